@@ -1,0 +1,1 @@
+//! GPU context: adapter choice, device, errors, read-back, timestamps.

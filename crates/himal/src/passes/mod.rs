@@ -1,0 +1,4 @@
+//! Frame passes, one folder per technique group: `mod.rs` (pipelines and
+//! graph nodes), one `.wgsl` per step, and `reference.rs` (the CPU twin).
+
+pub mod sky;

@@ -1,0 +1,1 @@
+//! Scene description: meshes, materials, cameras, TOML scene files, procedural demo world.

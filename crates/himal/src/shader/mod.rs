@@ -1,0 +1,1 @@
+//! WGSL composition: shared modules imported with `#import name`, line map, naga reflection.
