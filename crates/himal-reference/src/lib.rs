@@ -1,1 +1,14 @@
+//! CPU ground truth for himal's tests.
+//!
+//! Nothing here depends on `himal` (himal dev-depends on this crate): the
+//! integrators take the functions under test as closures, and the formulas
+//! here are written independently of himal's, in another parameterisation,
+//! so a shared mistake is unlikely.
+//!
+//! - [`integrate`]: Monte Carlo (importance sampling, two-strategy MIS) and
+//!   deterministic polar quadrature over the sphere.
+//! - [`microfacet`]: isotropic GGX D and Smith terms in f64, written in
+//!   theta form after Walter et al. 2007 and Heitz 2014.
 
+pub mod integrate;
+pub mod microfacet;

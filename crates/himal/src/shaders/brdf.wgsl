@@ -1,0 +1,118 @@
+// M1/M2: Far Cry 4 material model (McAuley, GDC 2015). GPU twin of
+// src/math/brdf.rs (same names, same equations; see docs/techniques/M1.md).
+// Anisotropic GGX D (Burley 2012), height-correlated anisotropic Smith V
+// (Heitz 2014), Schlick F, Lambert diffuse. t, b, n: right-handed orthonormal
+// shading frame (t = anisotropy x); v to the eye, l to the light.
+
+const PI: f32 = 3.14159265358979;
+// alpha floor: glossiness 1 would make D a delta (see MIN_ALPHA in brdf.rs).
+const BRDF_MIN_ALPHA: f32 = 0.002;
+// n.v floor: normal-mapped normals facing away shade as grazing.
+const BRDF_MIN_N_O_V: f32 = 1e-4;
+
+struct Surface {
+    diffuse_albedo: vec3f,
+    f0: vec3f,
+    // (alpha_x, alpha_y) along (tangent, binormal)
+    alpha: vec2f,
+}
+
+fn perceptual_roughness_from_glossiness(glossiness: f32) -> f32 {
+    return 1.0 - saturate(glossiness);
+}
+
+fn alpha_from_glossiness(glossiness: f32) -> f32 {
+    let r = perceptual_roughness_from_glossiness(glossiness);
+    return max(r * r, BRDF_MIN_ALPHA);
+}
+
+// Burley 2012: aspect = sqrt(1 - 0.9 anisotropy); (alpha / aspect, alpha * aspect).
+fn alpha_xy(glossiness: f32, anisotropy: f32) -> vec2f {
+    let alpha = alpha_from_glossiness(glossiness);
+    let aspect = sqrt(1.0 - 0.9 * saturate(anisotropy));
+    return max(vec2f(alpha / aspect, alpha * aspect), vec2f(BRDF_MIN_ALPHA));
+}
+
+// M2: specularReflectance = lerp(reflectance, albedo, metallic);
+// albedo *= 1 - metallic. F0 = reflectance literally.
+fn surface_from_material(albedo: vec3f, glossiness: f32, reflectance: f32, metallic: f32, anisotropy: f32) -> Surface {
+    return Surface(
+        albedo * (1.0 - metallic),
+        mix(vec3f(reflectance), albedo, metallic),
+        alpha_xy(glossiness, anisotropy),
+    );
+}
+
+// D = 1 / (pi ax ay ((h.t/ax)^2 + (h.b/ay)^2 + (h.n)^2)^2)
+fn d_ggx_aniso(n_o_h: f32, t_o_h: f32, b_o_h: f32, alpha_x: f32, alpha_y: f32) -> f32 {
+    let tx = t_o_h / alpha_x;
+    let by = b_o_h / alpha_y;
+    let d = tx * tx + by * by + n_o_h * n_o_h;
+    return 1.0 / (PI * alpha_x * alpha_y * d * d);
+}
+
+// V = G2 / (4 n.v n.l), G2 = 1 / (1 + Lambda(v) + Lambda(l)); needs n.v, n.l > 0.
+fn v_smith_ggx_correlated_aniso(n_o_v: f32, n_o_l: f32, t_o_v: f32, b_o_v: f32, t_o_l: f32, b_o_l: f32, alpha_x: f32, alpha_y: f32) -> f32 {
+    let lambda_v = length(vec3f(alpha_x * t_o_v, alpha_y * b_o_v, n_o_v));
+    let lambda_l = length(vec3f(alpha_x * t_o_l, alpha_y * b_o_l, n_o_l));
+    return 0.5 / (n_o_l * lambda_v + n_o_v * lambda_l);
+}
+
+fn f_schlick(f0: vec3f, f90: f32, v_o_h: f32) -> vec3f {
+    let x = 1.0 - saturate(v_o_h);
+    let x2 = x * x;
+    return f0 + (vec3f(f90) - f0) * (x2 * x2 * x);
+}
+
+fn diffuse_lambert(diffuse_albedo: vec3f) -> vec3f {
+    return diffuse_albedo * (1.0 / PI);
+}
+
+// D V F n.l with the same robustness rules as the CPU twin.
+fn specular_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+    let n_o_l = dot(n, l);
+    if !(n_o_l > 0.0) {
+        return vec3f(0.0);
+    }
+    let hv = v + l;
+    let h_len2 = dot(hv, hv);
+    // v = -l has no half vector (v below the horizon).
+    let h = select(n, hv * inverseSqrt(h_len2), h_len2 > 1e-30);
+    let n_o_h = dot(n, h);
+    if n_o_h <= 0.0 {
+        return vec3f(0.0);
+    }
+    let n_o_v = max(dot(n, v), BRDF_MIN_N_O_V);
+    let d = d_ggx_aniso(n_o_h, dot(t, h), dot(b, h), s.alpha.x, s.alpha.y);
+    let vis = v_smith_ggx_correlated_aniso(n_o_v, n_o_l, dot(t, v), dot(b, v), dot(t, l), dot(b, l), s.alpha.x, s.alpha.y);
+    return f_schlick(s.f0, 1.0, saturate(dot(v, h))) * (d * vis * n_o_l);
+}
+
+// (Lambert + D V F) max(n.l, 0).
+fn brdf_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+    let n_o_l = dot(n, l);
+    if !(n_o_l > 0.0) {
+        return vec3f(0.0);
+    }
+    return diffuse_lambert(s.diffuse_albedo) * n_o_l + specular_cos(s, t, b, n, v, l);
+}
+
+// Split-sum DFG fit f0 A + B (rational in roughness and n.v; coefficients
+// and error in brdf.rs env_brdf_approx_ab and docs/techniques/M1.md).
+fn env_brdf_approx(f0: vec3f, perceptual_roughness: f32, n_o_v: f32) -> vec3f {
+    let x = saturate(perceptual_roughness);
+    let y = saturate(n_o_v);
+    let x2 = x * x;
+    let y2 = y * y;
+    let xy = x * y;
+    let a_num = -0.055383194 + 6.755665 * y + 6.124511 * y2 - 2.5169654 * y2 * y
+        - 0.8979223 * x - 10.897606 * xy + 3.5524464 * xy * y
+        + 11.994692 * x2 - 7.513965 * x2 * y - 3.8492672 * x2 * x;
+    let a_den = 1.0 + 5.220406 * y + 4.354746 * y2 - 1.21989 * x - 9.033067 * xy + 8.828744 * x2;
+    let b_num = 0.9446362 - 2.067182 * y + 1.0619216 * y2 - 0.4990199 * x + 0.7222509 * xy - 0.053478025 * x2;
+    let b_den = 1.0 + 1.500716 * y + 12.616845 * y2 - 0.8193233 * x - 11.694335 * xy + 13.671154 * x2;
+    var ab = max(vec2f(a_num / a_den, b_num / b_den), vec2f(0.0));
+    // The fit overshoots A + B = 1 by up to 0.02 near roughness 0.
+    ab = ab / max(ab.x + ab.y, 1.0);
+    return f0 * ab.x + vec3f(ab.y);
+}
