@@ -6,25 +6,10 @@ use himal::graph::{
     BufferAccess, FrameGraph, GraphError, PassTimer, TextureAccess, TextureDesc, TexturePool,
 };
 
-/// Temporary scaffolding until `himal::gpu` provides the device.
-fn device() -> (wgpu::Device, wgpu::Queue) {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-        backends: wgpu::Backends::all(),
-        ..wgpu::InstanceDescriptor::new_without_display_handle()
-    });
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        force_fallback_adapter: false,
-        ..Default::default()
-    }))
-    .expect("no wgpu adapter (install mesa-vulkan-drivers for lavapipe)");
-    let timestamps =
-        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-    let desc = wgpu::DeviceDescriptor {
-        label: Some("himal.graph.test"),
-        required_features: adapter.features() & timestamps,
-        ..Default::default()
-    };
-    pollster::block_on(adapter.request_device(&desc)).expect("device")
+/// The shared test device (timestamps requested where the adapter has them).
+fn device() -> (&'static wgpu::Device, &'static wgpu::Queue) {
+    let ctx = himal::gpu::testing::shared_context().expect("GPU context (lavapipe in CI)");
+    (&ctx.device, &ctx.queue)
 }
 
 const W: u32 = 64; // 64 texels * 4 bytes = 256, the copy row alignment
@@ -123,7 +108,7 @@ fn graph_executes_clear_and_copy_and_skips_culled_pass() {
         mapped_at_creation: false,
     });
     let mut pool = TexturePool::new();
-    let mut timer = PassTimer::new(&device, &queue, 8);
+    let mut timer = PassTimer::new(device, queue, 8);
     let has_timer = timer.is_some();
 
     // Two frames: the second must reuse the pooled texture.
@@ -132,7 +117,7 @@ fn graph_executes_clear_and_copy_and_skips_culled_pass() {
         let graph = frame(&readback, &culled_ran).compile().expect("compile");
         assert_eq!(graph.culled(), ["debug.culled"]);
         let commands = graph
-            .execute(&device, &mut pool, timer.as_mut())
+            .execute(device, &mut pool, timer.as_mut())
             .expect("execute");
         queue.submit([commands]);
         assert!(!culled_ran.get(), "culled closure ran");
@@ -141,7 +126,7 @@ fn graph_executes_clear_and_copy_and_skips_culled_pass() {
         assert_eq!(pool.allocated_bytes(), BYTES);
 
         if let Some(timer) = timer.as_mut() {
-            let timings = timer.read_timings(&device).expect("timings");
+            let timings = timer.read_timings(device).expect("timings");
             let ids: Vec<&str> = timings.iter().map(|t| t.id.as_str()).collect();
             assert_eq!(ids, ["clear", "copy"]);
             for t in &timings {
@@ -151,7 +136,7 @@ fn graph_executes_clear_and_copy_and_skips_culled_pass() {
             }
             eprintln!("frame {frame_index} timings: {timings:?}");
         }
-        let bytes = read_buffer(&device, &readback);
+        let bytes = read_buffer(device, &readback);
         let want = [51u8, 102, 204, 255];
         let bad = bytes.chunks_exact(4).filter(|px| *px != want).count();
         assert_eq!(bad, 0, "frame {frame_index}: first texel {:?}", &bytes[..4]);
@@ -209,8 +194,12 @@ fn validation_error_in_a_pass_is_returned_not_panicked() {
     });
     let graph = g.compile().expect("compile");
     let mut pool = TexturePool::new();
-    match graph.execute(&device, &mut pool, None) {
+    match graph.execute(device, &mut pool, None) {
         Err(GraphError::Device(msg)) => assert!(!msg.is_empty()),
         other => panic!("expected Device error, got ok={}", other.is_ok()),
     }
+    // The graph's error scope caught it: nothing reached the context's
+    // uncaptured-error log.
+    let ctx = himal::gpu::testing::shared_context().expect("GPU context");
+    assert!(ctx.check("after graph validation error").is_ok());
 }

@@ -101,8 +101,8 @@ impl CompiledGraph<'_> {
     /// Records all live passes into one command buffer. Transients come
     /// from `pool`; with a `timer`, each pass is wrapped in a timestamp
     /// pair resolved at the end (read with [`PassTimer::read_timings`]
-    /// after submitting). wgpu validation errors raised while recording are
-    /// returned as [`GraphError::Device`].
+    /// after submitting). wgpu validation and out-of-memory errors raised
+    /// while allocating or recording are returned as [`GraphError::Device`].
     pub fn execute(
         self,
         device: &wgpu::Device,
@@ -134,6 +134,9 @@ impl CompiledGraph<'_> {
             }
         }
 
+        // Scopes cover pool allocation and recording; errors become Err.
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
         // Take every slot first (mutable pool), then borrow immutably.
         pool.begin_frame();
         let tex_index: Vec<usize> = (0..self.plan.texture_slots.len())
@@ -176,7 +179,6 @@ impl CompiledGraph<'_> {
         let views: Vec<OnceCell<wgpu::TextureView>> = (0..n).map(|_| OnceCell::new()).collect();
         let names: Vec<&str> = self.resources.iter().map(|r| r.name.as_str()).collect();
 
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("himal.frame_graph"),
         });
@@ -208,7 +210,9 @@ impl CompiledGraph<'_> {
             t.record_resolve(&mut encoder, ids);
         }
         let commands = encoder.finish();
-        match pollster::block_on(scope.pop()) {
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match v.or(o) {
             Some(e) => Err(GraphError::Device(e.to_string())),
             None => Ok(commands),
         }
