@@ -1,9 +1,9 @@
-//! L1 sky foundation: Preetham sky, sun, SH sky light, WGSL modules.
+//! L1 sky foundation (CPU): Preetham sky, sun, SH sky light. WGSL twins: `sky_wgsl.rs`.
 //! Measured numbers: `cargo test --release -p himal --test sky -- --nocapture`.
 
 use glam::{Quat, Vec3};
 use himal::math::sh::{Sh9Rgb, irradiance_rh2001, sh9_basis};
-use himal::passes::sky::preetham::{NIGHT_FLOOR, SkyGpuParams};
+use himal::passes::sky::preetham::NIGHT_FLOOR;
 use himal::passes::sky::reference::SKY_SH_SAMPLES_PER_AXIS;
 use himal::passes::sky::sun::sun_transmittance_rgb_colorimetric;
 use himal::passes::sky::{
@@ -570,59 +570,4 @@ fn sky_light_new_is_fast() {
     println!("SkyLight::new: {ms:.3} ms");
     // Brief: < 5 ms in release. Measured 0.19 ms on 2026-11-22 (2 cores, shared).
     assert!(ms < 5.0, "{ms} ms");
-}
-
-// ---------------------------------------------------------------- WGSL
-
-const SH_WGSL: &str = include_str!("../src/shaders/sh.wgsl");
-const SKY_WGSL: &str = include_str!("../src/shaders/sky.wgsl");
-
-const ENTRY: &str = r#"
-@group(0) @binding(0) var<uniform> sky_params: SkyParams;
-@group(0) @binding(1) var<uniform> sky_sh: Sh9;
-@group(0) @binding(2) var<storage, read> input: array<vec4f>;
-@group(0) @binding(3) var<storage, read_write> output: array<vec4f>;
-@compute @workgroup_size(64)
-fn cs_main(@builtin(global_invocation_id) id: vec3u) {
-    let d = input[id.x].xyz;
-    output[id.x] = vec4f(preetham_sky_radiance(sky_params, d) + sun_disk_radiance(sky_params, d)
-        + sh9_eval(sky_sh, d) + xyy_to_linear_srgb(d), 1.0);
-}
-"#;
-
-fn struct_layout(module: &naga::Module, name: &str) -> (u32, Vec<u32>) {
-    for (_, ty) in module.types.iter() {
-        if ty.name.as_deref() == Some(name)
-            && let naga::TypeInner::Struct { members, span } = &ty.inner
-        {
-            return (*span, members.iter().map(|m| m.offset).collect());
-        }
-    }
-    panic!("struct {name} not found");
-}
-
-#[test]
-fn wgsl_modules_validate_and_match_the_cpu_layouts() {
-    let source = format!("{SH_WGSL}\n{SKY_WGSL}\n{ENTRY}");
-    let module = naga::front::wgsl::parse_str(&source)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .unwrap_or_else(|e| panic!("{e:?}"));
-    for (name, src) in [("sh.wgsl", SH_WGSL), ("sky.wgsl", SKY_WGSL)] {
-        assert!(!src.contains("@group"), "{name} must not declare bindings");
-        assert!(!src.contains("const PI"), "{name} must not define PI");
-    }
-
-    let (span, offsets) = struct_layout(&module, "SkyParams");
-    assert_eq!(span as usize, std::mem::size_of::<SkyGpuParams>());
-    assert_eq!(offsets, (0..12).map(|i| 16 * i).collect::<Vec<u32>>());
-    let (span, _) = struct_layout(&module, "Sh9");
-    assert_eq!(
-        span as usize,
-        std::mem::size_of::<himal::math::sh::Sh9Gpu>()
-    );
 }
