@@ -1,1 +1,105 @@
 //! Frame graph: typed versioned handles, compile (order, cull, usages, pool), execute with timestamps.
+//!
+//! Built every frame (Filament / kajiya style, small):
+//! - Passes declare reads and writes by handle; [`PassBuilder::write`]
+//!   returns the next version, so read-after-write is explicit. Writing also
+//!   consumes the previous version (attachments may `Load` it).
+//! - [`FrameGraph::compile`] validates (misuse is an error, never a panic),
+//!   orders passes (declaration order where valid; a pass reading an old
+//!   version is moved before the overwrite), culls passes that reach no
+//!   output (resources marked with [`FrameGraph::mark_output`], whose
+//!   final version counts) and no `side_effect` pass, derives
+//!   `wgpu::TextureUsages` / `BufferUsages` from the live accesses, and
+//!   plans pool slots: a transient's slot is free after its last use and
+//!   reused by a later transient of identical key ([`PoolPlan`]).
+//! - [`CompiledGraph::execute`] records one command buffer with transients
+//!   from a [`TexturePool`] kept across frames and, given a [`PassTimer`],
+//!   a timestamp pair around each pass.
+//!
+//! Nothing before `execute` needs a device. Imported resources borrow the
+//! texture or buffer (`import_texture`); for device-free tests and
+//! listings, `import_texture_desc` / `import_buffer_desc` import a
+//! placeholder from a description, which `execute` rejects
+//! ([`GraphError::UnboundImport`]) if a live pass uses it. Imported
+//! resources are not outputs unless marked: mark history written for the
+//! next frame as output.
+
+mod builder;
+mod compile;
+mod describe;
+mod execute;
+mod pool;
+mod resource;
+mod timer;
+
+#[cfg(test)]
+mod tests;
+
+pub use builder::{FrameGraph, PassBuilder};
+pub use compile::{BufferKey, CompiledGraph, CompiledPass, PoolAssignment, PoolPlan, TextureKey};
+pub use execute::PassContext;
+pub use pool::TexturePool;
+pub use resource::{
+    BufferAccess, BufferDesc, BufferHandle, ResourceAccess, ResourceUse, TextureAccess,
+    TextureDesc, TextureHandle,
+};
+pub use timer::{PassTimer, PassTiming};
+
+/// Frame graph misuse and device failures.
+#[derive(thiserror::Error, Debug, Clone, PartialEq, Eq)]
+pub enum GraphError {
+    #[error("pass '{pass}' reads '{resource}' before any pass wrote it")]
+    ReadBeforeWrite { pass: String, resource: String },
+    #[error(
+        "pass '{pass}' writes '{resource}'@{used} but the newest version is @{latest} (two writers of one version)"
+    )]
+    StaleVersion {
+        pass: String,
+        resource: String,
+        used: u32,
+        latest: u32,
+    },
+    #[error("pass id '{0}' is used twice")]
+    DuplicatePass(String),
+    #[error("resource name '{0}' is used twice")]
+    DuplicateResource(String),
+    #[error("pass '{0}' was declared without execute()")]
+    MissingExecute(String),
+    #[error("{context}: handle of another graph, unknown resource or wrong kind")]
+    UnknownHandle { context: String },
+    #[error("pass '{pass}' declares {access} on '{resource}' with {declared_with}()")]
+    InvalidAccess {
+        pass: String,
+        resource: String,
+        access: String,
+        declared_with: &'static str,
+    },
+    #[error("pass '{pass}' uses '{resource}' without declaring it")]
+    UndeclaredResource { pass: String, resource: String },
+    #[error("passes {0:?} form a cycle (a pass reads a version that one of its inputs overwrote)")]
+    Cycle(Vec<String>),
+    #[error("imported '{resource}' needs usages {needed} but was created with {available}")]
+    ImportedUsage {
+        resource: String,
+        needed: String,
+        available: String,
+    },
+    #[error("'{0}' was imported as a placeholder (import_*_desc) and cannot execute")]
+    UnboundImport(String),
+    #[error("{passes} passes but the pass timer holds {capacity}")]
+    TimerCapacity { passes: usize, capacity: u32 },
+    #[error("device: {0}")]
+    Device(String),
+}
+
+impl GraphError {
+    /// Names where an unknown handle was used.
+    pub(crate) fn context(self, where_: &str) -> Self {
+        match self {
+            Self::UnknownHandle { .. } => Self::UnknownHandle {
+                context: where_.to_string(),
+            },
+            e => e,
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! Programs: a composed WGSL shader, its wgpu module and the bind-group
+//! layouts reflected from it; bind groups are built by binding name.
+
+use super::{GpuContext, GpuError};
+use crate::shader::{self, ComposedShader, ReflectedLayout};
+
+pub struct Program {
+    pub name: String,
+    pub module: wgpu::ShaderModule,
+    pub layout: ReflectedLayout,
+    pub bind_group_layouts: Vec<wgpu::BindGroupLayout>,
+    pub pipeline_layout: wgpu::PipelineLayout,
+}
+
+/// Fixed-function state of a render pipeline; shaders and layout come from the program.
+pub struct RenderSpec<'a> {
+    pub label: &'a str,
+    pub vertex_entry: &'a str,
+    pub fragment_entry: Option<&'a str>,
+    pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+    pub depth_stencil: Option<wgpu::DepthStencilState>,
+    pub primitive: wgpu::PrimitiveState,
+    /// WGSL `override` constants.
+    pub constants: &'a [(&'a str, f64)],
+}
+
+impl<'a> RenderSpec<'a> {
+    /// A full-screen triangle (`vs_main` draws 3 vertices) writing `targets`.
+    pub fn fullscreen(label: &'a str, targets: &'a [Option<wgpu::ColorTargetState>]) -> Self {
+        Self {
+            label,
+            vertex_entry: "vs_main",
+            fragment_entry: Some("fs_main"),
+            vertex_buffers: &[],
+            targets,
+            depth_stencil: None,
+            primitive: wgpu::PrimitiveState::default(),
+            constants: &[],
+        }
+    }
+}
+
+impl Program {
+    /// Composes the embedded shader `path` and creates its module and layouts.
+    pub fn new(ctx: &GpuContext, path: &str) -> Result<Self, GpuError> {
+        Self::from_composed(ctx, shader::compose(path)?)
+    }
+
+    /// Same as [`Program::new`] for WGSL text (tests, generated kernels).
+    pub fn from_source(ctx: &GpuContext, name: &str, text: &str) -> Result<Self, GpuError> {
+        Self::from_composed(ctx, shader::compose_str(name, text)?)
+    }
+
+    fn from_composed(ctx: &GpuContext, composed: ComposedShader) -> Result<Self, GpuError> {
+        let layout = composed.layout()?;
+        let name = composed.name.clone();
+        ctx.scoped(&name, || {
+            let module = ctx
+                .device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(&name),
+                    source: wgpu::ShaderSource::Wgsl(composed.wgsl()),
+                });
+            let bind_group_layouts: Vec<_> = (0..layout.groups.len())
+                .map(|g| {
+                    ctx.device
+                        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                            label: Some(&format!("{name}.group{g}")),
+                            entries: &layout.entries(g),
+                        })
+                })
+                .collect();
+            let refs: Vec<Option<&wgpu::BindGroupLayout>> =
+                bind_group_layouts.iter().map(Some).collect();
+            let pipeline_layout =
+                ctx.device
+                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some(&name),
+                        bind_group_layouts: &refs,
+                        immediate_size: 0,
+                    });
+            Program {
+                name: name.clone(),
+                module,
+                layout,
+                bind_group_layouts,
+                pipeline_layout,
+            }
+        })
+    }
+
+    /// Builds bind group `group` from resources named as in the WGSL.
+    /// Every binding of the group must be given, and no unknown name.
+    pub fn bind_group(
+        &self,
+        ctx: &GpuContext,
+        group: u32,
+        resources: &[(&str, wgpu::BindingResource<'_>)],
+    ) -> Result<wgpu::BindGroup, GpuError> {
+        let bindings = self
+            .layout
+            .groups
+            .get(group as usize)
+            .ok_or_else(|| GpuError::Other(format!("{}: no bind group {group}", self.name)))?;
+        let mut entries = Vec::with_capacity(bindings.len());
+        for b in bindings {
+            let Some((_, res)) = resources.iter().find(|(n, _)| *n == b.name) else {
+                return Err(GpuError::Other(format!(
+                    "{}: binding \"{}\" (group {group}) was not given",
+                    self.name, b.name
+                )));
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: res.clone(),
+            });
+        }
+        if let Some((n, _)) = resources
+            .iter()
+            .find(|(n, _)| !bindings.iter().any(|b| b.name == *n))
+        {
+            return Err(GpuError::Other(format!(
+                "{}: group {group} has no binding \"{n}\"",
+                self.name
+            )));
+        }
+        ctx.scoped(&self.name, || {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&format!("{}.group{group}", self.name)),
+                layout: &self.bind_group_layouts[group as usize],
+                entries: &entries,
+            })
+        })
+    }
+
+    pub fn compute_pipeline(
+        &self,
+        ctx: &GpuContext,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        ctx.scoped(&format!("{}::{entry}", self.name), || {
+            ctx.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&format!("{}::{entry}", self.name)),
+                    layout: Some(&self.pipeline_layout),
+                    module: &self.module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                })
+        })
+    }
+
+    pub fn render_pipeline(
+        &self,
+        ctx: &GpuContext,
+        spec: &RenderSpec<'_>,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let options = wgpu::PipelineCompilationOptions {
+            constants: spec.constants,
+            ..Default::default()
+        };
+        ctx.scoped(spec.label, || {
+            ctx.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(spec.label),
+                    layout: Some(&self.pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some(spec.vertex_entry),
+                        compilation_options: options.clone(),
+                        buffers: spec.vertex_buffers,
+                    },
+                    primitive: spec.primitive,
+                    depth_stencil: spec.depth_stencil.clone(),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: spec.fragment_entry.map(|e| wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some(e),
+                        compilation_options: options.clone(),
+                        targets: spec.targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
+    }
+}
+
+/// A uniform buffer initialised with `data`.
+pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &T) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::bytes_of(data),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        })
+}

@@ -1,0 +1,229 @@
+//! Recording: one command encoder, pooled transients, timestamps per pass.
+
+use std::cell::OnceCell;
+
+use super::GraphError;
+use super::builder::{Backing, ResourceKind};
+use super::compile::CompiledGraph;
+use super::pool::TexturePool;
+use super::resource::{BufferHandle, TextureHandle};
+use super::timer::PassTimer;
+
+/// What a pass closure records with. Resources are looked up by handle;
+/// any version of a resource the pass declared is accepted.
+pub struct PassContext<'e> {
+    pub encoder: &'e mut wgpu::CommandEncoder,
+    pub device: &'e wgpu::Device,
+    pass_id: &'e str,
+    declared: &'e [u32],
+    graph_id: u32,
+    names: &'e [&'e str],
+    textures: &'e [Option<&'e wgpu::Texture>],
+    views: &'e [OnceCell<wgpu::TextureView>],
+    buffers: &'e [Option<&'e wgpu::Buffer>],
+}
+
+impl<'e> PassContext<'e> {
+    // Returned references live for the whole pass ('e), not the borrow of
+    // `self`, so they can be used while `self.encoder` is borrowed mutably.
+    pub fn pass_id(&self) -> &'e str {
+        self.pass_id
+    }
+
+    fn resolve(&self, graph: u32, index: u32) -> Result<usize, GraphError> {
+        let name = self
+            .names
+            .get(index as usize)
+            .filter(|_| graph == self.graph_id);
+        let Some(name) = name else {
+            return Err(GraphError::UnknownHandle {
+                context: self.pass_id.to_string(),
+            });
+        };
+        if self.declared.binary_search(&index).is_err() {
+            return Err(GraphError::UndeclaredResource {
+                pass: self.pass_id.to_string(),
+                resource: name.to_string(),
+            });
+        }
+        Ok(index as usize)
+    }
+
+    /// The texture behind `h`, or an error if this pass did not declare it.
+    pub fn try_texture(&self, h: TextureHandle) -> Result<&'e wgpu::Texture, GraphError> {
+        let i = self.resolve(h.graph, h.index)?;
+        self.textures[i].ok_or_else(|| GraphError::UnknownHandle {
+            context: self.pass_id.to_string(),
+        })
+    }
+
+    /// Default view of the texture, created on first use and cached.
+    pub fn try_view(&self, h: TextureHandle) -> Result<&'e wgpu::TextureView, GraphError> {
+        let texture = self.try_texture(h)?;
+        let i = h.index as usize;
+        let (views, names) = (self.views, self.names);
+        Ok(views[i].get_or_init(|| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some(names[i]),
+                ..Default::default()
+            })
+        }))
+    }
+
+    pub fn try_buffer(&self, h: BufferHandle) -> Result<&'e wgpu::Buffer, GraphError> {
+        let i = self.resolve(h.graph, h.index)?;
+        self.buffers[i].ok_or_else(|| GraphError::UnknownHandle {
+            context: self.pass_id.to_string(),
+        })
+    }
+
+    /// # Panics
+    /// If this pass did not declare `h` (a bug in the pass code, like an
+    /// out-of-bounds index); use [`Self::try_texture`] to handle it.
+    pub fn texture(&self, h: TextureHandle) -> &'e wgpu::Texture {
+        self.try_texture(h).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// # Panics
+    /// As [`Self::texture`].
+    pub fn view(&self, h: TextureHandle) -> &'e wgpu::TextureView {
+        self.try_view(h).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// # Panics
+    /// As [`Self::texture`].
+    pub fn buffer(&self, h: BufferHandle) -> &'e wgpu::Buffer {
+        self.try_buffer(h).unwrap_or_else(|e| panic!("{e}"))
+    }
+}
+
+impl CompiledGraph<'_> {
+    /// Records all live passes into one command buffer. Transients come
+    /// from `pool`; with a `timer`, each pass is wrapped in a timestamp
+    /// pair resolved at the end (read with [`PassTimer::read_timings`]
+    /// after submitting). wgpu validation and out-of-memory errors raised
+    /// while allocating or recording are returned as [`GraphError::Device`].
+    pub fn execute(
+        self,
+        device: &wgpu::Device,
+        pool: &mut TexturePool,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<wgpu::CommandBuffer, GraphError> {
+        if let Some(t) = &timer
+            && self.passes.len() > t.capacity() as usize
+        {
+            return Err(GraphError::TimerCapacity {
+                passes: self.passes.len(),
+                capacity: t.capacity(),
+            });
+        }
+        // Placeholder imports used by a live pass cannot execute.
+        for (r, res) in self.resources.iter().enumerate() {
+            let placeholder = matches!(
+                &res.kind,
+                ResourceKind::Texture {
+                    backing: Backing::Imported(None),
+                    ..
+                } | ResourceKind::Buffer {
+                    backing: Backing::Imported(None),
+                    ..
+                }
+            );
+            if placeholder && self.declared.iter().any(|d| d.contains(&(r as u32))) {
+                return Err(GraphError::UnboundImport(res.name.clone()));
+            }
+        }
+
+        // Scopes cover pool allocation and recording; errors become Err.
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        // Take every slot first (mutable pool), then borrow immutably.
+        pool.begin_frame();
+        let tex_index: Vec<usize> = (0..self.plan.texture_slots.len())
+            .map(|s| {
+                let label = slot_label(&self.plan.textures, s);
+                pool.take_texture(device, &self.plan.texture_slots[s], &label)
+            })
+            .collect();
+        let buf_index: Vec<usize> = (0..self.plan.buffer_slots.len())
+            .map(|s| {
+                let label = slot_label(&self.plan.buffers, s);
+                pool.take_buffer(device, &self.plan.buffer_slots[s], &label)
+            })
+            .collect();
+        let pool = &*pool;
+
+        let n = self.resources.len();
+        let mut textures: Vec<Option<&wgpu::Texture>> = vec![None; n];
+        let mut buffers: Vec<Option<&wgpu::Buffer>> = vec![None; n];
+        for (i, r) in self.resources.iter().enumerate() {
+            match &r.kind {
+                ResourceKind::Texture {
+                    backing: Backing::Imported(t),
+                    ..
+                } => textures[i] = *t,
+                ResourceKind::Buffer {
+                    backing: Backing::Imported(b),
+                    ..
+                } => buffers[i] = *b,
+                ResourceKind::Texture { .. } => {
+                    textures[i] = self.slot_of[i]
+                        .and_then(|s| pool.texture(&self.plan.texture_slots[s], tex_index[s]));
+                }
+                ResourceKind::Buffer { .. } => {
+                    buffers[i] = self.slot_of[i]
+                        .and_then(|s| pool.buffer(&self.plan.buffer_slots[s], buf_index[s]));
+                }
+            }
+        }
+        let views: Vec<OnceCell<wgpu::TextureView>> = (0..n).map(|_| OnceCell::new()).collect();
+        let names: Vec<&str> = self.resources.iter().map(|r| r.name.as_str()).collect();
+
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("himal.frame_graph"),
+        });
+        let query = timer.as_ref().map(|t| t.query_set());
+        for (i, (f, pass)) in self.closures.into_iter().zip(&self.passes).enumerate() {
+            if let Some(q) = query {
+                encoder.write_timestamp(q, 2 * i as u32);
+            }
+            encoder.push_debug_group(&pass.id);
+            let mut ctx = PassContext {
+                encoder: &mut encoder,
+                device,
+                pass_id: &pass.id,
+                declared: &self.declared[i],
+                graph_id: self.graph_id,
+                names: &names,
+                textures: &textures,
+                views: &views,
+                buffers: &buffers,
+            };
+            f(&mut ctx);
+            encoder.pop_debug_group();
+            if let Some(q) = query {
+                encoder.write_timestamp(q, 2 * i as u32 + 1);
+            }
+        }
+        if let Some(t) = timer {
+            let ids = self.passes.iter().map(|p| p.id.clone()).collect();
+            t.record_resolve(&mut encoder, ids);
+        }
+        let commands = encoder.finish();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match v.or(o) {
+            Some(e) => Err(GraphError::Device(e.to_string())),
+            None => Ok(commands),
+        }
+    }
+}
+
+/// Pool object label: the first resource that uses the slot this frame.
+fn slot_label(assignments: &[super::compile::PoolAssignment], slot: usize) -> String {
+    let first = assignments.iter().find(|a| a.slot == slot);
+    format!(
+        "himal.pool.{}",
+        first.map_or("unused", |a| a.resource.as_str())
+    )
+}

@@ -1,0 +1,131 @@
+//! Transient texture and buffer pool, kept across frames outside the graph.
+
+use std::collections::HashMap;
+
+use super::compile::{BufferKey, TextureKey};
+
+struct Pooled<T> {
+    object: T,
+    bytes: u64,
+    /// Frame (execute call) that last took it; taken objects are not handed
+    /// out twice in one frame.
+    last_frame: u64,
+}
+
+/// Pooled transient textures (and buffers), keyed by description plus
+/// derived usages. A graph's `execute` takes one object per plan slot;
+/// objects not taken for a while can be dropped with [`TexturePool::trim`].
+#[derive(Default)]
+pub struct TexturePool {
+    textures: HashMap<TextureKey, Vec<Pooled<wgpu::Texture>>>,
+    buffers: HashMap<BufferKey, Vec<Pooled<wgpu::Buffer>>>,
+    frame: u64,
+}
+
+impl TexturePool {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Bytes held by pooled textures and buffers (textures: theoretical
+    /// size without driver padding).
+    pub fn allocated_bytes(&self) -> u64 {
+        let t: u64 = self.textures.values().flatten().map(|p| p.bytes).sum();
+        let b: u64 = self.buffers.values().flatten().map(|p| p.bytes).sum();
+        t + b
+    }
+
+    pub fn texture_count(&self) -> usize {
+        self.textures.values().map(Vec::len).sum()
+    }
+
+    pub fn buffer_count(&self) -> usize {
+        self.buffers.values().map(Vec::len).sum()
+    }
+
+    /// Drops objects not used by the last `max_idle_frames` executes
+    /// (e.g. after a resolution change).
+    pub fn trim(&mut self, max_idle_frames: u64) {
+        let frame = self.frame;
+        let keep = |last: u64| frame.saturating_sub(last) <= max_idle_frames;
+        for list in self.textures.values_mut() {
+            list.retain(|p| keep(p.last_frame));
+        }
+        for list in self.buffers.values_mut() {
+            list.retain(|p| keep(p.last_frame));
+        }
+        self.textures.retain(|_, l| !l.is_empty());
+        self.buffers.retain(|_, l| !l.is_empty());
+    }
+
+    pub(crate) fn begin_frame(&mut self) {
+        self.frame += 1;
+    }
+
+    /// Takes a texture not yet taken this frame, creating one if needed;
+    /// returns its index within the key's list.
+    pub(crate) fn take_texture(
+        &mut self,
+        device: &wgpu::Device,
+        key: &TextureKey,
+        label: &str,
+    ) -> usize {
+        let frame = self.frame;
+        let list = self.textures.entry(key.clone()).or_default();
+        if let Some(i) = list.iter().position(|p| p.last_frame != frame) {
+            list[i].last_frame = frame;
+            return i;
+        }
+        let desc = key.desc();
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: desc.size(),
+            mip_level_count: desc.mip_levels,
+            sample_count: 1,
+            dimension: desc.dimension,
+            format: desc.format,
+            usage: key.usages,
+            view_formats: &[],
+        });
+        list.push(Pooled {
+            object: texture,
+            bytes: desc.byte_size(),
+            last_frame: frame,
+        });
+        list.len() - 1
+    }
+
+    pub(crate) fn take_buffer(
+        &mut self,
+        device: &wgpu::Device,
+        key: &BufferKey,
+        label: &str,
+    ) -> usize {
+        let frame = self.frame;
+        let list = self.buffers.entry(key.clone()).or_default();
+        if let Some(i) = list.iter().position(|p| p.last_frame != frame) {
+            list[i].last_frame = frame;
+            return i;
+        }
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: key.size,
+            usage: key.usages,
+            mapped_at_creation: false,
+        });
+        list.push(Pooled {
+            object: buffer,
+            bytes: key.size,
+            last_frame: frame,
+        });
+        list.len() - 1
+    }
+
+    pub(crate) fn texture(&self, key: &TextureKey, index: usize) -> Option<&wgpu::Texture> {
+        self.textures.get(key)?.get(index).map(|p| &p.object)
+    }
+
+    pub(crate) fn buffer(&self, key: &BufferKey, index: usize) -> Option<&wgpu::Buffer> {
+        self.buffers.get(key)?.get(index).map(|p| &p.object)
+    }
+}
