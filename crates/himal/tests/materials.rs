@@ -78,7 +78,7 @@ fn m1_white_furnace_grid() {
     let n = 4096;
     let (mut worst_spec, mut worst_full_metal, mut worst_full_dielectric) =
         (0.0_f32, 0.0_f32, 0.0_f32);
-    let mut worst_split_mismatch = 0.0_f32;
+    let (mut worst_split_mismatch, mut worst_gltf_dielectric) = (0.0_f32, 0.0_f32);
     for &g in &GLOSSINESS {
         for &a in &ANISOTROPY {
             let alpha = alpha_xy(g, a);
@@ -117,6 +117,9 @@ fn m1_white_furnace_grid() {
                             // Lambert adds exactly its albedo; the rest is f0 A + B.
                             let expected = s.diffuse_albedo.x + s.f0.x * ab.x + ab.y;
                             worst_split_mismatch = worst_split_mismatch.max((e - expected).abs());
+                            if metallic == 0.0 && reflectance == 0.04 {
+                                worst_gltf_dielectric = worst_gltf_dielectric.max(e);
+                            }
                             if metallic == 1.0 {
                                 worst_full_metal = worst_full_metal.max(e);
                             } else {
@@ -131,6 +134,7 @@ fn m1_white_furnace_grid() {
     println!("M1 furnace: max specular albedo (f0 = 1)       {worst_spec:.5}");
     println!("M1 furnace: max full albedo, white metal       {worst_full_metal:.5}");
     println!("M1 furnace: max full albedo, white dielectric  {worst_full_dielectric:.5}");
+    println!("M1 furnace: max full albedo, reflectance 0.04  {worst_gltf_dielectric:.5}");
     println!("M1 furnace: max |full - (diffuse + f0 A + B)|  {worst_split_mismatch:.5}");
     // Measured 1.00001 (lobe) and 1.00024 (white metal, MIS noise) on
     // 2026-11-22; threshold 1 + 2e-3.
