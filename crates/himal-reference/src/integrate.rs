@@ -152,11 +152,15 @@ mod tests {
     #[test]
     fn quadrature_integrates_known_functions() {
         // Sphere area 4 pi; hemisphere cosine integral pi; a peaked lobe.
+        // Measured 7.8e-5, 2.0e-5 (absolute) and 4.5e-4 (relative) on
+        // 2026-11-22; thresholds 1e-4, 1e-4, 1e-3.
         let area = quadrature_cap(Vec3::Y, std::f64::consts::PI, 256, 64, 1.0, |_| Vec3::ONE);
+        println!("quadrature errors: area {:.1e}", (area.x - 4.0 * PI).abs());
         assert!((area.x - 4.0 * PI).abs() < 1e-4, "{area}");
         let cos = quadrature_cap(Vec3::Z, std::f64::consts::FRAC_PI_2, 256, 64, 1.0, |d| {
             Vec3::splat(d.z)
         });
+        println!("quadrature errors: cosine {:.1e}", (cos.x - PI).abs());
         assert!((cos.x - PI).abs() < 1e-4, "{cos}");
         // exp(k (cos - 1)) over the sphere = 2 pi (1 - e^-2k) / k, k = 1e5:
         // width ~0.003 rad, resolved by power 3.
@@ -165,6 +169,10 @@ mod tests {
         let lobe = quadrature_cap(Vec3::X, std::f64::consts::PI, 2048, 8, 3.0, |d| {
             Vec3::splat((k * (d.x as f64 - 1.0)).exp() as f32)
         });
+        println!(
+            "quadrature errors: lobe {:.1e}",
+            (lobe.x / exact - 1.0).abs()
+        );
         assert!((lobe.x / exact - 1.0).abs() < 1e-3, "{} vs {exact}", lobe.x);
     }
 
@@ -182,8 +190,10 @@ mod tests {
             Vec3::new(r * phi.cos(), r * phi.sin(), z)
         };
         let f = |d: Vec3| Vec3::splat(d.z.max(0.0) * d.z.max(0.0));
-        // Integral of cos^2 over the hemisphere = 2 pi / 3.
+        // Integral of cos^2 over the hemisphere = 2 pi / 3. Measured errors
+        // 7.7e-4 (uniform) and < 1e-7 (MIS) on 2026-11-22; threshold 2e-3.
         let e = estimate(4096, |u| Some((uniform(u), 1.0 / (2.0 * PI))), f);
+        println!("estimate error {:.1e}", (e.mean.x - 2.0 * PI / 3.0).abs());
         assert!((e.mean.x - 2.0 * PI / 3.0).abs() < 2e-3, "{e:?}");
         let m = estimate_mis(
             4096,
@@ -192,6 +202,10 @@ mod tests {
             |u| Some(uniform(u)),
             |d| if d.z >= 0.0 { 1.0 / (2.0 * PI) } else { 0.0 },
             f,
+        );
+        println!(
+            "estimate_mis error {:.1e}",
+            (m.mean.x - 2.0 * PI / 3.0).abs()
         );
         assert!((m.mean.x - 2.0 * PI / 3.0).abs() < 2e-3, "{m:?}");
     }
