@@ -98,6 +98,17 @@ impl Program {
         group: u32,
         resources: &[(&str, wgpu::BindingResource<'_>)],
     ) -> Result<wgpu::BindGroup, GpuError> {
+        ctx.scoped(&self.name, || self.bind(&ctx.device, group, resources))?
+    }
+
+    /// [`Program::bind_group`] without an error scope, for use while
+    /// recording a frame (wgpu errors then reach the context's error log).
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        group: u32,
+        resources: &[(&str, wgpu::BindingResource<'_>)],
+    ) -> Result<wgpu::BindGroup, GpuError> {
         let bindings = self
             .layout
             .groups
@@ -125,13 +136,11 @@ impl Program {
                 self.name
             )));
         }
-        ctx.scoped(&self.name, || {
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("{}.group{group}", self.name)),
-                layout: &self.bind_group_layouts[group as usize],
-                entries: &entries,
-            })
-        })
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&format!("{}.group{group}", self.name)),
+            layout: &self.bind_group_layouts[group as usize],
+            entries: &entries,
+        }))
     }
 
     pub fn compute_pipeline(

@@ -1,4 +1,9 @@
 //! Frame passes, one folder per technique group: `mod.rs` (pipelines and
 //! graph nodes), one `.wgsl` per step, and `reference.rs` (the CPU twin).
 
+pub mod common;
+pub mod debug;
+pub mod gbuffer;
+pub mod lighting;
+pub mod post;
 pub mod sky;

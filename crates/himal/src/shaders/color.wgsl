@@ -11,3 +11,11 @@ fn linear_to_srgb(c: vec3f) -> vec3f {
     let hi = 1.055 * pow(max(c, vec3f(0.0)), vec3f(1.0 / 2.4)) - 0.055;
     return select(hi, lo, c <= vec3f(0.0031308));
 }
+
+// Inverse of linear_to_srgb: lets a debug view write a display value v into
+// an sRGB target so that the stored byte is v itself.
+fn srgb_to_linear(c: vec3f) -> vec3f {
+    let lo = c / 12.92;
+    let hi = pow((max(c, vec3f(0.0)) + 0.055) / 1.055, vec3f(2.4));
+    return select(hi, lo, c <= vec3f(0.04045));
+}

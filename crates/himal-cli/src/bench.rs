@@ -1,0 +1,183 @@
+//! `himal bench`: per-pass GPU time over a fixed camera path, grouped like
+//! the Far Cry 4 frame budget (TECHNIQUES E5).
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use himal::{FrameSettings, Renderer};
+
+use crate::GpuArgs;
+use crate::render::{load_scene, parse_size, pick_camera};
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    pub scene: String,
+    #[arg(long)]
+    pub camera: Option<String>,
+    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    pub size: String,
+    /// Frames measured (after one warm-up frame).
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// Budget group of a pass id (E5: shadows, G-buffer, lighting, blended, post, anti-aliasing, misc).
+pub fn group(pass: &str) -> &'static str {
+    match pass.split('.').next().unwrap_or("") {
+        "shadows" => "shadows",
+        "gbuffer" => "G-buffer",
+        "lighting" | "sky" => "lighting",
+        "blended" => "blended",
+        "post" => "post",
+        "aa" => "anti-aliasing",
+        _ => "misc",
+    }
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let (width, height) = parse_size(&args.size)?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let scene = load_scene(&args.scene)?;
+    let camera = pick_camera(&scene, args.camera.as_deref())?;
+    let settings = FrameSettings::new(width, height, scene.sun.clone());
+    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
+    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut order: Vec<String> = Vec::new();
+    let mut wall = Vec::new();
+    for i in 0..args.frames {
+        // A fixed path: a slow dolly, the same for every run.
+        let mut cam = camera.clone();
+        cam.position += cam.forward * (0.5 * i as f32);
+        let t = Instant::now();
+        let frame = renderer.render(&cam, &settings)?;
+        wall.push(t.elapsed().as_secs_f64() * 1e3);
+        for t in frame.timings {
+            if !order.contains(&t.id) {
+                order.push(t.id.clone());
+            }
+            per_pass.entry(t.id).or_default().push(t.gpu_ms);
+        }
+    }
+    let rows: Vec<(String, f64)> = order
+        .iter()
+        .map(|id| {
+            (
+                id.clone(),
+                median(
+                    per_pass
+                        .get_mut(id)
+                        .map(|v| v.as_mut_slice())
+                        .unwrap_or(&mut []),
+                ),
+            )
+        })
+        .collect();
+    let total: f64 = rows.iter().map(|r| r.1).sum();
+    let wall_median = median(&mut wall);
+    let adapter = renderer.context().info.to_string();
+    if args.json {
+        let passes: Vec<String> = rows
+            .iter()
+            .map(|(id, ms)| {
+                format!(
+                    "{{\"id\":\"{id}\",\"group\":\"{}\",\"gpu_ms\":{ms:.4},\"share\":{:.4}}}",
+                    group(id),
+                    if total > 0.0 { ms / total } else { 0.0 }
+                )
+            })
+            .collect();
+        let memory: Vec<String> = renderer
+            .memory()
+            .iter()
+            .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
+            .collect();
+        println!(
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"passes\":[{}],\"memory\":[{}]}}",
+            args.frames,
+            renderer.scene_triangles(),
+            passes.join(","),
+            memory.join(",")
+        );
+        return Ok(());
+    }
+    println!(
+        "himal bench: {adapter}, {width}x{height}, {} frames (median), {} triangles",
+        args.frames,
+        renderer.scene_triangles()
+    );
+    if rows.is_empty() {
+        println!("(this adapter has no timestamp queries: no per-pass GPU times)");
+    }
+    println!(
+        "{:<22} {:<14} {:>10} {:>8}",
+        "pass", "group", "GPU ms", "share"
+    );
+    for (id, ms) in &rows {
+        println!(
+            "{:<22} {:<14} {:>10.3} {:>7.1}%",
+            id,
+            group(id),
+            ms,
+            if total > 0.0 { 100.0 * ms / total } else { 0.0 }
+        );
+    }
+    let mut groups: BTreeMap<&str, f64> = BTreeMap::new();
+    for (id, ms) in &rows {
+        *groups.entry(group(id)).or_default() += ms;
+    }
+    println!("{:<22} {:<14} {:>10.3} {:>7.1}%", "total", "", total, 100.0);
+    println!(
+        "by budget group (Far Cry 4 PS4 ms: shadows 1.8, G-buffer 7.5, lighting 6.6, blended 1.7, post 2.8, AA 1.9, misc 1.1):"
+    );
+    for g in [
+        "shadows",
+        "G-buffer",
+        "lighting",
+        "blended",
+        "post",
+        "anti-aliasing",
+        "misc",
+    ] {
+        let ms = groups.get(g).copied().unwrap_or(0.0);
+        println!(
+            "  {:<14} {:>10.3} ms {:>6.1}%",
+            g,
+            ms,
+            if total > 0.0 { 100.0 * ms / total } else { 0.0 }
+        );
+    }
+    println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
+    println!("memory:");
+    for (what, bytes) in renderer.memory() {
+        println!(
+            "  {:<22} {:>8.2} MiB",
+            what,
+            bytes as f64 / (1024.0 * 1024.0)
+        );
+    }
+    Ok(())
+}

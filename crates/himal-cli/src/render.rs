@@ -1,0 +1,155 @@
+//! `himal render`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use himal::image_io::ImageKind;
+use himal::scene::{Camera, Scene};
+use himal::{FrameSettings, Renderer, ViewBuffer};
+
+use crate::GpuArgs;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (TOML), or `demo` for the built-in demo world.
+    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    pub scene: String,
+    /// Named camera of the scene (default: its first camera).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Time of day, HH:MM (default: the scene's).
+    #[arg(long, value_name = "HH:MM")]
+    pub time: Option<String>,
+    /// Image size.
+    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    pub size: String,
+    /// Frames to render; more than one writes a numbered sequence while the camera dollies forward.
+    #[arg(long, default_value_t = 1)]
+    pub frames: u32,
+    /// Camera travel per frame in metres along its view direction (sequences).
+    #[arg(long, default_value_t = 0.25)]
+    pub speed: f32,
+    /// Buffer to write: final or a debug view.
+    #[arg(long, default_value = "final", value_name = "BUFFER")]
+    pub view: String,
+    /// Output file (.png or .exr); sequences insert _NNNN before the extension.
+    #[arg(long, default_value = "out/demo.png")]
+    pub out: PathBuf,
+    /// Exposure bias in EV on top of auto exposure.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Print the compiled frame graph (passes, reads, writes) and exit.
+    #[arg(long)]
+    pub graph: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .with_context(|| format!("--size \"{s}\": expected WxH, e.g. 1280x720"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("--size \"{s}\": bad width"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("--size \"{s}\": bad height"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("--size {s}: width and height must be within 1..16384");
+    }
+    Ok((w, h))
+}
+
+/// Loads `demo` or a scene file.
+pub fn load_scene(spec: &str) -> Result<Scene> {
+    Ok(if spec == "demo" {
+        Scene::demo()?
+    } else {
+        Scene::load(Path::new(spec))?
+    })
+}
+
+/// The named camera, or the scene's first.
+pub fn pick_camera(scene: &Scene, name: Option<&str>) -> Result<Camera> {
+    match name {
+        Some(n) => Ok(scene.camera(n)?.clone()),
+        None => scene
+            .cameras
+            .first()
+            .map(|c| c.camera.clone())
+            .context("the scene has no camera: add a [[camera]] table"),
+    }
+}
+
+fn sequence_path(out: &Path, index: u32) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    let ext = out.extension().and_then(|s| s.to_str()).unwrap_or("png");
+    out.with_file_name(format!("{stem}_{index:04}.{ext}"))
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let (width, height) = parse_size(&args.size)?;
+    let view: ViewBuffer = args.view.parse()?;
+    let kind = ImageKind::from_path(&args.out)?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let scene = load_scene(&args.scene)?;
+    let camera = pick_camera(&scene, args.camera.as_deref())?;
+    let mut sun = scene.sun.clone();
+    if let Some(t) = &args.time {
+        sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
+    }
+    let mut settings = FrameSettings::new(width, height, sun);
+    settings.view = view;
+    settings.raw = kind == ImageKind::Exr;
+    settings.exposure_ev = args.exposure;
+    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    if args.graph {
+        print!("{}", renderer.describe_graph(&settings)?);
+        return Ok(());
+    }
+    let progress = (args.frames > 1).then(|| {
+        let bar = indicatif::ProgressBar::new(args.frames as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} frames, {elapsed} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar.set_message("rendering");
+        bar
+    });
+    for i in 0..args.frames {
+        let mut cam = camera.clone();
+        cam.position += cam.forward * (args.speed * i as f32);
+        let frame = renderer.render(&cam, &settings)?;
+        let path = if args.frames > 1 {
+            sequence_path(&args.out, i)
+        } else {
+            args.out.clone()
+        };
+        himal::image_io::save(&path, &frame.image)?;
+        match &progress {
+            Some(bar) => bar.inc(1),
+            None => println!(
+                "wrote {} ({width}x{height}, {})",
+                path.display(),
+                renderer.context().info.name
+            ),
+        }
+    }
+    if let Some(bar) = progress {
+        bar.finish_with_message(format!(
+            "wrote {} frames next to {}",
+            args.frames,
+            args.out.display()
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! The `himal` program: bad input gives a non-zero exit and a clear message.
+
+use std::process::Command;
+
+fn himal(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_himal"))
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn fails_with(args: &[&str], needle: &str) {
+    let (ok, _, err) = himal(args);
+    assert!(!ok, "{args:?} should fail");
+    assert!(
+        err.contains(needle),
+        "{args:?}: stderr lacks \"{needle}\":\n{err}"
+    );
+}
+
+#[test]
+fn size_zero_is_rejected() {
+    fails_with(&["render", "--size", "0x0"], "--size 0x0");
+}
+
+#[test]
+fn unknown_camera_lists_known_ones() {
+    fails_with(
+        &["render", "--camera", "nowhere", "--size", "8x8"],
+        "nowhere",
+    );
+}
+
+#[test]
+fn bad_time_is_rejected() {
+    fails_with(&["render", "--time", "25:99", "--size", "8x8"], "--time");
+}
+
+#[test]
+fn bad_view_lists_views() {
+    fails_with(
+        &["render", "--view", "nope", "--size", "8x8"],
+        "known: final",
+    );
+}
+
+#[test]
+fn unwritable_output_names_the_file() {
+    fails_with(
+        &["render", "--size", "8x8", "--out", "/proc/himal-test/x.png"],
+        "/proc/himal-test/x.png",
+    );
+}
+
+#[test]
+fn malformed_scene_names_file_and_line() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("broken.toml");
+    std::fs::write(
+        &path,
+        "[sun]\ntime = \"10:00\"\n\n[[object]\nname = \"x\"\n",
+    )
+    .expect("write");
+    let p = path.to_string_lossy().to_string();
+    fails_with(&["render", "--scene", &p, "--size", "8x8"], "broken.toml:4");
+}
+
+#[test]
+fn graph_lists_passes_in_order() {
+    let (ok, out, err) = himal(&["render", "--graph", "--size", "64x36"]);
+    assert!(ok, "{err}");
+    let order = [
+        "gbuffer",
+        "lighting.deferred",
+        "sky",
+        "post.luminance",
+        "post.tonemap",
+    ];
+    let mut at = 0;
+    for id in order {
+        let i = out[at..]
+            .find(id)
+            .unwrap_or_else(|| panic!("{id} missing or out of order in:\n{out}"));
+        at += i + id.len();
+    }
+}
+
+#[test]
+fn renders_a_png() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-png-{}", std::process::id()));
+    let path = dir.join("f.png");
+    let p = path.to_string_lossy().to_string();
+    let (ok, _, err) = himal(&[
+        "render",
+        "--size",
+        "64x36",
+        "--camera",
+        "materials",
+        "--out",
+        &p,
+    ]);
+    assert!(ok, "{err}");
+    let img = image::open(&path).expect("a PNG");
+    assert_eq!((img.width(), img.height()), (64, 36));
+}

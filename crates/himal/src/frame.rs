@@ -1,0 +1,121 @@
+//! The whole frame, top to bottom, in one place to read.
+//!
+//! ```text
+//! gbuffer ─┬─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
+//!          └───────────────────────────────────────────────> debug.view ──> output (--view)
+//! ```
+//! Passes that reach no output are culled by the graph (tone mapping when a
+//! debug view is shown).
+
+use std::cell::RefCell;
+
+use crate::gpu::GpuError;
+use crate::graph::FrameGraph;
+use crate::passes::debug::{DebugPass, DebugView};
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::lighting::{LightingInputs, LightingPass};
+use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::sky::SkyPass;
+use crate::renderer::scene_gpu::SceneGpu;
+
+/// Errors raised while a pass records (closures cannot return them).
+#[derive(Default)]
+pub struct FrameErrors(RefCell<Vec<GpuError>>);
+
+impl FrameErrors {
+    /// Keeps the error, if any, and returns the value.
+    pub fn record<T>(&self, r: Result<T, GpuError>) -> Option<T> {
+        match r {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.0.borrow_mut().push(e);
+                None
+            }
+        }
+    }
+
+    pub fn take_first(&self) -> Option<GpuError> {
+        let mut v = self.0.borrow_mut();
+        if v.is_empty() {
+            None
+        } else {
+            Some(v.remove(0))
+        }
+    }
+}
+
+/// Every pass's pipelines, created once.
+pub struct Passes {
+    pub gbuffer: GBufferPass,
+    pub lighting: LightingPass,
+    pub sky: SkyPass,
+    pub luminance: LuminancePass,
+    pub tonemap: TonemapPass,
+    pub debug: DebugPass,
+}
+
+/// What the frame reads that outlives it.
+pub struct FrameInputs<'a> {
+    pub passes: &'a Passes,
+    pub scene: &'a SceneGpu,
+    pub view: &'a wgpu::Buffer,
+    pub lighting: &'a wgpu::Buffer,
+    pub sky: &'a wgpu::Buffer,
+    pub luminance: &'a LuminanceBuffers,
+    pub output: &'a wgpu::Texture,
+    pub errors: &'a FrameErrors,
+}
+
+/// Builds the frame graph; `debug` replaces tone mapping with a debug view.
+pub fn build<'a>(
+    inputs: FrameInputs<'a>,
+    size: (u32, u32),
+    debug: Option<DebugView>,
+) -> FrameGraph<'a> {
+    let FrameInputs {
+        passes,
+        scene,
+        view,
+        lighting,
+        sky,
+        luminance,
+        output,
+        errors,
+    } = inputs;
+    let mut g = FrameGraph::new();
+    let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, errors);
+    let hdr = passes.lighting.add(
+        &mut g,
+        size,
+        gbuffer,
+        LightingInputs {
+            view,
+            lighting,
+            sky,
+        },
+        errors,
+    );
+    let hdr = passes
+        .sky
+        .add(&mut g, hdr, gbuffer.depth, view, sky, errors);
+    let exposure = passes.luminance.add(&mut g, hdr, size, luminance, errors);
+    let out = g.import_texture("output", output);
+    let out = match debug {
+        None => passes
+            .tonemap
+            .add(&mut g, hdr, exposure, out, view, &luminance.result, errors),
+        Some(v) => passes.debug.add(
+            &mut g,
+            v,
+            gbuffer,
+            hdr,
+            exposure,
+            out,
+            view,
+            &luminance.result,
+            errors,
+        ),
+    };
+    g.mark_output(out);
+    g
+}

@@ -1,0 +1,131 @@
+//! Debug views (`himal render --view BUFFER`): one G-buffer channel or the
+//! HDR lighting buffer, as a viewable image (PNG) or raw values (EXR).
+
+use std::collections::HashMap;
+
+use crate::frame::FrameErrors;
+use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureAccess, TextureHandle};
+use crate::passes::common::{draw_fullscreen, target};
+use crate::passes::gbuffer::GBuffer;
+
+/// Buffers a debug view can show; `id` is the shader's `VIEW` constant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DebugView {
+    Albedo = 1,
+    Normal = 2,
+    Tangent = 3,
+    Glossiness = 4,
+    Reflectance = 5,
+    Metallic = 6,
+    Anisotropy = 7,
+    Depth = 8,
+    Motion = 9,
+    Lighting = 10,
+}
+
+pub struct DebugPass {
+    program: Program,
+    pipelines: HashMap<(DebugView, wgpu::TextureFormat), wgpu::RenderPipeline>,
+}
+
+impl DebugPass {
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        Ok(Self {
+            program: Program::new(ctx, "passes/debug/view.wgsl")?,
+            pipelines: HashMap::new(),
+        })
+    }
+
+    /// Builds the pipeline for `view` into `format` (float formats get raw values).
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: DebugView,
+        format: wgpu::TextureFormat,
+    ) -> Result<(), GpuError> {
+        if self.pipelines.contains_key(&(view, format)) {
+            return Ok(());
+        }
+        let display = !matches!(
+            format,
+            wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
+        );
+        let targets = [target(format)];
+        let constants = [
+            ("VIEW", view as u32 as f64),
+            ("DISPLAY", if display { 1.0 } else { 0.0 }),
+        ];
+        let mut spec = RenderSpec::fullscreen("debug.view", &targets);
+        spec.constants = &constants;
+        let pipeline = self.program.render_pipeline(ctx, &spec)?;
+        self.pipelines.insert((view, format), pipeline);
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        view_kind: DebugView,
+        gbuffer: GBuffer,
+        hdr: TextureHandle,
+        exposure: BufferHandle,
+        output: TextureHandle,
+        view: &'a wgpu::Buffer,
+        exposure_buffer: &'a wgpu::Buffer,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let format = graph.texture_desc(output).map(|d| d.format);
+        let pipeline = format.and_then(|f| self.pipelines.get(&(view_kind, f)));
+        let mut pass = graph.add_pass("debug.view");
+        for t in [
+            gbuffer.albedo,
+            gbuffer.frame,
+            gbuffer.material,
+            gbuffer.motion,
+            gbuffer.depth,
+            hdr,
+        ] {
+            pass.read(t, TextureAccess::Sampled);
+        }
+        pass.read_buffer(exposure, BufferAccess::StorageRead);
+        let output = pass.write(output, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let Some(pipeline) = pipeline else {
+                errors.record::<()>(Err(GpuError::Other(format!(
+                    "debug view {view_kind:?} was not prepared"
+                ))));
+                return;
+            };
+            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
+            let bind_group = self.program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("view", view.as_entire_binding()),
+                    ("gbuffer_albedo", tv(gbuffer.albedo)),
+                    ("gbuffer_frame", tv(gbuffer.frame)),
+                    ("gbuffer_material", tv(gbuffer.material)),
+                    ("motion", tv(gbuffer.motion)),
+                    ("depth", tv(gbuffer.depth)),
+                    ("hdr", tv(hdr)),
+                    ("exposure", exposure_buffer.as_entire_binding()),
+                ],
+            );
+            if let Some(bg) = errors.record(bind_group) {
+                let target = ctx.view(output);
+                draw_fullscreen(
+                    ctx,
+                    pipeline,
+                    &bg,
+                    target,
+                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    None,
+                );
+            }
+        });
+        output
+    }
+}

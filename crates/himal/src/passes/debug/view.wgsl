@@ -1,0 +1,75 @@
+// debug.view: shows one G-buffer or HDR buffer (`himal render --view BUFFER`).
+// VIEW selects the buffer (ids in passes/debug/mod.rs `DebugView`); DISPLAY = 1
+// maps to viewable [0,1] for PNG (sRGB target), DISPLAY = 0 writes raw values
+// (Rgba32Float, for EXR): albedo linear, normal/tangent in [-1,1], depth as
+// stored (reverse-Z), motion in pixels, lighting in HDR units.
+#import view
+#import color
+#import tangent_frame
+
+override VIEW: u32 = 1u;
+override DISPLAY: bool = true;
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var gbuffer_albedo: texture_2d<f32>;
+@group(0) @binding(2) var gbuffer_frame: texture_2d<f32>;
+@group(0) @binding(3) var gbuffer_material: texture_2d<f32>;
+@group(0) @binding(4) var motion: texture_2d<f32>;
+@group(0) @binding(5) var depth: texture_depth_2d;
+@group(0) @binding(6) var hdr: texture_2d<f32>;
+@group(0) @binding(7) var<storage, read> exposure: vec4f;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
+    return fullscreen_clip(i);
+}
+
+// Display value v in [0,1] stored as-is by the sRGB target.
+fn shown(v: vec3f) -> vec4f {
+    return vec4f(srgb_to_linear(clamp(v, vec3f(0.0), vec3f(1.0))), 1.0);
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2i(frag.xy);
+    let d = textureLoad(depth, px, 0);
+    let sky = d <= 0.0;
+    let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
+    let m = textureLoad(gbuffer_material, px, 0);
+    var raw = vec4f(0.0, 0.0, 0.0, 1.0);
+    var disp = vec3f(0.0);
+    switch VIEW {
+        case 1u: { // albedo (linear; the sRGB target encodes it)
+            raw = vec4f(textureLoad(gbuffer_albedo, px, 0).rgb, 1.0);
+            return select(raw, vec4f(0.0, 0.0, 0.0, 1.0), sky);
+        }
+        case 2u: { raw = vec4f(tbn[2], 1.0); disp = tbn[2] * 0.5 + 0.5; }
+        case 3u: { raw = vec4f(tbn[0], 1.0); disp = tbn[0] * 0.5 + 0.5; }
+        case 4u: { raw = vec4f(vec3f(m.x), 1.0); disp = vec3f(m.x); }
+        case 5u: { raw = vec4f(vec3f(m.y), 1.0); disp = vec3f(m.y); }
+        case 6u: { raw = vec4f(vec3f(m.z), 1.0); disp = vec3f(m.z); }
+        case 7u: { raw = vec4f(vec3f(m.w), 1.0); disp = vec3f(m.w); }
+        case 8u: {
+            raw = vec4f(vec3f(d), 1.0);
+            // distance = near / depth for an infinite reverse-Z projection; log scale 1 m .. 4 km
+            let dist = view.camera_position.w / max(d, 1e-9);
+            disp = vec3f(1.0 - clamp(log2(max(dist, 1.0)) / 12.0, 0.0, 1.0));
+        }
+        case 9u: {
+            let mv = textureLoad(motion, px, 0).xy * view.viewport.xy;
+            raw = vec4f(mv, 0.0, 1.0);
+            disp = vec3f(0.5 + mv / 16.0, 0.5);
+        }
+        default: { // 10: lighting (HDR); display: exposure-scaled, clamped, no curve
+            let c = textureLoad(hdr, px, 0).rgb;
+            raw = vec4f(c, 1.0);
+            let scale = 0.18 / max(exposure.y, 1e-6) * exp2(view.jitter.w);
+            return select(raw, vec4f(min(c * scale, vec3f(1.0)), 1.0), DISPLAY);
+        }
+    }
+    if (sky && VIEW != 8u) {
+        raw = vec4f(0.0, 0.0, 0.0, 1.0);
+        disp = vec3f(0.0);
+    }
+    return select(raw, shown(disp), DISPLAY);
+}

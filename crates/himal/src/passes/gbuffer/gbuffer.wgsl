@@ -1,0 +1,82 @@
+// gbuffer: rasterise scene geometry into the G-buffer (TECHNIQUES M1-M3).
+// Targets: 0 albedo Rgba8UnormSrgb (rgb albedo, a material AO)
+//          1 frame  Rgb10a2Unorm   (tangent frame quaternion, smallest three + index; M3)
+//          2 material Rgba8Unorm   (glossiness, reflectance, metallic, anisotropy; M1)
+//          3 motion Rg16Float      (previous uv - current uv)
+// Bindings: view (uniform View), objects (storage, per-object transforms; instance index = object).
+// Source: McAuley, "Rendering the World of Far Cry 4", GDC 2015, Materials + Appendix A.
+#import view
+#import tangent_frame
+
+struct Object {
+    model: mat4x4f,
+    // inverse transpose of model (for normals), 3x3 part used
+    normal_matrix: mat4x4f,
+    prev_model: mat4x4f,
+}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+
+struct VertexIn {
+    @location(0) position: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) tangent: vec4f,
+    @location(3) uv: vec2f,
+    @location(4) color: vec4f,
+    @location(5) surface: vec4f,
+    @builtin(instance_index) object: u32,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4f,
+    @location(0) normal: vec3f,
+    @location(1) tangent: vec4f,
+    @location(2) color: vec4f,
+    @location(3) surface: vec4f,
+    @location(4) curr_clip: vec4f,
+    @location(5) prev_clip: vec4f,
+}
+
+@vertex
+fn vs_main(in: VertexIn) -> VertexOut {
+    let o = objects[in.object];
+    let world = o.model * vec4f(in.position, 1.0);
+    let prev_world = o.prev_model * vec4f(in.position, 1.0);
+    var out: VertexOut;
+    out.curr_clip = view.view_proj * world;
+    out.prev_clip = view.prev_view_proj * prev_world;
+    // Jitter moves the raster only; motion vectors stay jitter-free.
+    out.clip = out.curr_clip + vec4f(view.jitter.xy * out.curr_clip.w, 0.0, 0.0);
+    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
+    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w);
+    out.color = in.color;
+    out.surface = in.surface;
+    return out;
+}
+
+struct GBufferOut {
+    @location(0) albedo: vec4f,
+    @location(1) frame: vec4f,
+    @location(2) material: vec4f,
+    @location(3) motion: vec2f,
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    var n = normalize(in.normal);
+    if (!front) {
+        n = -n;
+    }
+    // Right-handed shading frame; a mirrored tangent's sign is consumed here (M3.md).
+    let tbn = shading_frame(n, in.tangent);
+    var out: GBufferOut;
+    out.albedo = in.color;
+    out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
+    out.material = clamp(in.surface, vec4f(0.0), vec4f(1.0));
+    let curr = in.curr_clip.xy / in.curr_clip.w;
+    let prev = in.prev_clip.xy / in.prev_clip.w;
+    // NDC y up -> uv y down
+    out.motion = (prev - curr) * vec2f(0.5, -0.5);
+    return out;
+}

@@ -1,0 +1,153 @@
+//! G-buffer pass (TECHNIQUES M1-M3): scene geometry into albedo, a
+//! quaternion tangent frame (Rgb10a2), material parameters, motion, depth.
+//! Layout per DESIGN.md; the packing lives in `shaders/tangent_frame.wgsl`
+//! with its CPU twin in `math/quat_frame.rs`.
+
+use crate::frame::FrameErrors;
+use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
+use crate::passes::common::target;
+use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
+
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
+pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Handles of the G-buffer targets after the pass.
+#[derive(Clone, Copy, Debug)]
+pub struct GBuffer {
+    pub albedo: TextureHandle,
+    pub frame: TextureHandle,
+    pub material: TextureHandle,
+    pub motion: TextureHandle,
+    pub depth: TextureHandle,
+}
+
+pub struct GBufferPass {
+    program: Program,
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?;
+        let targets = [
+            target(ALBEDO_FORMAT),
+            target(FRAME_FORMAT),
+            target(MATERIAL_FORMAT),
+            target(MOTION_FORMAT),
+        ];
+        let pipeline = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "gbuffer",
+                vertex_entry: "vs_main",
+                fragment_entry: Some("fs_main"),
+                vertex_buffers: &[Some(vertex_layout())],
+                targets: &targets,
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    // reverse-Z: nearer is larger
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: Some(wgpu::Face::Back),
+                    ..Default::default()
+                },
+                constants: &[],
+            },
+        )?;
+        Ok(Self { program, pipeline })
+    }
+
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        size: (u32, u32),
+        view: &'a wgpu::Buffer,
+        scene: &'a SceneGpu,
+        errors: &'a FrameErrors,
+    ) -> GBuffer {
+        let (w, h) = size;
+        let albedo =
+            graph.create_texture("gbuffer.albedo", TextureDesc::new_2d(w, h, ALBEDO_FORMAT));
+        let frame = graph.create_texture("gbuffer.frame", TextureDesc::new_2d(w, h, FRAME_FORMAT));
+        let material = graph.create_texture(
+            "gbuffer.material",
+            TextureDesc::new_2d(w, h, MATERIAL_FORMAT),
+        );
+        let motion = graph.create_texture("motion", TextureDesc::new_2d(w, h, MOTION_FORMAT));
+        let depth = graph.create_texture("depth", TextureDesc::new_2d(w, h, DEPTH_FORMAT));
+        let mut pass = graph.add_pass("gbuffer");
+        let out = GBuffer {
+            albedo: pass.write(albedo, TextureAccess::ColorAttachment),
+            frame: pass.write(frame, TextureAccess::ColorAttachment),
+            material: pass.write(material, TextureAccess::ColorAttachment),
+            motion: pass.write(motion, TextureAccess::ColorAttachment),
+            depth: pass.write(depth, TextureAccess::DepthAttachment),
+        };
+        pass.execute(move |ctx| {
+            let Some(bind_group) = errors.record(self.program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("view", view.as_entire_binding()),
+                    ("objects", scene.objects.as_entire_binding()),
+                ],
+            )) else {
+                return;
+            };
+            let colour = |v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let attachments = [
+                colour(ctx.view(out.albedo)),
+                colour(ctx.view(out.frame)),
+                colour(ctx.view(out.material)),
+                colour(ctx.view(out.motion)),
+            ];
+            let depth_view = ctx.view(out.depth);
+            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("gbuffer"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            rp.set_pipeline(&self.pipeline);
+            rp.set_bind_group(0, &bind_group, &[]);
+            rp.set_vertex_buffer(0, scene.vertices.slice(..));
+            rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for d in &scene.draws {
+                rp.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    d.object..d.object + 1,
+                );
+            }
+        });
+        out
+    }
+}

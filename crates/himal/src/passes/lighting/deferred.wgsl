@@ -1,0 +1,72 @@
+// lighting.deferred: full-screen deferred shading of the G-buffer (TECHNIQUES M1, M2, L1 foundation).
+// Sun: anisotropic GGX + height-correlated Smith + Schlick, Lambert diffuse (brdf.wgsl).
+// Sky: third-order SH irradiance; ambient specular uses the split-sum fit with SH
+// evaluated along the reflection vector (stand-in until the L3/L4 probes land).
+// Aerial perspective: exponential extinction toward the sky colour along the view ray.
+// Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth.
+// CPU twin: passes/lighting/reference.rs (`shade`).
+#import view
+#import brdf
+#import tangent_frame
+#import sh
+#import sky
+
+struct Lighting {
+    // xyz: unit vector towards the sun
+    sun_direction: vec4f,
+    // rgb: sun illuminance at the ground (klux), w unused
+    sun_illuminance: vec4f,
+    // sky irradiance E(n) as SH9 (klux)
+    sky_irradiance: Sh9,
+    // x: extinction per metre, y: amount of aerial perspective (0 = off)
+    fog: vec4f,
+}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> lighting: Lighting;
+@group(0) @binding(2) var<uniform> sky: SkyParams;
+@group(0) @binding(3) var gbuffer_albedo: texture_2d<f32>;
+@group(0) @binding(4) var gbuffer_frame: texture_2d<f32>;
+@group(0) @binding(5) var gbuffer_material: texture_2d<f32>;
+@group(0) @binding(6) var depth: texture_depth_2d;
+
+// Outgoing radiance toward v (before aerial perspective).
+fn shade(s: Surface, glossiness: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f) -> vec3f {
+    let l = lighting.sun_direction.xyz;
+    var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb;
+    let n_o_v = max(dot(n, v), 1e-4);
+    let r = reflect(-v, n);
+    let e_n = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
+    let e_r = max(sh9_eval(lighting.sky_irradiance, r), vec3f(0.0));
+    let dfg = env_brdf_approx(s.f0, perceptual_roughness_from_glossiness(glossiness), n_o_v);
+    c += (s.diffuse_albedo * e_n + dfg * e_r) * (ao / PI);
+    return c;
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
+    return fullscreen_clip(i);
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2i(frag.xy);
+    let d = textureLoad(depth, px, 0);
+    if (d <= 0.0) {
+        discard;
+    }
+    let uv = frag.xy * view.viewport.zw;
+    let p = world_from_depth(view, uv, d);
+    let albedo_ao = textureLoad(gbuffer_albedo, px, 0);
+    let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
+    let m = textureLoad(gbuffer_material, px, 0);
+    let s = surface_from_material(albedo_ao.rgb, m.x, m.y, m.z, m.w);
+    let to_camera = view.camera_position.xyz - p;
+    let dist = length(to_camera);
+    let v = to_camera / dist;
+    var c = shade(s, m.x, albedo_ao.a, tbn[0], tbn[1], tbn[2], v);
+    let transmittance = exp(-lighting.fog.x * dist);
+    let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
+    c = c * transmittance + inscatter * (1.0 - transmittance);
+    return vec4f(c, 1.0);
+}

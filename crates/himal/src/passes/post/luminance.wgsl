@@ -1,0 +1,60 @@
+// post.luminance: log-average luminance of the HDR image, reduced on the GPU
+// (TECHNIQUES H3; Reinhard et al. 2002 eq. 1: L_avg = exp(mean(log(delta + L)))).
+// Two steps with a fixed reduction order, so the result is deterministic:
+//   cs_partial: each 16x16 tile -> (sum of log L, pixel count) in partials[tile]
+//   cs_final:   one workgroup sums the tiles -> result = (log average, average, tiles, pixels)
+// Bindings: hdr (texture), partials (storage), result (storage). CPU twin: post/reference.rs.
+#import color
+
+const DELTA: f32 = 1e-4;
+
+@group(0) @binding(0) var hdr: texture_2d<f32>;
+@group(0) @binding(1) var<storage, read_write> partials: array<vec2f>;
+@group(0) @binding(2) var<storage, read_write> result: vec4f;
+
+var<workgroup> tile_sum: array<vec2f, 256>;
+
+@compute @workgroup_size(16, 16)
+fn cs_partial(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) li: u32,
+              @builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) nwg: vec3u) {
+    let size = textureDimensions(hdr);
+    var v = vec2f(0.0);
+    if (gid.x < size.x && gid.y < size.y) {
+        let c = textureLoad(hdr, vec2i(gid.xy), 0).rgb;
+        // Guard against NaN/Inf from upstream passes.
+        let l = clamp(luminance(c), 0.0, 65504.0);
+        v = vec2f(log(DELTA + l), 1.0);
+    }
+    tile_sum[li] = v;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
+        if (li < stride) {
+            tile_sum[li] = tile_sum[li] + tile_sum[li + stride];
+        }
+        workgroupBarrier();
+    }
+    if (li == 0u) {
+        partials[wg.y * nwg.x + wg.x] = tile_sum[0];
+    }
+}
+
+@compute @workgroup_size(256)
+fn cs_final(@builtin(local_invocation_index) li: u32) {
+    let n = arrayLength(&partials);
+    var v = vec2f(0.0);
+    for (var i = li; i < n; i = i + 256u) {
+        v = v + partials[i];
+    }
+    tile_sum[li] = v;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
+        if (li < stride) {
+            tile_sum[li] = tile_sum[li] + tile_sum[li + stride];
+        }
+        workgroupBarrier();
+    }
+    if (li == 0u) {
+        let log_avg = tile_sum[0].x / max(tile_sum[0].y, 1.0);
+        result = vec4f(log_avg, exp(log_avg), f32(n), tile_sum[0].y);
+    }
+}

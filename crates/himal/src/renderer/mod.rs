@@ -1,0 +1,404 @@
+//! [`Renderer`]: owns the device, the scene on the GPU, every pass's
+//! pipelines and the state kept between frames; renders one frame per call.
+
+pub mod scene_gpu;
+pub mod uniforms;
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec4};
+
+use crate::Error;
+use crate::frame::{self, FrameErrors, FrameInputs, Passes};
+use crate::gpu::pipeline::uniform_buffer;
+use crate::gpu::{GpuContext, TextureData, read_texture};
+use crate::graph::{PassTimer, PassTiming, TexturePool};
+use crate::math::sh::Sh9Gpu;
+use crate::passes::debug::{DebugPass, DebugView};
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::lighting::LightingPass;
+use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::sky::{SkyLight, SkyPass};
+use crate::scene::{Camera, Scene, SunDesc};
+use scene_gpu::SceneGpu;
+use uniforms::{LightingUniform, ViewUniform};
+
+/// Format of the displayable output (PNG).
+pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Format of raw float output (EXR of a debug view).
+pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// The buffer a frame shows (`--view`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum ViewBuffer {
+    #[default]
+    Final,
+    Debug(DebugView),
+}
+
+impl ViewBuffer {
+    pub const NAMES: [&'static str; 11] = [
+        "final",
+        "albedo",
+        "normal",
+        "tangent",
+        "glossiness",
+        "reflectance",
+        "metallic",
+        "anisotropy",
+        "depth",
+        "motion",
+        "lighting",
+    ];
+}
+
+impl ViewBuffer {
+    pub fn debug(self) -> Option<DebugView> {
+        match self {
+            ViewBuffer::Final => None,
+            ViewBuffer::Debug(v) => Some(v),
+        }
+    }
+}
+
+impl std::str::FromStr for ViewBuffer {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        use DebugView as D;
+        Ok(match s {
+            "final" => ViewBuffer::Final,
+            "albedo" => ViewBuffer::Debug(D::Albedo),
+            "normal" => ViewBuffer::Debug(D::Normal),
+            "tangent" => ViewBuffer::Debug(D::Tangent),
+            "glossiness" => ViewBuffer::Debug(D::Glossiness),
+            "reflectance" => ViewBuffer::Debug(D::Reflectance),
+            "metallic" => ViewBuffer::Debug(D::Metallic),
+            "anisotropy" => ViewBuffer::Debug(D::Anisotropy),
+            "depth" => ViewBuffer::Debug(D::Depth),
+            "motion" => ViewBuffer::Debug(D::Motion),
+            "lighting" => ViewBuffer::Debug(D::Lighting),
+            other => {
+                return Err(Error::InvalidSettings(format!(
+                    "unknown view \"{other}\" (known: {})",
+                    ViewBuffer::NAMES.join(", ")
+                )));
+            }
+        })
+    }
+}
+
+/// Everything one frame needs besides the camera.
+#[derive(Clone, Debug)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub view: ViewBuffer,
+    /// Raw float values (for EXR) instead of a displayable image.
+    pub raw: bool,
+    pub sun: SunDesc,
+    /// Exposure bias in EV on top of the auto exposure.
+    pub exposure_ev: f32,
+    /// Aerial perspective extinction per metre (0 = off).
+    pub aerial_extinction: f32,
+}
+
+impl FrameSettings {
+    pub fn new(width: u32, height: u32, sun: SunDesc) -> Self {
+        Self {
+            width,
+            height,
+            view: ViewBuffer::Final,
+            raw: false,
+            sun,
+            exposure_ev: 0.0,
+            aerial_extinction: 2.5e-4,
+        }
+    }
+}
+
+/// One rendered frame read back to the CPU.
+pub struct RenderedFrame {
+    pub image: TextureData,
+    /// GPU time per pass (empty where the adapter has no timestamps).
+    pub timings: Vec<PassTiming>,
+}
+
+/// GPU resources the frame graph borrows (everything but the pool and timer,
+/// which execution borrows mutably).
+struct Resources {
+    passes: Passes,
+    scene: SceneGpu,
+    view_buffer: wgpu::Buffer,
+    lighting_buffer: wgpu::Buffer,
+    sky_buffer: wgpu::Buffer,
+    luminance: Option<((u32, u32), LuminanceBuffers)>,
+    outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
+}
+
+impl Resources {
+    fn inputs<'a>(
+        &'a self,
+        size: (u32, u32),
+        format: wgpu::TextureFormat,
+        errors: &'a FrameErrors,
+    ) -> Option<FrameInputs<'a>> {
+        Some(FrameInputs {
+            passes: &self.passes,
+            scene: &self.scene,
+            view: &self.view_buffer,
+            lighting: &self.lighting_buffer,
+            sky: &self.sky_buffer,
+            luminance: &self.luminance.as_ref()?.1,
+            output: self.outputs.get(&(size.0, size.1, format))?,
+            errors,
+        })
+    }
+}
+
+pub struct Renderer {
+    ctx: GpuContext,
+    res: Resources,
+    pool: TexturePool,
+    timer: Option<PassTimer>,
+    prev_view_proj: Option<Mat4>,
+    frame_index: u64,
+    sky_light: Option<(SunKey, SkyLight)>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+struct SunKey(f32, f32, u32, f32);
+
+impl Renderer {
+    /// Creates every pipeline and uploads the scene.
+    pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
+        let passes = Passes {
+            gbuffer: GBufferPass::new(&ctx)?,
+            lighting: LightingPass::new(&ctx)?,
+            sky: SkyPass::new(&ctx)?,
+            luminance: LuminancePass::new(&ctx)?,
+            tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
+            debug: DebugPass::new(&ctx)?,
+        };
+        let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        let view_buffer =
+            uniform_buffer(&ctx, "view", &bytemuck::Zeroable::zeroed() as &ViewUniform);
+        let lighting_buffer = uniform_buffer(
+            &ctx,
+            "lighting",
+            &bytemuck::Zeroable::zeroed() as &LightingUniform,
+        );
+        let sky_light = SkyLight::new(12.0, 45.0, 172, 3.0);
+        let sky_buffer = uniform_buffer(&ctx, "sky", &sky_light.sky.gpu_params());
+        let timer = PassTimer::new(&ctx.device, &ctx.queue, 32);
+        Ok(Self {
+            ctx,
+            res: Resources {
+                passes,
+                scene: scene_gpu,
+                view_buffer,
+                lighting_buffer,
+                sky_buffer,
+                luminance: None,
+                outputs: HashMap::new(),
+            },
+            pool: TexturePool::new(),
+            timer,
+            prev_view_proj: None,
+            frame_index: 0,
+            sky_light: None,
+        })
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    pub fn scene_triangles(&self) -> u64 {
+        self.res.scene.triangles
+    }
+
+    /// Bytes held by the scene's buffers and the transient texture pool.
+    pub fn memory(&self) -> Vec<(&'static str, u64)> {
+        vec![
+            ("scene buffers", self.res.scene.bytes),
+            ("frame targets (pool)", self.pool.allocated_bytes()),
+        ]
+    }
+
+    /// Forgets the previous frame (camera cut): motion vectors become zero.
+    pub fn reset_history(&mut self) {
+        self.prev_view_proj = None;
+    }
+
+    fn validate(settings: &FrameSettings) -> Result<(), Error> {
+        let max = 16384;
+        if settings.width == 0
+            || settings.height == 0
+            || settings.width > max
+            || settings.height > max
+        {
+            return Err(Error::InvalidSettings(format!(
+                "frame size {}x{} is outside 1x1..{max}x{max}",
+                settings.width, settings.height
+            )));
+        }
+        Ok(())
+    }
+
+    fn update_sky(&mut self, sun: &SunDesc) {
+        let key = SunKey(
+            sun.time_hours,
+            sun.latitude_deg,
+            sun.day_of_year,
+            sun.turbidity,
+        );
+        if self.sky_light.as_ref().is_some_and(|(k, _)| *k == key) {
+            return;
+        }
+        let light = SkyLight::new(
+            sun.time_hours,
+            sun.latitude_deg,
+            sun.day_of_year,
+            sun.turbidity,
+        );
+        self.ctx.queue.write_buffer(
+            &self.res.sky_buffer,
+            0,
+            bytemuck::bytes_of(&light.sky.gpu_params()),
+        );
+        self.sky_light = Some((key, light));
+    }
+
+    /// The compiled pass list for these settings (`himal render --graph`).
+    pub fn describe_graph(&mut self, settings: &FrameSettings) -> Result<String, Error> {
+        Self::validate(settings)?;
+        let size = (settings.width, settings.height);
+        let format = self.prepare_output(settings)?;
+        let errors = FrameErrors::default();
+        let inputs = self
+            .res
+            .inputs(size, format, &errors)
+            .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
+        Ok(frame::build(inputs, size, settings.view.debug())
+            .compile()?
+            .describe())
+    }
+
+    fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
+        match settings.view {
+            ViewBuffer::Debug(_) if settings.raw => RAW_FORMAT,
+            _ => DISPLAY_FORMAT,
+        }
+    }
+
+    /// Creates size-dependent resources and the debug pipeline if needed.
+    fn prepare_output(&mut self, settings: &FrameSettings) -> Result<wgpu::TextureFormat, Error> {
+        let size = (settings.width, settings.height);
+        let format = Self::output_format(settings);
+        if let ViewBuffer::Debug(v) = settings.view {
+            self.res.passes.debug.prepare(&self.ctx, v, format)?;
+        }
+        if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
+            self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
+        }
+        let device = &self.ctx.device;
+        self.res
+            .outputs
+            .entry((size.0, size.1, format))
+            .or_insert_with(|| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("output"),
+                    size: wgpu::Extent3d {
+                        width: size.0,
+                        height: size.1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                })
+            });
+        Ok(format)
+    }
+
+    /// Renders one frame from `camera` and reads the output back.
+    pub fn render(
+        &mut self,
+        camera: &Camera,
+        settings: &FrameSettings,
+    ) -> Result<RenderedFrame, Error> {
+        Self::validate(settings)?;
+        let size = (settings.width, settings.height);
+        let format = self.prepare_output(settings)?;
+        self.update_sky(&settings.sun);
+        let aspect = size.0 as f32 / size.1 as f32;
+        let (view, proj) = (camera.view(), camera.projection(aspect));
+        let view_proj = proj * view;
+        let prev = self.prev_view_proj.unwrap_or(view_proj);
+        let uniform = ViewUniform::new(
+            view,
+            proj,
+            prev,
+            camera.position,
+            camera.near,
+            size,
+            self.frame_index,
+            settings.exposure_ev,
+        );
+        self.ctx
+            .queue
+            .write_buffer(&self.res.view_buffer, 0, bytemuck::bytes_of(&uniform));
+        let Some((_, light)) = &self.sky_light else {
+            return Err(Error::InvalidSettings("sky light missing".into()));
+        };
+        let lighting = LightingUniform::new(
+            light.sun_direction,
+            light.sun_illuminance,
+            Sh9Gpu::from(&light.irradiance_sh),
+            Vec4::new(
+                settings.aerial_extinction,
+                if settings.aerial_extinction > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                },
+                0.0,
+                0.0,
+            ),
+        );
+        self.ctx
+            .queue
+            .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
+
+        let errors = FrameErrors::default();
+        let Self {
+            ctx,
+            res,
+            pool,
+            timer,
+            ..
+        } = self;
+        let inputs = res
+            .inputs(size, format, &errors)
+            .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
+        let output = inputs.output;
+        let compiled = frame::build(inputs, size, settings.view.debug()).compile()?;
+        let commands = compiled.execute(&ctx.device, pool, timer.as_mut())?;
+        if let Some(e) = errors.take_first() {
+            return Err(e.into());
+        }
+        ctx.queue.submit([commands]);
+        ctx.check("frame")?;
+        let timings = match timer.as_mut() {
+            Some(t) => t.read_timings(&ctx.device)?,
+            None => Vec::new(),
+        };
+        let image = read_texture(ctx, output, 0, 0)?;
+        self.prev_view_proj = Some(view_proj);
+        self.frame_index += 1;
+        Ok(RenderedFrame { image, timings })
+    }
+}

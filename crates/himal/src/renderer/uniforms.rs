@@ -1,0 +1,74 @@
+//! CPU twins of the uniform structs in `shaders/view.wgsl` and
+//! `passes/lighting/deferred.wgsl` (layouts checked by a test).
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::math::sh::Sh9Gpu;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ViewUniform {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub prev_view_proj: [[f32; 4]; 4],
+    pub view: [[f32; 4]; 4],
+    /// xyz camera position, w near plane
+    pub camera_position: [f32; 4],
+    /// width, height, 1/width, 1/height
+    pub viewport: [f32; 4],
+    /// xy jitter (clip units), z frame index, w exposure bias (EV)
+    pub jitter: [f32; 4],
+}
+
+impl ViewUniform {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        view: Mat4,
+        proj: Mat4,
+        prev_view_proj: Mat4,
+        position: Vec3,
+        near: f32,
+        size: (u32, u32),
+        frame_index: u64,
+        exposure_bias_ev: f32,
+    ) -> Self {
+        let view_proj = proj * view;
+        let (w, h) = (size.0 as f32, size.1 as f32);
+        Self {
+            view_proj: view_proj.to_cols_array_2d(),
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            prev_view_proj: prev_view_proj.to_cols_array_2d(),
+            view: view.to_cols_array_2d(),
+            camera_position: position.extend(near).to_array(),
+            viewport: [w, h, 1.0 / w, 1.0 / h],
+            jitter: [0.0, 0.0, frame_index as f32, exposure_bias_ev],
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LightingUniform {
+    pub sun_direction: [f32; 4],
+    pub sun_illuminance: [f32; 4],
+    pub sky_irradiance: Sh9Gpu,
+    /// x extinction per metre, y aerial perspective amount
+    pub fog: [f32; 4],
+}
+
+impl LightingUniform {
+    pub fn new(
+        sun_direction: Vec3,
+        sun_illuminance: Vec3,
+        sky_irradiance: Sh9Gpu,
+        fog: Vec4,
+    ) -> Self {
+        Self {
+            sun_direction: sun_direction.extend(0.0).to_array(),
+            sun_illuminance: sun_illuminance.extend(0.0).to_array(),
+            sky_irradiance,
+            fog: fog.to_array(),
+        }
+    }
+}

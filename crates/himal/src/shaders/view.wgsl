@@ -1,0 +1,35 @@
+// Per-frame camera data shared by every pass (twin: frame.rs `ViewUniform`).
+// Reverse-Z: depth 1 at the near plane, 0 at infinity (the cleared value).
+
+struct View {
+    view_proj: mat4x4f,
+    inv_view_proj: mat4x4f,
+    prev_view_proj: mat4x4f,
+    view: mat4x4f,
+    // xyz camera position (world), w near plane distance
+    camera_position: vec4f,
+    // width, height, 1/width, 1/height in pixels
+    viewport: vec4f,
+    // xy: this frame's sub-pixel jitter in clip units; z: frame index; w: exposure EV bias
+    jitter: vec4f,
+}
+
+// Full-screen triangle: vertex 0..2 covers the screen; uv has y down.
+fn fullscreen_clip(vertex_index: u32) -> vec4f {
+    let uv = vec2f(f32((vertex_index << 1u) & 2u), f32(vertex_index & 2u));
+    return vec4f(uv * vec2f(2.0, -2.0) + vec2f(-1.0, 1.0), 0.0, 1.0);
+}
+
+// World position of the pixel centre at `uv` (y down) with device depth `depth`.
+fn world_from_depth(view: View, uv: vec2f, depth: f32) -> vec3f {
+    let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    let p = view.inv_view_proj * ndc;
+    return p.xyz / p.w;
+}
+
+// Unit direction from the camera through the pixel at `uv` (works at depth 0 = infinity).
+fn view_ray(view: View, uv: vec2f) -> vec3f {
+    let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0, 1.0);
+    let p = view.inv_view_proj * ndc;
+    return normalize(p.xyz / p.w - view.camera_position.xyz);
+}
