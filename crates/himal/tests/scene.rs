@@ -237,7 +237,7 @@ fn demo_snapped_objects_touch_the_ground_without_sinking_far() {
         "house4",
         "house5",
         "house6",
-        "house8",
+        "house7",
         "barn",
         "well",
         "plinth_front",

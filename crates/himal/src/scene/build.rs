@@ -76,8 +76,13 @@ impl Checker<'_> {
     }
 
     pub fn non_negative(&self, v: &Option<Spanned<f32>>, key: &str, default: f32) -> Result<f32> {
-        v.as_ref()
-            .map_or(Ok(default), |v| self.range(v, key, 0.0, f32::MAX))
+        let Some(v) = v else { return Ok(default) };
+        let x = *v.get_ref();
+        if x >= 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(&v.span(), format!("{key} = {x} must be finite and >= 0")))
+        }
     }
 
     pub fn int(&self, v: &Spanned<i64>, key: &str, lo: i64, hi: i64) -> Result<u32> {

@@ -108,6 +108,9 @@ pub struct Vertex {
     pub surface: [f32; 4],
 }
 
+// The GPU vertex layout depends on this size.
+const _: () = assert!(std::mem::size_of::<Vertex>() == 80);
+
 /// Axis-aligned bounding box. The empty box has `min > max` (+inf / -inf).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
