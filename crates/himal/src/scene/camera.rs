@@ -3,7 +3,7 @@
 use glam::{Mat4, Vec3};
 
 /// A perspective camera in world space.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub position: Vec3,
     /// Unit view direction.

@@ -232,6 +232,16 @@ mod tests {
     use super::parse_hh_mm;
 
     #[test]
+    fn parse_time_takes_clock_or_hours() {
+        use crate::scene::parse_time;
+        assert_eq!(parse_time("10:30"), Ok(10.5));
+        assert_eq!(parse_time(" 14.25 "), Ok(14.25));
+        assert!(parse_time("24").is_err() && parse_time("-1").is_err());
+        assert!(parse_time("25:99").unwrap_err().contains("25:99"));
+        assert!(parse_time("noon").is_err());
+    }
+
+    #[test]
     fn hh_mm_parses_and_rejects() {
         assert_eq!(parse_hh_mm("14:30"), Ok(14.5));
         assert_eq!(parse_hh_mm("0:00"), Ok(0.0));

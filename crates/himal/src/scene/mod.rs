@@ -253,10 +253,27 @@ impl MaterialDesc {
     }
 }
 
+/// Time of day from text as the scene file takes it: "HH:MM" (24-hour
+/// clock) or hours as a number, in [0, 24). For command-line overrides.
+pub fn parse_time(text: &str) -> Result<f32, String> {
+    let text = text.trim();
+    let hours = if text.contains(':') {
+        file::parse_hh_mm(text)?
+    } else {
+        text.parse::<f32>()
+            .map_err(|_| format!("bad time \"{text}\": expected \"HH:MM\" or hours like 14.5"))?
+    };
+    if (0.0..24.0).contains(&hours) {
+        Ok(hours)
+    } else {
+        Err(format!("time {hours} hours is out of range [0, 24)"))
+    }
+}
+
 /// Sun position inputs (the sky pass turns them into a direction and colour).
 /// World orientation assumed by the demo's cameras: north is -Z, east is +X,
 /// so an afternoon sun shines from +Z, -X (south-west).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SunDesc {
     /// Local solar time in hours, [0, 24).
     pub time_hours: f32,
