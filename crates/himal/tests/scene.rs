@@ -157,7 +157,7 @@ fn demo_bounds_contain_every_object() {
         "{e}"
     );
     eprintln!("bounds {:?}", s.bounds);
-    // Measured top 279.3 m, bottom -1.26 m on 2026-11-22.
+    // Measured top 289.0 m, bottom -1.26 m on 2026-11-22.
     assert!(
         (150.0..=300.0).contains(&s.bounds.max.y),
         "peaks at {}",
@@ -370,7 +370,7 @@ fn tangents_follow_uvs_with_positive_handedness() {
     let terrain = &demo().meshes[object(demo(), "terrain").mesh];
     let agreement = uv_frame_agreement(terrain);
     eprintln!("terrain frame agreement {agreement}");
-    // Measured 0.99972 on 2026-11-22; threshold 0.995.
+    // Measured 0.99950 on 2026-11-22; threshold 0.995.
     assert!(agreement > 0.995, "terrain frame agreement {agreement}");
 }
 
