@@ -1,1 +1,373 @@
 //! Scene description: meshes, materials, cameras, TOML scene files, procedural demo world.
+//!
+//! A [`Scene`] is a flat list of [`Object`]s (a mesh index and a transform),
+//! the meshes they share, named cameras and the sun. Materials are baked into
+//! the vertices (`color`, `surface`) when meshes are built, so a mesh exists
+//! once per (primitive parameters, material) pair and the height field can
+//! blend materials per vertex.
+//!
+//! # Scene files (TOML)
+//!
+//! Units are metres and degrees; the world is right-handed with Y up.
+//! Unknown keys are errors, and every error names the file and `line:column`.
+//!
+//! ```toml
+//! [sun]                        # optional; defaults shown
+//! time = "14:00"               # "HH:MM" (24 h, local solar time) or hours as a number, in [0, 24)
+//! latitude = 45.0              # degrees, [-90, 90]
+//! day_of_year = 172            # 1..=366
+//! turbidity = 3.0              # sky haze, [1, 10]
+//!
+//! [[material]]
+//! name = "plaster"             # unique
+//! albedo = [0.85, 0.80, 0.70]  # sRGB-encoded 0..1 (converted to linear), or
+//! # albedo_linear = [...]      # linear 0..1; give exactly one of the two
+//! glossiness = 0.3             # [0, 1], default 0.5
+//! reflectance = 0.04           # [0, 1], specular F0 of a dielectric, default 0.04
+//! metallic = 0.0               # [0, 1], default 0 (metals: albedo is their F0 colour)
+//! anisotropy = 0.0             # [0, 1], default 0
+//! ao = 1.0                     # [0, 1], baked ambient occlusion, default 1
+//!
+//! [[object]]
+//! name = "house"               # unique
+//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield
+//! material = "plaster"
+//! position = [0, 0, 0]         # default origin
+//! rotation = [0, 30, 0]        # Euler degrees [x, y, z], R = Ry * Rx * Rz (roll, then pitch, then yaw)
+//! scale = 1.0                  # number or [x, y, z], positive
+//! size = [6, 3, 4]             # primitive parameters, see below
+//! snap_to_ground = true        # put the lowest point on the height field (see below)
+//! rest_on = "other"            # or put the lowest point on top of an earlier object
+//! repeat = { count = 4, step = [2, 0, 0] }  # copies, `step` in the object's rotated frame
+//! ```
+//!
+//! Primitives (all centred on their local origin):
+//! - `plane`: `size = [x, z]`, `segments` (quads per side, default 1); faces +Y.
+//! - `box`: `size = [x, y, z]`.
+//! - `sphere`: `radius`, `segments` (around, default 48), `rings` (pole to pole, default segments / 2).
+//! - `cylinder`: `radius`, `height`, `segments` (default 32); axis Y, capped.
+//! - `prism`: roof, `size = [length x, height y, depth z]`, ridge along X;
+//!   optional `gable_material` for the two end triangles (default `material`).
+//! - `heightfield`: `size = [x, z]`, `resolution` (vertices per side, >= 2) and either
+//!   `noise = { seed, octaves, frequency, amplitude, ridged, lacunarity, gain, warp,
+//!   erosion, flat_radius, valley_radius, floor_amplitude }` (see [`TerrainNoise`]) or
+//!   `png = "relative/to/scene.png"` (grayscale, 16-bit recommended; column 0 at -x,
+//!   row 0 at -z; `resolution` optional, resamples) with `height_scale` (metres at white).
+//!   `layers = [{ material, min_height, max_height, min_slope, max_slope, blend,
+//!   slope_blend, jitter }]`: slopes in degrees from horizontal, `blend` in metres,
+//!   `slope_blend` in degrees, `jitter` metres of noise on the height test.
+//!   `material` (if given) is the base layer, otherwise the first layer is;
+//!   the base covers everything and later layers are painted over it in order.
+//!   `albedo_variation` (0..1) adds low-frequency brightness variation.
+//!   A height field may be moved, yawed and scaled but not pitched or rolled.
+//!
+//! Placement: `snap_to_ground = true` samples the height field under the
+//! object's footprint (its rotated, scaled bounds' bottom rectangle, 5 x 5
+//! points) on the exact mesh triangles and puts the object's lowest point
+//! on the *lowest* sample, plus `position.y` as an offset: nothing floats,
+//! and on the demo's gently rolling valley floor the sink at the uphill side
+//! is a few centimetres. `rest_on` does the same on the top of an earlier
+//! object's world bounds (roofs on walls, spheres on a plinth).
+//!
+//! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
+//! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).
+//!
+//! Mesh conventions (UVs, tangents, winding) are in [`primitives`].
+
+mod build;
+mod camera;
+mod error;
+mod file;
+pub mod heightfield;
+pub mod noise;
+mod place;
+pub mod primitives;
+mod terrain;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Vec3};
+
+pub use camera::{Camera, DEFAULT_NEAR};
+pub use error::SceneError;
+pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
+
+/// One vertex as the G-buffer pass reads it (80 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    /// xyz: unit tangent along +u; w: handedness sign (+1/-1), glTF convention
+    /// (bitangent = cross(normal, tangent.xyz) * w).
+    pub tangent: [f32; 4],
+    pub uv: [f32; 2],
+    /// Linear albedo rgb; a = material (baked) ambient occlusion.
+    pub color: [f32; 4],
+    /// Glossiness, reflectance, metallic, anisotropy (TECHNIQUES.md M1), each in [0, 1].
+    pub surface: [f32; 4],
+}
+
+// The GPU vertex layout depends on this size.
+const _: () = assert!(std::mem::size_of::<Vertex>() == 80);
+
+/// Axis-aligned bounding box. The empty box has `min > max` (+inf / -inf).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    pub fn new(min: Vec3, max: Vec3) -> Self {
+        Aabb { min, max }
+    }
+
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
+        points.into_iter().fold(Aabb::EMPTY, |b, p| Aabb {
+            min: b.min.min(p),
+            max: b.max.max(p),
+        })
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Full size along each axis (`max - min`), not the half size.
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (a, b) = (self.min, self.max);
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { a.x } else { b.x },
+                if i & 2 == 0 { a.y } else { b.y },
+                if i & 4 == 0 { a.z } else { b.z },
+            )
+        })
+    }
+
+    /// Bounds of the eight transformed corners (affine `m`).
+    pub fn transform(&self, m: &Mat4) -> Aabb {
+        if self.is_empty() {
+            return *self;
+        }
+        Aabb::from_points(self.corners().map(|c| m.transform_point3(c)))
+    }
+
+    pub fn contains_point(&self, p: Vec3, tolerance: f32) -> bool {
+        p.cmpge(self.min - tolerance).all() && p.cmple(self.max + tolerance).all()
+    }
+
+    pub fn contains(&self, other: &Aabb, tolerance: f32) -> bool {
+        other.is_empty()
+            || (self.contains_point(other.min, tolerance)
+                && self.contains_point(other.max, tolerance))
+    }
+}
+
+/// Triangle list, counter-clockwise front faces seen from outside.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    pub name: String,
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+    pub bounds: Aabb,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// An instance of a mesh in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub mesh: usize,
+    /// Local to world (translation * rotation * scale).
+    pub transform: Mat4,
+}
+
+/// Material parameters as written in the scene file (albedo already linear).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    pub name: String,
+    /// Linear albedo; for metals their F0 colour.
+    pub albedo: Vec3,
+    pub glossiness: f32,
+    pub reflectance: f32,
+    pub metallic: f32,
+    pub anisotropy: f32,
+    pub ao: f32,
+}
+
+impl Default for MaterialDesc {
+    fn default() -> Self {
+        MaterialDesc {
+            name: "default".into(),
+            albedo: Vec3::splat(0.5),
+            glossiness: 0.5,
+            reflectance: 0.04,
+            metallic: 0.0,
+            anisotropy: 0.0,
+            ao: 1.0,
+        }
+    }
+}
+
+impl MaterialDesc {
+    /// `Vertex::color`: linear albedo and ao.
+    pub fn vertex_color(&self) -> [f32; 4] {
+        self.albedo.extend(self.ao).to_array()
+    }
+
+    /// `Vertex::surface`: glossiness, reflectance, metallic, anisotropy.
+    pub fn vertex_surface(&self) -> [f32; 4] {
+        [
+            self.glossiness,
+            self.reflectance,
+            self.metallic,
+            self.anisotropy,
+        ]
+    }
+}
+
+/// Time of day from text as the scene file takes it: "HH:MM" (24-hour
+/// clock) or hours as a number, in [0, 24). For command-line overrides.
+pub fn parse_time(text: &str) -> Result<f32, String> {
+    let text = text.trim();
+    let hours = if text.contains(':') {
+        file::parse_hh_mm(text)?
+    } else {
+        text.parse::<f32>()
+            .map_err(|_| format!("bad time \"{text}\": expected \"HH:MM\" or hours like 14.5"))?
+    };
+    if (0.0..24.0).contains(&hours) {
+        Ok(hours)
+    } else {
+        Err(format!("time {hours} hours is out of range [0, 24)"))
+    }
+}
+
+/// Sun position inputs (the sky pass turns them into a direction and colour).
+/// World orientation assumed by the demo's cameras: north is -Z, east is +X,
+/// so an afternoon sun shines from +Z, -X (south-west).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SunDesc {
+    /// Local solar time in hours, [0, 24).
+    pub time_hours: f32,
+    pub latitude_deg: f32,
+    pub day_of_year: u32,
+    pub turbidity: f32,
+}
+
+impl Default for SunDesc {
+    fn default() -> Self {
+        SunDesc {
+            time_hours: 14.0,
+            latitude_deg: 45.0,
+            day_of_year: 172,
+            turbidity: 3.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedCamera {
+    pub name: String,
+    pub camera: Camera,
+}
+
+/// A loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The file it came from: the loaded path, or the `origin` given to
+    /// [`Scene::from_toml_str`]; `None` only for scenes assembled in code.
+    pub path: Option<PathBuf>,
+    pub meshes: Vec<Mesh>,
+    pub objects: Vec<Object>,
+    pub materials: Vec<MaterialDesc>,
+    pub cameras: Vec<NamedCamera>,
+    pub sun: SunDesc,
+    /// World bounds of all objects.
+    pub bounds: Aabb,
+}
+
+/// Text of the demo world, embedded so the renderer runs from anywhere.
+const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
+
+impl Scene {
+    /// Reads, parses and builds the scene file at `path`; relative paths
+    /// inside it are resolved against its folder.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+        let mut scene = Self::from_toml_str(&text, &path.display().to_string(), base_dir)?;
+        scene.path = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// Parses scene text; `origin` names it in messages, `base_dir` resolves relative paths.
+    pub fn from_toml_str(text: &str, origin: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        build::build_scene(text, origin, base_dir)
+    }
+
+    /// The demo world (`scenes/demo.toml`, embedded at compile time).
+    pub fn demo() -> Result<Scene, SceneError> {
+        let base_dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes"));
+        Self::from_toml_str(DEMO_TOML, "scenes/demo.toml", base_dir)
+    }
+
+    /// The camera called `name`; the error lists the names there are.
+    pub fn camera(&self, name: &str) -> Result<&Camera, SceneError> {
+        self.cameras
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| &c.camera)
+            .ok_or_else(|| SceneError::UnknownCamera {
+                file: self
+                    .path
+                    .as_ref()
+                    .map_or_else(|| "<scene>".to_string(), |p| p.display().to_string()),
+                name: name.to_string(),
+                known: self
+                    .cameras
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+    }
+
+    /// Triangles drawn per frame (each object counts its mesh's triangles).
+    pub fn triangle_count(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| self.meshes[o.mesh].triangle_count())
+            .sum()
+    }
+}

@@ -1,0 +1,502 @@
+//! Scene file -> [`Scene`]: semantic checks (each error at the offending
+//! key), materials, cameras, and mesh building shared per (shape, material).
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::Path;
+
+use glam::{EulerRot, Mat4, Quat, Vec3};
+use toml::Spanned;
+
+use super::error::SourceMap;
+use super::file::{FileCamera, FileMaterial, FileObject, FileScene, FileSun};
+use super::place::Placer;
+use super::{Aabb, Camera, MaterialDesc, NamedCamera, Scene, SceneError, SunDesc};
+use super::{heightfield, primitives};
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield";
+
+/// Range checks that point at the offending value.
+pub(crate) struct Checker<'a> {
+    pub src: SourceMap<'a>,
+}
+
+impl Checker<'_> {
+    pub fn err(&self, span: &Range<usize>, message: impl Into<String>) -> SceneError {
+        self.src.error(span, message)
+    }
+
+    /// `v` in [lo, hi] (inclusive).
+    pub fn range(&self, v: &Spanned<f32>, key: &str, lo: f32, hi: f32) -> Result<f32> {
+        let x = *v.get_ref();
+        if x >= lo && x <= hi {
+            Ok(x)
+        } else {
+            Err(self.err(
+                &v.span(),
+                format!("{key} = {x} is out of range [{lo}, {hi}]"),
+            ))
+        }
+    }
+
+    pub fn unit(&self, v: &Option<Spanned<f32>>, key: &str, default: f32) -> Result<f32> {
+        v.as_ref()
+            .map_or(Ok(default), |v| self.range(v, key, 0.0, 1.0))
+    }
+
+    pub fn positive(&self, v: &Spanned<f32>, key: &str) -> Result<f32> {
+        let x = *v.get_ref();
+        if x > 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(&v.span(), format!("{key} = {x} must be positive")))
+        }
+    }
+
+    /// A vector of finite numbers (TOML allows nan and inf).
+    pub fn finite3(&self, v: &Spanned<[f32; 3]>, key: &str) -> Result<Vec3> {
+        let a = *v.get_ref();
+        if a.iter().all(|c| c.is_finite()) {
+            Ok(Vec3::from(a))
+        } else {
+            Err(self.err(&v.span(), format!("{key} {a:?} must be finite")))
+        }
+    }
+
+    /// Optional finite vector, `default` when absent.
+    pub fn finite3_or(
+        &self,
+        v: &Option<Spanned<[f32; 3]>>,
+        key: &str,
+        default: Vec3,
+    ) -> Result<Vec3> {
+        v.as_ref().map_or(Ok(default), |v| self.finite3(v, key))
+    }
+
+    pub fn non_negative(&self, v: &Option<Spanned<f32>>, key: &str, default: f32) -> Result<f32> {
+        let Some(v) = v else { return Ok(default) };
+        let x = *v.get_ref();
+        if x >= 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(&v.span(), format!("{key} = {x} must be finite and >= 0")))
+        }
+    }
+
+    pub fn int(&self, v: &Spanned<i64>, key: &str, lo: i64, hi: i64) -> Result<u32> {
+        let x = *v.get_ref();
+        if x >= lo && x <= hi {
+            Ok(x as u32)
+        } else {
+            Err(self.err(
+                &v.span(),
+                format!("{key} = {x} is out of range [{lo}, {hi}]"),
+            ))
+        }
+    }
+
+    /// `size` with exactly `N` positive components.
+    pub fn size<const N: usize>(&self, v: &Spanned<Vec<f32>>, primitive: &str) -> Result<[f32; N]> {
+        let s = v.get_ref();
+        if s.len() != N || s.iter().any(|c| !(*c > 0.0 && c.is_finite())) {
+            let want = if N == 2 { "[x, z]" } else { "[x, y, z]" };
+            return Err(self.err(
+                &v.span(),
+                format!("{primitive} size must be {N} positive numbers {want}, got {s:?}"),
+            ));
+        }
+        let mut out = [0.0; N];
+        out.copy_from_slice(s);
+        Ok(out)
+    }
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<Scene> {
+    let ck = Checker {
+        src: SourceMap { origin, text },
+    };
+    let file: FileScene = toml::from_str(text).map_err(|e| ck.src.toml_error(&e))?;
+    let sun = build_sun(&ck, file.sun.as_ref())?;
+    let materials = build_materials(&ck, &file.material)?;
+    let cameras = build_cameras(&ck, &file.camera)?;
+    let mut world = World {
+        ck: &ck,
+        base_dir,
+        materials: &materials,
+        meshes: Vec::new(),
+        mesh_keys: HashMap::new(),
+    };
+    let objects = Placer::place_all(&mut world, &file.object)?;
+    let meshes = world.meshes;
+    let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
+        b.union(&meshes[o.mesh].bounds.transform(&o.transform))
+    });
+    Ok(Scene {
+        path: Some(origin.into()),
+        meshes,
+        objects,
+        materials,
+        cameras,
+        sun,
+        bounds,
+    })
+}
+
+fn build_sun(ck: &Checker, sun: Option<&FileSun>) -> Result<SunDesc> {
+    let mut out = SunDesc::default();
+    let Some(s) = sun else { return Ok(out) };
+    if let Some(t) = &s.time {
+        let h = t.get_ref().0;
+        if !(0.0..24.0).contains(&h) {
+            return Err(ck.err(
+                &t.span(),
+                format!("time = {h} hours is out of range [0, 24)"),
+            ));
+        }
+        out.time_hours = h;
+    }
+    if let Some(l) = &s.latitude {
+        out.latitude_deg = ck.range(l, "latitude", -90.0, 90.0)?;
+    }
+    if let Some(d) = &s.day_of_year {
+        out.day_of_year = ck.int(d, "day_of_year", 1, 366)?;
+    }
+    if let Some(t) = &s.turbidity {
+        out.turbidity = ck.range(t, "turbidity", 1.0, 10.0)?;
+    }
+    Ok(out)
+}
+
+fn build_materials(ck: &Checker, file: &[FileMaterial]) -> Result<Vec<MaterialDesc>> {
+    let mut out: Vec<MaterialDesc> = Vec::new();
+    let mut first_at: HashMap<&str, Range<usize>> = HashMap::new();
+    for m in file {
+        let name = m.name.get_ref();
+        if let Some(prev) = first_at.get(name.as_str()) {
+            let (line, _) = ck.src.line_column(prev.start);
+            return Err(ck.err(
+                &m.name.span(),
+                format!("material \"{name}\" is defined twice (first on line {line})"),
+            ));
+        }
+        first_at.insert(name, m.name.span());
+        let albedo = match (&m.albedo, &m.albedo_linear) {
+            (Some(_), Some(l)) => {
+                return Err(ck.err(&l.span(), "give albedo (sRGB) or albedo_linear, not both"));
+            }
+            (None, None) => {
+                return Err(ck.err(
+                    &m.name.span(),
+                    format!("material \"{name}\" needs albedo (sRGB) or albedo_linear"),
+                ));
+            }
+            (Some(a), None) | (None, Some(a)) => {
+                let v = a.get_ref();
+                if v.iter().any(|c| !(0.0..=1.0).contains(c)) {
+                    return Err(ck.err(&a.span(), format!("albedo {v:?} must lie in [0, 1]")));
+                }
+                let v = Vec3::from(*v);
+                if m.albedo.is_some() {
+                    v.map(srgb_to_linear)
+                } else {
+                    v
+                }
+            }
+        };
+        out.push(MaterialDesc {
+            name: name.clone(),
+            albedo,
+            glossiness: ck.unit(&m.glossiness, "glossiness", 0.5)?,
+            reflectance: ck.unit(&m.reflectance, "reflectance", 0.04)?,
+            metallic: ck.unit(&m.metallic, "metallic", 0.0)?,
+            anisotropy: ck.unit(&m.anisotropy, "anisotropy", 0.0)?,
+            ao: ck.unit(&m.ao, "ao", 1.0)?,
+        });
+    }
+    Ok(out)
+}
+
+fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<NamedCamera>> {
+    let mut out: Vec<NamedCamera> = Vec::new();
+    for c in file {
+        let name = c.name.get_ref();
+        if out.iter().any(|o| &o.name == name) {
+            return Err(ck.err(
+                &c.name.span(),
+                format!("camera \"{name}\" is defined twice"),
+            ));
+        }
+        let position = ck.finite3(&c.position, "position")?;
+        let (dir, span) = match (&c.target, &c.forward) {
+            (Some(t), None) => (ck.finite3(t, "target")? - position, t.span()),
+            (None, Some(f)) => (ck.finite3(f, "forward")?, f.span()),
+            _ => {
+                return Err(ck.err(
+                    &c.name.span(),
+                    format!("camera \"{name}\" needs exactly one of target or forward"),
+                ));
+            }
+        };
+        if dir.length() <= 1e-6 {
+            return Err(ck.err(&span, "view direction has zero length (target = position?)"));
+        }
+        let forward = dir.normalize();
+        let up = match &c.up {
+            Some(u) => {
+                let v = ck.finite3(u, "up")?;
+                if v.cross(forward).length() <= 1e-3 {
+                    return Err(ck.err(
+                        &u.span(),
+                        "up must be non-zero and not parallel to the view",
+                    ));
+                }
+                v.normalize()
+            }
+            None => super::camera::up_for(forward),
+        };
+        let fov_y_deg = match &c.fov_y {
+            Some(f) if !(*f.get_ref() > 0.0 && *f.get_ref() < 180.0) => {
+                return Err(ck.err(
+                    &f.span(),
+                    format!("fov_y = {} must lie in (0, 180) degrees", f.get_ref()),
+                ));
+            }
+            Some(f) => *f.get_ref(),
+            None => 60.0,
+        };
+        let near = match &c.near {
+            Some(n) => ck.positive(n, "near")?,
+            None => super::DEFAULT_NEAR,
+        };
+        out.push(NamedCamera {
+            name: name.clone(),
+            camera: Camera {
+                position,
+                forward,
+                up,
+                fov_y_deg,
+                near,
+            },
+        });
+    }
+    Ok(out)
+}
+
+/// Meshes built so far, shared by (shape, material) key.
+pub(crate) struct World<'a> {
+    pub ck: &'a Checker<'a>,
+    pub base_dir: &'a Path,
+    pub materials: &'a [MaterialDesc],
+    pub meshes: Vec<super::Mesh>,
+    pub mesh_keys: HashMap<String, usize>,
+}
+
+/// A validated primitive; its Debug text (with the material) keys mesh sharing.
+#[derive(Debug)]
+enum Shape {
+    Plane {
+        size: [f32; 2],
+        segments: u32,
+    },
+    Box {
+        size: [f32; 3],
+    },
+    Sphere {
+        radius: f32,
+        segments: u32,
+        rings: u32,
+    },
+    Cylinder {
+        radius: f32,
+        height: f32,
+        segments: u32,
+    },
+    Prism {
+        size: [f32; 3],
+        gable: usize,
+    },
+}
+
+/// Which keys each primitive takes besides the common ones.
+fn allowed_keys(primitive: &str) -> Option<&'static [&'static str]> {
+    Some(match primitive {
+        "plane" => &["size", "segments"],
+        "box" => &["size"],
+        "sphere" => &["radius", "segments", "rings"],
+        "cylinder" => &["radius", "height", "segments"],
+        "prism" => &["size", "gable_material"],
+        "heightfield" => &[
+            "size",
+            "resolution",
+            "noise",
+            "png",
+            "height_scale",
+            "layers",
+            "albedo_variation",
+        ],
+        _ => return None,
+    })
+}
+
+impl World<'_> {
+    pub fn material(&self, name: &Spanned<String>) -> Result<usize> {
+        let n = name.get_ref();
+        self.materials
+            .iter()
+            .position(|m| &m.name == n)
+            .ok_or_else(|| {
+                let known: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
+                self.ck.err(
+                    &name.span(),
+                    format!("unknown material \"{n}\" (known: {})", known.join(", ")),
+                )
+            })
+    }
+
+    pub fn required<'o, T>(&self, o: &FileObject, v: &'o Option<T>, key: &str) -> Result<&'o T> {
+        v.as_ref().ok_or_else(|| {
+            self.ck.err(
+                &o.name.span(),
+                format!(
+                    "object \"{}\": primitive {} needs `{key}`",
+                    o.name.get_ref(),
+                    o.primitive.get_ref()
+                ),
+            )
+        })
+    }
+
+    fn segments(&self, v: &Option<Spanned<i64>>, key: &str, default: u32, lo: i64) -> Result<u32> {
+        v.as_ref()
+            .map_or(Ok(default), |s| self.ck.int(s, key, lo, 4096))
+    }
+
+    /// Rejects unknown primitives and keys that do not apply to the primitive.
+    pub fn check_keys(&self, o: &FileObject) -> Result<()> {
+        let prim = o.primitive.get_ref().as_str();
+        let Some(allowed) = allowed_keys(prim) else {
+            return Err(self.ck.err(
+                &o.primitive.span(),
+                format!("unknown primitive \"{prim}\" (known: {PRIMITIVES})"),
+            ));
+        };
+        match o
+            .parameter_keys()
+            .into_iter()
+            .find(|(k, _)| !allowed.contains(k))
+        {
+            Some((key, span)) => Err(self.ck.err(
+                &span,
+                format!(
+                    "`{key}` does not apply to primitive {prim} (its keys: {})",
+                    allowed.join(", ")
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// Mesh index for a non-height-field object, shared when identical.
+    pub fn mesh_for(&mut self, o: &FileObject) -> Result<usize> {
+        self.check_keys(o)?;
+        let prim = o.primitive.get_ref().as_str();
+        let material = self.material(self.required(o, &o.material, "material")?)?;
+        let shape = match prim {
+            "plane" => Shape::Plane {
+                size: self.ck.size(self.required(o, &o.size, "size")?, prim)?,
+                segments: self.segments(&o.segments, "segments", 1, 1)?,
+            },
+            "box" => Shape::Box {
+                size: self.ck.size(self.required(o, &o.size, "size")?, prim)?,
+            },
+            "sphere" => {
+                let segments = self.segments(&o.segments, "segments", 48, 3)?;
+                Shape::Sphere {
+                    radius: self
+                        .ck
+                        .positive(self.required(o, &o.radius, "radius")?, "radius")?,
+                    segments,
+                    rings: self.segments(&o.rings, "rings", (segments / 2).max(2), 2)?,
+                }
+            }
+            "cylinder" => Shape::Cylinder {
+                radius: self
+                    .ck
+                    .positive(self.required(o, &o.radius, "radius")?, "radius")?,
+                height: self
+                    .ck
+                    .positive(self.required(o, &o.height, "height")?, "height")?,
+                segments: self.segments(&o.segments, "segments", 32, 3)?,
+            },
+            _ => Shape::Prism {
+                size: self.ck.size(self.required(o, &o.size, "size")?, prim)?,
+                gable: match &o.gable_material {
+                    Some(g) => self.material(g)?,
+                    None => material,
+                },
+            },
+        };
+        // f32 Debug output round-trips, so equal keys mean identical meshes.
+        let key = format!("{shape:?} {material}");
+        if let Some(&i) = self.mesh_keys.get(&key) {
+            return Ok(i);
+        }
+        let m = &self.materials[material];
+        let name = format!("{prim}/{}/{}", m.name, self.meshes.len());
+        let mesh = match shape {
+            Shape::Plane { size, segments } => primitives::plane(name, size, [segments; 2], m),
+            Shape::Box { size } => primitives::cuboid(name, Vec3::from(size), m),
+            Shape::Sphere {
+                radius,
+                segments,
+                rings,
+            } => primitives::uv_sphere(name, radius, segments, rings, m),
+            Shape::Cylinder {
+                radius,
+                height,
+                segments,
+            } => primitives::cylinder(name, radius, height, segments, m),
+            Shape::Prism { size, gable } => {
+                primitives::prism(name, Vec3::from(size), m, &self.materials[gable])
+            }
+        };
+        self.meshes.push(mesh);
+        self.mesh_keys.insert(key, self.meshes.len() - 1);
+        Ok(self.meshes.len() - 1)
+    }
+
+    /// Height field mesh and grid.
+    pub fn heightfield(&mut self, o: &FileObject) -> Result<(usize, heightfield::HeightGrid)> {
+        self.check_keys(o)?;
+        let (grid, seed, layers, variation) = super::terrain::build(self, o)?;
+        let name = format!("heightfield/{}", o.name.get_ref());
+        let mesh = grid.mesh(name, &layers, seed, variation);
+        self.meshes.push(mesh);
+        Ok((self.meshes.len() - 1, grid))
+    }
+}
+
+/// Local-to-world rotation from Euler degrees [x, y, z]: R = Ry * Rx * Rz.
+pub(crate) fn rotation_from_euler_deg(r: [f32; 3]) -> Quat {
+    Quat::from_euler(
+        EulerRot::YXZ,
+        r[1].to_radians(),
+        r[0].to_radians(),
+        r[2].to_radians(),
+    )
+}
+
+/// Translation * rotation * scale.
+pub(crate) fn trs(t: Vec3, r: Quat, s: Vec3) -> Mat4 {
+    Mat4::from_scale_rotation_translation(s, r, t)
+}

@@ -1,0 +1,119 @@
+//! Pinhole camera: right-handed, Y up, reverse-Z with an infinite far plane.
+
+use glam::{Mat4, Vec3};
+
+/// A perspective camera in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    /// Unit view direction.
+    pub forward: Vec3,
+    /// World up hint (need not be orthogonal to `forward`, must not be parallel).
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_y_deg: f32,
+    /// Near plane distance in metres (depth 1 there).
+    pub near: f32,
+}
+
+/// Near plane used when a scene file does not give one.
+pub const DEFAULT_NEAR: f32 = 0.1;
+
+/// An up vector that is not parallel to `forward` (Y unless looking straight up or down).
+pub fn up_for(forward: Vec3) -> Vec3 {
+    if forward.normalize_or_zero().y.abs() > 0.999 {
+        Vec3::NEG_Z
+    } else {
+        Vec3::Y
+    }
+}
+
+impl Camera {
+    /// Camera at `position` looking at `target` with Y up.
+    pub fn look_at(position: Vec3, target: Vec3, fov_y_deg: f32) -> Camera {
+        let forward = (target - position).normalize_or(Vec3::NEG_Z);
+        Camera {
+            position,
+            forward,
+            up: up_for(forward),
+            fov_y_deg,
+            near: DEFAULT_NEAR,
+        }
+    }
+
+    /// World to view: right-handed view space, camera looks down -Z, Y up.
+    pub fn view(&self) -> Mat4 {
+        let forward = self.forward.normalize_or(Vec3::NEG_Z);
+        let up = if forward.cross(self.up).length_squared() < 1e-8 {
+            up_for(forward)
+        } else {
+            self.up.normalize()
+        };
+        glam::camera::rh::view::look_to_mat4(self.position, forward, up)
+    }
+
+    /// View to clip, reverse-Z with an infinite far plane: depth = near / distance,
+    /// so 1 at the near plane and 0 at infinity; clip z in [0, 1], NDC Y up (wgpu).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        glam::camera::rh::proj::directx::perspective_infinite_reverse(
+            self.fov_y_deg.to_radians(),
+            aspect,
+            self.near,
+        )
+    }
+
+    pub fn view_projection(&self, aspect: f32) -> Mat4 {
+        self.projection(aspect) * self.view()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec4;
+
+    #[test]
+    fn projection_is_reverse_z_with_infinite_far_plane() {
+        let cam = Camera::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -10.0), 60.0);
+        let vp = cam.view_projection(16.0 / 9.0);
+        let depth = |d: f32| {
+            let c: Vec4 = vp * (cam.position + cam.forward * d).extend(1.0);
+            c.z / c.w
+        };
+        assert!(
+            (depth(cam.near) - 1.0).abs() < 1e-6,
+            "near depth {}",
+            depth(cam.near)
+        );
+        let mut last = depth(cam.near);
+        for k in 1..60 {
+            let d = cam.near * 1.5f32.powi(k);
+            let z = depth(d);
+            assert!(z < last && z > 0.0, "depth {z} at {d} m after {last}");
+            assert!(
+                (z - cam.near / d).abs() < 1e-6,
+                "depth {z} != near / distance at {d} m"
+            );
+            last = z;
+        }
+        assert!(depth(1e9) < 1e-9);
+        // Straight ahead is the screen centre; up is +y in NDC (wgpu), right is +x.
+        let ndc = |p: Vec3| vp.project_point3(p);
+        let ahead = ndc(cam.position + cam.forward * 10.0);
+        assert!(ahead.x.abs() < 1e-6 && ahead.y.abs() < 1e-6);
+        assert!(ndc(cam.position + Vec3::new(0.0, 1.0, -10.0)).y > 0.0);
+        assert!(ndc(cam.position + Vec3::new(1.0, 0.0, -10.0)).x > 0.0);
+        // The top of the frustum is at fov_y / 2.
+        let top = ndc(cam.position + Vec3::new(0.0, (30f32).to_radians().tan() * 10.0, -10.0));
+        assert!((top.y - 1.0).abs() < 1e-5, "{top}");
+    }
+
+    #[test]
+    fn looking_straight_down_still_gives_a_valid_view() {
+        let cam = Camera::look_at(Vec3::new(0.0, 100.0, 0.0), Vec3::ZERO, 30.0);
+        let v = cam.view();
+        assert!(v.to_cols_array().iter().all(|x| x.is_finite()));
+        let p = v.transform_point3(Vec3::ZERO);
+        assert!((p - Vec3::new(0.0, 0.0, -100.0)).length() < 1e-4, "{p}");
+    }
+}

@@ -1,0 +1,255 @@
+//! The scene file's TOML shape (serde). Every value a later check may
+//! reject is `Spanned`, so the error can point at its line and column;
+//! `deny_unknown_fields` turns typos into errors at the key.
+
+use std::fmt;
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use toml::Spanned;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileScene {
+    pub sun: Option<FileSun>,
+    #[serde(default)]
+    pub material: Vec<FileMaterial>,
+    #[serde(default)]
+    pub object: Vec<FileObject>,
+    #[serde(default)]
+    pub camera: Vec<FileCamera>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileSun {
+    pub time: Option<Spanned<TimeOfDay>>,
+    pub latitude: Option<Spanned<f32>>,
+    pub day_of_year: Option<Spanned<i64>>,
+    pub turbidity: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileMaterial {
+    pub name: Spanned<String>,
+    pub albedo: Option<Spanned<[f32; 3]>>,
+    pub albedo_linear: Option<Spanned<[f32; 3]>>,
+    pub glossiness: Option<Spanned<f32>>,
+    pub reflectance: Option<Spanned<f32>>,
+    pub metallic: Option<Spanned<f32>>,
+    pub anisotropy: Option<Spanned<f32>>,
+    pub ao: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileRepeat {
+    pub count: Spanned<i64>,
+    pub step: Spanned<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileObject {
+    pub name: Spanned<String>,
+    pub primitive: Spanned<String>,
+    pub material: Option<Spanned<String>>,
+    pub position: Option<Spanned<[f32; 3]>>,
+    pub rotation: Option<Spanned<[f32; 3]>>,
+    pub scale: Option<Spanned<Scale>>,
+    pub snap_to_ground: Option<Spanned<bool>>,
+    pub rest_on: Option<Spanned<String>>,
+    pub repeat: Option<Spanned<FileRepeat>>,
+    // Primitive parameters; which ones apply is checked per primitive.
+    pub size: Option<Spanned<Vec<f32>>>,
+    pub radius: Option<Spanned<f32>>,
+    pub height: Option<Spanned<f32>>,
+    pub segments: Option<Spanned<i64>>,
+    pub rings: Option<Spanned<i64>>,
+    pub gable_material: Option<Spanned<String>>,
+    pub resolution: Option<Spanned<i64>>,
+    pub noise: Option<Spanned<FileNoise>>,
+    pub png: Option<Spanned<String>>,
+    pub height_scale: Option<Spanned<f32>>,
+    pub layers: Option<Spanned<Vec<FileLayer>>>,
+    pub albedo_variation: Option<Spanned<f32>>,
+}
+
+impl FileObject {
+    /// Primitive parameter keys present, with their spans, for the per-primitive check.
+    pub fn parameter_keys(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        let mut keys = Vec::new();
+        macro_rules! key {
+            ($($field:ident),*) => {$(
+                if let Some(v) = &self.$field {
+                    keys.push((stringify!($field), v.span()));
+                }
+            )*};
+        }
+        key!(
+            size,
+            radius,
+            height,
+            segments,
+            rings,
+            gable_material,
+            resolution,
+            noise,
+            png,
+            height_scale,
+            layers,
+            albedo_variation
+        );
+        keys
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileNoise {
+    pub seed: Option<Spanned<i64>>,
+    pub octaves: Option<Spanned<i64>>,
+    pub frequency: Option<Spanned<f32>>,
+    pub amplitude: Option<Spanned<f32>>,
+    pub ridged: Option<bool>,
+    pub lacunarity: Option<Spanned<f32>>,
+    pub gain: Option<Spanned<f32>>,
+    pub warp: Option<Spanned<f32>>,
+    pub erosion: Option<Spanned<f32>>,
+    pub flat_radius: Option<Spanned<f32>>,
+    pub valley_radius: Option<Spanned<f32>>,
+    pub floor_amplitude: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileLayer {
+    pub material: Spanned<String>,
+    pub min_height: Option<Spanned<f32>>,
+    pub max_height: Option<Spanned<f32>>,
+    pub min_slope: Option<Spanned<f32>>,
+    pub max_slope: Option<Spanned<f32>>,
+    pub blend: Option<Spanned<f32>>,
+    pub slope_blend: Option<Spanned<f32>>,
+    pub jitter: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileCamera {
+    pub name: Spanned<String>,
+    pub position: Spanned<[f32; 3]>,
+    pub target: Option<Spanned<[f32; 3]>>,
+    pub forward: Option<Spanned<[f32; 3]>>,
+    pub up: Option<Spanned<[f32; 3]>>,
+    pub fov_y: Option<Spanned<f32>>,
+    pub near: Option<Spanned<f32>>,
+}
+
+/// `time = "HH:MM"` or `time = 14.5` (hours); range checked later.
+pub(crate) struct TimeOfDay(pub f32);
+
+/// Parses "HH:MM" (24-hour clock) into hours.
+pub(crate) fn parse_hh_mm(s: &str) -> Result<f32, String> {
+    let bad = || format!("bad time \"{s}\": expected \"HH:MM\" with HH in 00..23 and MM in 00..59");
+    let (h, m) = s.split_once(':').ok_or_else(bad)?;
+    let digits = |t: &str| !t.is_empty() && t.len() <= 2 && t.bytes().all(|b| b.is_ascii_digit());
+    if !digits(h) || m.len() != 2 || !digits(m) {
+        return Err(bad());
+    }
+    let (h, m): (u32, u32) = (h.parse().map_err(|_| bad())?, m.parse().map_err(|_| bad())?);
+    if h > 23 || m > 59 {
+        return Err(bad());
+    }
+    Ok(h as f32 + m as f32 / 60.0)
+}
+
+impl<'de> Deserialize<'de> for TimeOfDay {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = TimeOfDay;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a time \"HH:MM\" or hours as a number")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<TimeOfDay, E> {
+                parse_hh_mm(s).map(TimeOfDay).map_err(E::custom)
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<TimeOfDay, E> {
+                Ok(TimeOfDay(v as f32))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<TimeOfDay, E> {
+                Ok(TimeOfDay(v as f32))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<TimeOfDay, E> {
+                Ok(TimeOfDay(v as f32))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `scale = 2.0` or `scale = [1, 2, 1]`.
+pub(crate) struct Scale(pub [f32; 3]);
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Scale;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number or an array of three numbers")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale, E> {
+                Ok(Scale([v as f32; 3]))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+                let mut s = [0.0f32; 3];
+                for (i, c) in s.iter_mut().enumerate() {
+                    *c = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<f32>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                Ok(Scale(s))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_hh_mm;
+
+    #[test]
+    fn parse_time_takes_clock_or_hours() {
+        use crate::scene::parse_time;
+        assert_eq!(parse_time("10:30"), Ok(10.5));
+        assert_eq!(parse_time(" 14.25 "), Ok(14.25));
+        assert!(parse_time("24").is_err() && parse_time("-1").is_err());
+        assert!(parse_time("25:99").unwrap_err().contains("25:99"));
+        assert!(parse_time("noon").is_err());
+    }
+
+    #[test]
+    fn hh_mm_parses_and_rejects() {
+        assert_eq!(parse_hh_mm("14:30"), Ok(14.5));
+        assert_eq!(parse_hh_mm("0:00"), Ok(0.0));
+        assert_eq!(parse_hh_mm("23:59").map(|h| (h * 60.0).round()), Ok(1439.0));
+        for bad in [
+            "25:99", "24:00", "12:60", "12", "12:5", "a:bc", ":30", "12:30:00", "-1:30",
+        ] {
+            assert!(parse_hh_mm(bad).is_err(), "{bad} accepted");
+        }
+    }
+}
