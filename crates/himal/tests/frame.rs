@@ -91,7 +91,7 @@ fn lit_sphere_matches_cpu_lighting_reference() {
     let light = LightingParams {
         sun_direction: sky.sun_direction,
         sun_illuminance: sky.sun_illuminance,
-        sky_irradiance: sky.irradiance_sh.clone(),
+        sky_irradiance: sky.irradiance_sh,
     };
     // The G-buffer stores albedo in 8-bit sRGB and material parameters in 8 bits.
     let material = Material {

@@ -1,7 +1,7 @@
 // post.luminance: log-average luminance of the HDR image, reduced on the GPU
 // (TECHNIQUES H3; Reinhard et al. 2002 eq. 1: L_avg = exp(mean(log(delta + L)))).
 // Two steps with a fixed reduction order, so the result is deterministic:
-//   cs_partial: each 16x16 tile -> (sum of log L, pixel count) in partials[tile]
+//   cs_partial: each 64x64 tile (16x16 threads, 4x4 pixels each) -> (sum of log L, pixel count)
 //   cs_final:   one workgroup sums the tiles -> result = (log average, average, tiles, pixels)
 // Bindings: hdr (texture), partials (storage), result (storage). CPU twin: post/reference.rs.
 #import color
@@ -19,11 +19,17 @@ fn cs_partial(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocati
               @builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) nwg: vec3u) {
     let size = textureDimensions(hdr);
     var v = vec2f(0.0);
-    if (gid.x < size.x && gid.y < size.y) {
-        let c = textureLoad(hdr, vec2i(gid.xy), 0).rgb;
-        // Guard against NaN/Inf from upstream passes.
-        let l = clamp(luminance(c), 0.0, 65504.0);
-        v = vec2f(log(DELTA + l), 1.0);
+    // Fewer, fuller workgroups: barriers dominate on software adapters.
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        for (var i = 0u; i < 4u; i = i + 1u) {
+            let p = gid.xy * 4u + vec2u(i, j);
+            if (p.x < size.x && p.y < size.y) {
+                let c = textureLoad(hdr, vec2i(p), 0).rgb;
+                // Guard against NaN/Inf from upstream passes.
+                let l = clamp(luminance(c), 0.0, 65504.0);
+                v = v + vec2f(log(DELTA + l), 1.0);
+            }
+        }
     }
     tile_sum[li] = v;
     workgroupBarrier();

@@ -10,8 +10,8 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureAccess, TextureHandle};
 use crate::passes::common::{draw_fullscreen, target};
 
-/// Tile edge of `post.luminance` (workgroup 16x16).
-pub const TILE: u32 = 16;
+/// Tile edge in pixels of `post.luminance` (16x16 threads, 4x4 pixels each).
+pub const TILE: u32 = 64;
 pub const KEY: f64 = 0.18;
 
 /// Buffers of the luminance reduction, sized for a maximum frame size.

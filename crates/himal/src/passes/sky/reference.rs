@@ -33,8 +33,40 @@ pub struct SkyLight {
     /// Sun illuminance at the ground, linear RGB klux (zero at night).
     pub sun_illuminance: Vec3,
     pub sky: PreethamSky,
-    /// Sky irradiance SH (sun excluded; it is a separate directional light).
+    /// Sky and ground-bounce irradiance SH (sun excluded; it is a separate
+    /// directional light). See [`sky_and_ground_irradiance_sh`].
     pub irradiance_sh: Sh9Rgb,
+}
+
+/// Albedo of the ground that bounces sun and sky light back up (a grassy
+/// valley: Jacobs & Stein's meadow albedo is about 0.15-0.25, greenish).
+pub const GROUND_ALBEDO: Vec3 = Vec3::new(0.16, 0.19, 0.11);
+
+/// Irradiance SH of the sky above the horizon and, below it, of a Lambertian
+/// ground lit by the sun and the sky: L_g = albedo / pi * (E_sun * max(sun.y, 0) + E_sky(up)).
+/// Without it, surfaces facing down (and metals reflecting the ground) see
+/// only the dim below-horizon fill of the sky model.
+pub fn sky_and_ground_irradiance_sh(
+    sky: &PreethamSky,
+    sun_direction: Vec3,
+    sun_illuminance: Vec3,
+) -> Sh9Rgb {
+    let e_up = sky_irradiance_sh(sky).eval(Vec3::Y).max(Vec3::ZERO)
+        + sun_illuminance * sun_direction.y.max(0.0);
+    let l_ground = GROUND_ALBEDO * e_up / std::f32::consts::PI;
+    let radiance = |d: Vec3| {
+        if d.y >= 0.0 {
+            return sky.radiance(d);
+        }
+        let blend = smoothstep(0.0, super::preetham::GROUND_BLEND_Y, -d.y);
+        sky.radiance(d).lerp(l_ground, blend)
+    };
+    Sh9Rgb::project(radiance, SKY_SH_SAMPLES_PER_AXIS).radiance_to_irradiance_coeffs()
+}
+
+fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
+    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
 }
 
 impl SkyLight {
@@ -43,10 +75,11 @@ impl SkyLight {
     pub fn new(time_hours: f32, latitude_deg: f32, day_of_year: u32, turbidity: f32) -> SkyLight {
         let sun = sun_position(time_hours, latitude_deg, day_of_year);
         let sky = PreethamSky::new(sun.direction, turbidity);
+        let sun_illuminance = sun_illuminance_rgb(sun.direction, turbidity);
         SkyLight {
             sun_direction: sun.direction,
-            sun_illuminance: sun_illuminance_rgb(sun.direction, turbidity),
-            irradiance_sh: sky_irradiance_sh(&sky),
+            sun_illuminance,
+            irradiance_sh: sky_and_ground_irradiance_sh(&sky, sun.direction, sun_illuminance),
             sky,
         }
     }
