@@ -9,7 +9,7 @@ use clap::Args;
 use himal::{FrameSettings, Renderer};
 
 use crate::GpuArgs;
-use crate::render::{load_scene, parse_size, pick_camera};
+use crate::render::{load_scene, parse_size, pick_camera, shadow_resolution};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -22,6 +22,11 @@ pub struct BenchArgs {
     /// Frames measured (after one warm-up frame).
     #[arg(long, default_value_t = 16)]
     pub frames: u32,
+    /// Sun shadows: off or sun (compare the two in one session for the cost ratio).
+    #[arg(long, default_value = "sun", value_name = "off|sun")]
+    pub shadows: String,
+    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
+    pub shadow_resolution: u32,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -62,7 +67,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     let camera = pick_camera(&scene, args.camera.as_deref())?;
-    let settings = FrameSettings::new(width, height, scene.sun.clone());
+    let mut settings = FrameSettings::new(width, height, scene.sun.clone());
+    settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();

@@ -39,6 +39,12 @@ pub struct RenderArgs {
     /// Exposure bias in EV on top of auto exposure.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
+    /// Sun shadows: off, or sun (one shadow map over the scene).
+    #[arg(long, default_value = "sun", value_name = "off|sun")]
+    pub shadows: String,
+    /// Sun shadow map edge in texels.
+    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
+    pub shadow_resolution: u32,
     /// Print the compiled frame graph (passes, reads, writes) and exit.
     #[arg(long)]
     pub graph: bool,
@@ -63,6 +69,16 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
         bail!("--size {s}: width and height must be within 1..16384");
     }
     Ok((w, h))
+}
+
+/// `--shadows off|sun` with `--shadow-resolution N` to the renderer's setting (0 = off).
+pub fn shadow_resolution(mode: &str, resolution: u32) -> Result<u32> {
+    match mode {
+        "off" => Ok(0),
+        "sun" if (16..=16384).contains(&resolution) => Ok(resolution),
+        "sun" => bail!("--shadow-resolution {resolution}: expected 16..16384"),
+        other => bail!("--shadows {other}: expected off or sun"),
+    }
 }
 
 /// Loads `demo` or a scene file.
@@ -109,6 +125,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
     settings.exposure_ev = args.exposure;
+    settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);

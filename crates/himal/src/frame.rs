@@ -1,8 +1,9 @@
 //! The whole frame, top to bottom, in one place to read.
 //!
 //! ```text
-//! gbuffer ─┬─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
-//!          └───────────────────────────────────────────────> debug.view ──> output (--view)
+//! shadows.sun ─┐
+//! gbuffer ─────┴─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
+//!    └──────────────────────────────────────────────────────> debug.view ──> output (--view)
 //! ```
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
@@ -15,6 +16,7 @@ use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingPass};
 use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::shadows::SunShadowPass;
 use crate::passes::sky::SkyPass;
 use crate::renderer::scene_gpu::SceneGpu;
 
@@ -46,6 +48,7 @@ impl FrameErrors {
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
+    pub shadows: SunShadowPass,
     pub gbuffer: GBufferPass,
     pub lighting: LightingPass,
     pub sky: SkyPass,
@@ -63,6 +66,10 @@ pub struct FrameInputs<'a> {
     pub sky: &'a wgpu::Buffer,
     pub luminance: &'a LuminanceBuffers,
     pub output: &'a wgpu::Texture,
+    /// Sun shadow map resolution; `None` = shadows off.
+    pub shadow_resolution: Option<u32>,
+    /// 1x1 depth texture bound in place of the map when shadows are off.
+    pub shadow_placeholder: &'a wgpu::Texture,
     pub errors: &'a FrameErrors,
 }
 
@@ -80,21 +87,27 @@ pub fn build<'a>(
         sky,
         luminance,
         output,
+        shadow_resolution,
+        shadow_placeholder,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
+    let shadow_map = match shadow_resolution {
+        Some(resolution) => passes.shadows.add(&mut g, resolution, scene, errors),
+        None => g.import_texture("shadow.off", shadow_placeholder),
+    };
     let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, errors);
-    let hdr = passes.lighting.add(
-        &mut g,
-        size,
-        gbuffer,
-        LightingInputs {
-            view,
-            lighting,
-            sky,
-        },
-        errors,
-    );
+    let shadow_sampler = &passes.shadows.sampler;
+    let lighting_inputs = LightingInputs {
+        view,
+        lighting,
+        sky,
+        shadow_map,
+        shadow_sampler,
+    };
+    let hdr = passes
+        .lighting
+        .add(&mut g, size, gbuffer, lighting_inputs, errors);
     let hdr = passes
         .sky
         .add(&mut g, hdr, gbuffer.depth, view, sky, errors);

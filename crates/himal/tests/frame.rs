@@ -129,7 +129,7 @@ fn lit_sphere_matches_cpu_lighting_reference() {
             }
             let t = Vec3::Y.cross(n).normalize_or(Vec3::X);
             let bt = n.cross(t);
-            let cpu = shade(&material, 1.0, t, bt, n, v, &light);
+            let cpu = shade(&material, 1.0, t, bt, n, v, &light, 1.0);
             let g = gpu[(y * w + x) as usize];
             let g = Vec3::new(g[0], g[1], g[2]);
             let rel = ((g - cpu).abs() / cpu.max(Vec3::splat(1e-3))).max_element();

@@ -6,4 +6,5 @@ pub mod debug;
 pub mod gbuffer;
 pub mod lighting;
 pub mod post;
+pub mod shadows;
 pub mod sky;

@@ -2,14 +2,17 @@
 // Sun: anisotropic GGX + height-correlated Smith + Schlick, Lambert diffuse (brdf.wgsl).
 // Sky: third-order SH irradiance; ambient specular uses the split-sum fit with SH
 // evaluated along the reflection vector (stand-in until the L3/L4 probes land).
+// Sun shadow: shaders/shadow.wgsl (S1 foundation), normal offset + depth bias.
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
-// Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth.
+// Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
+// shadow_map + shadow_sampler.
 // CPU twin: passes/lighting/reference.rs (`shade`).
 #import view
 #import brdf
 #import tangent_frame
 #import sh
 #import sky
+#import shadow
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -20,6 +23,10 @@ struct Lighting {
     sky_irradiance: Sh9,
     // x: extinction per metre, y: amount of aerial perspective (0 = off)
     fog: vec4f,
+    // world -> sun shadow clip space
+    light_view_proj: mat4x4f,
+    // x: 1 = shadows on, y: normal offset (m), z: depth bias (light NDC)
+    shadow: vec4f,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -29,11 +36,14 @@ struct Lighting {
 @group(0) @binding(4) var gbuffer_frame: texture_2d<f32>;
 @group(0) @binding(5) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(6) var depth: texture_depth_2d;
+@group(0) @binding(7) var shadow_map: texture_depth_2d;
+@group(0) @binding(8) var shadow_sampler: sampler_comparison;
 
 // Outgoing radiance toward v (before aerial perspective).
-fn shade(s: Surface, glossiness: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f) -> vec3f {
+// `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
+fn shade(s: Surface, glossiness: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32) -> vec3f {
     let l = lighting.sun_direction.xyz;
-    var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb;
+    var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
     let r = reflect(-v, n);
     let e_n = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
@@ -64,7 +74,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let to_camera = view.camera_position.xyz - p;
     let dist = length(to_camera);
     let v = to_camera / dist;
-    var c = shade(s, m.x, albedo_ao.a, tbn[0], tbn[1], tbn[2], v);
+    var vis = 1.0;
+    if (lighting.shadow.x > 0.5) {
+        let offset_p = p + tbn[2] * lighting.shadow.y;
+        vis = sun_shadow_visibility(shadow_map, shadow_sampler, lighting.light_view_proj, offset_p, lighting.shadow.z);
+    }
+    var c = shade(s, m.x, albedo_ao.a, tbn[0], tbn[1], tbn[2], v, vis);
     let transmittance = exp(-lighting.fog.x * dist);
     let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
     c = c * transmittance + inscatter * (1.0 - transmittance);

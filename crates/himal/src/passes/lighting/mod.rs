@@ -18,6 +18,9 @@ pub struct LightingInputs<'a> {
     pub view: &'a wgpu::Buffer,
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
+    /// Sun shadow map (a 1x1 imported placeholder when shadows are off).
+    pub shadow_map: TextureHandle,
+    pub shadow_sampler: &'a wgpu::Sampler,
 }
 
 pub struct LightingPass {
@@ -50,6 +53,7 @@ impl LightingPass {
             gbuffer.frame,
             gbuffer.material,
             gbuffer.depth,
+            inputs.shadow_map,
         ] {
             pass.read(t, TextureAccess::Sampled);
         }
@@ -77,6 +81,14 @@ impl LightingPass {
                     (
                         "depth",
                         wgpu::BindingResource::TextureView(ctx.view(gbuffer.depth)),
+                    ),
+                    (
+                        "shadow_map",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_map)),
+                    ),
+                    (
+                        "shadow_sampler",
+                        wgpu::BindingResource::Sampler(inputs.shadow_sampler),
                     ),
                 ],
             );

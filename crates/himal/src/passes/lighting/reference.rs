@@ -18,7 +18,9 @@ pub struct LightingParams {
 }
 
 /// Outgoing radiance toward `v` of a point with material `m`, material AO
-/// `ao` and right-handed frame (t, b, n): sun + SH sky, before aerial perspective.
+/// `ao` and right-handed frame (t, b, n): sun (times `sun_visibility`) + SH
+/// sky, before aerial perspective.
+#[allow(clippy::too_many_arguments)]
 pub fn shade(
     m: &Material,
     ao: f32,
@@ -27,10 +29,11 @@ pub fn shade(
     n: Vec3,
     v: Vec3,
     light: &LightingParams,
+    sun_visibility: f32,
 ) -> Vec3 {
     let s = surface_from_material(m);
     let l = light.sun_direction;
-    let mut c = brdf_cos(&s, t, b, n, v, l) * light.sun_illuminance;
+    let mut c = brdf_cos(&s, t, b, n, v, l) * light.sun_illuminance * sun_visibility;
     let n_o_v = n.dot(v).max(1e-4);
     let r = (2.0 * n.dot(v)) * n - v;
     let e_n = light.sky_irradiance.eval(n).max(Vec3::ZERO);

@@ -1,0 +1,159 @@
+//! Sun shadow map (foundation of TECHNIQUES S1): one orthographic depth map
+//! fitted to the scene's bounds, sampled with a 3x3 tent of hardware
+//! comparisons in the lighting pass (`shaders/shadow.wgsl`). Cascades, the
+//! static far map, the atlas and the hero map (S1-S4) build on this pass.
+//! Reference: [`reference`] and `tests/shadows.rs` (CPU ray casting).
+
+pub mod reference;
+
+use glam::{Mat4, Vec3};
+
+use crate::frame::FrameErrors;
+use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
+use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
+use crate::scene::Aabb;
+
+pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Light-space fit of the sun shadow map; see [`reference::sun_shadow_fit`].
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowFit {
+    pub light_view_proj: Mat4,
+    /// World size of one shadow texel (metres).
+    pub texel_world: f32,
+    /// Depth range of the orthographic projection (metres).
+    pub depth_range: f32,
+}
+
+pub struct SunShadowPass {
+    program: Program,
+    pipeline: wgpu::RenderPipeline,
+    uniform: wgpu::Buffer,
+    /// Comparison sampler the lighting pass uses with the map.
+    pub sampler: wgpu::Sampler,
+}
+
+impl SunShadowPass {
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, "passes/shadows/sun.wgsl")?;
+        let mut layout = vertex_layout();
+        layout.attributes = &layout.attributes[..1]; // position only
+        let pipeline = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "shadows.sun",
+                vertex_entry: "vs_main",
+                fragment_entry: None,
+                vertex_buffers: &[Some(layout)],
+                targets: &[],
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: SHADOW_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    // Slope-scaled bias against acne on surfaces grazing the sun.
+                    bias: wgpu::DepthBiasState {
+                        constant: 0,
+                        slope_scale: 1.5,
+                        clamp: 0.0,
+                    },
+                }),
+                // Both faces cast: the terrain is single-sided.
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                constants: &[],
+            },
+        )?;
+        let uniform = uniform_buffer(ctx, "shadows.sun.view", &Mat4::IDENTITY.to_cols_array_2d());
+        let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadows.sun.compare"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        Ok(Self {
+            program,
+            pipeline,
+            uniform,
+            sampler,
+        })
+    }
+
+    /// Fits the map to `bounds` for `sun_direction` and uploads the matrix.
+    pub fn update(
+        &self,
+        queue: &wgpu::Queue,
+        bounds: &Aabb,
+        sun_direction: Vec3,
+        resolution: u32,
+    ) -> ShadowFit {
+        let fit = reference::sun_shadow_fit(bounds, sun_direction, resolution);
+        queue.write_buffer(
+            &self.uniform,
+            0,
+            bytemuck::bytes_of(&fit.light_view_proj.to_cols_array_2d()),
+        );
+        fit
+    }
+
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        resolution: u32,
+        scene: &'a SceneGpu,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let map = graph.create_texture(
+            "shadow.sun",
+            TextureDesc::new_2d(resolution, resolution, SHADOW_FORMAT),
+        );
+        let mut pass = graph.add_pass("shadows.sun");
+        let map = pass.write(map, TextureAccess::DepthAttachment);
+        pass.execute(move |ctx| {
+            let bind_group = self.program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("shadow", self.uniform.as_entire_binding()),
+                    ("objects", scene.objects.as_entire_binding()),
+                ],
+            );
+            let Some(bg) = errors.record(bind_group) else {
+                return;
+            };
+            let view = ctx.view(map);
+            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadows.sun"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            rp.set_pipeline(&self.pipeline);
+            rp.set_bind_group(0, &bg, &[]);
+            rp.set_vertex_buffer(0, scene.vertices.slice(..));
+            rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for d in &scene.draws {
+                rp.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    d.object..d.object + 1,
+                );
+            }
+        });
+        map
+    }
+}

@@ -1,0 +1,172 @@
+//! Sun shadow map against CPU ray casting: a box on a plane under three sun
+//! positions. The GPU's sun visibility is recovered per pixel from two HDR
+//! renders (shadows on and off) and the CPU twin of the sun term:
+//! `vis = 1 - (L_off - L_on) / sun_term`.
+
+use std::path::Path;
+
+use glam::{Vec3, Vec4};
+use himal::gpu::{GpuContext, GpuOptions};
+use himal::math::brdf::Material;
+use himal::passes::lighting::reference::{LightingParams, shade};
+use himal::passes::sky::SkyLight;
+use himal::scene::Scene;
+use himal::{FrameSettings, Renderer};
+
+fn scene(time: &str) -> String {
+    format!(
+        r#"
+[sun]
+time = "{time}"
+latitude = 45.0
+day_of_year = 172
+
+[[material]]
+name = "white"
+albedo_linear = [0.7, 0.7, 0.7]
+glossiness = 0.1
+
+[[object]]
+name = "ground"
+primitive = "plane"
+material = "white"
+size = [40.0, 40.0]
+
+[[object]]
+name = "box"
+primitive = "box"
+material = "white"
+size = [2.0, 6.0, 2.0]
+position = [0.0, 3.0, 0.0]
+
+[[camera]]
+name = "top"
+position = [0.0, 24.0, 0.0]
+forward = [0.0, -1.0, 0.0]
+up = [0.0, 0.0, -1.0]
+fov_y = 60.0
+"#
+    )
+}
+
+/// Does the ray from `p` toward `d` hit the box [-1,0,-1]..[1,6,1]?
+fn hits_box(p: Vec3, d: Vec3) -> bool {
+    let (lo, hi) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 6.0, 1.0));
+    let inv = d.recip();
+    let t0 = (lo - p) * inv;
+    let t1 = (hi - p) * inv;
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element();
+    far >= near.max(1e-4)
+}
+
+#[test]
+fn sun_shadow_agrees_with_ray_cast_visibility() {
+    let (w, h) = (128u32, 128u32);
+    for time in ["09:00", "12:00", "16:30"] {
+        let text = scene(time);
+        let scene = Scene::from_toml_str(&text, "shadow_box.toml", Path::new(".")).expect("scene");
+        let camera = scene.camera("top").expect("camera").clone();
+        let ctx = GpuContext::new(&GpuOptions::default()).expect("adapter");
+        let mut r = Renderer::new(ctx, &scene).expect("renderer");
+        let mut s = FrameSettings::new(w, h, scene.sun.clone());
+        s.view = "lighting".parse().expect("view");
+        s.raw = true;
+        s.aerial_extinction = 0.0;
+        let on = r
+            .render(&camera, &s)
+            .expect("on")
+            .image
+            .to_rgba_f32()
+            .expect("f32");
+        s.shadow_resolution = 0;
+        let off = r
+            .render(&camera, &s)
+            .expect("off")
+            .image
+            .to_rgba_f32()
+            .expect("f32");
+
+        let sun = &scene.sun;
+        let sky = SkyLight::new(
+            sun.time_hours,
+            sun.latitude_deg,
+            sun.day_of_year,
+            sun.turbidity,
+        );
+        let light = LightingParams {
+            sun_direction: sky.sun_direction,
+            sun_illuminance: sky.sun_illuminance,
+            sky_irradiance: sky.irradiance_sh,
+        };
+        let m = Material {
+            albedo: Vec3::splat(0.7),
+            glossiness: 0.1,
+            reflectance: 0.04,
+            metallic: 0.0,
+            anisotropy: 0.0,
+        };
+        let inv = camera.view_projection(w as f32 / h as f32).inverse();
+        // [cpu shadowed, cpu lit] -> (pixels, GPU agrees)
+        let mut counts = [(0usize, 0usize); 2];
+        for y in 0..h {
+            for x in 0..w {
+                let ndc = Vec4::new(
+                    (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
+                    1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
+                    1.0,
+                    1.0,
+                );
+                let q = inv * ndc;
+                let dir = (q.truncate() / q.w - camera.position).normalize();
+                let t = -camera.position.y / dir.y;
+                let p = camera.position + dir * t;
+                // ground pixels the box does not hide, away from the plane's edge
+                if t <= 0.0
+                    || p.x.abs() > 18.0
+                    || p.z.abs() > 18.0
+                    || hits_box(camera.position, dir)
+                {
+                    continue;
+                }
+                // Away from penumbrae: every point within 0.15 m agrees.
+                let cpu_lit = !hits_box(p, light.sun_direction);
+                let stable = (0..8).all(|k| {
+                    let a = k as f32 * std::f32::consts::TAU / 8.0;
+                    let o = p + Vec3::new(a.cos(), 0.0, a.sin()) * 0.15;
+                    !hits_box(o, light.sun_direction) == cpu_lit
+                });
+                if !stable {
+                    continue;
+                }
+                let v = -dir;
+                let sun_term = shade(&m, 1.0, Vec3::X, Vec3::NEG_Z, Vec3::Y, v, &light, 1.0)
+                    - shade(&m, 1.0, Vec3::X, Vec3::NEG_Z, Vec3::Y, v, &light, 0.0);
+                let i = (y * w + x) as usize;
+                let diff = (off[i][0] - on[i][0]) + (off[i][1] - on[i][1]) + (off[i][2] - on[i][2]);
+                let vis = 1.0 - diff / (sun_term.x + sun_term.y + sun_term.z).max(1e-6);
+                let c = &mut counts[usize::from(cpu_lit)];
+                c.0 += 1;
+                c.1 += usize::from((vis > 0.5) == cpu_lit);
+            }
+        }
+        let [(shadowed, shadowed_ok), (lit, lit_ok)] = counts;
+        let (rs, rl) = (
+            shadowed_ok as f64 / shadowed.max(1) as f64,
+            lit_ok as f64 / lit.max(1) as f64,
+        );
+        eprintln!(
+            "{time}: shadowed {shadowed_ok}/{shadowed} ({:.2}%), lit {lit_ok}/{lit} ({:.2}%)",
+            100.0 * rs,
+            100.0 * rl
+        );
+        assert!(
+            lit > 5000 && shadowed > 50,
+            "{time}: too few pixels ({lit} lit, {shadowed} shadowed)"
+        );
+        // Issue #6 asks >= 97% agreement away from penumbra edges, here for the
+        // shadowed and the lit pixels separately (a missing shadow cannot hide
+        // in the lit majority). Measured 2026-11-22 on lavapipe: 100% / 100% at all three times.
+        assert!(rs >= 0.97 && rl >= 0.97, "{time}: shadowed {rs}, lit {rl}");
+    }
+}
