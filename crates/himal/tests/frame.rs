@@ -4,14 +4,15 @@
 
 use std::path::Path;
 
-use glam::{Vec3, Vec4};
-use himal::gpu::{GpuContext, GpuOptions};
+mod common;
+
+use common::{lighting_params, pixel_ray, renderer};
+use glam::Vec3;
 use himal::math::brdf::Material;
-use himal::passes::lighting::reference::{LightingParams, shade};
+use himal::passes::lighting::reference::shade;
 use himal::passes::post::reference::{log_average_luminance, reinhard};
-use himal::passes::sky::SkyLight;
 use himal::scene::Scene;
-use himal::{FrameSettings, Renderer, ViewBuffer};
+use himal::{FrameSettings, ViewBuffer};
 
 const SPHERE_SCENE: &str = r#"
 [sun]
@@ -43,11 +44,6 @@ position = [0.0, 0.6, 4.0]
 target = [0.0, 0.0, 0.0]
 fov_y = 35.0
 "#;
-
-fn renderer(scene: &Scene) -> Renderer {
-    let ctx = GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)");
-    Renderer::new(ctx, scene).expect("renderer")
-}
 
 fn q8(v: f32) -> f32 {
     (v.clamp(0.0, 1.0) * 255.0).round() / 255.0
@@ -81,18 +77,7 @@ fn lit_sphere_matches_cpu_lighting_reference() {
     let frame = r.render(&camera, &settings).expect("frame");
     let gpu = frame.image.to_rgba_f32().expect("float image");
 
-    let sun = &scene.sun;
-    let sky = SkyLight::new(
-        sun.time_hours,
-        sun.latitude_deg,
-        sun.day_of_year,
-        sun.turbidity,
-    );
-    let light = LightingParams {
-        sun_direction: sky.sun_direction,
-        sun_illuminance: sky.sun_illuminance,
-        sky_irradiance: sky.irradiance_sh,
-    };
+    let light = lighting_params(&scene);
     // The G-buffer stores albedo in 8-bit sRGB and material parameters in 8 bits.
     let material = Material {
         albedo: Vec3::new(0.6, 0.3, 0.2).map(q8_srgb),
@@ -101,18 +86,10 @@ fn lit_sphere_matches_cpu_lighting_reference() {
         metallic: 0.0,
         anisotropy: 0.0,
     };
-    let inv = camera.view_projection(w as f32 / h as f32).inverse();
     let (mut compared, mut worst, mut sum) = (0, 0.0f32, 0.0f32);
     for y in 0..h {
         for x in 0..w {
-            let ndc = Vec4::new(
-                (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
-                1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
-                1.0,
-                1.0,
-            );
-            let p = inv * ndc;
-            let dir = (p.truncate() / p.w - camera.position).normalize();
+            let dir = pixel_ray(&camera, (w, h), x, y);
             // ray-sphere (unit sphere at the origin)
             let b = camera.position.dot(dir);
             let c = camera.position.length_squared() - 1.0;

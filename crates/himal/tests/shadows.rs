@@ -5,13 +5,14 @@
 
 use std::path::Path;
 
-use glam::{Vec3, Vec4};
-use himal::gpu::{GpuContext, GpuOptions};
+mod common;
+
+use common::{lighting_params, pixel_ray, renderer};
+use glam::Vec3;
+use himal::FrameSettings;
 use himal::math::brdf::Material;
-use himal::passes::lighting::reference::{LightingParams, shade};
-use himal::passes::sky::SkyLight;
+use himal::passes::lighting::reference::shade;
 use himal::scene::Scene;
-use himal::{FrameSettings, Renderer};
 
 fn scene(time: &str) -> String {
     format!(
@@ -67,8 +68,7 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
         let text = scene(time);
         let scene = Scene::from_toml_str(&text, "shadow_box.toml", Path::new(".")).expect("scene");
         let camera = scene.camera("top").expect("camera").clone();
-        let ctx = GpuContext::new(&GpuOptions::default()).expect("adapter");
-        let mut r = Renderer::new(ctx, &scene).expect("renderer");
+        let mut r = renderer(&scene);
         let mut s = FrameSettings::new(w, h, scene.sun.clone());
         s.view = "lighting".parse().expect("view");
         s.raw = true;
@@ -87,18 +87,7 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
             .to_rgba_f32()
             .expect("f32");
 
-        let sun = &scene.sun;
-        let sky = SkyLight::new(
-            sun.time_hours,
-            sun.latitude_deg,
-            sun.day_of_year,
-            sun.turbidity,
-        );
-        let light = LightingParams {
-            sun_direction: sky.sun_direction,
-            sun_illuminance: sky.sun_illuminance,
-            sky_irradiance: sky.irradiance_sh,
-        };
+        let light = lighting_params(&scene);
         let m = Material {
             albedo: Vec3::splat(0.7),
             glossiness: 0.1,
@@ -106,19 +95,11 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
             metallic: 0.0,
             anisotropy: 0.0,
         };
-        let inv = camera.view_projection(w as f32 / h as f32).inverse();
         // [cpu shadowed, cpu lit] -> (pixels, GPU agrees)
         let mut counts = [(0usize, 0usize); 2];
         for y in 0..h {
             for x in 0..w {
-                let ndc = Vec4::new(
-                    (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
-                    1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
-                    1.0,
-                    1.0,
-                );
-                let q = inv * ndc;
-                let dir = (q.truncate() / q.w - camera.position).normalize();
+                let dir = pixel_ray(&camera, (w, h), x, y);
                 let t = -camera.position.y / dir.y;
                 let p = camera.position + dir * t;
                 // ground pixels the box does not hide, away from the plane's edge

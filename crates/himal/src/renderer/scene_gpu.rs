@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::gpu::{GpuContext, GpuError};
 use crate::scene::{Scene, Vertex};
 
-/// Twin of `Object` in `passes/gbuffer/gbuffer.wgsl`.
+/// Twin of `Object` in `shaders/scene.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ObjectGpu {
@@ -127,5 +127,15 @@ impl SceneGpu {
                 bytes,
             }
         })
+    }
+
+    /// Records every draw: one indexed draw per object, instance index = object.
+    pub fn draw_all(&self, rp: &mut wgpu::RenderPass<'_>) {
+        rp.set_vertex_buffer(0, self.vertices.slice(..));
+        rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &self.draws {
+            let indices = d.first_index..d.first_index + d.index_count;
+            rp.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
+        }
     }
 }

@@ -7,13 +7,7 @@
 // Source: McAuley, "Rendering the World of Far Cry 4", GDC 2015, Materials + Appendix A.
 #import view
 #import tangent_frame
-
-struct Object {
-    model: mat4x4f,
-    // inverse transpose of model (for normals), 3x3 part used
-    normal_matrix: mat4x4f,
-    prev_model: mat4x4f,
-}
+#import scene
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;

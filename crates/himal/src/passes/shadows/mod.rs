@@ -144,15 +144,7 @@ impl SunShadowPass {
             });
             rp.set_pipeline(&self.pipeline);
             rp.set_bind_group(0, &bg, &[]);
-            rp.set_vertex_buffer(0, scene.vertices.slice(..));
-            rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            for d in &scene.draws {
-                rp.draw_indexed(
-                    d.first_index..d.first_index + d.index_count,
-                    d.base_vertex,
-                    d.object..d.object + 1,
-                );
-            }
+            scene.draw_all(&mut rp);
         });
         map
     }

@@ -3,14 +3,10 @@
 // Bindings: shadow (uniform ShadowView: light view-projection), objects (as gbuffer).
 // Standard depth here (0 near .. 1 far, compare LessEqual), unlike the camera's reverse-Z.
 
+#import scene
+
 struct ShadowView {
     light_view_proj: mat4x4f,
-}
-
-struct Object {
-    model: mat4x4f,
-    normal_matrix: mat4x4f,
-    prev_model: mat4x4f,
 }
 
 @group(0) @binding(0) var<uniform> shadow: ShadowView;

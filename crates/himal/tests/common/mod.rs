@@ -1,0 +1,44 @@
+//! Helpers shared by the whole-frame GPU tests.
+
+use glam::{Vec3, Vec4};
+use himal::Renderer;
+use himal::gpu::{GpuContext, GpuOptions};
+use himal::passes::lighting::reference::LightingParams;
+use himal::passes::sky::SkyLight;
+use himal::scene::{Camera, Scene};
+
+/// A renderer on the adapter present (lavapipe in CI).
+pub fn renderer(scene: &Scene) -> Renderer {
+    let ctx = GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)");
+    Renderer::new(ctx, scene).expect("renderer")
+}
+
+/// Sun and sky of the scene's time of day, as the lighting pass gets them.
+pub fn lighting_params(scene: &Scene) -> LightingParams {
+    let sun = &scene.sun;
+    let sky = SkyLight::new(
+        sun.time_hours,
+        sun.latitude_deg,
+        sun.day_of_year,
+        sun.turbidity,
+    );
+    LightingParams {
+        sun_direction: sky.sun_direction,
+        sun_illuminance: sky.sun_illuminance,
+        sky_irradiance: sky.irradiance_sh,
+    }
+}
+
+/// Unit direction of the camera ray through the centre of pixel (x, y).
+pub fn pixel_ray(camera: &Camera, size: (u32, u32), x: u32, y: u32) -> Vec3 {
+    let (w, h) = (size.0 as f32, size.1 as f32);
+    let inv = camera.view_projection(w / h).inverse();
+    let ndc = Vec4::new(
+        (x as f32 + 0.5) / w * 2.0 - 1.0,
+        1.0 - (y as f32 + 0.5) / h * 2.0,
+        1.0,
+        1.0,
+    );
+    let p = inv * ndc;
+    (p.truncate() / p.w - camera.position).normalize()
+}
