@@ -19,7 +19,7 @@ use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::LightingPass;
 use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
 use crate::passes::shadows::SunShadowPass;
-use crate::passes::sky::{SkyLight, SkyPass};
+use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
 use crate::scene::{Aabb, Camera, Scene, SunDesc};
 use scene_gpu::SceneGpu;
 use uniforms::{LightingUniform, ViewUniform};
@@ -202,8 +202,9 @@ impl Renderer {
             "lighting",
             &bytemuck::Zeroable::zeroed() as &LightingUniform,
         );
-        let sky_light = SkyLight::new(12.0, 45.0, 172, 3.0);
-        let sky_buffer = uniform_buffer(&ctx, "sky", &sky_light.sky.gpu_params());
+        // Filled by `update_sky` before the first frame.
+        let sky_buffer =
+            uniform_buffer(&ctx, "sky", &<SkyGpuParams as bytemuck::Zeroable>::zeroed());
         let timer = PassTimer::new(&ctx.device, &ctx.queue, 32);
         let shadow_placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow.off"),
