@@ -14,6 +14,18 @@ const DELTA: f32 = 1e-4;
 
 var<workgroup> tile_sum: array<vec2f, 256>;
 
+// Sums tile_sum[0..256] into tile_sum[0] in a fixed order (deterministic).
+// Called from uniform control flow by all 256 invocations.
+fn reduce_tile(li: u32) {
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
+        if (li < stride) {
+            tile_sum[li] = tile_sum[li] + tile_sum[li + stride];
+        }
+        workgroupBarrier();
+    }
+}
+
 @compute @workgroup_size(16, 16)
 fn cs_partial(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) li: u32,
               @builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) nwg: vec3u) {
@@ -32,13 +44,7 @@ fn cs_partial(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocati
         }
     }
     tile_sum[li] = v;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
-        if (li < stride) {
-            tile_sum[li] = tile_sum[li] + tile_sum[li + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce_tile(li);
     if (li == 0u) {
         partials[wg.y * nwg.x + wg.x] = tile_sum[0];
     }
@@ -52,13 +58,7 @@ fn cs_final(@builtin(local_invocation_index) li: u32) {
         v = v + partials[i];
     }
     tile_sum[li] = v;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
-        if (li < stride) {
-            tile_sum[li] = tile_sum[li] + tile_sum[li + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce_tile(li);
     if (li == 0u) {
         let log_avg = tile_sum[0].x / max(tile_sum[0].y, 1.0);
         result = vec4f(log_avg, exp(log_avg), f32(n), tile_sum[0].y);
