@@ -27,6 +27,8 @@ pub struct BenchArgs {
     pub shadows: String,
     #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
     pub shadow_resolution: u32,
+    #[command(flatten)]
+    pub ao: crate::ao::AoArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -39,7 +41,7 @@ pub fn group(pass: &str) -> &'static str {
     match pass.split('.').next().unwrap_or("") {
         "shadows" => "shadows",
         "gbuffer" => "G-buffer",
-        "lighting" | "sky" => "lighting",
+        "lighting" | "sky" | "ao" => "lighting",
         "blended" => "blended",
         "post" => "post",
         "aa" => "anti-aliasing",
@@ -69,6 +71,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    settings.ao = args.ao.settings()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();

@@ -1,6 +1,7 @@
 //! `himal`: render the demo world or a scene headless, time every pass,
 //! list adapters.
 
+mod ao;
 mod bench;
 mod render;
 

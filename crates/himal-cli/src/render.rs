@@ -49,6 +49,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub graph: bool,
     #[command(flatten)]
+    pub ao: crate::ao::AoArgs,
+    #[command(flatten)]
     pub gpu: GpuArgs,
 }
 
@@ -126,6 +128,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     settings.raw = kind == ImageKind::Exr;
     settings.exposure_ev = args.exposure;
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    settings.ao = args.ao.settings()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);

@@ -1,9 +1,10 @@
 //! The whole frame, top to bottom, in one place to read.
 //!
 //! ```text
-//! shadows.sun ─┐
-//! gbuffer ─────┴─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
-//!    └──────────────────────────────────────────────────────> debug.view ──> output (--view)
+//! shadows.sun ────────────────────────────────┐
+//! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ──┴─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
+//!          │                 (passes/ao/mod.rs)
+//!          └───────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
@@ -12,12 +13,14 @@ use std::cell::RefCell;
 
 use crate::gpu::GpuError;
 use crate::graph::FrameGraph;
-use crate::passes::debug::{DebugPass, DebugView};
+use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
+use crate::passes::debug::DebugPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingPass};
 use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
 use crate::passes::shadows::SunShadowPass;
 use crate::passes::sky::SkyPass;
+use crate::renderer::ViewBuffer;
 use crate::renderer::scene_gpu::SceneGpu;
 
 /// Errors raised while a pass records (closures cannot return them).
@@ -50,6 +53,7 @@ impl FrameErrors {
 pub struct Passes {
     pub shadows: SunShadowPass,
     pub gbuffer: GBufferPass,
+    pub ao: AoPass,
     pub lighting: LightingPass,
     pub sky: SkyPass,
     pub luminance: LuminancePass,
@@ -70,15 +74,15 @@ pub struct FrameInputs<'a> {
     pub shadow_resolution: Option<u32>,
     /// 1x1 depth texture bound in place of the map when shadows are off.
     pub shadow_placeholder: &'a wgpu::Texture,
+    /// AO settings and history; `None` = AO off.
+    pub ao: Option<(&'a AoSettings, &'a AoHistory)>,
+    /// 1x1 white texture bound in place of AO when it is off.
+    pub ao_placeholder: &'a wgpu::Texture,
     pub errors: &'a FrameErrors,
 }
 
-/// Builds the frame graph; `debug` replaces tone mapping with a debug view.
-pub fn build<'a>(
-    inputs: FrameInputs<'a>,
-    size: (u32, u32),
-    debug: Option<DebugView>,
-) -> FrameGraph<'a> {
+/// Builds the frame graph; a debug `shown` view replaces tone mapping.
+pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -> FrameGraph<'a> {
     let FrameInputs {
         passes,
         scene,
@@ -89,6 +93,8 @@ pub fn build<'a>(
         output,
         shadow_resolution,
         shadow_placeholder,
+        ao,
+        ao_placeholder,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
@@ -97,6 +103,15 @@ pub fn build<'a>(
         None => g.import_texture("shadow.off", shadow_placeholder),
     };
     let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, errors);
+    let ao_targets = ao.map(|(settings, history)| {
+        let inputs = AoInputs {
+            settings,
+            view,
+            depth: gbuffer.depth,
+            history,
+        };
+        passes.ao.add(&mut g, size, inputs, errors)
+    });
     let shadow_sampler = &passes.shadows.sampler;
     let lighting_inputs = LightingInputs {
         view,
@@ -104,6 +119,10 @@ pub fn build<'a>(
         sky,
         shadow_map,
         shadow_sampler,
+        ao: match ao_targets {
+            Some(t) => t.ao,
+            None => g.import_texture("ao.off", ao_placeholder),
+        },
     };
     let hdr = passes
         .lighting
@@ -113,11 +132,22 @@ pub fn build<'a>(
         .add(&mut g, hdr, gbuffer.depth, view, sky, errors);
     let exposure = passes.luminance.add(&mut g, hdr, size, luminance, errors);
     let out = g.import_texture("output", output);
-    let out = match debug {
-        None => passes
-            .tonemap
-            .add(&mut g, hdr, exposure, out, view, &luminance.result, errors),
-        Some(v) => passes.debug.add(
+    let out = match shown {
+        ViewBuffer::Final => {
+            passes
+                .tonemap
+                .add(&mut g, hdr, exposure, out, view, &luminance.result, errors)
+        }
+        ViewBuffer::Ao(v) => match ao_targets {
+            Some(t) => passes.ao.add_view(&mut g, v, t, out, errors),
+            None => {
+                errors.record::<()>(Err(GpuError::Other(
+                    "AO views need AO on (--ao hbao or hbao+stf)".into(),
+                )));
+                out
+            }
+        },
+        ViewBuffer::Debug(v) => passes.debug.add(
             &mut g,
             v,
             gbuffer,

@@ -14,6 +14,7 @@ use crate::gpu::pipeline::uniform_buffer;
 use crate::gpu::{GpuContext, TextureData, read_texture};
 use crate::graph::{PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
+use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView};
 use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::LightingPass;
@@ -39,10 +40,12 @@ pub enum ViewBuffer {
     #[default]
     Final,
     Debug(DebugView),
+    /// AO buffers (`ao`, `ao-raw`, `stability-mask`).
+    Ao(AoView),
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 11] = [
+    pub const NAMES: [&'static str; 14] = [
         "final",
         "albedo",
         "normal",
@@ -54,16 +57,10 @@ impl ViewBuffer {
         "depth",
         "motion",
         "lighting",
+        "ao",
+        "ao-raw",
+        "stability-mask",
     ];
-}
-
-impl ViewBuffer {
-    pub fn debug(self) -> Option<DebugView> {
-        match self {
-            ViewBuffer::Final => None,
-            ViewBuffer::Debug(v) => Some(v),
-        }
-    }
 }
 
 impl std::str::FromStr for ViewBuffer {
@@ -82,6 +79,9 @@ impl std::str::FromStr for ViewBuffer {
             "depth" => ViewBuffer::Debug(D::Depth),
             "motion" => ViewBuffer::Debug(D::Motion),
             "lighting" => ViewBuffer::Debug(D::Lighting),
+            "ao" => ViewBuffer::Ao(AoView::Ao),
+            "ao-raw" => ViewBuffer::Ao(AoView::Raw),
+            "stability-mask" => ViewBuffer::Ao(AoView::Stability),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -107,6 +107,8 @@ pub struct FrameSettings {
     pub aerial_extinction: f32,
     /// Sun shadow map edge in texels; 0 = shadows off.
     pub shadow_resolution: u32,
+    /// Screen-space AO (TECHNIQUES O1-O3).
+    pub ao: AoSettings,
 }
 
 impl FrameSettings {
@@ -120,6 +122,7 @@ impl FrameSettings {
             exposure_ev: 0.0,
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
+            ao: AoSettings::default(),
         }
     }
 }
@@ -142,13 +145,15 @@ struct Resources {
     luminance: Option<((u32, u32), LuminanceBuffers)>,
     outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
     shadow_placeholder: wgpu::Texture,
+    ao_history: Option<AoHistory>,
+    ao_placeholder: wgpu::Texture,
     bounds: Aabb,
 }
 
 impl Resources {
     fn inputs<'a>(
         &'a self,
-        settings: &FrameSettings,
+        settings: &'a FrameSettings,
         format: wgpu::TextureFormat,
         errors: &'a FrameErrors,
     ) -> Option<FrameInputs<'a>> {
@@ -164,6 +169,11 @@ impl Resources {
             shadow_resolution: (settings.shadow_resolution > 0)
                 .then_some(settings.shadow_resolution),
             shadow_placeholder: &self.shadow_placeholder,
+            ao: match (settings.ao.mode, &self.ao_history) {
+                (AoMode::Off, _) | (_, None) => None,
+                (_, Some(h)) => Some((&settings.ao, h)),
+            },
+            ao_placeholder: &self.ao_placeholder,
             errors,
         })
     }
@@ -188,6 +198,7 @@ impl Renderer {
         let passes = Passes {
             shadows: SunShadowPass::new(&ctx)?,
             gbuffer: GBufferPass::new(&ctx)?,
+            ao: AoPass::new(&ctx)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
@@ -220,6 +231,28 @@ impl Renderer {
             usage: wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
+        let ao_placeholder = {
+            use wgpu::util::DeviceExt;
+            ctx.device.create_texture_with_data(
+                &ctx.queue,
+                &wgpu::TextureDescriptor {
+                    label: Some("ao.off"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::Rgba8Unorm,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                },
+                wgpu::util::TextureDataOrder::LayerMajor,
+                &[255; 4],
+            )
+        };
         Ok(Self {
             ctx,
             res: Resources {
@@ -231,6 +264,8 @@ impl Renderer {
                 luminance: None,
                 outputs: HashMap::new(),
                 shadow_placeholder,
+                ao_history: None,
+                ao_placeholder,
                 bounds: scene.bounds,
             },
             pool: TexturePool::new(),
@@ -254,12 +289,19 @@ impl Renderer {
         vec![
             ("scene buffers", self.res.scene.bytes),
             ("frame targets (pool)", self.pool.allocated_bytes()),
+            (
+                "AO history",
+                self.res.ao_history.as_ref().map_or(0, AoHistory::bytes),
+            ),
         ]
     }
 
     /// Forgets the previous frame (camera cut): motion vectors become zero.
     pub fn reset_history(&mut self) {
         self.prev_view_proj = None;
+        if let Some(h) = &mut self.res.ao_history {
+            h.invalidate();
+        }
     }
 
     fn validate(settings: &FrameSettings) -> Result<(), Error> {
@@ -273,6 +315,12 @@ impl Renderer {
                 "frame size {}x{} is outside 1x1..{max}x{max}",
                 settings.width, settings.height
             )));
+        }
+        settings.ao.validate()?;
+        if matches!(settings.view, ViewBuffer::Ao(_)) && settings.ao.mode == AoMode::Off {
+            return Err(Error::InvalidSettings(
+                "the AO views need AO on (--ao hbao or hbao+stf)".into(),
+            ));
         }
         Ok(())
     }
@@ -311,14 +359,14 @@ impl Renderer {
             .res
             .inputs(settings, format, &errors)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
-        Ok(frame::build(inputs, size, settings.view.debug())
+        Ok(frame::build(inputs, size, settings.view)
             .compile()?
             .describe())
     }
 
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Debug(_) if settings.raw => RAW_FORMAT,
+            ViewBuffer::Debug(_) | ViewBuffer::Ao(_) if settings.raw => RAW_FORMAT,
             _ => DISPLAY_FORMAT,
         }
     }
@@ -327,8 +375,13 @@ impl Renderer {
     fn prepare_output(&mut self, settings: &FrameSettings) -> Result<wgpu::TextureFormat, Error> {
         let size = (settings.width, settings.height);
         let format = Self::output_format(settings);
-        if let ViewBuffer::Debug(v) = settings.view {
-            self.res.passes.debug.prepare(&self.ctx, v, format)?;
+        match settings.view {
+            ViewBuffer::Debug(v) => self.res.passes.debug.prepare(&self.ctx, v, format)?,
+            ViewBuffer::Ao(v) => self.res.passes.ao.prepare_view(&self.ctx, v, format)?,
+            ViewBuffer::Final => {}
+        }
+        if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
+            self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
         }
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
@@ -383,6 +436,10 @@ impl Renderer {
         self.ctx
             .queue
             .write_buffer(&self.res.view_buffer, 0, bytemuck::bytes_of(&uniform));
+        self.res.passes.ao.update(
+            &self.ctx.queue,
+            &AoUniform::new(&settings.ao, proj, camera.near, size),
+        );
         let Some((_, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
@@ -434,7 +491,7 @@ impl Renderer {
             .inputs(settings, format, &errors)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
         let output = inputs.output;
-        let compiled = frame::build(inputs, size, settings.view.debug()).compile()?;
+        let compiled = frame::build(inputs, size, settings.view).compile()?;
         let commands = compiled.execute(&ctx.device, pool, timer.as_mut())?;
         if let Some(e) = errors.take_first() {
             return Err(e.into());
@@ -448,6 +505,14 @@ impl Renderer {
         let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
         self.frame_index += 1;
+        if let Some(h) = &mut self.res.ao_history {
+            // Only the filter writes the history; any other mode leaves it stale.
+            if settings.ao.mode == AoMode::HbaoStf {
+                h.advance();
+            } else {
+                h.invalidate();
+            }
+        }
         Ok(RenderedFrame { image, timings })
     }
 }

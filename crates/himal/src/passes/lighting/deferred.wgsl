@@ -5,7 +5,7 @@
 // Sun shadow: shaders/shadow.wgsl (S1 foundation), normal offset + depth bias.
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
-// shadow_map + shadow_sampler.
+// shadow_map + shadow_sampler, ao (screen-space AO in .x, passes/ao; 1x1 white when off).
 // CPU twin: passes/lighting/reference.rs (`shade`).
 #import view
 #import brdf
@@ -38,6 +38,7 @@ struct Lighting {
 @group(0) @binding(6) var depth: texture_depth_2d;
 @group(0) @binding(7) var shadow_map: texture_depth_2d;
 @group(0) @binding(8) var shadow_sampler: sampler_comparison;
+@group(0) @binding(9) var ao: texture_2d<f32>;
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
@@ -79,7 +80,9 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let offset_p = p + tbn[2] * lighting.shadow.y;
         vis = sun_shadow_visibility(shadow_map, shadow_sampler, lighting.light_view_proj, offset_p, lighting.shadow.z);
     }
-    var c = shade(s, m.x, albedo_ao.a, tbn[0], tbn[1], tbn[2], v, vis);
+    // Screen-space AO darkens the ambient terms only, like the material's baked AO (O1).
+    let ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
+    var c = shade(s, m.x, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
     let transmittance = exp(-lighting.fog.x * dist);
     let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
     c = c * transmittance + inscatter * (1.0 - transmittance);

@@ -21,6 +21,8 @@ pub struct LightingInputs<'a> {
     /// Sun shadow map (a 1x1 imported placeholder when shadows are off).
     pub shadow_map: TextureHandle,
     pub shadow_sampler: &'a wgpu::Sampler,
+    /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
+    pub ao: TextureHandle,
 }
 
 pub struct LightingPass {
@@ -54,6 +56,7 @@ impl LightingPass {
             gbuffer.material,
             gbuffer.depth,
             inputs.shadow_map,
+            inputs.ao,
         ] {
             pass.read(t, TextureAccess::Sampled);
         }
@@ -89,6 +92,10 @@ impl LightingPass {
                     (
                         "shadow_sampler",
                         wgpu::BindingResource::Sampler(inputs.shadow_sampler),
+                    ),
+                    (
+                        "ao",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.ao)),
                     ),
                 ],
             );

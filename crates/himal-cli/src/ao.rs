@@ -1,0 +1,51 @@
+//! AO options shared by `render` and `bench` (TECHNIQUES O1-O3).
+
+use anyhow::{Result, bail};
+use clap::Args;
+use himal::passes::ao::{AoMode, AoSettings};
+
+#[derive(Args, Debug, Clone)]
+pub struct AoArgs {
+    /// Screen-space AO: off, hbao (HBAO + bilateral blur), hbao+stf (plus the selective temporal filter).
+    #[arg(long, default_value = "hbao+stf", value_name = "off|hbao|hbao+stf")]
+    pub ao: String,
+    /// HBAO resolution.
+    #[arg(long, default_value = "half", value_name = "half|full")]
+    pub ao_resolution: String,
+    /// HBAO radius in metres.
+    #[arg(long, value_name = "M")]
+    pub ao_radius: Option<f32>,
+    /// Blur sampling: adaptive (point inner half, bilinear outer half) or brute force.
+    #[arg(long, default_value = "adaptive", value_name = "adaptive|brute")]
+    pub ao_blur: String,
+    /// Blur kernel radius in pixels.
+    #[arg(long, value_name = "PIXELS")]
+    pub ao_blur_radius: Option<u32>,
+}
+
+impl AoArgs {
+    pub fn settings(&self) -> Result<AoSettings> {
+        let mut s = AoSettings {
+            mode: self.ao.parse::<AoMode>()?,
+            ..AoSettings::default()
+        };
+        s.full_resolution = match self.ao_resolution.as_str() {
+            "half" => false,
+            "full" => true,
+            other => bail!("--ao-resolution {other}: expected half or full"),
+        };
+        s.adaptive_blur = match self.ao_blur.as_str() {
+            "adaptive" => true,
+            "brute" => false,
+            other => bail!("--ao-blur {other}: expected adaptive or brute"),
+        };
+        if let Some(r) = self.ao_radius {
+            s.radius = r;
+        }
+        if let Some(r) = self.ao_blur_radius {
+            s.blur_radius = r;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}

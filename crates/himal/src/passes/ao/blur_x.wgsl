@@ -1,0 +1,20 @@
+// ao.blur_x: horizontal cross-bilateral blur of (AO, Z) (TECHNIQUES O3).
+// Target: Rg16Float (AO, Z). Bindings: params, packed (ao.pack output), linear_sampler.
+// Kernel: shaders/ao.wgsl `ao_cross_bilateral`. CPU twin: reference.rs `blur`.
+#import view
+#import ao
+
+@group(0) @binding(0) var<uniform> params: AoParams;
+@group(0) @binding(1) var packed: texture_2d<f32>;
+@group(0) @binding(2) var linear_sampler: sampler;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
+    return fullscreen_clip(i);
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let r = ao_cross_bilateral(packed, linear_sampler, vec2i(frag.xy), vec2i(1, 0), params);
+    return vec4f(r, 0.0, 1.0);
+}

@@ -1,0 +1,205 @@
+//! AO settings (`himal render --ao ...`), the uniform twin of `AoParams` in
+//! `shaders/ao.wgsl`, and the 4x4 jitter pattern.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
+use crate::Error;
+
+/// Which AO runs (`--ao off|hbao|hbao+stf`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum AoMode {
+    Off,
+    /// HBAO and the cross-bilateral blur.
+    Hbao,
+    /// HBAO, the blur and the selective temporal filter (Battlefield 3).
+    #[default]
+    HbaoStf,
+}
+
+impl AoMode {
+    pub const NAMES: [&'static str; 3] = ["off", "hbao", "hbao+stf"];
+}
+
+impl std::str::FromStr for AoMode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s {
+            "off" => Ok(AoMode::Off),
+            "hbao" => Ok(AoMode::Hbao),
+            "hbao+stf" => Ok(AoMode::HbaoStf),
+            other => Err(Error::InvalidSettings(format!(
+                "unknown AO mode \"{other}\" (known: {})",
+                AoMode::NAMES.join(", ")
+            ))),
+        }
+    }
+}
+
+/// Every AO parameter; defaults are the talk's where it gives one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AoSettings {
+    pub mode: AoMode,
+    /// HBAO at full instead of half resolution.
+    pub full_resolution: bool,
+    /// Radius R of the horizon search (m); W(r) = 1 - r^2 / R^2 beyond which samples count 0.
+    pub radius: f32,
+    /// Directions D of the horizon search.
+    pub directions: u32,
+    /// Steps S per direction.
+    pub steps: u32,
+    /// Occlusion multiplier (1 = the integral as is).
+    pub strength: f32,
+    /// Tangent-plane angle bias (degrees) against self-occlusion of tessellated surfaces.
+    pub angle_bias_deg: f32,
+    /// Cap on the projected radius (AO pixels) so close-ups stay bounded in cost.
+    pub max_radius_px: f32,
+    /// Cross-bilateral kernel radius (full-resolution pixels).
+    pub blur_radius: u32,
+    /// Depth sharpness of the blur: dz = sharpness (z - z0) / z0.
+    pub blur_sharpness: f32,
+    /// Adaptive sampling (inner half point taps, outer half bilinear step 2) vs brute force.
+    pub adaptive_blur: bool,
+    /// Disocclusion threshold epsilon on |1 - w_i / w_(i-1)|.
+    pub epsilon: f32,
+    /// N_max, the most frames accumulated.
+    pub n_max: f32,
+    /// Continuity distance L (m).
+    pub continuity: f32,
+    /// Filter only unstable pixels (the talk); false filters every pixel.
+    pub selective: bool,
+}
+
+impl Default for AoSettings {
+    fn default() -> Self {
+        Self {
+            mode: AoMode::HbaoStf,
+            full_resolution: false,
+            radius: 1.5,
+            directions: 8,
+            steps: 4,
+            strength: 1.0,
+            angle_bias_deg: 10.0,
+            max_radius_px: 48.0,
+            blur_radius: 8,
+            blur_sharpness: 16.0,
+            adaptive_blur: true,
+            epsilon: 0.1,
+            n_max: 8.0,
+            continuity: 0.1,
+            selective: true,
+        }
+    }
+}
+
+impl AoSettings {
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |what: &str| Err(Error::InvalidSettings(format!("AO: {what}")));
+        if !(self.radius > 0.0 && self.radius.is_finite()) {
+            return bad("radius must be a positive number of metres");
+        }
+        if !(1..=32).contains(&self.directions) || !(1..=32).contains(&self.steps) {
+            return bad("directions and steps must be in 1..=32");
+        }
+        if self.blur_radius > 32 {
+            return bad("blur radius must be at most 32 pixels");
+        }
+        if !(self.n_max >= 1.0) || !(self.epsilon >= 0.0) || !(self.continuity > 0.0) {
+            return bad("N_max >= 1, epsilon >= 0 and L > 0 are required");
+        }
+        Ok(())
+    }
+
+    /// Full-resolution pixels per AO pixel.
+    pub fn scale(&self) -> u32 {
+        if self.full_resolution { 1 } else { 2 }
+    }
+
+    /// AO resolution for a `full` frame: AO texel q holds full pixel q * scale.
+    pub fn ao_size(&self, full: (u32, u32)) -> (u32, u32) {
+        let s = self.scale();
+        (full.0.div_ceil(s), full.1.div_ceil(s))
+    }
+}
+
+/// Twin of `AoParams` in `shaders/ao.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct AoUniform {
+    pub proj: [f32; 4],
+    pub ao_size: [f32; 4],
+    pub full_size: [f32; 4],
+    pub hbao: [f32; 4],
+    pub hbao_steps: [f32; 4],
+    pub blur: [f32; 4],
+    pub stf: [f32; 4],
+}
+
+impl AoUniform {
+    /// `proj` is the camera projection (reverse-Z, infinite far), `near` its near plane.
+    pub fn new(s: &AoSettings, proj: Mat4, near: f32, full: (u32, u32)) -> Self {
+        let ao = s.ao_size(full);
+        let size = |(w, h): (u32, u32)| [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32];
+        let sigma = (s.blur_radius as f32 + 1.0) * 0.5;
+        Self {
+            proj: [
+                1.0 / proj.x_axis.x,
+                1.0 / proj.y_axis.y,
+                near,
+                0.5 * ao.1 as f32 * proj.y_axis.y,
+            ],
+            ao_size: size(ao),
+            full_size: size(full),
+            hbao: [
+                s.radius,
+                1.0 / (s.radius * s.radius),
+                s.strength,
+                s.angle_bias_deg.to_radians(),
+            ],
+            hbao_steps: [
+                s.directions as f32,
+                s.steps as f32,
+                s.scale() as f32,
+                s.max_radius_px,
+            ],
+            blur: [
+                s.blur_radius as f32,
+                1.0 / (2.0 * sigma * sigma),
+                s.blur_sharpness,
+                if s.adaptive_blur { 1.0 } else { 0.0 },
+            ],
+            stf: [
+                s.epsilon,
+                s.n_max,
+                s.continuity,
+                if s.selective { 1.0 } else { 0.0 },
+            ],
+        }
+    }
+}
+
+/// The AO debug views; `id` is `VIEW` in `passes/ao/view.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AoView {
+    /// Blurred and filtered AO (raw: AO, Z, N).
+    Ao = 1,
+    /// HBAO before blur and filter (raw: AO, continuity).
+    Raw = 2,
+    /// 1 = stable (continuous over 4x4: temporal filter off), 0 = unstable.
+    Stability = 3,
+}
+
+/// 4x4 Bayer order: neighbouring pixels get far-apart rotations.
+const BAYER_4X4: [u32; 16] = [0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5];
+
+/// The 4x4 jitter texture, row-major: (rotation as a fraction of one direction
+/// sector, first-step offset as a fraction of a step, 0, 0). Frame independent,
+/// as in the talk; rotation follows the Bayer order, the offset a second
+/// permutation of it so the two do not correlate.
+pub fn jitter_4x4() -> [[f32; 4]; 16] {
+    std::array::from_fn(|i| {
+        let rotation = (BAYER_4X4[i] as f32 + 0.5) / 16.0;
+        let offset = (BAYER_4X4[(i * 7 + 5) % 16] as f32 + 0.5) / 16.0;
+        [rotation, offset, 0.0, 0.0]
+    })
+}
