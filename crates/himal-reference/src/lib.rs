@@ -5,10 +5,12 @@
 //! here are written independently of himal's, in another parameterisation,
 //! so a shared mistake is unlikely.
 //!
+//! - [`ao`]: ray-traced ambient occlusion of analytic scenes (planes, spheres, boxes).
 //! - [`integrate`]: Monte Carlo (importance sampling, two-strategy MIS) and
 //!   deterministic polar quadrature over the sphere.
 //! - [`microfacet`]: isotropic GGX D and Smith terms in f64, written in
 //!   theta form after Walter et al. 2007 and Heitz 2014.
 
+pub mod ao;
 pub mod integrate;
 pub mod microfacet;

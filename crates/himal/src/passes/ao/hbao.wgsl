@@ -68,6 +68,11 @@ fn integrate_direction(p: vec3f, n: vec3f, q: vec2i, dir: vec2f, step_px: f32, o
     let steps = u32(params.hbao_steps.y);
     for (var s = 0u; s < steps; s++) {
         let sq = vec2i(floor(vec2f(q) + 0.5 + dir * ray));
+        // Off screen the depth buffer knows nothing: stop rather than clamp
+        // (clamped samples leave the slice and self-occlude planes).
+        if (any(sq < vec2i(0)) || any(sq >= vec2i(params.ao_size.xy))) {
+            break;
+        }
         let d = texel_position(sq) - p;
         let d2 = dot(d, d);
         if (d2 > 0.0 && d2 < params.hbao.x * params.hbao.x) {

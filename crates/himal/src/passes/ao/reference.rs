@@ -134,6 +134,9 @@ fn integrate_direction(
     let mut occlusion = 0.0;
     for _ in 0..p.hbao_steps[1] as u32 {
         let sq = (q.as_vec2() + 0.5 + dir * ray).floor().as_ivec2();
+        if sq.cmplt(IVec2::ZERO).any() || sq.cmpge(v4(p.ao_size).xy().as_ivec2()).any() {
+            break;
+        }
         let d = texel_position(p, depth, sq) - pos;
         let d2 = d.length_squared();
         if d2 > 0.0 && d2 < p.hbao[0] * p.hbao[0] {
