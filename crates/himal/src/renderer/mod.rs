@@ -109,6 +109,9 @@ pub struct FrameSettings {
     pub shadow_resolution: u32,
     /// Screen-space AO (TECHNIQUES O1-O3).
     pub ao: AoSettings,
+    /// Animation clock in seconds (moving objects, vegetation sway); set by
+    /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
+    pub time_s: f32,
 }
 
 impl FrameSettings {
@@ -123,6 +126,7 @@ impl FrameSettings {
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
             ao: AoSettings::default(),
+            time_s: 0.0,
         }
     }
 }
@@ -185,6 +189,8 @@ pub struct Renderer {
     pool: TexturePool,
     timer: Option<PassTimer>,
     prev_view_proj: Option<Mat4>,
+    /// Animation time of the previous frame (`None`: first frame or after a cut).
+    prev_time: Option<f32>,
     frame_index: u64,
     sky_light: Option<(SunKey, SkyLight)>,
 }
@@ -271,6 +277,7 @@ impl Renderer {
             pool: TexturePool::new(),
             timer,
             prev_view_proj: None,
+            prev_time: None,
             frame_index: 0,
             sky_light: None,
         })
@@ -302,6 +309,7 @@ impl Renderer {
         if let Some(h) = &mut self.res.ao_history {
             h.invalidate();
         }
+        self.prev_time = None;
     }
 
     fn validate(settings: &FrameSettings) -> Result<(), Error> {
@@ -423,6 +431,7 @@ impl Renderer {
         let (view, proj) = (camera.view(), camera.projection(aspect));
         let view_proj = proj * view;
         let prev = self.prev_view_proj.unwrap_or(view_proj);
+        let prev_time = self.prev_time.unwrap_or(settings.time_s);
         let uniform = ViewUniform::new(
             view,
             proj,
@@ -432,7 +441,11 @@ impl Renderer {
             size,
             self.frame_index,
             settings.exposure_ev,
-        );
+        )
+        .with_times(settings.time_s, prev_time);
+        self.res
+            .scene
+            .update_objects(&self.ctx.queue, settings.time_s, prev_time);
         self.ctx
             .queue
             .write_buffer(&self.res.view_buffer, 0, bytemuck::bytes_of(&uniform));
@@ -464,6 +477,7 @@ impl Renderer {
                 &self.res.bounds,
                 light.sun_direction,
                 settings.shadow_resolution,
+                settings.time_s,
             );
             lighting.light_view_proj = fit.light_view_proj.to_cols_array_2d();
             // Normal offset 1.5 texels and depth bias 2 texels: 1 texel left
@@ -504,6 +518,7 @@ impl Renderer {
         };
         let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
+        self.prev_time = Some(settings.time_s);
         self.frame_index += 1;
         if let Some(h) = &mut self.res.ao_history {
             // Only the filter writes the history; any other mode leaves it stale.

@@ -1,11 +1,14 @@
 //! The scene's meshes and object transforms on the GPU: one vertex buffer,
 //! one index buffer, one storage buffer of objects (instance index = object).
+//! Draws come in two lists: opaque objects (early-Z, no discard) and
+//! vegetation (alpha-tested, swaying, double-sided), each drawn with its own
+//! pipeline. Moving objects are rewritten every frame by [`SceneGpu::update_objects`].
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::gpu::{GpuContext, GpuError};
-use crate::scene::{Scene, Vertex};
+use crate::scene::{Object, Scene, Vertex};
 
 /// Twin of `Object` in `shaders/scene.wgsl`.
 #[repr(C)]
@@ -14,6 +17,21 @@ pub struct ObjectGpu {
     pub model: [[f32; 4]; 4],
     pub normal_matrix: [[f32; 4]; 4],
     pub prev_model: [[f32; 4]; 4],
+    /// x alpha pattern (0 opaque, 1 grass, 2 leaves), y sway amplitude (m),
+    /// zw sway weight of leaves (local bottom y, 1 / height); see [`crate::scene::Foliage`].
+    pub params: [f32; 4],
+}
+
+impl ObjectGpu {
+    /// An object at `model` now that was at `prev_model` in the previous frame.
+    pub fn new(model: glam::Mat4, prev_model: glam::Mat4, params: [f32; 4]) -> Self {
+        ObjectGpu {
+            model: model.to_cols_array_2d(),
+            normal_matrix: model.inverse().transpose().to_cols_array_2d(),
+            prev_model: prev_model.to_cols_array_2d(),
+            params,
+        }
+    }
 }
 
 /// One indexed draw of one object.
@@ -29,7 +47,12 @@ pub struct SceneGpu {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub objects: wgpu::Buffer,
-    pub draws: Vec<Draw>,
+    /// Opaque objects (G-buffer and shadow pipelines without a discard).
+    pub draws_opaque: Vec<Draw>,
+    /// Alpha-tested, swaying vegetation (the `VEGETATION` pipelines).
+    pub draws_vegetation: Vec<Draw>,
+    /// Moving objects with their index into `objects`, rewritten per frame.
+    pub animated: Vec<(u32, Object)>,
     pub triangles: u64,
     pub bytes: u64,
 }
@@ -62,7 +85,8 @@ impl SceneGpu {
             indices.extend_from_slice(&mesh.indices);
         }
         let mut objects = Vec::with_capacity(scene.objects.len());
-        let mut draws = Vec::with_capacity(scene.objects.len());
+        let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
+        let mut animated = Vec::new();
         let mut triangles = 0u64;
         for (i, object) in scene.objects.iter().enumerate() {
             let Some(&(first_index, index_count, base_vertex)) = ranges.get(object.mesh) else {
@@ -74,11 +98,15 @@ impl SceneGpu {
                 )));
             };
             let m = object.transform;
-            objects.push(ObjectGpu {
-                model: m.to_cols_array_2d(),
-                normal_matrix: m.inverse().transpose().to_cols_array_2d(),
-                prev_model: m.to_cols_array_2d(),
-            });
+            objects.push(ObjectGpu::new(m, m, params(object)));
+            if object.motion.is_some() {
+                animated.push((i as u32, object.clone()));
+            }
+            let draws = if object.foliage.is_some() {
+                &mut draws_vegetation
+            } else {
+                &mut draws_opaque
+            };
             draws.push(Draw {
                 first_index,
                 index_count,
@@ -122,20 +150,66 @@ impl SceneGpu {
                     bytemuck::cast_slice(&objects),
                     wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 ),
-                draws,
+                draws_opaque,
+                draws_vegetation,
+                animated,
                 triangles,
                 bytes,
             }
         })
     }
 
-    /// Records every draw: one indexed draw per object, instance index = object.
-    pub fn draw_all(&self, rp: &mut wgpu::RenderPass<'_>) {
+    /// Writes the transforms of moving objects at `time` (s), with
+    /// `prev_model` at `prev_time`, so motion vectors cover the movement.
+    /// Static objects keep `prev_model = model` from the upload.
+    pub fn update_objects(&self, queue: &wgpu::Queue, time: f32, prev_time: f32) {
+        for (i, object) in &self.animated {
+            let gpu = ObjectGpu::new(
+                object.transform_at(time),
+                object.transform_at(prev_time),
+                params(object),
+            );
+            let offset = *i as u64 * std::mem::size_of::<ObjectGpu>() as u64;
+            queue.write_buffer(&self.objects, offset, bytemuck::bytes_of(&gpu));
+        }
+    }
+
+    /// Binds the shared vertex and index buffers.
+    pub fn bind_geometry(&self, rp: &mut wgpu::RenderPass<'_>) {
         rp.set_vertex_buffer(0, self.vertices.slice(..));
         rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for d in &self.draws {
+    }
+
+    /// Records `draws` (geometry bound): one indexed draw per object, instance index = object.
+    pub fn draw_list(rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
+        for d in draws {
             let indices = d.first_index..d.first_index + d.index_count;
             rp.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
         }
     }
+
+    /// Binds the geometry and records the opaque objects.
+    pub fn draw_opaque(&self, rp: &mut wgpu::RenderPass<'_>) {
+        self.bind_geometry(rp);
+        Self::draw_list(rp, &self.draws_opaque);
+    }
+
+    /// Binds the geometry and records the vegetation (set a `VEGETATION` pipeline first).
+    pub fn draw_vegetation(&self, rp: &mut wgpu::RenderPass<'_>) {
+        self.bind_geometry(rp);
+        Self::draw_list(rp, &self.draws_vegetation);
+    }
+
+    /// Records every draw, vegetation as plain cards (no alpha test, no
+    /// sway); passes that need the true vegetation shape draw the two lists.
+    pub fn draw_all(&self, rp: &mut wgpu::RenderPass<'_>) {
+        self.bind_geometry(rp);
+        Self::draw_list(rp, &self.draws_opaque);
+        Self::draw_list(rp, &self.draws_vegetation);
+    }
+}
+
+/// `ObjectGpu::params` of an object: its foliage, zero for opaque objects.
+fn params(object: &Object) -> [f32; 4] {
+    object.foliage.map_or([0.0; 4], |f| f.params())
 }

@@ -19,6 +19,8 @@ pub struct ViewUniform {
     pub viewport: [f32; 4],
     /// xy jitter (clip units), z frame index, w exposure bias (EV)
     pub jitter: [f32; 4],
+    /// x animation time now (s), y animation time of the previous frame, zw 0
+    pub time: [f32; 4],
 }
 
 impl ViewUniform {
@@ -43,7 +45,14 @@ impl ViewUniform {
             camera_position: position.extend(near).to_array(),
             viewport: [w, h, 1.0 / w, 1.0 / h],
             jitter: [0.0, 0.0, frame_index as f32, exposure_bias_ev],
+            time: [0.0; 4],
         }
+    }
+
+    /// Sets the animation clock: `now` and the previous frame's time (s).
+    pub fn with_times(mut self, now: f32, prev: f32) -> Self {
+        self.time = [now, prev, 0.0, 0.0];
+        self
     }
 }
 

@@ -12,11 +12,11 @@ use super::error::SourceMap;
 use super::file::{FileCamera, FileMaterial, FileObject, FileScene, FileSun};
 use super::place::Placer;
 use super::{Aabb, Camera, MaterialDesc, NamedCamera, Scene, SceneError, SunDesc};
-use super::{heightfield, primitives};
+use super::{heightfield, primitives, vegetation};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
-const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield";
+const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield, grass, bush";
 
 /// Range checks that point at the offending value.
 pub(crate) struct Checker<'a> {
@@ -139,7 +139,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
     let objects = Placer::place_all(&mut world, &file.object)?;
     let meshes = world.meshes;
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
-        b.union(&meshes[o.mesh].bounds.transform(&o.transform))
+        b.union(&o.swept_bounds(&meshes[o.mesh].bounds))
     });
     Ok(Scene {
         path: Some(origin.into()),
@@ -325,6 +325,8 @@ enum Shape {
         size: [f32; 3],
         gable: usize,
     },
+    Grass(vegetation::GrassParams),
+    Bush(vegetation::BushParams),
 }
 
 /// Which keys each primitive takes besides the common ones.
@@ -344,6 +346,10 @@ fn allowed_keys(primitive: &str) -> Option<&'static [&'static str]> {
             "layers",
             "albedo_variation",
         ],
+        "grass" => &[
+            "size", "density", "height", "width", "seed", "cards", "sway",
+        ],
+        "bush" => &["radius", "size", "width", "seed", "cards", "sway"],
         _ => return None,
     })
 }
@@ -438,6 +444,8 @@ impl World<'_> {
                     .positive(self.required(o, &o.height, "height")?, "height")?,
                 segments: self.segments(&o.segments, "segments", 32, 3)?,
             },
+            "grass" => Shape::Grass(self.grass_params(o)?),
+            "bush" => Shape::Bush(self.bush_params(o)?),
             _ => Shape::Prism {
                 size: self.ck.size(self.required(o, &o.size, "size")?, prim)?,
                 gable: match &o.gable_material {
@@ -469,6 +477,13 @@ impl World<'_> {
             Shape::Prism { size, gable } => {
                 primitives::prism(name, Vec3::from(size), m, &self.materials[gable])
             }
+            Shape::Grass(p) => vegetation::grass(name, &p, m, |_, _| Some(0.0)).map_err(|_| {
+                SceneError::Invalid {
+                    file: self.ck.src.origin.to_string(),
+                    message: "grass on a plane cannot fail".into(),
+                }
+            })?,
+            Shape::Bush(p) => vegetation::bush(name, &p, m),
         };
         self.meshes.push(mesh);
         self.mesh_keys.insert(key, self.meshes.len() - 1);

@@ -61,6 +61,7 @@ pub(crate) struct FileObject {
     pub snap_to_ground: Option<Spanned<bool>>,
     pub rest_on: Option<Spanned<String>>,
     pub repeat: Option<Spanned<FileRepeat>>,
+    pub orbit: Option<Spanned<FileOrbit>>,
     // Primitive parameters; which ones apply is checked per primitive.
     pub size: Option<Spanned<Vec<f32>>>,
     pub radius: Option<Spanned<f32>>,
@@ -74,6 +75,11 @@ pub(crate) struct FileObject {
     pub height_scale: Option<Spanned<f32>>,
     pub layers: Option<Spanned<Vec<FileLayer>>>,
     pub albedo_variation: Option<Spanned<f32>>,
+    pub density: Option<Spanned<f32>>,
+    pub width: Option<Spanned<f32>>,
+    pub seed: Option<Spanned<i64>>,
+    pub cards: Option<Spanned<i64>>,
+    pub sway: Option<Spanned<f32>>,
 }
 
 impl FileObject {
@@ -99,10 +105,25 @@ impl FileObject {
             png,
             height_scale,
             layers,
-            albedo_variation
+            albedo_variation,
+            density,
+            width,
+            seed,
+            cards,
+            sway
         );
         keys
     }
+}
+
+/// `orbit = { radius, period, phase, turn }` (see `scene/motion.rs`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileOrbit {
+    pub radius: Spanned<f32>,
+    pub period: Spanned<f32>,
+    pub phase: Option<Spanned<f32>>,
+    pub turn: Option<bool>,
 }
 
 #[derive(Deserialize)]

@@ -75,14 +75,17 @@
 //! Mesh conventions (UVs, tangents, winding) are in [`primitives`].
 
 mod build;
+mod build_vegetation;
 mod camera;
 mod error;
 mod file;
 pub mod heightfield;
+mod motion;
 pub mod noise;
 mod place;
 pub mod primitives;
 mod terrain;
+pub mod vegetation;
 
 use std::path::{Path, PathBuf};
 
@@ -91,6 +94,7 @@ use glam::{Mat4, Vec3};
 pub use camera::{Camera, DEFAULT_NEAR};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
+pub use motion::{Motion, Orbit};
 
 /// One vertex as the G-buffer pass reads it (80 bytes).
 #[repr(C)]
@@ -205,8 +209,75 @@ impl Mesh {
 pub struct Object {
     pub name: String,
     pub mesh: usize,
-    /// Local to world (translation * rotation * scale).
+    /// Local to world (translation * rotation * scale) at time 0.
     pub transform: Mat4,
+    /// Movement over time; `None` for static objects.
+    pub motion: Option<Motion>,
+    /// Alpha-tested, swaying cards; `None` for opaque geometry.
+    pub foliage: Option<Foliage>,
+}
+
+impl Object {
+    /// Local to world at time `t` (seconds); `transform` for static objects.
+    pub fn transform_at(&self, t: f32) -> Mat4 {
+        self.motion.map_or(self.transform, |m| m.transform_at(t))
+    }
+
+    /// World bounds over all time: the path swept by a moving object, the
+    /// sway of foliage (`mesh_bounds`: the bounds of its mesh).
+    pub fn swept_bounds(&self, mesh_bounds: &Aabb) -> Aabb {
+        let mut b = mesh_bounds.transform(&self.transform);
+        if let Some(m) = &self.motion {
+            // The bounds' sphere around its centre, swept around the circle.
+            let local = mesh_bounds.transform(&m.base);
+            let r = if m.orbit.turn {
+                Vec3::splat(local.extent().length() * 0.5)
+            } else {
+                local.extent() * 0.5
+            };
+            let c = local.center();
+            let reach = Vec3::new(m.orbit.radius, 0.0, m.orbit.radius);
+            b = b.union(&Aabb::new(c - reach - r, c + reach + r));
+        }
+        if let Some(f) = &self.foliage {
+            let pad = Vec3::new(f.sway, 0.0, f.sway) * std::f32::consts::SQRT_2;
+            b = Aabb::new(b.min - pad, b.max + pad);
+        }
+        b
+    }
+}
+
+/// Alpha-test pattern of vegetation cards (GPU `Object.params.x`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlphaPattern {
+    /// Tapered blades, several per card (`grass`).
+    Grass = 1,
+    /// Elliptic leaves (`bush`).
+    Leaves = 2,
+}
+
+/// Vegetation drawing parameters (GPU `Object.params`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Foliage {
+    pub pattern: AlphaPattern,
+    /// Sway amplitude (metres) at full weight; see `docs/techniques/vegetation.md`.
+    pub sway: f32,
+    /// Sway weight source: grass uses `v^2`; leaves use
+    /// `((y_local - sway_base) * sway_inv_height)^2` (0 at the bush's bottom).
+    pub sway_base: f32,
+    pub sway_inv_height: f32,
+}
+
+impl Foliage {
+    /// `Object.params` in `shaders/scene.wgsl`.
+    pub fn params(&self) -> [f32; 4] {
+        [
+            self.pattern as u32 as f32,
+            self.sway,
+            self.sway_base,
+            self.sway_inv_height,
+        ]
+    }
 }
 
 /// Material parameters as written in the scene file (albedo already linear).
@@ -310,7 +381,7 @@ pub struct Scene {
     pub materials: Vec<MaterialDesc>,
     pub cameras: Vec<NamedCamera>,
     pub sun: SunDesc,
-    /// World bounds of all objects.
+    /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
 }
 

@@ -6,13 +6,16 @@ use glam::{Mat4, Vec3};
 
 use super::build::{World, rotation_from_euler_deg, trs};
 use super::file::FileObject;
+use super::file::FileOrbit;
 use super::heightfield::HeightGrid;
-use super::{Aabb, Object, SceneError};
+use super::{Aabb, Motion, Object, Orbit, SceneError};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// Footprint samples per side for `snap_to_ground`.
 const FOOTPRINT_SAMPLES: usize = 5;
+/// Points along an orbit where `snap_to_ground` samples the ground.
+const PATH_SAMPLES: usize = 16;
 
 /// A placed height field that objects can be snapped onto.
 struct Ground {
@@ -63,6 +66,7 @@ impl Placer {
                 ),
                 ("rest_on", o.rest_on.as_ref().map(|s| s.span())),
                 ("repeat", o.repeat.as_ref().map(|s| s.span())),
+                ("orbit", o.orbit.as_ref().map(|s| s.span())),
             ] {
                 if let Some(span) = span {
                     return Err(ck.err(&span, format!("`{key}` does not apply to a height field")));
@@ -102,11 +106,28 @@ impl Placer {
                     name: name.to_string(),
                     mesh,
                     transform,
+                    motion: None,
+                    foliage: None,
                 });
                 continue;
             }
-            let mesh = world.mesh_for(o)?;
-            let local = world.meshes[mesh].bounds;
+            let prim = o.primitive.get_ref().as_str();
+            let orbit = match &o.orbit {
+                Some(r) if prim == "grass" || prim == "bush" => {
+                    return Err(ck.err(&r.span(), format!("`orbit` does not apply to {prim}")));
+                }
+                Some(r) => Some(orbit(world, r)?),
+                None => None,
+            };
+            let snap = o.snap_to_ground.as_ref().filter(|s| *s.get_ref());
+            // Snapped grass gets a mesh per copy (below); the rest share one.
+            let (mesh, foliage, local) = if prim == "grass" && snap.is_some() {
+                world.check_keys(o)?;
+                (usize::MAX, None, Aabb::EMPTY)
+            } else {
+                let mesh = world.mesh_for(o)?;
+                (mesh, world.foliage(o, mesh)?, world.meshes[mesh].bounds)
+            };
             let rotation = rotation_from_euler_deg(
                 ck.finite3_or(&o.rotation, "rotation", Vec3::ZERO)?
                     .to_array(),
@@ -120,7 +141,6 @@ impl Placer {
                 ),
                 None => (1, Vec3::ZERO),
             };
-            let snap = o.snap_to_ground.as_ref().filter(|s| *s.get_ref());
             if let (Some(_), Some(r)) = (snap, &o.rest_on) {
                 return Err(ck.err(&r.span(), "use snap_to_ground or rest_on, not both"));
             }
@@ -148,9 +168,61 @@ impl Placer {
             let mut bounds = Aabb::EMPTY;
             for k in 0..count {
                 let base = position + rotation * (step * k as f32);
+                let copy_name = if count > 1 {
+                    format!("{name}#{k}")
+                } else {
+                    name.to_string()
+                };
+                if let (Some(snap), "grass") = (snap, prim) {
+                    // Each clump's root on the ground below it, `position.y` above.
+                    let transform = trs(base, rotation, scale);
+                    let up = transform.y_axis.y;
+                    let suffix = if count > 1 {
+                        format!("#{k}")
+                    } else {
+                        String::new()
+                    };
+                    let grass = world.snapped_grass(o, &suffix, |x, z| {
+                        let w = transform.transform_point3(Vec3::new(x, 0.0, z));
+                        let h = grounds.iter().find_map(|g| g.height(w.x, w.z))?;
+                        (up.abs() > 1e-6).then(|| (h + base.y - w.y) / up)
+                    })?;
+                    let mesh = grass.map_err(|p| {
+                        let w = transform.transform_point3(Vec3::new(p.x, 0.0, p.y));
+                        ck.err(
+                            &snap.span(),
+                            format!(
+                                "object \"{name}\": grass at ({:.1}, {:.1}) is not over any height field",
+                                w.x, w.z
+                            ),
+                        )
+                    })?;
+                    bounds = bounds.union(&world.meshes[mesh].bounds.transform(&transform));
+                    out.push(Object {
+                        name: copy_name,
+                        mesh,
+                        transform,
+                        motion: None,
+                        foliage: world.foliage(o, mesh)?,
+                    });
+                    continue;
+                }
+                // A moving object rests on the lowest ground along its path.
+                let path: Vec<Vec3> = match &orbit {
+                    Some(orbit) => (0..PATH_SAMPLES)
+                        .map(|i| {
+                            let a = i as f32 * std::f32::consts::TAU / PATH_SAMPLES as f32;
+                            base + Vec3::new(a.cos(), 0.0, -a.sin()) * orbit.radius
+                        })
+                        .collect(),
+                    None => vec![base],
+                };
                 let y = if let Some(snap) = snap {
-                    let ground =
-                        footprint_ground(&grounds, &local, &rs, base).ok_or_else(|| {
+                    let ground = path
+                        .iter()
+                        .map(|&p| footprint_ground(&grounds, &local, &rs, p))
+                        .try_fold(f32::INFINITY, |lo, h| h.map(|h| lo.min(h)))
+                        .ok_or_else(|| {
                             ck.err(
                             &snap.span(),
                             format!(
@@ -165,22 +237,58 @@ impl Placer {
                 } else {
                     base.y
                 };
-                let transform = trs(Vec3::new(base.x, y, base.z), rotation, scale);
-                bounds = bounds.union(&local.transform(&transform));
-                out.push(Object {
-                    name: if count > 1 {
-                        format!("{name}#{k}")
-                    } else {
-                        name.to_string()
-                    },
+                let mut transform = trs(Vec3::new(base.x, y, base.z), rotation, scale);
+                let motion = orbit.map(|mut orbit| {
+                    orbit.centre = Vec3::new(base.x, y, base.z);
+                    Motion {
+                        orbit,
+                        base: transform,
+                    }
+                });
+                if let Some(m) = &motion {
+                    transform = m.transform_at(0.0);
+                }
+                let object = Object {
+                    name: copy_name,
                     mesh,
                     transform,
-                });
+                    motion,
+                    foliage,
+                };
+                bounds = bounds.union(&object.swept_bounds(&local));
+                out.push(object);
             }
             placed.insert(name, bounds);
         }
         Ok(out)
     }
+}
+
+/// Checked `orbit = { radius, period, phase, turn }`; the centre is set at placement.
+fn orbit(world: &World, o: &toml::Spanned<FileOrbit>) -> Result<Orbit> {
+    let ck = world.ck;
+    let f = o.get_ref();
+    let period = *f.period.get_ref();
+    if !(period.is_finite() && period != 0.0) {
+        return Err(ck.err(
+            &f.period.span(),
+            format!("orbit period = {period} must be a non-zero number of seconds"),
+        ));
+    }
+    let phase = match &f.phase {
+        Some(p) if !p.get_ref().is_finite() => {
+            return Err(ck.err(&p.span(), "orbit phase must be finite (degrees)"));
+        }
+        Some(p) => p.get_ref().to_radians(),
+        None => 0.0,
+    };
+    Ok(Orbit {
+        centre: Vec3::ZERO,
+        radius: ck.positive(&f.radius, "orbit radius")?,
+        period,
+        phase,
+        turn: f.turn.unwrap_or(false),
+    })
 }
 
 fn scale(world: &World, o: &FileObject) -> Result<Vec3> {

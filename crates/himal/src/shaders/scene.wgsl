@@ -1,8 +1,104 @@
-// Scene data shared by passes that draw meshes (twin: renderer/scene_gpu.rs `ObjectGpu`).
+// Scene data shared by passes that draw meshes (twin: renderer/scene_gpu.rs `ObjectGpu`),
+// and the vegetation functions those passes share: sway and alpha patterns
+// (docs/techniques/vegetation.md; card conventions in scene/vegetation.rs).
 
 struct Object {
     model: mat4x4f,
     // inverse transpose of model (for normals), 3x3 part used
     normal_matrix: mat4x4f,
     prev_model: mat4x4f,
+    // x: alpha pattern (0 opaque, 1 grass, 2 leaves); y: sway amplitude (m);
+    // zw: leaves' sway weight (local y of the bottom, 1 / height)
+    params: vec4f,
+}
+
+const FOLIAGE_GRASS: u32 = 1u;
+const FOLIAGE_LEAVES: u32 = 2u;
+
+fn foliage_pattern(o: Object) -> u32 {
+    return u32(o.params.x + 0.5);
+}
+
+// Sway weight: 0 at the root, 1 at the tip, quadratic (stiff base, supple tip).
+fn foliage_sway_weight(o: Object, local: vec3f, uv: vec2f) -> f32 {
+    var h = uv.y;
+    if (foliage_pattern(o) == FOLIAGE_LEAVES) {
+        h = clamp((local.y - o.params.z) * o.params.w, 0.0, 1.0);
+    }
+    return h * h;
+}
+
+// Horizontal world displacement at time t (s) of a vertex at rest at world
+// xz `rest`: amplitude * weight * (two low frequencies, 0.4 and 1.1 Hz,
+// phase from the position, so neighbouring clumps sway out of step). Each
+// component stays within amplitude * weight.
+fn foliage_sway(o: Object, local: vec3f, uv: vec2f, rest: vec2f, t: f32) -> vec3f {
+    let w1 = 6.2831853 * 0.4;
+    let w2 = 6.2831853 * 1.1;
+    let phase = dot(rest, vec2f(0.9, 0.6));
+    let s = vec2f(
+        0.7 * sin(w1 * t + phase) + 0.3 * sin(w2 * t + 1.7 * phase + 1.0),
+        0.7 * sin(w1 * t + phase + 1.9) + 0.3 * sin(w2 * t + 2.3 * phase),
+    );
+    let a = o.params.y * foliage_sway_weight(o, local, uv);
+    return vec3f(s.x, 0.0, s.y) * a;
+}
+
+// Integer hash (PCG output permutation): a card's blades from its seed.
+fn foliage_hash(n: u32) -> u32 {
+    let state = n * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn foliage_unit(h: u32, shift: u32) -> f32 {
+    return f32((h >> shift) & 255u) / 255.0;
+}
+
+// Grass card: four tapered blades of 55..100 % of the card's height,
+// leaning a little; 1 inside a blade, 0 elsewhere. uv.x integer part = seed.
+fn foliage_grass_alpha(uv: vec2f) -> f32 {
+    let seed = u32(max(floor(uv.x), 0.0));
+    let u = fract(uv.x);
+    let v = uv.y;
+    for (var i = 0u; i < 4u; i++) {
+        let h = foliage_hash(seed * 16u + i);
+        let top = 0.55 + 0.45 * foliage_unit(h, 0u);
+        let centre = (f32(i) + 0.25 + 0.5 * foliage_unit(h, 8u)) / 4.0;
+        let lean = (foliage_unit(h, 16u) - 0.5) * 0.25;
+        let f = v / top;
+        let half_width = 0.09 * (1.0 - f);
+        if (f < 1.0 && abs(u - centre - lean * f * f) < half_width) {
+            return 1.0;
+        }
+    }
+    return 0.0;
+}
+
+// Leaf card: five ellipses (leaves) at random places and angles.
+fn foliage_leaves_alpha(uv: vec2f) -> f32 {
+    let seed = u32(max(floor(uv.x), 0.0));
+    let p = vec2f(fract(uv.x), uv.y);
+    for (var i = 0u; i < 5u; i++) {
+        let h = foliage_hash(seed * 16u + i + 7u);
+        let c = vec2f(0.22 + 0.56 * foliage_unit(h, 0u), 0.22 + 0.56 * foliage_unit(h, 8u));
+        let a = 3.14159265 * foliage_unit(h, 16u);
+        let d = p - c;
+        let q = vec2f(d.x * cos(a) + d.y * sin(a), -d.x * sin(a) + d.y * cos(a));
+        let size = vec2f(0.24, 0.11) * (0.8 + 0.4 * foliage_unit(h, 24u));
+        let e = q / size;
+        if (dot(e, e) < 1.0) {
+            return 1.0;
+        }
+    }
+    return 0.0;
+}
+
+// Alpha of a vegetation card at uv for `pattern` (1 everywhere for 0).
+fn foliage_alpha(pattern: u32, uv: vec2f) -> f32 {
+    switch pattern {
+        case 1u: { return foliage_grass_alpha(uv); }
+        case 2u: { return foliage_leaves_alpha(uv); }
+        default: { return 1.0; }
+    }
 }

@@ -1,4 +1,4 @@
-// Per-frame camera data shared by every pass (twin: frame.rs `ViewUniform`).
+// Per-frame camera data shared by every pass (twin: renderer/uniforms.rs `ViewUniform`).
 // Reverse-Z: depth 1 at the near plane, 0 at infinity (the cleared value).
 
 struct View {
@@ -12,6 +12,8 @@ struct View {
     viewport: vec4f,
     // xy: this frame's sub-pixel jitter in clip units; z: frame index; w: exposure EV bias
     jitter: vec4f,
+    // x: animation time now (s); y: animation time of the previous frame; zw: 0
+    time: vec4f,
 }
 
 // Full-screen triangle: vertex 0..2 covers the screen; uv has y down.

@@ -4,6 +4,8 @@
 //          2 material Rgba8Unorm   (glossiness, reflectance, metallic, anisotropy; M1)
 //          3 motion Rg16Float      (previous uv - current uv)
 // Bindings: view (uniform View), objects (storage, per-object transforms; instance index = object).
+// VEGETATION (override): the alpha-tested, swaying, double-sided pipeline
+// (docs/techniques/vegetation.md); false keeps the opaque path free of discard.
 // Source: McAuley, "Rendering the World of Far Cry 4", GDC 2015, Materials + Appendix A.
 #import view
 #import tangent_frame
@@ -11,6 +13,8 @@
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
+
+override VEGETATION: bool = false;
 
 struct VertexIn {
     @location(0) position: vec3f,
@@ -30,14 +34,24 @@ struct VertexOut {
     @location(3) surface: vec4f,
     @location(4) curr_clip: vec4f,
     @location(5) prev_clip: vec4f,
+    @location(6) uv: vec2f,
+    @location(7) @interpolate(flat) pattern: u32,
 }
 
 @vertex
 fn vs_main(in: VertexIn) -> VertexOut {
     let o = objects[in.object];
-    let world = o.model * vec4f(in.position, 1.0);
-    let prev_world = o.prev_model * vec4f(in.position, 1.0);
+    var world = o.model * vec4f(in.position, 1.0);
+    var prev_world = o.prev_model * vec4f(in.position, 1.0);
     var out: VertexOut;
+    out.uv = in.uv;
+    out.pattern = 0u;
+    if (VEGETATION) {
+        // Sway at this frame's and the previous frame's time: motion vectors cover it.
+        world += vec4f(foliage_sway(o, in.position, in.uv, world.xz, view.time.x), 0.0);
+        prev_world += vec4f(foliage_sway(o, in.position, in.uv, prev_world.xz, view.time.y), 0.0);
+        out.pattern = foliage_pattern(o);
+    }
     out.curr_clip = view.view_proj * world;
     out.prev_clip = view.prev_view_proj * prev_world;
     // Jitter moves the raster only; motion vectors stay jitter-free.
@@ -59,7 +73,16 @@ struct GBufferOut {
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var n = normalize(in.normal);
-    if (!front) {
+    if (VEGETATION) {
+        if (foliage_alpha(in.pattern, in.uv) < 0.5) {
+            discard;
+        }
+        // Grass normals lean up on both faces: mirror only the horizontal
+        // part; bush normals are the bush's outward normal on both faces.
+        if (!front && in.pattern == FOLIAGE_GRASS) {
+            n = vec3f(-n.x, n.y, -n.z);
+        }
+    } else if (!front) {
         n = -n;
     }
     // Right-handed shading frame; a mirrored tangent's sign is consumed here (M3.md).

@@ -1,7 +1,9 @@
 //! G-buffer pass (TECHNIQUES M1-M3): scene geometry into albedo, a
 //! quaternion tangent frame (Rgb10a2), material parameters, motion, depth.
 //! Layout per DESIGN.md; the packing lives in `shaders/tangent_frame.wgsl`
-//! with its CPU twin in `math/quat_frame.rs`.
+//! with its CPU twin in `math/quat_frame.rs`. Opaque objects draw first with
+//! back-face culling and no discard (early-Z); vegetation follows with the
+//! same shader specialised by `VEGETATION` (alpha test, sway, no culling).
 
 use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
@@ -29,6 +31,7 @@ pub struct GBuffer {
 pub struct GBufferPass {
     program: Program,
     pipeline: wgpu::RenderPipeline,
+    vegetation: wgpu::RenderPipeline,
 }
 
 impl GBufferPass {
@@ -40,30 +43,39 @@ impl GBufferPass {
             target(MATERIAL_FORMAT),
             target(MOTION_FORMAT),
         ];
-        let pipeline = program.render_pipeline(
-            ctx,
-            &RenderSpec {
-                label: "gbuffer",
-                vertex_entry: "vs_main",
-                fragment_entry: Some("fs_main"),
-                vertex_buffers: &[Some(vertex_layout())],
-                targets: &targets,
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    // reverse-Z: nearer is larger
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: Some(wgpu::Face::Back),
-                    ..Default::default()
-                },
-                constants: &[],
+        let buffers = [Some(vertex_layout())];
+        let spec = |label, cull_mode, constants| RenderSpec {
+            label,
+            vertex_entry: "vs_main",
+            fragment_entry: Some("fs_main"),
+            vertex_buffers: &buffers,
+            targets: &targets,
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                // reverse-Z: nearer is larger
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            primitive: wgpu::PrimitiveState {
+                cull_mode,
+                ..Default::default()
             },
+            constants,
+        };
+        let pipeline =
+            program.render_pipeline(ctx, &spec("gbuffer", Some(wgpu::Face::Back), &[]))?;
+        // Cards are seen from both sides.
+        let vegetation = program.render_pipeline(
+            ctx,
+            &spec("gbuffer.vegetation", None, &[("VEGETATION", 1.0)]),
         )?;
-        Ok(Self { program, pipeline })
+        Ok(Self {
+            program,
+            pipeline,
+            vegetation,
+        })
     }
 
     pub fn add<'a>(
@@ -138,7 +150,11 @@ impl GBufferPass {
             });
             rp.set_pipeline(&self.pipeline);
             rp.set_bind_group(0, &bind_group, &[]);
-            scene.draw_all(&mut rp);
+            scene.draw_opaque(&mut rp);
+            if !scene.draws_vegetation.is_empty() {
+                rp.set_pipeline(&self.vegetation);
+                SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
+            }
         });
         out
     }

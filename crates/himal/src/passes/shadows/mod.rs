@@ -17,6 +17,20 @@ use crate::scene::Aabb;
 
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
+/// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
+const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x3,
+        offset: 0,
+        shader_location: 0,
+    },
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x2,
+        offset: 40,
+        shader_location: 3,
+    },
+];
+
 /// Light-space fit of the sun shadow map; see [`reference::sun_shadow_fit`].
 #[derive(Clone, Copy, Debug)]
 pub struct ShadowFit {
@@ -27,9 +41,20 @@ pub struct ShadowFit {
     pub depth_range: f32,
 }
 
+/// Twin of `ShadowView` in `sun.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShadowViewGpu {
+    light_view_proj: [[f32; 4]; 4],
+    /// x animation time (s)
+    time: [f32; 4],
+}
+
 pub struct SunShadowPass {
     program: Program,
     pipeline: wgpu::RenderPipeline,
+    /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
+    vegetation: wgpu::RenderPipeline,
     uniform: wgpu::Buffer,
     /// Comparison sampler the lighting pass uses with the map.
     pub sampler: wgpu::Sampler,
@@ -40,6 +65,36 @@ impl SunShadowPass {
         let program = Program::new(ctx, "passes/shadows/sun.wgsl")?;
         let mut layout = vertex_layout();
         layout.attributes = &layout.attributes[..1]; // position only
+        let mut veg_layout = vertex_layout();
+        veg_layout.attributes = &VEGETATION_ATTRIBUTES;
+        let depth_stencil = wgpu::DepthStencilState {
+            format: SHADOW_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+            stencil: Default::default(),
+            // Slope-scaled bias against acne on surfaces grazing the sun.
+            bias: wgpu::DepthBiasState {
+                constant: 0,
+                slope_scale: 1.5,
+                clamp: 0.0,
+            },
+        };
+        let vegetation = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "shadows.sun.vegetation",
+                vertex_entry: "vs_vegetation",
+                fragment_entry: Some("fs_vegetation"),
+                vertex_buffers: &[Some(veg_layout)],
+                targets: &[],
+                depth_stencil: Some(depth_stencil.clone()),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                constants: &[],
+            },
+        )?;
         let pipeline = program.render_pipeline(
             ctx,
             &RenderSpec {
@@ -48,18 +103,7 @@ impl SunShadowPass {
                 fragment_entry: None,
                 vertex_buffers: &[Some(layout)],
                 targets: &[],
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: SHADOW_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                    stencil: Default::default(),
-                    // Slope-scaled bias against acne on surfaces grazing the sun.
-                    bias: wgpu::DepthBiasState {
-                        constant: 0,
-                        slope_scale: 1.5,
-                        clamp: 0.0,
-                    },
-                }),
+                depth_stencil: Some(depth_stencil),
                 // Both faces cast: the terrain is single-sided.
                 primitive: wgpu::PrimitiveState {
                     cull_mode: None,
@@ -68,7 +112,14 @@ impl SunShadowPass {
                 constants: &[],
             },
         )?;
-        let uniform = uniform_buffer(ctx, "shadows.sun.view", &Mat4::IDENTITY.to_cols_array_2d());
+        let uniform = uniform_buffer(
+            ctx,
+            "shadows.sun.view",
+            &ShadowViewGpu {
+                light_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
+                time: [0.0; 4],
+            },
+        );
         let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadows.sun.compare"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -79,25 +130,28 @@ impl SunShadowPass {
         Ok(Self {
             program,
             pipeline,
+            vegetation,
             uniform,
             sampler,
         })
     }
 
-    /// Fits the map to `bounds` for `sun_direction` and uploads the matrix.
+    /// Fits the map to `bounds` for `sun_direction` and uploads the matrix
+    /// and the animation time `time_s` (vegetation sway).
     pub fn update(
         &self,
         queue: &wgpu::Queue,
         bounds: &Aabb,
         sun_direction: Vec3,
         resolution: u32,
+        time_s: f32,
     ) -> ShadowFit {
         let fit = reference::sun_shadow_fit(bounds, sun_direction, resolution);
-        queue.write_buffer(
-            &self.uniform,
-            0,
-            bytemuck::bytes_of(&fit.light_view_proj.to_cols_array_2d()),
-        );
+        let gpu = ShadowViewGpu {
+            light_view_proj: fit.light_view_proj.to_cols_array_2d(),
+            time: [time_s, 0.0, 0.0, 0.0],
+        };
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&gpu));
         fit
     }
 
@@ -144,7 +198,11 @@ impl SunShadowPass {
             });
             rp.set_pipeline(&self.pipeline);
             rp.set_bind_group(0, &bg, &[]);
-            scene.draw_all(&mut rp);
+            scene.draw_opaque(&mut rp);
+            if !scene.draws_vegetation.is_empty() {
+                rp.set_pipeline(&self.vegetation);
+                SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
+            }
         });
         map
     }

@@ -1,12 +1,16 @@
 // shadows.sun: depth of every object seen from the sun (orthographic), the
 // single-map foundation of TECHNIQUES S1 (cascades replace the fit later).
-// Bindings: shadow (uniform ShadowView: light view-projection), objects (as gbuffer).
+// Bindings: shadow (uniform ShadowView: light view-projection, time), objects (as gbuffer).
 // Standard depth here (0 near .. 1 far, compare LessEqual), unlike the camera's reverse-Z.
+// Vegetation (vs_vegetation / fs_vegetation) sways and alpha-tests as in the
+// G-buffer, so grass casts blades, not cards.
 
 #import scene
 
 struct ShadowView {
     light_view_proj: mat4x4f,
+    // x: animation time (s), as View.time.x
+    time: vec4f,
 }
 
 @group(0) @binding(0) var<uniform> shadow: ShadowView;
@@ -15,4 +19,33 @@ struct ShadowView {
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> @builtin(position) vec4f {
     return shadow.light_view_proj * (objects[object].model * vec4f(position, 1.0));
+}
+
+struct VegetationOut {
+    @builtin(position) clip: vec4f,
+    @location(0) uv: vec2f,
+    @location(1) @interpolate(flat) pattern: u32,
+}
+
+@vertex
+fn vs_vegetation(
+    @location(0) position: vec3f,
+    @location(3) uv: vec2f,
+    @builtin(instance_index) object: u32,
+) -> VegetationOut {
+    let o = objects[object];
+    var world = o.model * vec4f(position, 1.0);
+    world += vec4f(foliage_sway(o, position, uv, world.xz, shadow.time.x), 0.0);
+    var out: VegetationOut;
+    out.clip = shadow.light_view_proj * world;
+    out.uv = uv;
+    out.pattern = foliage_pattern(o);
+    return out;
+}
+
+@fragment
+fn fs_vegetation(in: VegetationOut) {
+    if (foliage_alpha(in.pattern, in.uv) < 0.5) {
+        discard;
+    }
 }
