@@ -1,4 +1,6 @@
 //! Helpers shared by the whole-frame GPU tests.
+// Each test binary uses a subset of these helpers.
+#![allow(dead_code)]
 
 use glam::{Vec3, Vec4};
 use himal::Renderer;

@@ -104,6 +104,7 @@ fn nearer(a: Vec3, b: Vec3) -> Vec3 {
     }
 }
 
+#[allow(clippy::too_many_arguments)] // mirrors the WGSL function's parameters
 fn integrate_direction(
     p: &AoUniform,
     depth: &Image<f32>,

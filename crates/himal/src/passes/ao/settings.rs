@@ -104,7 +104,8 @@ impl AoSettings {
         if self.blur_radius > 32 {
             return bad("blur radius must be at most 32 pixels");
         }
-        if !(self.n_max >= 1.0) || !(self.epsilon >= 0.0) || !(self.continuity > 0.0) {
+        let ok = self.n_max >= 1.0 && self.epsilon >= 0.0 && self.continuity > 0.0;
+        if !ok {
             return bad("N_max >= 1, epsilon >= 0 and L > 0 are required");
         }
         Ok(())
