@@ -29,6 +29,9 @@ pub struct BenchArgs {
     pub shadow_resolution: u32,
     #[command(flatten)]
     pub ao: crate::ao::AoArgs,
+    /// Compare AO variants (HBAO, + STF, brute-force blur) in one interleaved run and print the ratios.
+    #[arg(long)]
+    pub compare_ao: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -72,6 +75,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
     settings.ao = args.ao.settings()?;
+    if args.compare_ao {
+        return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
+    }
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();

@@ -3,6 +3,7 @@
 
 mod ao;
 mod bench;
+mod bench_ao;
 mod render;
 
 use anyhow::Result;
