@@ -9,7 +9,7 @@ use clap::Args;
 use himal::{FrameSettings, Renderer};
 
 use crate::GpuArgs;
-use crate::render::{load_scene, parse_size, pick_camera, shadow_resolution};
+use crate::render::{PostArgs, load_scene, parse_size, pick_camera, shadow_resolution};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -27,6 +27,8 @@ pub struct BenchArgs {
     pub shadows: String,
     #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
     pub shadow_resolution: u32,
+    #[command(flatten)]
+    pub post: PostArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -69,6 +71,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    args.post.apply(&mut settings)?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();

@@ -1,6 +1,7 @@
 //! [`Renderer`]: owns the device, the scene on the GPU, every pass's
 //! pipelines and the state kept between frames; renders one frame per call.
 
+pub mod post_state;
 pub mod scene_gpu;
 pub mod uniforms;
 
@@ -17,10 +18,14 @@ use crate::math::sh::Sh9Gpu;
 use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::LightingPass;
-use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::post::{
+    AdaptPass, AdaptationSettings, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass,
+    TonemapPass,
+};
 use crate::passes::shadows::SunShadowPass;
 use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
 use crate::scene::{Aabb, Camera, Scene, SunDesc};
+use post_state::PostState;
 use scene_gpu::SceneGpu;
 use uniforms::{LightingUniform, ViewUniform};
 
@@ -42,7 +47,7 @@ pub enum ViewBuffer {
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 11] = [
+    pub const NAMES: [&'static str; 13] = [
         "final",
         "albedo",
         "normal",
@@ -54,6 +59,8 @@ impl ViewBuffer {
         "depth",
         "motion",
         "lighting",
+        "luminance",
+        "bloom",
     ];
 }
 
@@ -82,6 +89,8 @@ impl std::str::FromStr for ViewBuffer {
             "depth" => ViewBuffer::Debug(D::Depth),
             "motion" => ViewBuffer::Debug(D::Motion),
             "lighting" => ViewBuffer::Debug(D::Lighting),
+            "luminance" => ViewBuffer::Debug(D::Luminance),
+            "bloom" => ViewBuffer::Debug(D::Bloom),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -103,6 +112,12 @@ pub struct FrameSettings {
     pub sun: SunDesc,
     /// Exposure bias in EV on top of the auto exposure.
     pub exposure_ev: f32,
+    /// H3 light adaptation; off = expose each frame for its own log-average.
+    pub adaptation: AdaptationSettings,
+    /// Reinhard white point (scaled luminance mapped to white); `None` = L/(1+L).
+    pub white_point: Option<f32>,
+    /// H2 Kawase bloom.
+    pub bloom: BloomSettings,
     /// Aerial perspective extinction per metre (0 = off).
     pub aerial_extinction: f32,
     /// Sun shadow map edge in texels; 0 = shadows off.
@@ -118,6 +133,9 @@ impl FrameSettings {
             raw: false,
             sun,
             exposure_ev: 0.0,
+            adaptation: AdaptationSettings::default(),
+            white_point: None,
+            bloom: BloomSettings::default(),
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
         }
@@ -140,6 +158,7 @@ struct Resources {
     lighting_buffer: wgpu::Buffer,
     sky_buffer: wgpu::Buffer,
     luminance: Option<((u32, u32), LuminanceBuffers)>,
+    post: PostState,
     outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
     shadow_placeholder: wgpu::Texture,
     bounds: Aabb,
@@ -160,6 +179,7 @@ impl Resources {
             lighting: &self.lighting_buffer,
             sky: &self.sky_buffer,
             luminance: &self.luminance.as_ref()?.1,
+            post: self.post.frame(settings),
             output: self.outputs.get(&(size.0, size.1, format))?,
             shadow_resolution: (settings.shadow_resolution > 0)
                 .then_some(settings.shadow_resolution),
@@ -191,6 +211,8 @@ impl Renderer {
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
+            adapt: AdaptPass::new(&ctx)?,
+            bloom: BloomPass::new(&ctx)?,
             tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
             debug: DebugPass::new(&ctx)?,
         };
@@ -220,6 +242,7 @@ impl Renderer {
             usage: wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
+        let post = PostState::new(&ctx);
         Ok(Self {
             ctx,
             res: Resources {
@@ -229,6 +252,7 @@ impl Renderer {
                 lighting_buffer,
                 sky_buffer,
                 luminance: None,
+                post,
                 outputs: HashMap::new(),
                 shadow_placeholder,
                 bounds: scene.bounds,
@@ -257,9 +281,20 @@ impl Renderer {
         ]
     }
 
-    /// Forgets the previous frame (camera cut): motion vectors become zero.
+    /// Forgets the previous frame (camera cut): motion vectors become zero,
+    /// the next frame starts adapted.
     pub fn reset_history(&mut self) {
         self.prev_view_proj = None;
+        self.res.post.reset = true;
+    }
+
+    /// Reads back the exposure state (outside the frame; for tests and logs):
+    /// (this frame's log-average luminance, adapted luminance).
+    pub fn exposure_state(&self) -> Result<(f32, f32), Error> {
+        let bytes = crate::gpu::read_buffer(&self.ctx, &self.res.post.adapted)?;
+        let v: &[f32] = bytemuck::try_cast_slice(&bytes[..16])
+            .map_err(|e| Error::InvalidSettings(format!("adapted buffer: {e}")))?;
+        Ok((v[2], v[1]))
     }
 
     fn validate(settings: &FrameSettings) -> Result<(), Error> {
@@ -274,7 +309,7 @@ impl Renderer {
                 settings.width, settings.height
             )));
         }
-        Ok(())
+        post_state::validate(settings)
     }
 
     fn update_sky(&mut self, sun: &SunDesc) {
@@ -330,6 +365,11 @@ impl Renderer {
         if let ViewBuffer::Debug(v) = settings.view {
             self.res.passes.debug.prepare(&self.ctx, v, format)?;
         }
+        let passes = &mut self.res.passes;
+        passes
+            .tonemap
+            .prepare(&self.ctx, post_state::tonemap_key(settings))?;
+        passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
         }
@@ -366,6 +406,7 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun);
+        self.res.post.update(&self.ctx.queue, settings);
         let aspect = size.0 as f32 / size.1 as f32;
         let (view, proj) = (camera.view(), camera.projection(aspect));
         let view_proj = proj * view;
@@ -447,6 +488,7 @@ impl Renderer {
         };
         let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
+        self.res.post.frame_done(settings);
         self.frame_index += 1;
         Ok(RenderedFrame { image, timings })
     }
