@@ -288,6 +288,26 @@ impl Renderer {
         self.res.post.reset = true;
     }
 
+    /// E1 pre-warm: fetches every pipeline permutation a frame of this
+    /// renderer can ask for (tone-map variants, bloom passes, debug views in
+    /// both formats), so none compiles mid-sequence. Save the cache after it
+    /// with [`GpuContext::save_pipeline_cache`].
+    pub fn prewarm(&mut self) -> Result<(), Error> {
+        let (ctx, passes) = (&self.ctx, &mut self.res.passes);
+        for key in crate::passes::post::TonemapKey::all() {
+            passes.tonemap.prepare(ctx, key)?;
+        }
+        passes.bloom.prepare(ctx, BloomSettings::MAX_PASSES)?;
+        for name in ViewBuffer::NAMES {
+            if let ViewBuffer::Debug(v) = name.parse()? {
+                for format in [DISPLAY_FORMAT, RAW_FORMAT] {
+                    passes.debug.prepare(ctx, v, format)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Reads back the exposure state (outside the frame; for tests and logs):
     /// (this frame's log-average luminance, adapted luminance).
     pub fn exposure_state(&self) -> Result<(f32, f32), Error> {
