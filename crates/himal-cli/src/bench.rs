@@ -108,6 +108,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let total: f64 = rows.iter().map(|r| r.1).sum();
     let wall_median = median(&mut wall);
     let adapter = renderer.context().info.to_string();
+    let cache = renderer.context().pipelines.stats();
+    crate::save_cache(renderer.context());
     if args.json {
         let passes: Vec<String> = rows
             .iter()
@@ -125,9 +127,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"passes\":[{}],\"memory\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
+            cache.memory_hits,
+            cache.disk_hits,
+            cache.compiles,
+            cache.disk_ms,
+            cache.compile_ms,
             passes.join(","),
             memory.join(",")
         );
@@ -180,6 +187,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
+    println!("pipeline cache (whole run, E1): {cache}");
     println!("memory:");
     for (what, bytes) in renderer.memory() {
         println!(

@@ -44,6 +44,9 @@ pub struct RenderArgs {
     /// Sun shadow map edge in texels.
     #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
     pub shadow_resolution: u32,
+    /// Print each frame's log-average and adapted luminance (read back after the frame).
+    #[arg(long)]
+    pub print_exposure: bool,
     /// Print the compiled frame graph (passes, reads, writes) and exit.
     #[arg(long)]
     pub graph: bool,
@@ -67,16 +70,16 @@ pub struct PostArgs {
     #[arg(long, default_value = "on", value_name = "on|off")]
     pub bloom: String,
     /// Bloom bright-pass threshold in scaled luminance (1 = display 0.5).
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub bloom_threshold: Option<f32>,
     /// Bloom strength (weight of the bloom added to the HDR image).
-    #[arg(long, value_name = "W")]
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
     pub bloom_strength: Option<f32>,
     /// Kawase blur passes at quarter resolution (0..8).
     #[arg(long, value_name = "N")]
     pub bloom_passes: Option<u32>,
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
 }
 
@@ -219,6 +222,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.out.clone()
         };
         himal::image_io::save(&path, &frame.image)?;
+        if args.print_exposure {
+            let (l_avg, l_a) = renderer.exposure_state()?;
+            let line = format!("frame {i}: log-average {l_avg:.5}, adapted {l_a:.5}");
+            match &progress {
+                Some(bar) => bar.println(line),
+                None => println!("{line}"),
+            }
+        }
         match &progress {
             Some(bar) => bar.inc(1),
             None => println!(
@@ -228,6 +239,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             ),
         }
     }
+    let stats = renderer.context().pipelines.stats();
+    crate::save_cache(renderer.context());
     if let Some(bar) = progress {
         bar.finish_with_message(format!(
             "wrote {} frames next to {}",
@@ -235,5 +248,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.out.display()
         ));
     }
+    println!("pipelines: {stats}");
     Ok(())
 }
