@@ -226,7 +226,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             let (l_avg, l_a) = renderer.exposure_state()?;
             let line = format!("frame {i}: log-average {l_avg:.5}, adapted {l_a:.5}");
             match &progress {
-                Some(bar) => bar.println(line),
+                // println on a hidden bar (no terminal) would drop the line.
+                Some(bar) => bar.suspend(|| println!("{line}")),
                 None => println!("{line}"),
             }
         }
