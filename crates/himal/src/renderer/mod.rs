@@ -309,12 +309,20 @@ impl Renderer {
     }
 
     /// Reads back the exposure state (outside the frame; for tests and logs):
-    /// (this frame's log-average luminance, adapted luminance).
+    /// (last frame's log-average luminance, adapted luminance). The adapted
+    /// value is the last adapted frame's (stale while adaptation is off).
     pub fn exposure_state(&self) -> Result<(f32, f32), Error> {
-        let bytes = crate::gpu::read_buffer(&self.ctx, &self.res.post.adapted)?;
-        let v: &[f32] = bytemuck::try_cast_slice(&bytes[..16])
-            .map_err(|e| Error::InvalidSettings(format!("adapted buffer: {e}")))?;
-        Ok((v[2], v[1]))
+        let read = |buffer: &wgpu::Buffer, i: usize| -> Result<f32, Error> {
+            let bytes = crate::gpu::read_buffer(&self.ctx, buffer)?;
+            let v: &[f32] = bytemuck::try_cast_slice(&bytes[..16])
+                .map_err(|e| Error::InvalidSettings(format!("exposure buffer: {e}")))?;
+            Ok(v[i])
+        };
+        let l_avg = match &self.res.luminance {
+            Some((_, buffers)) => read(&buffers.result, 1)?,
+            None => 0.0,
+        };
+        Ok((l_avg, read(&self.res.post.adapted, 1)?))
     }
 
     fn validate(settings: &FrameSettings) -> Result<(), Error> {
