@@ -9,7 +9,7 @@ use clap::Args;
 use himal::{FrameSettings, Renderer};
 
 use crate::GpuArgs;
-use crate::render::{load_scene, parse_size, pick_camera, shadow_resolution};
+use crate::render::{PostArgs, load_scene, parse_size, pick_camera, shadow_resolution};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -32,6 +32,8 @@ pub struct BenchArgs {
     /// Compare AO variants (HBAO, + STF, brute-force blur) in one interleaved run and print the ratios.
     #[arg(long)]
     pub compare_ao: bool,
+    #[command(flatten)]
+    pub post: PostArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -74,6 +76,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    args.post.apply(&mut settings)?;
     settings.ao = args.ao.settings()?;
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
@@ -114,6 +117,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let total: f64 = rows.iter().map(|r| r.1).sum();
     let wall_median = median(&mut wall);
     let adapter = renderer.context().info.to_string();
+    let cache = renderer.context().pipelines.stats();
+    crate::save_cache(renderer.context());
     if args.json {
         let passes: Vec<String> = rows
             .iter()
@@ -131,9 +136,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"passes\":[{}],\"memory\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
+            cache.memory_hits,
+            cache.disk_hits,
+            cache.compiles,
+            cache.disk_ms,
+            cache.compile_ms,
             passes.join(","),
             memory.join(",")
         );
@@ -186,6 +196,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
+    println!("pipeline cache (whole run, E1): {cache}");
     println!("memory:");
     for (what, bytes) in renderer.memory() {
         println!(

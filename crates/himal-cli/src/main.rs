@@ -4,7 +4,10 @@
 mod ao;
 mod bench;
 mod bench_ao;
+mod prewarm;
 mod render;
+
+use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
@@ -26,6 +29,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Render a fixed camera path and print GPU time per pass.
     Bench(bench::BenchArgs),
+    /// Compile every pipeline permutation the renderer can use and write the pipeline cache.
+    Prewarm(prewarm::PrewarmArgs),
     /// List adapters, the chosen one, its features and limits.
     Info(GpuArgs),
 }
@@ -36,13 +41,57 @@ pub struct GpuArgs {
     /// Adapter name substring or backend (vulkan, gl, metal, dx12); default: $HIMAL_ADAPTER, else hardware first.
     #[arg(long, value_name = "NAME|BACKEND")]
     pub adapter: Option<String>,
+    /// Pipeline cache directory, or off; default: $HIMAL_CACHE_DIR, else $XDG_CACHE_HOME/himal, else ~/.cache/himal.
+    #[arg(long, value_name = "DIR|off")]
+    pub cache: Option<String>,
 }
 
+/// Environment variable naming the pipeline cache directory (`off` disables it).
+pub const CACHE_ENV: &str = "HIMAL_CACHE_DIR";
+
 impl GpuArgs {
+    /// The pipeline cache directory (E1); `None` = memory only.
+    pub fn cache_dir(&self) -> Option<PathBuf> {
+        let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty());
+        let chosen = self
+            .cache
+            .clone()
+            .map(PathBuf::from)
+            .or_else(|| env(CACHE_ENV).map(PathBuf::from));
+        match chosen {
+            Some(d) if d.as_os_str() == "off" => None,
+            Some(d) => Some(d),
+            None => env("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| env("HOME").map(|h| PathBuf::from(h).join(".cache")))
+                .map(|d| d.join("himal")),
+        }
+    }
+
+    /// The GPU context with the pipeline cache opened (a bad cache file is
+    /// ignored with a warning).
     pub fn context(&self) -> Result<himal::gpu::GpuContext> {
-        Ok(himal::gpu::GpuContext::new(&himal::gpu::GpuOptions {
+        let ctx = himal::gpu::GpuContext::new(&himal::gpu::GpuOptions {
             adapter: self.adapter.clone(),
-        })?)
+        })?;
+        if let Some(dir) = self.cache_dir() {
+            let status = ctx.open_pipeline_cache(&dir);
+            log::info!("pipeline cache: {status:?}");
+        }
+        Ok(ctx)
+    }
+}
+
+/// Writes the pipeline cache if this run created pipelines; a failure only warns.
+pub fn save_cache(ctx: &himal::gpu::GpuContext) {
+    let stats = ctx.pipelines.stats();
+    if stats.compiles + stats.disk_hits == 0 {
+        return;
+    }
+    match ctx.save_pipeline_cache() {
+        Ok(Some(path)) => log::info!("pipeline cache written: {}", path.display()),
+        Ok(None) => {}
+        Err(e) => log::warn!("{e}"),
     }
 }
 
@@ -89,6 +138,7 @@ fn main() -> Result<()> {
     match cli.command {
         Command::Render(a) => render::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Prewarm(a) => prewarm::run(&a),
         Command::Info(a) => info(&a),
     }
 }

@@ -36,15 +36,17 @@ pub struct RenderArgs {
     /// Output file (.png or .exr); sequences insert _NNNN before the extension.
     #[arg(long, default_value = "out/demo.png")]
     pub out: PathBuf,
-    /// Exposure bias in EV on top of auto exposure.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub exposure: f32,
+    #[command(flatten)]
+    pub post: PostArgs,
     /// Sun shadows: off, or sun (one shadow map over the scene).
     #[arg(long, default_value = "sun", value_name = "off|sun")]
     pub shadows: String,
     /// Sun shadow map edge in texels.
     #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
     pub shadow_resolution: u32,
+    /// Print each frame's log-average and adapted luminance (read back after the frame).
+    #[arg(long)]
+    pub print_exposure: bool,
     /// Print the compiled frame graph (passes, reads, writes) and exit.
     #[arg(long)]
     pub graph: bool,
@@ -52,6 +54,74 @@ pub struct RenderArgs {
     pub ao: crate::ao::AoArgs,
     #[command(flatten)]
     pub gpu: GpuArgs,
+}
+
+/// HDR post options shared by render, bench and prewarm (H2, H3).
+#[derive(Args, Clone, Debug)]
+pub struct PostArgs {
+    /// auto: light adaptation (the first frame starts adapted); EV: each frame
+    /// exposed for its own log-average luminance, biased by EV stops.
+    #[arg(
+        long,
+        default_value = "auto",
+        value_name = "auto|EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: String,
+    /// Kawase bloom, composited in HDR before tone mapping.
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub bloom: String,
+    /// Bloom bright-pass threshold in scaled luminance (1 = display 0.5).
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
+    pub bloom_threshold: Option<f32>,
+    /// Bloom strength (weight of the bloom added to the HDR image).
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
+    pub bloom_strength: Option<f32>,
+    /// Kawase blur passes at quarter resolution (0..8).
+    #[arg(long, value_name = "N")]
+    pub bloom_passes: Option<u32>,
+    /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
+    pub white_point: Option<f32>,
+}
+
+impl PostArgs {
+    /// Applies the options to `settings` (the library checks the ranges).
+    pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        match self.exposure.as_str() {
+            "auto" => {
+                settings.adaptation.enabled = true;
+                settings.exposure_ev = 0.0;
+            }
+            ev => {
+                let v: f32 = ev
+                    .parse()
+                    .ok()
+                    .filter(|v: &f32| v.is_finite())
+                    .with_context(|| {
+                        format!("--exposure {ev}: expected auto or a number of EV (e.g. -1.5)")
+                    })?;
+                settings.adaptation.enabled = false;
+                settings.exposure_ev = v;
+            }
+        }
+        settings.bloom.enabled = match self.bloom.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--bloom {other}: expected on or off"),
+        };
+        if let Some(t) = self.bloom_threshold {
+            settings.bloom.threshold = t;
+        }
+        if let Some(s) = self.bloom_strength {
+            settings.bloom.strength = s;
+        }
+        if let Some(n) = self.bloom_passes {
+            settings.bloom.passes = n;
+        }
+        settings.white_point = self.white_point;
+        Ok(())
+    }
 }
 
 /// Parses `WxH`.
@@ -126,7 +196,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut settings = FrameSettings::new(width, height, sun);
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
-    settings.exposure_ev = args.exposure;
+    args.post.apply(&mut settings)?;
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
     settings.ao = args.ao.settings()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
@@ -155,6 +225,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.out.clone()
         };
         himal::image_io::save(&path, &frame.image)?;
+        if args.print_exposure {
+            let (l_avg, l_a) = renderer.exposure_state()?;
+            let line = format!("frame {i}: log-average {l_avg:.5}, adapted {l_a:.5}");
+            match &progress {
+                // println on a hidden bar (no terminal) would drop the line.
+                Some(bar) => bar.suspend(|| println!("{line}")),
+                None => println!("{line}"),
+            }
+        }
         match &progress {
             Some(bar) => bar.inc(1),
             None => println!(
@@ -164,6 +243,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             ),
         }
     }
+    let stats = renderer.context().pipelines.stats();
+    crate::save_cache(renderer.context());
     if let Some(bar) = progress {
         bar.finish_with_message(format!(
             "wrote {} frames next to {}",
@@ -171,5 +252,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.out.display()
         ));
     }
+    println!("pipelines: {stats}");
     Ok(())
 }

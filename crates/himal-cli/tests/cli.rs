@@ -3,7 +3,10 @@
 use std::process::Command;
 
 fn himal(args: &[&str]) -> (bool, String, String) {
+    // Tests never touch the user's pipeline cache.
+    let cache = std::env::temp_dir().join(format!("himal-cli-cache-{}", std::process::id()));
     let out = Command::new(env!("CARGO_BIN_EXE_himal"))
+        .env("HIMAL_CACHE_DIR", cache)
         .args(args)
         .output()
         .expect("runs");

@@ -1,11 +1,13 @@
 //! The whole frame, top to bottom, in one place to read.
 //!
 //! ```text
-//! shadows.sun ────────────────────────────────┐
-//! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ──┴─> lighting.deferred ─> sky ─> post.luminance ─> post.tonemap ─> output
-//!          │                 (passes/ao/mod.rs)
-//!          └───────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
+//! shadows.sun ──────────────────────────────┐
+//! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ─┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
+//!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
+//!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
+//!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
+//! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
 
@@ -17,7 +19,10 @@ use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingPass};
-use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::post::{
+    AdaptPass, BloomInputs, BloomPass, LuminanceBuffers, LuminancePass, PostFrame, PostInputs,
+    TonemapPass,
+};
 use crate::passes::shadows::SunShadowPass;
 use crate::passes::sky::SkyPass;
 use crate::renderer::ViewBuffer;
@@ -57,6 +62,8 @@ pub struct Passes {
     pub lighting: LightingPass,
     pub sky: SkyPass,
     pub luminance: LuminancePass,
+    pub adapt: AdaptPass,
+    pub bloom: BloomPass,
     pub tonemap: TonemapPass,
     pub debug: DebugPass,
 }
@@ -69,6 +76,7 @@ pub struct FrameInputs<'a> {
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
     pub luminance: &'a LuminanceBuffers,
+    pub post: PostFrame<'a>,
     pub output: &'a wgpu::Texture,
     /// Sun shadow map resolution; `None` = shadows off.
     pub shadow_resolution: Option<u32>,
@@ -90,6 +98,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         lighting,
         sky,
         luminance,
+        post,
         output,
         shadow_resolution,
         shadow_placeholder,
@@ -130,13 +139,42 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     let hdr = passes
         .sky
         .add(&mut g, hdr, gbuffer.depth, view, sky, errors);
-    let exposure = passes.luminance.add(&mut g, hdr, size, luminance, errors);
+    let measured = passes.luminance.add(&mut g, hdr, size, luminance, errors);
+    let exposure = if post.adaptation {
+        let adapted = passes.adapt.add(
+            &mut g,
+            measured,
+            &luminance.result,
+            post.adapted,
+            post.uniform,
+            errors,
+        );
+        (adapted, post.adapted)
+    } else {
+        (measured, &luminance.result)
+    };
+    let bloom_inputs = BloomInputs {
+        post: post.uniform,
+        exposure: exposure.1,
+    };
+    let bloom = post.bloom_passes.map(|n| {
+        passes
+            .bloom
+            .add(&mut g, hdr, exposure.0, bloom_inputs, n, errors)
+    });
+    let post_inputs = PostInputs {
+        post: post.uniform,
+        exposure,
+        bloom,
+        placeholder: post.bloom_placeholder,
+        sampler: &passes.bloom.sampler,
+    };
     let out = g.import_texture("output", output);
     let out = match shown {
         ViewBuffer::Final => {
             passes
                 .tonemap
-                .add(&mut g, hdr, exposure, out, view, &luminance.result, errors)
+                .add(&mut g, post.tonemap, hdr, post_inputs, out, errors)
         }
         ViewBuffer::Ao(v) => match ao_targets {
             Some(t) => passes.ao.add_view(&mut g, v, t, out, errors),
@@ -147,17 +185,11 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                 out
             }
         },
-        ViewBuffer::Debug(v) => passes.debug.add(
-            &mut g,
-            v,
-            gbuffer,
-            hdr,
-            exposure,
-            out,
-            view,
-            &luminance.result,
-            errors,
-        ),
+        ViewBuffer::Debug(v) => {
+            passes
+                .debug
+                .add(&mut g, v, gbuffer, hdr, post_inputs, out, view, errors)
+        }
     };
     g.mark_output(out);
     g

@@ -3,6 +3,7 @@
 //! Validation errors and device loss never panic: wgpu's uncaptured-error
 //! handler records them and [`GpuContext::check`] turns them into `Err`.
 
+pub mod cache;
 pub mod pipeline;
 mod readback;
 pub mod testing;
@@ -84,6 +85,8 @@ pub struct GpuContext {
     pub info: AdapterSummary,
     /// Timestamp queries inside encoders are available (per-pass timings).
     pub timestamps: bool,
+    /// E1 pipeline cache: memory, then disk (`open_pipeline_cache`), then compile.
+    pub pipelines: cache::ShaderCache,
     errors: Arc<Mutex<Vec<String>>>,
     lost: Arc<Mutex<Option<String>>>,
 }
@@ -185,8 +188,9 @@ impl GpuContext {
         let info = AdapterSummary::from(&adapter.get_info());
         let wanted_features =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        let features = adapter.features() & wanted_features;
-        let timestamps = features == wanted_features;
+        let timestamps = adapter.features() & wanted_features == wanted_features;
+        // PIPELINE_CACHE (Vulkan) lets compiled pipelines persist on disk (E1).
+        let features = adapter.features() & (wanted_features | wgpu::Features::PIPELINE_CACHE);
         let desc = wgpu::DeviceDescriptor {
             label: Some("himal"),
             required_features: features,
@@ -221,6 +225,7 @@ impl GpuContext {
             queue,
             info,
             timestamps,
+            pipelines: cache::ShaderCache::default(),
             errors,
             lost,
         })

@@ -1,6 +1,7 @@
 //! Programs: a composed WGSL shader, its wgpu module and the bind-group
 //! layouts reflected from it; bind groups are built by binding name.
 
+use super::cache::{PipelineKey, fnv1a};
 use super::{GpuContext, GpuError};
 use crate::shader::{self, ComposedShader, ReflectedLayout};
 
@@ -10,6 +11,9 @@ pub struct Program {
     pub layout: ReflectedLayout,
     pub bind_group_layouts: Vec<wgpu::BindGroupLayout>,
     pub pipeline_layout: wgpu::PipelineLayout,
+    /// FNV-1a of the composed WGSL: part of every pipeline key (E1), so an
+    /// edited shader never matches a cached pipeline.
+    pub source_hash: u64,
 }
 
 /// Fixed-function state of a render pipeline; shaders and layout come from the program.
@@ -55,6 +59,7 @@ impl Program {
     fn from_composed(ctx: &GpuContext, composed: ComposedShader) -> Result<Self, GpuError> {
         let layout = composed.layout()?;
         let name = composed.name.clone();
+        let source_hash = fnv1a(composed.source.as_bytes());
         ctx.scoped(&name, || {
             let module = ctx
                 .device
@@ -86,6 +91,7 @@ impl Program {
                 layout,
                 bind_group_layouts,
                 pipeline_layout,
+                source_hash,
             }
         })
     }
@@ -143,60 +149,100 @@ impl Program {
         }))
     }
 
+    /// The permutation key of a pipeline of this program: program and its
+    /// hash, entry points, override constants (sorted) and, for render
+    /// pipelines, a hash of the fixed-function state.
+    pub fn key(
+        &self,
+        kind: &str,
+        entries: &str,
+        constants: &[(&str, f64)],
+        state: u64,
+    ) -> PipelineKey {
+        let mut c: Vec<String> = constants.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        c.sort();
+        PipelineKey(format!(
+            "{kind}|{}|{entries}|{:016x}|{}|{state:016x}",
+            self.name,
+            self.source_hash,
+            c.join(",")
+        ))
+    }
+
+    /// The compute pipeline of `entry` with `constants`, through the
+    /// context's pipeline cache (memory, disk, compile).
     pub fn compute_pipeline(
         &self,
         ctx: &GpuContext,
         entry: &str,
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline, GpuError> {
-        ctx.scoped(&format!("{}::{entry}", self.name), || {
-            ctx.device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&format!("{}::{entry}", self.name)),
-                    layout: Some(&self.pipeline_layout),
-                    module: &self.module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                })
+        let key = self.key("compute", entry, constants, 0);
+        ctx.pipelines.compute(key, |cache| {
+            ctx.scoped(&format!("{}::{entry}", self.name), || {
+                ctx.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(&format!("{}::{entry}", self.name)),
+                        layout: Some(&self.pipeline_layout),
+                        module: &self.module,
+                        entry_point: Some(entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants,
+                            ..Default::default()
+                        },
+                        cache,
+                    })
+            })
         })
     }
 
+    /// The render pipeline of `spec`, through the context's pipeline cache.
     pub fn render_pipeline(
         &self,
         ctx: &GpuContext,
         spec: &RenderSpec<'_>,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
+        // wgpu's Debug output of the state is stable within a wgpu version,
+        // which the cache file's identity pins.
+        let state = format!(
+            "{}|{:?}|{:?}|{:?}|{:?}",
+            spec.label, spec.vertex_buffers, spec.targets, spec.depth_stencil, spec.primitive
+        );
+        let entries = format!(
+            "{}+{}",
+            spec.vertex_entry,
+            spec.fragment_entry.unwrap_or("-")
+        );
+        let key = self.key("render", &entries, spec.constants, fnv1a(state.as_bytes()));
         let options = wgpu::PipelineCompilationOptions {
             constants: spec.constants,
             ..Default::default()
         };
-        ctx.scoped(spec.label, || {
-            ctx.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(spec.label),
-                    layout: Some(&self.pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some(spec.vertex_entry),
-                        compilation_options: options.clone(),
-                        buffers: spec.vertex_buffers,
-                    },
-                    primitive: spec.primitive,
-                    depth_stencil: spec.depth_stencil.clone(),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: spec.fragment_entry.map(|e| wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some(e),
-                        compilation_options: options.clone(),
-                        targets: spec.targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+        ctx.pipelines.render(key, |cache| {
+            ctx.scoped(spec.label, || {
+                ctx.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(spec.label),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some(spec.vertex_entry),
+                            compilation_options: options.clone(),
+                            buffers: spec.vertex_buffers,
+                        },
+                        primitive: spec.primitive,
+                        depth_stencil: spec.depth_stencil.clone(),
+                        multisample: wgpu::MultisampleState::default(),
+                        fragment: spec.fragment_entry.map(|e| wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(e),
+                            compilation_options: options.clone(),
+                            targets: spec.targets,
+                        }),
+                        multiview_mask: None,
+                        cache,
+                    })
+            })
         })
     }
 }

@@ -1,6 +1,7 @@
 //! [`Renderer`]: owns the device, the scene on the GPU, every pass's
 //! pipelines and the state kept between frames; renders one frame per call.
 
+pub mod post_state;
 pub mod scene_gpu;
 pub mod uniforms;
 
@@ -18,10 +19,14 @@ use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView
 use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::LightingPass;
-use crate::passes::post::{LuminanceBuffers, LuminancePass, TonemapPass};
+use crate::passes::post::{
+    AdaptPass, AdaptationSettings, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass,
+    TonemapPass,
+};
 use crate::passes::shadows::SunShadowPass;
 use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
 use crate::scene::{Aabb, Camera, Scene, SunDesc};
+use post_state::PostState;
 use scene_gpu::SceneGpu;
 use uniforms::{LightingUniform, ViewUniform};
 
@@ -45,7 +50,7 @@ pub enum ViewBuffer {
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 14] = [
+    pub const NAMES: [&'static str; 16] = [
         "final",
         "albedo",
         "normal",
@@ -60,6 +65,8 @@ impl ViewBuffer {
         "ao",
         "ao-raw",
         "stability-mask",
+        "luminance",
+        "bloom",
     ];
 }
 
@@ -82,6 +89,8 @@ impl std::str::FromStr for ViewBuffer {
             "ao" => ViewBuffer::Ao(AoView::Ao),
             "ao-raw" => ViewBuffer::Ao(AoView::Raw),
             "stability-mask" => ViewBuffer::Ao(AoView::Stability),
+            "luminance" => ViewBuffer::Debug(D::Luminance),
+            "bloom" => ViewBuffer::Debug(D::Bloom),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -103,6 +112,12 @@ pub struct FrameSettings {
     pub sun: SunDesc,
     /// Exposure bias in EV on top of the auto exposure.
     pub exposure_ev: f32,
+    /// H3 light adaptation; off = expose each frame for its own log-average.
+    pub adaptation: AdaptationSettings,
+    /// Reinhard white point (scaled luminance mapped to white); `None` = L/(1+L).
+    pub white_point: Option<f32>,
+    /// H2 Kawase bloom.
+    pub bloom: BloomSettings,
     /// Aerial perspective extinction per metre (0 = off).
     pub aerial_extinction: f32,
     /// Sun shadow map edge in texels; 0 = shadows off.
@@ -123,6 +138,9 @@ impl FrameSettings {
             raw: false,
             sun,
             exposure_ev: 0.0,
+            adaptation: AdaptationSettings::default(),
+            white_point: None,
+            bloom: BloomSettings::default(),
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
             ao: AoSettings::default(),
@@ -147,6 +165,7 @@ struct Resources {
     lighting_buffer: wgpu::Buffer,
     sky_buffer: wgpu::Buffer,
     luminance: Option<((u32, u32), LuminanceBuffers)>,
+    post: PostState,
     outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
     shadow_placeholder: wgpu::Texture,
     ao_history: Option<AoHistory>,
@@ -169,6 +188,7 @@ impl Resources {
             lighting: &self.lighting_buffer,
             sky: &self.sky_buffer,
             luminance: &self.luminance.as_ref()?.1,
+            post: self.post.frame(settings),
             output: self.outputs.get(&(size.0, size.1, format))?,
             shadow_resolution: (settings.shadow_resolution > 0)
                 .then_some(settings.shadow_resolution),
@@ -208,6 +228,8 @@ impl Renderer {
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
+            adapt: AdaptPass::new(&ctx)?,
+            bloom: BloomPass::new(&ctx)?,
             tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
             debug: DebugPass::new(&ctx)?,
         };
@@ -259,6 +281,7 @@ impl Renderer {
                 &[255; 4],
             )
         };
+        let post = PostState::new(&ctx);
         Ok(Self {
             ctx,
             res: Resources {
@@ -268,6 +291,7 @@ impl Renderer {
                 lighting_buffer,
                 sky_buffer,
                 luminance: None,
+                post,
                 outputs: HashMap::new(),
                 shadow_placeholder,
                 ao_history: None,
@@ -303,13 +327,54 @@ impl Renderer {
         ]
     }
 
-    /// Forgets the previous frame (camera cut): motion vectors become zero.
+    /// Forgets the previous frame (camera cut): motion vectors become zero,
+    /// the next frame starts adapted.
     pub fn reset_history(&mut self) {
         self.prev_view_proj = None;
         if let Some(h) = &mut self.res.ao_history {
             h.invalidate();
         }
         self.prev_time = None;
+        self.res.post.reset = true;
+    }
+
+    /// E1 pre-warm: fetches every pipeline permutation a frame of this
+    /// renderer can ask for (tone-map variants, bloom passes, debug views in
+    /// both formats), so none compiles mid-sequence. Save the cache after it
+    /// with [`GpuContext::save_pipeline_cache`].
+    pub fn prewarm(&mut self) -> Result<(), Error> {
+        let (ctx, passes) = (&self.ctx, &mut self.res.passes);
+        for key in crate::passes::post::TonemapKey::all() {
+            passes.tonemap.prepare(ctx, key)?;
+        }
+        passes.bloom.prepare(ctx, BloomSettings::MAX_PASSES)?;
+        for name in ViewBuffer::NAMES {
+            for format in [DISPLAY_FORMAT, RAW_FORMAT] {
+                match name.parse()? {
+                    ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format)?,
+                    ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format)?,
+                    ViewBuffer::Final => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads back the exposure state (outside the frame; for tests and logs):
+    /// (last frame's log-average luminance, adapted luminance). The adapted
+    /// value is the last adapted frame's (stale while adaptation is off).
+    pub fn exposure_state(&self) -> Result<(f32, f32), Error> {
+        let read = |buffer: &wgpu::Buffer, i: usize| -> Result<f32, Error> {
+            let bytes = crate::gpu::read_buffer(&self.ctx, buffer)?;
+            let v: &[f32] = bytemuck::try_cast_slice(&bytes[..16])
+                .map_err(|e| Error::InvalidSettings(format!("exposure buffer: {e}")))?;
+            Ok(v[i])
+        };
+        let l_avg = match &self.res.luminance {
+            Some((_, buffers)) => read(&buffers.result, 1)?,
+            None => 0.0,
+        };
+        Ok((l_avg, read(&self.res.post.adapted, 1)?))
     }
 
     fn validate(settings: &FrameSettings) -> Result<(), Error> {
@@ -330,7 +395,7 @@ impl Renderer {
                 "the AO views need AO on (--ao hbao or hbao+stf)".into(),
             ));
         }
-        Ok(())
+        post_state::validate(settings)
     }
 
     fn update_sky(&mut self, sun: &SunDesc) {
@@ -391,6 +456,11 @@ impl Renderer {
         if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
             self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
         }
+        let passes = &mut self.res.passes;
+        passes
+            .tonemap
+            .prepare(&self.ctx, post_state::tonemap_key(settings))?;
+        passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
         }
@@ -427,6 +497,7 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun);
+        self.res.post.update(&self.ctx.queue, settings);
         let aspect = size.0 as f32 / size.1 as f32;
         let (view, proj) = (camera.view(), camera.projection(aspect));
         let view_proj = proj * view;
@@ -519,6 +590,7 @@ impl Renderer {
         let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
         self.prev_time = Some(settings.time_s);
+        self.res.post.frame_done(settings);
         self.frame_index += 1;
         if let Some(h) = &mut self.res.ao_history {
             // Only the filter writes the history; any other mode leaves it stale.

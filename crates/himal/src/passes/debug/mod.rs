@@ -6,9 +6,10 @@ use std::collections::HashMap;
 use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{BufferAccess, FrameGraph, TextureAccess, TextureHandle};
 use crate::passes::common::{draw_fullscreen, target};
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::post::PostInputs;
 
 /// Buffers a debug view can show; `id` is the shader's `VIEW` constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -23,6 +24,10 @@ pub enum DebugView {
     Depth = 8,
     Motion = 9,
     Lighting = 10,
+    /// Per-pixel luminance around the exposure (H3), log scale.
+    Luminance = 11,
+    /// The bloom chain's output (H2), upsampled.
+    Bloom = 12,
 }
 
 pub struct DebugPass {
@@ -71,12 +76,16 @@ impl DebugPass {
         view_kind: DebugView,
         gbuffer: GBuffer,
         hdr: TextureHandle,
-        exposure: BufferHandle,
+        post: PostInputs<'a>,
         output: TextureHandle,
         view: &'a wgpu::Buffer,
-        exposure_buffer: &'a wgpu::Buffer,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
+        let bloom = match post.bloom {
+            Some(b) => b,
+            None => graph.import_texture("bloom.off", post.placeholder),
+        };
+        let (exposure, exposure_buffer) = post.exposure;
         let format = graph.texture_desc(output).map(|d| d.format);
         let pipeline = format.and_then(|f| self.pipelines.get(&(view_kind, f)));
         let mut pass = graph.add_pass("debug.view");
@@ -87,6 +96,7 @@ impl DebugPass {
             gbuffer.motion,
             gbuffer.depth,
             hdr,
+            bloom,
         ] {
             pass.read(t, TextureAccess::Sampled);
         }
@@ -112,6 +122,12 @@ impl DebugPass {
                     ("depth", tv(gbuffer.depth)),
                     ("hdr", tv(hdr)),
                     ("exposure", exposure_buffer.as_entire_binding()),
+                    ("post", post.post.as_entire_binding()),
+                    ("bloom", tv(bloom)),
+                    (
+                        "bloom_sampler",
+                        wgpu::BindingResource::Sampler(post.sampler),
+                    ),
                 ],
             );
             if let Some(bg) = errors.record(bind_group) {

@@ -2,10 +2,12 @@
 // VIEW selects the buffer (ids in passes/debug/mod.rs `DebugView`); DISPLAY = 1
 // maps to viewable [0,1] for PNG (sRGB target), DISPLAY = 0 writes raw values
 // (Rgba32Float, for EXR): albedo linear, normal/tangent in [-1,1], depth as
-// stored (reverse-Z), motion in pixels, lighting in HDR units.
+// stored (reverse-Z), motion in pixels, lighting and bloom in HDR units,
+// luminance as (L_w, L_w / L_exposure, L_exposure).
 #import view
 #import color
 #import tangent_frame
+#import post
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -18,6 +20,9 @@ override DISPLAY: bool = true;
 @group(0) @binding(5) var depth: texture_depth_2d;
 @group(0) @binding(6) var hdr: texture_2d<f32>;
 @group(0) @binding(7) var<storage, read> exposure: vec4f;
+@group(0) @binding(8) var<uniform> post: Post;
+@group(0) @binding(9) var bloom: texture_2d<f32>;
+@group(0) @binding(10) var bloom_sampler: sampler;
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
@@ -60,10 +65,24 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             raw = vec4f(mv, 0.0, 1.0);
             disp = vec3f(0.5 + mv / 16.0, 0.5);
         }
+        case 11u: { // luminance (H3); display: log2(L_w / L_exposure) over +-8 EV, grey
+            let l_w = luminance(textureLoad(hdr, px, 0).rgb);
+            let l_e = max(exposure.y, 1e-6);
+            raw = vec4f(l_w, l_w / l_e, l_e, 1.0);
+            let ev = log2(max(l_w, 1e-9) / l_e);
+            return select(raw, shown(vec3f(0.5 + ev / 16.0)), DISPLAY);
+        }
+        case 12u: { // bloom (H2, HDR units); display: exposure-scaled, clamped, no curve
+            let uv = frag.xy * view.viewport.zw;
+            let b = textureSampleLevel(bloom, bloom_sampler, uv, 0.0).rgb;
+            raw = vec4f(b, 1.0);
+            let scale = exposure_scale(post, exposure.y);
+            return select(raw, vec4f(min(b * scale, vec3f(1.0)), 1.0), DISPLAY);
+        }
         default: { // 10: lighting (HDR); display: exposure-scaled, clamped, no curve
             let c = textureLoad(hdr, px, 0).rgb;
             raw = vec4f(c, 1.0);
-            let scale = 0.18 / max(exposure.y, 1e-6) * exp2(view.jitter.w);
+            let scale = exposure_scale(post, exposure.y);
             return select(raw, vec4f(min(c * scale, vec3f(1.0)), 1.0), DISPLAY);
         }
     }

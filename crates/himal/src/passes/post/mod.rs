@@ -1,20 +1,27 @@
-//! Tone mapping (TECHNIQUES H3, without adaptation yet): log-average
-//! luminance reduced on the GPU, then Reinhard `L/(1+L)` at key 0.18.
+//! HDR post (TECHNIQUES H2, H3): log-average luminance reduced on the GPU,
+//! light adaptation kept on the GPU, Kawase bloom, bloom composite and
+//! Reinhard `L/(1+L)` (optionally with a white point) at key 0.18.
 //! CPU twin: [`reference`].
 
+pub mod bloom;
+pub mod params;
 pub mod reference;
+mod tonemap;
+
+pub use bloom::{BloomInputs, BloomPass};
+pub use params::{AdaptationSettings, BloomSettings, FrameDelta, PostUniform};
+pub use tonemap::{PostInputs, TonemapKey, TonemapPass};
 
 use crate::frame::FrameErrors;
-use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
 
 /// Tile edge in pixels of `post.luminance` (16x16 threads, 4x4 pixels each).
 pub const TILE: u32 = 64;
 pub const KEY: f64 = 0.18;
 
-/// Buffers of the luminance reduction, sized for a maximum frame size.
+/// Buffers of the luminance reduction, sized for one frame size.
 pub struct LuminanceBuffers {
     pub partials: wgpu::Buffer,
     /// (log average, average, tiles, pixels)
@@ -104,60 +111,85 @@ impl LuminancePass {
     }
 }
 
-pub struct TonemapPass {
+/// `post.adapt`: moves the adapted luminance (persistent, on the GPU)
+/// toward this frame's log-average; see `adapt.wgsl`.
+pub struct AdaptPass {
     program: Program,
-    pipeline: wgpu::RenderPipeline,
+    pipeline: wgpu::ComputePipeline,
 }
 
-impl TonemapPass {
-    pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, "passes/post/tonemap.wgsl")?;
-        let targets = [target(output_format)];
-        let mut spec = RenderSpec::fullscreen("post.tonemap", &targets);
-        let constants = [("KEY", KEY)];
-        spec.constants = &constants;
-        let pipeline = program.render_pipeline(ctx, &spec)?;
+/// Bytes of the adapted-luminance buffer: (log L_a, L_a, L_avg, frames since reset).
+pub const ADAPTED_BYTES: u64 = 16;
+
+/// The persistent adapted-luminance buffer (survives frames and size changes).
+pub fn adapted_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("post.adapt.state"),
+        size: ADAPTED_BYTES,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+impl AdaptPass {
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, "passes/post/adapt.wgsl")?;
+        let pipeline = program.compute_pipeline(ctx, "cs_main", &[])?;
         Ok(Self { program, pipeline })
     }
 
-    /// Tone-maps `hdr` into `output` (imported LDR target); returns its new version.
-    #[allow(clippy::too_many_arguments)]
+    /// Reads `measured` (the luminance result), updates `adapted`; returns its handle.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
-        hdr: TextureHandle,
-        exposure: BufferHandle,
-        output: TextureHandle,
-        view: &'a wgpu::Buffer,
-        exposure_buffer: &'a wgpu::Buffer,
+        measured: BufferHandle,
+        measured_buffer: &'a wgpu::Buffer,
+        adapted_buffer: &'a wgpu::Buffer,
+        post: &'a wgpu::Buffer,
         errors: &'a FrameErrors,
-    ) -> TextureHandle {
-        let mut pass = graph.add_pass("post.tonemap");
-        pass.read(hdr, TextureAccess::Sampled);
-        pass.read_buffer(exposure, BufferAccess::StorageRead);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
+    ) -> BufferHandle {
+        let adapted = graph.import_buffer("adapt.state", adapted_buffer);
+        let mut pass = graph.add_pass("post.adapt");
+        pass.read_buffer(measured, BufferAccess::StorageRead);
+        let adapted = pass.write_buffer(adapted, BufferAccess::StorageWrite);
         pass.execute(move |ctx| {
             let bind_group = self.program.bind(
                 ctx.device,
                 0,
                 &[
-                    ("view", view.as_entire_binding()),
-                    ("hdr", wgpu::BindingResource::TextureView(ctx.view(hdr))),
-                    ("exposure", exposure_buffer.as_entire_binding()),
+                    ("post", post.as_entire_binding()),
+                    ("measured", measured_buffer.as_entire_binding()),
+                    ("adapted", adapted_buffer.as_entire_binding()),
                 ],
             );
-            if let Some(bg) = errors.record(bind_group) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    &self.pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let Some(bg) = errors.record(bind_group) else {
+                return;
+            };
+            let mut cp = ctx
+                .encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("post.adapt"),
+                    timestamp_writes: None,
+                });
+            cp.set_bind_group(0, &bg, &[]);
+            cp.set_pipeline(&self.pipeline);
+            cp.dispatch_workgroups(1, 1, 1);
         });
-        output
+        adapted
     }
+}
+
+/// Post settings and persistent buffers of one frame (see `frame::build`).
+pub struct PostFrame<'a> {
+    /// `PostUniform`, written for this frame.
+    pub uniform: &'a wgpu::Buffer,
+    /// Adapted-luminance state (persistent).
+    pub adapted: &'a wgpu::Buffer,
+    /// 1x1 texture bound in place of the bloom when bloom is off.
+    pub bloom_placeholder: &'a wgpu::Texture,
+    /// Kawase passes; `None` = no bloom chain.
+    pub bloom_passes: Option<u32>,
+    /// Expose for the adapted luminance (else for this frame's log-average).
+    pub adaptation: bool,
+    pub tonemap: TonemapKey,
 }

@@ -1,0 +1,66 @@
+//! `himal prewarm` and the post options from the command line (E1, H2, H3).
+
+use std::process::Command;
+
+fn himal(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_himal"))
+        .env("HIMAL_CACHE_DIR", "off")
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn render_after_prewarm_compiles_nothing() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-prewarm-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_string_lossy().to_string();
+    let (ok, out, err) = himal(&["prewarm", "--cache", &d]);
+    assert!(ok, "{err}");
+    assert!(out.contains("compiles"), "{out}");
+    let png = dir.join("f.png").to_string_lossy().to_string();
+    let (ok, out, err) = himal(&[
+        "render", "--cache", &d, "--size", "32x18", "--view", "bloom", "--out", &png,
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains(" 0 compiles"),
+        "render after prewarm compiled: {out}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_post_options_are_rejected() {
+    for (args, needle) in [
+        (
+            &["render", "--exposure", "bright", "--size", "8x8"][..],
+            "--exposure bright",
+        ),
+        (
+            &["render", "--bloom", "maybe", "--size", "8x8"][..],
+            "--bloom maybe",
+        ),
+        (
+            &["render", "--bloom-passes", "99", "--size", "8x8"][..],
+            "bloom passes 99",
+        ),
+        (
+            &["render", "--white-point", "-1", "--size", "8x8"][..],
+            "white point",
+        ),
+        (&["prewarm", "--cache", "off"][..], "cache directory"),
+    ] {
+        let (ok, _, err) = himal(args);
+        assert!(!ok, "{args:?} should fail");
+        assert!(
+            err.contains(needle),
+            "{args:?}: stderr lacks \"{needle}\":\n{err}"
+        );
+    }
+}

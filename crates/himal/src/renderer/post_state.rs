@@ -1,0 +1,152 @@
+//! The renderer's HDR-post state (H2, H3): the post uniform, the persistent
+//! adapted-luminance buffer and the frame-delta clock.
+
+use std::time::Instant;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::gpu::pipeline::uniform_buffer;
+use crate::passes::debug::DebugView;
+use crate::passes::lighting::HDR_FORMAT;
+use crate::passes::post::{
+    self, BloomSettings, FrameDelta, PostFrame, PostUniform, TonemapKey, adapted_buffer,
+};
+use crate::renderer::{FrameSettings, ViewBuffer};
+
+pub struct PostState {
+    pub uniform: wgpu::Buffer,
+    pub adapted: wgpu::Buffer,
+    pub bloom_placeholder: wgpu::Texture,
+    /// The next frame starts adapted (first frame, camera cut, adaptation was off).
+    pub reset: bool,
+    last_frame: Option<Instant>,
+}
+
+/// What `--view bloom` needs even with bloom off.
+fn bloom_passes(settings: &FrameSettings) -> Option<u32> {
+    let shown = settings.view == ViewBuffer::Debug(DebugView::Bloom);
+    (settings.bloom.enabled || shown).then_some(settings.bloom.passes)
+}
+
+pub fn tonemap_key(settings: &FrameSettings) -> TonemapKey {
+    TonemapKey {
+        bloom: settings.bloom.enabled,
+        white_point: settings.white_point.is_some(),
+    }
+}
+
+pub fn validate(settings: &FrameSettings) -> Result<(), Error> {
+    let bad = |m: String| Err(Error::InvalidSettings(m));
+    let b = &settings.bloom;
+    if b.passes > BloomSettings::MAX_PASSES {
+        return bad(format!(
+            "bloom passes {} exceed {}",
+            b.passes,
+            BloomSettings::MAX_PASSES
+        ));
+    }
+    if !(b.threshold.is_finite()
+        && b.threshold >= 0.0
+        && b.strength.is_finite()
+        && b.strength >= 0.0)
+    {
+        return bad(format!(
+            "bloom threshold {} and strength {} must be finite and >= 0",
+            b.threshold, b.strength
+        ));
+    }
+    let a = &settings.adaptation;
+    if !(a.tau_brighten > 0.0
+        && a.tau_darken > 0.0
+        && a.tau_brighten.is_finite()
+        && a.tau_darken.is_finite())
+    {
+        return bad(format!(
+            "adaptation time constants {} s and {} s must be positive",
+            a.tau_brighten, a.tau_darken
+        ));
+    }
+    if let FrameDelta::Fixed(dt) = a.delta
+        && !(dt.is_finite() && dt >= 0.0)
+    {
+        return bad(format!("frame delta {dt} s must be finite and >= 0"));
+    }
+    if let Some(w) = settings.white_point
+        && !(w.is_finite() && w > 0.0)
+    {
+        return bad(format!("white point {w} must be positive"));
+    }
+    if !settings.exposure_ev.is_finite() {
+        return bad(format!(
+            "exposure {} EV is not finite",
+            settings.exposure_ev
+        ));
+    }
+    Ok(())
+}
+
+impl PostState {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let bloom_placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("bloom.off"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: HDR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        Self {
+            uniform: uniform_buffer(ctx, "post", &<PostUniform as bytemuck::Zeroable>::zeroed()),
+            adapted: adapted_buffer(&ctx.device),
+            bloom_placeholder,
+            reset: true,
+            last_frame: None,
+        }
+    }
+
+    /// Writes this frame's uniform (frame delta, reset flag, knobs).
+    pub fn update(&mut self, queue: &wgpu::Queue, settings: &FrameSettings) {
+        let now = Instant::now();
+        let dt = match settings.adaptation.delta {
+            FrameDelta::Fixed(dt) => dt,
+            FrameDelta::Real => self
+                .last_frame
+                .map(|t| now.duration_since(t).as_secs_f32())
+                .unwrap_or(0.0),
+        };
+        self.last_frame = Some(now);
+        let uniform = PostUniform::new(
+            post::KEY as f32,
+            settings.exposure_ev,
+            settings.white_point,
+            &settings.bloom,
+            &settings.adaptation,
+            dt,
+            self.reset,
+        );
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+    }
+
+    /// Called after a frame was submitted.
+    pub fn frame_done(&mut self, settings: &FrameSettings) {
+        // The adapted state is stale after frames without adaptation.
+        self.reset = !settings.adaptation.enabled;
+    }
+
+    pub fn frame<'a>(&'a self, settings: &FrameSettings) -> PostFrame<'a> {
+        PostFrame {
+            uniform: &self.uniform,
+            adapted: &self.adapted,
+            bloom_placeholder: &self.bloom_placeholder,
+            bloom_passes: bloom_passes(settings),
+            adaptation: settings.adaptation.enabled,
+            tonemap: tonemap_key(settings),
+        }
+    }
+}

@@ -1,0 +1,169 @@
+//! E1 pipeline cache on the adapter present (lavapipe in CI): after a
+//! pre-warm, a 16-frame sequence in a fresh process-like context compiles
+//! nothing; a corrupted or incompatible cache file is detected, ignored
+//! (with a warning) and rebuilt. Each test uses its own temporary directory.
+
+use std::path::{Path, PathBuf};
+
+use himal::gpu::cache::{LoadStatus, cache_file};
+use himal::gpu::{GpuContext, GpuOptions};
+use himal::scene::Scene;
+use himal::{FrameSettings, Renderer};
+
+const SCENE: &str = r#"
+[sun]
+time = "10:30"
+latitude = 45.0
+day_of_year = 172
+turbidity = 3.0
+
+[[material]]
+name = "test"
+albedo_linear = [0.6, 0.3, 0.2]
+glossiness = 0.7
+reflectance = 0.04
+metallic = 0.0
+anisotropy = 0.0
+ao = 1.0
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+material = "test"
+radius = 1.0
+segments = 16
+position = [0.0, 0.0, 0.0]
+
+[[camera]]
+name = "front"
+position = [0.0, 0.6, 4.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 35.0
+"#;
+
+/// A fresh, empty directory under the system temp dir.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("himal-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// A new context (as a new process would have) with the cache in `dir` opened.
+fn context(dir: &Path) -> (GpuContext, LoadStatus) {
+    let ctx = GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)");
+    let status = ctx.open_pipeline_cache(dir);
+    (ctx, status)
+}
+
+fn scene() -> Scene {
+    Scene::from_toml_str(SCENE, "ball.toml", Path::new(".")).expect("scene")
+}
+
+#[test]
+fn after_prewarm_a_16_frame_sequence_compiles_nothing() {
+    let dir = temp_dir("cache-prewarm");
+    let scene = scene();
+    let (ctx, status) = context(&dir);
+    assert!(matches!(status, LoadStatus::Missing(_)), "{status:?}");
+    let mut warm = Renderer::new(ctx, &scene).expect("renderer");
+    warm.prewarm().expect("prewarm");
+    let prewarm = warm.context().pipelines.stats();
+    let written = warm.context().save_pipeline_cache().expect("save");
+    assert!(written.is_some_and(|p| p.exists()), "cache file written");
+    eprintln!("prewarm: {prewarm}");
+
+    let (ctx, status) = context(&dir);
+    let LoadStatus::Loaded { keys, .. } = status else {
+        panic!("cache not loaded: {status:?}");
+    };
+    // Measured 44 permutations: the passes' fixed pipelines, 4 tone maps,
+    // 8 Kawase offsets, 12 debug views x 2 formats.
+    assert_eq!(
+        keys as u64, prewarm.compiles,
+        "index holds every pre-warmed key"
+    );
+    let mut r = Renderer::new(ctx, &scene).expect("renderer");
+    let start = r.context().pipelines.stats();
+    let camera = scene.camera("front").expect("camera").clone();
+    let mut settings = FrameSettings::new(48, 32, scene.sun.clone());
+    settings.white_point = Some(4.0);
+    for i in 0..16 {
+        let mut cam = camera.clone();
+        cam.position += cam.forward * (0.05 * i as f32);
+        // Bloom off for the second half: another tone-map permutation mid-sequence.
+        settings.bloom.enabled = i < 8;
+        r.render(&cam, &settings).expect("frame");
+    }
+    let total = r.context().pipelines.stats();
+    let sequence = total.since(&start);
+    eprintln!("start-up: {start}; 16 frames: {sequence}");
+    assert_eq!(
+        total.compiles, 0,
+        "pipelines compiled after pre-warm: {total}"
+    );
+    assert!(total.disk_hits > 0, "nothing came from disk: {total}");
+    // Permutations first used mid-sequence (tone map with bloom off, Kawase
+    // offsets) come from disk, not from the compiler: measured 7 disk hits.
+    assert_eq!(sequence.compiles, 0, "compiled mid-sequence: {sequence}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn corrupted_or_foreign_cache_is_ignored_and_rebuilt() {
+    let dir = temp_dir("cache-corrupt");
+    let scene = scene();
+    let (ctx, _) = context(&dir);
+    let path = cache_file(&dir, &ctx.adapter.get_info());
+    let first = Renderer::new(ctx, &scene).expect("renderer");
+    let compiled = first.context().pipelines.stats().compiles;
+    first.context().save_pipeline_cache().expect("save");
+    let good = std::fs::read(&path).expect("cache file");
+
+    // Damage: one flipped bit in the middle (checksum), an old format
+    // version, a truncated file, another adapter's identity.
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x10;
+    let mut old = good.clone();
+    old[8] = old[8].wrapping_add(1);
+    let truncated = good[..good.len() / 3].to_vec();
+    let mut foreign = good.clone();
+    let at = foreign
+        .windows(4)
+        .position(|w| w == b"|wgp")
+        .expect("identity in header");
+    foreign[at - 1] ^= 0x01; // last byte of the driver info, checksum refreshed below
+    let n = foreign.len() - 8;
+    let sum = himal::gpu::cache::fnv1a(&foreign[..n]);
+    foreign[n..].copy_from_slice(&sum.to_le_bytes());
+    for (what, bytes, reason) in [
+        ("flipped bit", &flipped, "checksum"),
+        ("old version", &old, "version"),
+        ("truncated", &truncated, ""),
+        ("other adapter", &foreign, "another adapter"),
+    ] {
+        std::fs::write(&path, bytes).expect("write damaged file");
+        let (ctx, status) = context(&dir);
+        let LoadStatus::Rejected { reason: got, .. } = &status else {
+            panic!("{what}: damaged file accepted: {status:?}");
+        };
+        eprintln!("{what}: rejected: {got}");
+        assert!(got.contains(reason), "{what}: reason \"{got}\"");
+        if what == "flipped bit" {
+            // Ignored: everything compiles again, and the save rebuilds the file.
+            let r = Renderer::new(ctx, &scene).expect("renderer despite a bad cache");
+            let stats = r.context().pipelines.stats();
+            assert_eq!((stats.disk_hits, stats.compiles), (0, compiled), "{stats}");
+            r.context().save_pipeline_cache().expect("rebuild");
+            let (ctx, status) = context(&dir);
+            assert!(
+                matches!(status, LoadStatus::Loaded { .. }),
+                "rebuilt: {status:?}"
+            );
+            let r = Renderer::new(ctx, &scene).expect("renderer");
+            let stats = r.context().pipelines.stats();
+            assert_eq!((stats.compiles, stats.disk_hits), (0, compiled), "{stats}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
