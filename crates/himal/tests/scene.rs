@@ -679,8 +679,13 @@ orbit = { radius = 2, period = -8, phase = 90, turn = true }
     let (g, b, sp) = (object(&s, "g"), object(&s, "b"), object(&s, "s"));
     let gf = g.foliage.expect("grass foliage");
     assert_eq!((gf.pattern, gf.sway), (AlphaPattern::Grass, 0.05));
-    // round(2 / cell) x round(3 / cell) clumps with cell = 1/sqrt(10): 6 x 9, two cards each.
-    assert_eq!(s.meshes[g.mesh].triangle_count(), 6 * 9 * 2 * 2);
+    // round(2 / cell) x round(3 / cell) cells with cell = 1/sqrt(10): 6 x 9,
+    // two cards each; the ragged border drops some (measured 42 of 54 kept).
+    let tris = s.meshes[g.mesh].triangle_count();
+    assert!(
+        tris % 4 == 0 && (30 * 4..=54 * 4).contains(&tris),
+        "{tris} triangles"
+    );
     let gb = s.meshes[g.mesh].bounds;
     assert!(
         gb.max.y <= 0.4 * 1.25 + 1e-5 && gb.min.y.abs() < 1e-6,

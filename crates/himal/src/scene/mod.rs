@@ -63,7 +63,7 @@
 //!   A height field may be moved, yawed and scaled but not pitched or rolled.
 //! - `grass`: a field of crossed, alpha-tested cards over `size = [x, z]`:
 //!   `density` (clumps per m², default 30; one clump per cell of a jittered
-//!   grid), `height` (mean card height, default 0.3 m, 0.75..1.25 per clump),
+//!   grid, inside a ragged rounded rectangle), `height` (mean card height, default 0.3 m, 0.75..1.25 per clump),
 //!   `width` (mean card width, default 0.15 m), `cards` (crossed cards per
 //!   clump, 1..=4, default 3), `seed` (default 0), `sway` (tip amplitude in
 //!   metres, [0, 1], default 0.04). The local origin is at root height.

@@ -22,6 +22,8 @@ use super::{MaterialDesc, Mesh};
 const GRASS_UP_TILT: f32 = 1.5;
 /// Pattern seeds per card: `uv.x` integer part in 0..PATTERN_SEEDS.
 const PATTERN_SEEDS: u32 = 16;
+/// Border raggedness of grass fields (fraction of the half size).
+const EDGE_RAGGEDNESS: f32 = 0.3;
 /// Most clumps one grass object may hold.
 pub const MAX_CLUMPS: u32 = 200_000;
 
@@ -79,7 +81,8 @@ impl GrassParams {
 }
 
 /// A grass field: one clump per cell of a jittered grid (stratified, so
-/// no bald patches), each `cards` vertical quads crossed at random yaw.
+/// no bald patches) inside a ragged rounded rectangle (`EDGE_RAGGEDNESS`),
+/// each `cards` vertical quads crossed at random yaw.
 /// `root_y(x, z)` gives the local height of a clump's root (0 on a plane,
 /// the height field under it when snapped); `Err((x, z))` names a root it
 /// could not place.
@@ -98,6 +101,12 @@ pub fn grass(
             let mut rng = Rng::new(p.seed, (j * nx + i) as i32);
             let xz =
                 origin + (Vec2::new(i as f32, j as f32) + Vec2::new(rng.next(), rng.next())) * cell;
+            // Ragged, rounded border: keep clumps inside a superellipse whose
+            // radius varies by 30 % per clump, so patches are not rectangles.
+            let q = (xz / (0.5 * Vec2::from(p.size))).abs().powf(4.0);
+            if (q.x + q.y).powf(0.25) > 1.0 - EDGE_RAGGEDNESS * rng.next() {
+                continue;
+            }
             let y = root_y(xz.x, xz.y).ok_or(xz)?;
             let root = Vec3::new(xz.x, y, xz.y);
             let height = p.height * (0.75 + 0.5 * rng.next());
