@@ -683,7 +683,7 @@ orbit = { radius = 2, period = -8, phase = 90, turn = true }
     // two cards each; the ragged border drops some (measured 42 of 54 kept).
     let tris = s.meshes[g.mesh].triangle_count();
     assert!(
-        tris % 4 == 0 && (30 * 4..=54 * 4).contains(&tris),
+        tris.is_multiple_of(4) && (30 * 4..=54 * 4).contains(&tris),
         "{tris} triangles"
     );
     let gb = s.meshes[g.mesh].bounds;
