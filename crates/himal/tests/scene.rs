@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use glam::{Mat4, Vec2, Vec3};
-use himal::scene::{HeightGrid, MaterialDesc, Mesh, Object, Scene, TerrainLayer, primitives};
+use himal::scene::{
+    AlphaPattern, HeightGrid, MaterialDesc, Mesh, Object, Scene, TerrainLayer, primitives,
+};
 
 fn demo() -> &'static Scene {
     static DEMO: OnceLock<Scene> = OnceLock::new();
@@ -633,6 +635,212 @@ fn semantic_checks_point_at_the_offending_key() {
         };
         assert!(
             msg.starts_with(place) && msg.contains(problem),
+            "{msg}\n(wanted {place} {problem})"
+        );
+    }
+}
+
+#[test]
+fn vegetation_and_orbit_keys_parse() {
+    let text = r#"
+[[material]]
+name = "m"
+albedo = [0.5, 0.5, 0.5]
+
+[[object]]
+name = "g"
+primitive = "grass"
+material = "m"
+size = [2, 3]
+density = 10
+height = 0.4
+width = 0.1
+cards = 2
+seed = 3
+sway = 0.05
+
+[[object]]
+name = "b"
+primitive = "bush"
+material = "m"
+size = [1, 0.8, 1]
+cards = 20
+position = [3, 0, 0]
+
+[[object]]
+name = "s"
+primitive = "sphere"
+material = "m"
+radius = 0.5
+position = [0, 0.5, 0]
+orbit = { radius = 2, period = -8, phase = 90, turn = true }
+"#;
+    let s = Scene::from_toml_str(text, "x.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let (g, b, sp) = (object(&s, "g"), object(&s, "b"), object(&s, "s"));
+    let gf = g.foliage.expect("grass foliage");
+    assert_eq!((gf.pattern, gf.sway), (AlphaPattern::Grass, 0.05));
+    // round(2 / cell) x round(3 / cell) cells with cell = 1/sqrt(10): 6 x 9,
+    // two cards each; the ragged border drops some (measured 42 of 54 kept).
+    let tris = s.meshes[g.mesh].triangle_count();
+    assert!(
+        tris.is_multiple_of(4) && (30 * 4..=54 * 4).contains(&tris),
+        "{tris} triangles"
+    );
+    let gb = s.meshes[g.mesh].bounds;
+    assert!(
+        gb.max.y <= 0.4 * 1.25 + 1e-5 && gb.min.y.abs() < 1e-6,
+        "{gb:?}"
+    );
+    let bf = b.foliage.expect("bush foliage");
+    assert_eq!((bf.pattern, bf.sway), (AlphaPattern::Leaves, 0.03));
+    assert_eq!(s.meshes[b.mesh].triangle_count(), 40);
+    assert!(sp.foliage.is_none() && g.motion.is_none());
+    let orbit = sp.motion.expect("motion").orbit;
+    assert_eq!((orbit.radius, orbit.period, orbit.turn), (2.0, -8.0, true));
+    // Phase 90 degrees: (0, -2) at t = 0; clockwise, a quarter turn later at (2, 0).
+    let at = |t: f32| sp.transform_at(t).w_axis.truncate();
+    assert!(
+        (at(0.0) - Vec3::new(0.0, 0.5, -2.0)).length() < 1e-5,
+        "{}",
+        at(0.0)
+    );
+    assert!(
+        (at(2.0) - Vec3::new(2.0, 0.5, 0.0)).length() < 1e-5,
+        "{}",
+        at(2.0)
+    );
+    // `turn`: the sphere's local +X follows the yaw (phase 90 at t = 0).
+    let x_axis = sp.transform_at(0.0).x_axis.truncate();
+    assert!((x_axis - Vec3::NEG_Z).length() < 1e-5, "{x_axis}");
+    // Same seed, same mesh; another seed, another field.
+    let again = Scene::from_toml_str(text, "x.toml", Path::new(".")).expect("again");
+    assert_eq!(again.meshes[g.mesh], s.meshes[g.mesh]);
+    let other = Scene::from_toml_str(
+        &text.replace("seed = 3", "seed = 4"),
+        "x.toml",
+        Path::new("."),
+    )
+    .expect("other");
+    assert_ne!(other.meshes[g.mesh].vertices, s.meshes[g.mesh].vertices);
+}
+
+#[test]
+fn snapped_grass_roots_follow_the_height_field() {
+    let text = r#"
+[[material]]
+name = "m"
+albedo = [0.5, 0.5, 0.5]
+
+[[object]]
+name = "t"
+primitive = "heightfield"
+material = "m"
+size = [20, 20]
+resolution = 33
+noise = { seed = 2, amplitude = 3, frequency = 0.1 }
+
+[[object]]
+name = "g"
+primitive = "grass"
+material = "m"
+size = [6, 6]
+position = [1, 0.0, -2]
+rotation = [0, 30, 0]
+snap_to_ground = true
+"#;
+    let s = Scene::from_toml_str(text, "x.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let terrain = object(&s, "t");
+    let ground = TerrainProbe::new(&s.meshes[terrain.mesh], terrain.transform);
+    let g = object(&s, "g");
+    let mesh = &s.meshes[g.mesh];
+    let mut worst = 0.0f32;
+    // Four vertices per card, the first two at the root: the root is their midpoint.
+    for card in mesh.vertices.chunks(4) {
+        assert!(card[0].uv[1] == 0.0 && card[1].uv[1] == 0.0);
+        let mid = (Vec3::from(card[0].position) + Vec3::from(card[1].position)) * 0.5;
+        let p = g.transform.transform_point3(mid);
+        worst = worst.max((p.y - ground.height(p.x, p.z)).abs());
+    }
+    // Roots are placed on the exact triangles: measured worst 0 m (f32 rounding).
+    assert!(worst < 1e-3, "root off the ground by {worst} m");
+}
+
+#[test]
+fn vegetation_and_orbit_errors_point_at_the_offending_key() {
+    let base = "[[material]]\nname = \"m\"\nalbedo = [0.5, 0.5, 0.5]\n\n";
+    let grass =
+        "[[object]]\nname = \"g\"\nprimitive = \"grass\"\nmaterial = \"m\"\nsize = [2, 2]\n";
+    let ball = "[[object]]\nname = \"s\"\nprimitive = \"sphere\"\nmaterial = \"m\"\nradius = 1\n";
+    // (object text, the offending text whose start the error must name, problem)
+    let cases = [
+        (
+            format!("{grass}density = 0\n"),
+            "0\n",
+            "density = 0 must be positive",
+        ),
+        (
+            format!("{grass}sway = 2\n"),
+            "2\n",
+            "sway = 2 is out of range [0, 1]",
+        ),
+        (
+            format!("{grass}cards = 9\n"),
+            "9\n",
+            "cards = 9 is out of range [1, 4]",
+        ),
+        (
+            format!("{grass}radius = 1\n"),
+            "1\n",
+            "`radius` does not apply to primitive grass",
+        ),
+        (
+            format!("{grass}density = 100000\n"),
+            "100000",
+            "clumps, more than 200000",
+        ),
+        (
+            format!("{grass}snap_to_ground = true\n"),
+            "true",
+            "is not over any height field",
+        ),
+        (
+            format!("{grass}orbit = {{ radius = 1, period = 2 }}\n"),
+            "{ radius",
+            "`orbit` does not apply to grass",
+        ),
+        (
+            "[[object]]\nname = \"b\"\nprimitive = \"bush\"\nmaterial = \"m\"\n".to_string(),
+            "\"b\"",
+            "primitive bush needs `radius` or `size`",
+        ),
+        (
+            format!("{ball}orbit = {{ radius = 1, period = 0 }}\n"),
+            "0 }",
+            "orbit period = 0 must be a non-zero",
+        ),
+        (
+            format!("{ball}orbit = {{ radius = -1, period = 3 }}\n"),
+            "-1",
+            "orbit radius = -1 must be positive",
+        ),
+        (
+            format!("{ball}orbit = {{ radius = 1, period = 3, speed = 2 }}\n"),
+            "speed",
+            "unknown field `speed`",
+        ),
+    ];
+    for (object, at, problem) in cases {
+        let text = format!("{base}{object}");
+        let offset = object.rfind(at).expect("marker") + base.len();
+        let line = text[..offset].matches('\n').count() + 1;
+        let column = offset - text[..offset].rfind('\n').map_or(0, |i| i + 1) + 1;
+        let place = format!("x.toml:{line}:{column}:");
+        let msg = match Scene::from_toml_str(&text, "x.toml", Path::new(".")) {
+            Ok(_) => panic!("accepted: {object}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            msg.starts_with(&place) && msg.contains(problem),
             "{msg}\n(wanted {place} {problem})"
         );
     }

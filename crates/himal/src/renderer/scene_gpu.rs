@@ -148,7 +148,9 @@ impl SceneGpu {
                 objects: init(
                     "scene.objects",
                     bytemuck::cast_slice(&objects),
-                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
                 ),
                 draws_opaque,
                 draws_vegetation,

@@ -30,7 +30,7 @@
 //!
 //! [[object]]
 //! name = "house"               # unique
-//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield
+//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield | grass | bush
 //! material = "plaster"
 //! position = [0, 0, 0]         # default origin
 //! rotation = [0, 30, 0]        # Euler degrees [x, y, z], R = Ry * Rx * Rz (roll, then pitch, then yaw)
@@ -39,6 +39,7 @@
 //! snap_to_ground = true        # put the lowest point on the height field (see below)
 //! rest_on = "other"            # or put the lowest point on top of an earlier object
 //! repeat = { count = 4, step = [2, 0, 0] }  # copies, `step` in the object's rotated frame
+//! orbit = { radius = 4.0, period = 12.0, phase = 0.0, turn = false }  # moves over time, see below
 //! ```
 //!
 //! Primitives (all centred on their local origin):
@@ -60,6 +61,25 @@
 //!   the base covers everything and later layers are painted over it in order.
 //!   `albedo_variation` (0..1) adds low-frequency brightness variation.
 //!   A height field may be moved, yawed and scaled but not pitched or rolled.
+//! - `grass`: a field of crossed, alpha-tested cards over `size = [x, z]`:
+//!   `density` (clumps per m², default 30; one clump per cell of a jittered
+//!   grid, inside a ragged rounded rectangle), `height` (mean card height, default 0.3 m, 0.75..1.25 per clump),
+//!   `width` (mean card width, default 0.15 m), `cards` (crossed cards per
+//!   clump, 1..=4, default 3), `seed` (default 0), `sway` (tip amplitude in
+//!   metres, [0, 1], default 0.04). The local origin is at root height.
+//! - `bush`: `cards` (default 80) square leaf cards of edge `width` (default
+//!   0.3 m) inside an ellipsoid of `radius` or full `size = [x, y, z]`;
+//!   `seed`, `sway` (default 0.03).
+//!   Vegetation is drawn double-sided with a procedural alpha pattern and
+//!   sway (`docs/techniques/vegetation.md`; card UVs in [`vegetation`]).
+//!
+//! Moving objects: `orbit = { radius, period, phase, turn }` moves the object
+//! on a horizontal circle around its placed position at constant speed:
+//! at time `t` (seconds, `FrameSettings::time_s`) it sits at
+//! `position + radius * (cos a, 0, -sin a)` with
+//! `a = phase + 360 * t / period` degrees (`phase` default 0; a negative
+//! `period` runs clockwise seen from above); `turn = true` also yaws it by `a`.
+//! See [`Orbit`]. Not for height fields and vegetation.
 //!
 //! Placement: `snap_to_ground = true` samples the height field under the
 //! object's footprint (its rotated, scaled bounds' bottom rectangle, 5 x 5
@@ -67,7 +87,10 @@
 //! on the *lowest* sample, plus `position.y` as an offset: nothing floats,
 //! and on the demo's gently rolling valley floor the sink at the uphill side
 //! is a few centimetres. `rest_on` does the same on the top of an earlier
-//! object's world bounds (roofs on walls, spheres on a plinth).
+//! object's world bounds (roofs on walls, spheres on a plinth). An orbiting
+//! object is snapped to the lowest ground under 16 points of its circle.
+//! Snapped `grass` instead puts every clump's root on the ground below it
+//! (plus `position.y`); unsnapped grass stands on its local y = 0.
 //!
 //! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
 //! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).

@@ -22,6 +22,8 @@ use super::{MaterialDesc, Mesh};
 const GRASS_UP_TILT: f32 = 1.5;
 /// Pattern seeds per card: `uv.x` integer part in 0..PATTERN_SEEDS.
 const PATTERN_SEEDS: u32 = 16;
+/// Border raggedness of grass fields (fraction of the half size).
+const EDGE_RAGGEDNESS: f32 = 0.3;
 /// Most clumps one grass object may hold.
 pub const MAX_CLUMPS: u32 = 200_000;
 
@@ -79,7 +81,8 @@ impl GrassParams {
 }
 
 /// A grass field: one clump per cell of a jittered grid (stratified, so
-/// no bald patches), each `cards` vertical quads crossed at random yaw.
+/// no bald patches) inside a ragged rounded rectangle (`EDGE_RAGGEDNESS`),
+/// each `cards` vertical quads crossed at random yaw.
 /// `root_y(x, z)` gives the local height of a clump's root (0 on a plane,
 /// the height field under it when snapped); `Err((x, z))` names a root it
 /// could not place.
@@ -98,6 +101,12 @@ pub fn grass(
             let mut rng = Rng::new(p.seed, (j * nx + i) as i32);
             let xz =
                 origin + (Vec2::new(i as f32, j as f32) + Vec2::new(rng.next(), rng.next())) * cell;
+            // Ragged, rounded border: keep clumps inside a superellipse whose
+            // radius varies by 30 % per clump, so patches are not rectangles.
+            let q = (xz / (0.5 * Vec2::from(p.size))).abs().powf(4.0);
+            if (q.x + q.y).powf(0.25) > 1.0 - EDGE_RAGGEDNESS * rng.next() {
+                continue;
+            }
             let y = root_y(xz.x, xz.y).ok_or(xz)?;
             let root = Vec3::new(xz.x, y, xz.y);
             let height = p.height * (0.75 + 0.5 * rng.next());
@@ -183,4 +192,92 @@ pub fn bush(name: String, p: &BushParams, m: &MaterialDesc) -> Mesh {
         b.triangle(i[0], i[2], i[3]);
     }
     b.finish(name)
+}
+
+// CPU twins of the vegetation functions in `shaders/scene.wgsl` (tests).
+
+/// `foliage_hash`: PCG output permutation.
+fn foliage_hash(n: u32) -> u32 {
+    let state = n.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+fn foliage_unit(h: u32, shift: u32) -> f32 {
+    ((h >> shift) & 255) as f32 / 255.0
+}
+
+fn split_seed(uv: [f32; 2]) -> (u32, f32) {
+    let seed = uv[0].floor().max(0.0);
+    (seed as u32, uv[0] - uv[0].floor())
+}
+
+/// `foliage_grass_alpha`: 1 inside one of the card's four tapered blades.
+pub fn grass_alpha(uv: [f32; 2]) -> f32 {
+    let (seed, u) = split_seed(uv);
+    let v = uv[1];
+    for i in 0..4u32 {
+        let h = foliage_hash(seed.wrapping_mul(16).wrapping_add(i));
+        let top = 0.55 + 0.45 * foliage_unit(h, 0);
+        let centre = (i as f32 + 0.25 + 0.5 * foliage_unit(h, 8)) / 4.0;
+        let lean = (foliage_unit(h, 16) - 0.5) * 0.25;
+        let f = v / top;
+        let half_width = 0.09 * (1.0 - f);
+        if f < 1.0 && (u - centre - lean * f * f).abs() < half_width {
+            return 1.0;
+        }
+    }
+    0.0
+}
+
+/// `foliage_leaves_alpha`: 1 inside one of the card's five elliptic leaves.
+pub fn leaves_alpha(uv: [f32; 2]) -> f32 {
+    let (seed, u) = split_seed(uv);
+    for i in 0..5u32 {
+        let h = foliage_hash(seed.wrapping_mul(16).wrapping_add(i).wrapping_add(7));
+        let c = Vec2::new(
+            0.22 + 0.56 * foliage_unit(h, 0),
+            0.22 + 0.56 * foliage_unit(h, 8),
+        );
+        let a = std::f32::consts::PI * foliage_unit(h, 16);
+        let d = Vec2::new(u, uv[1]) - c;
+        let q = Vec2::new(
+            d.x * a.cos() + d.y * a.sin(),
+            -d.x * a.sin() + d.y * a.cos(),
+        );
+        let size = Vec2::new(0.27, 0.13) * (0.8 + 0.4 * foliage_unit(h, 24));
+        let e = q / size;
+        if e.dot(e) < 1.0 {
+            return 1.0;
+        }
+    }
+    0.0
+}
+
+/// `foliage_alpha` for a pattern.
+pub fn alpha(pattern: super::AlphaPattern, uv: [f32; 2]) -> f32 {
+    match pattern {
+        super::AlphaPattern::Grass => grass_alpha(uv),
+        super::AlphaPattern::Leaves => leaves_alpha(uv),
+    }
+}
+
+/// Sway frequencies (rad/s) and weights of `foliage_sway`.
+pub const SWAY_OMEGA: [f32; 2] = [std::f32::consts::TAU * 0.4, std::f32::consts::TAU * 1.1];
+pub const SWAY_WEIGHTS: [f32; 2] = [0.7, 0.3];
+
+/// `foliage_sway`: horizontal displacement of a vertex resting at world
+/// `rest` (xz) with sway amplitude times weight `a`, at time `t`.
+pub fn sway_offset(a: f32, rest: Vec2, t: f32) -> Vec3 {
+    let [w1, w2] = SWAY_OMEGA;
+    let phase = rest.dot(Vec2::new(0.9, 0.6));
+    let x = 0.7 * (w1 * t + phase).sin() + 0.3 * (w2 * t + 1.7 * phase + 1.0).sin();
+    let z = 0.7 * (w1 * t + phase + 1.9).sin() + 0.3 * (w2 * t + 2.3 * phase).sin();
+    Vec3::new(x, 0.0, z) * a
+}
+
+/// Largest speed of one sway component per metre of `a` (m/s): the
+/// derivative bound `0.7 w1 + 0.3 w2`.
+pub fn sway_max_speed() -> f32 {
+    SWAY_WEIGHTS[0] * SWAY_OMEGA[0] + SWAY_WEIGHTS[1] * SWAY_OMEGA[1]
 }

@@ -85,7 +85,7 @@ fn foliage_leaves_alpha(uv: vec2f) -> f32 {
         let a = 3.14159265 * foliage_unit(h, 16u);
         let d = p - c;
         let q = vec2f(d.x * cos(a) + d.y * sin(a), -d.x * sin(a) + d.y * cos(a));
-        let size = vec2f(0.24, 0.11) * (0.8 + 0.4 * foliage_unit(h, 24u));
+        let size = vec2f(0.27, 0.13) * (0.8 + 0.4 * foliage_unit(h, 24u));
         let e = q / size;
         if (dot(e, e) < 1.0) {
             return 1.0;
