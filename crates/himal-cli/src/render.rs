@@ -218,6 +218,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for i in 0..args.frames {
         let mut cam = camera.clone();
         cam.position += cam.forward * (args.speed * i as f32);
+        // Animation (moving objects, sway) at 30 frames per second of sequence time.
+        settings.time_s = i as f32 / 30.0;
         let frame = renderer.render(&cam, &settings)?;
         let path = if args.frames > 1 {
             sequence_path(&args.out, i)
