@@ -288,8 +288,9 @@ fn moving_sphere_motion_vectors_match_its_projected_displacement() {
 /// The grass patch with its sway turned off (exact card geometry) and `density`.
 fn still_grass(density: &str, camera: &str) -> Scene {
     let text = GRASS_PATCH
-        .replace("sway = 0.04", "sway = 0.0")
+        .replace("sway = 0.02", "sway = 0.0")
         .replace("density = 60.0", &format!("density = {density}"));
+
     load(&format!("{text}\n{camera}"), "grass_patch.toml")
 }
 
