@@ -50,3 +50,26 @@ pub fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
         write_mask: wgpu::ColorWrites::ALL,
     })
 }
+
+/// Pipeline of a debug-view shader (`VIEW` selects the buffer, `DISPLAY`
+/// viewable vs raw): float targets get raw values, others display values.
+pub fn view_pipeline(
+    ctx: &crate::gpu::GpuContext,
+    program: &crate::gpu::pipeline::Program,
+    label: &str,
+    view_id: u32,
+    format: wgpu::TextureFormat,
+) -> Result<wgpu::RenderPipeline, crate::gpu::GpuError> {
+    let display = !matches!(
+        format,
+        wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
+    );
+    let targets = [target(format)];
+    let constants = [
+        ("VIEW", view_id as f64),
+        ("DISPLAY", if display { 1.0 } else { 0.0 }),
+    ];
+    let mut spec = crate::gpu::pipeline::RenderSpec::fullscreen(label, &targets);
+    spec.constants = &constants;
+    program.render_pipeline(ctx, &spec)
+}

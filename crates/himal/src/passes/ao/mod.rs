@@ -21,7 +21,7 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, PassContext, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
+use crate::passes::common::{draw_fullscreen, target, view_pipeline};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -233,18 +233,7 @@ impl AoPass {
         if self.views.contains_key(&(view, format)) {
             return Ok(());
         }
-        let display = !matches!(
-            format,
-            wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
-        );
-        let targets = [target(format)];
-        let constants = [
-            ("VIEW", view as u32 as f64),
-            ("DISPLAY", if display { 1.0 } else { 0.0 }),
-        ];
-        let mut spec = RenderSpec::fullscreen("ao.view", &targets);
-        spec.constants = &constants;
-        let pipeline = self.view_program.render_pipeline(ctx, &spec)?;
+        let pipeline = view_pipeline(ctx, &self.view_program, "ao.view", view as u32, format)?;
         self.views.insert((view, format), pipeline);
         Ok(())
     }

@@ -4,10 +4,10 @@
 use std::collections::HashMap;
 
 use crate::frame::FrameErrors;
-use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
+use crate::passes::common::{draw_fullscreen, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -53,18 +53,7 @@ impl DebugPass {
         if self.pipelines.contains_key(&(view, format)) {
             return Ok(());
         }
-        let display = !matches!(
-            format,
-            wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
-        );
-        let targets = [target(format)];
-        let constants = [
-            ("VIEW", view as u32 as f64),
-            ("DISPLAY", if display { 1.0 } else { 0.0 }),
-        ];
-        let mut spec = RenderSpec::fullscreen("debug.view", &targets);
-        spec.constants = &constants;
-        let pipeline = self.program.render_pipeline(ctx, &spec)?;
+        let pipeline = view_pipeline(ctx, &self.program, "debug.view", view as u32, format)?;
         self.pipelines.insert((view, format), pipeline);
         Ok(())
     }
