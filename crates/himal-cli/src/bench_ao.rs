@@ -87,6 +87,12 @@ pub fn run(
         "  STF adds {:+.1}% to the AO total (talk: +16%, 2.5 -> 2.9 ms)",
         100.0 * stf
     );
+    // The filter's own steps, free of the noise in the passes it leaves alone.
+    let own = get(1, "ao.blur_y_stf") - get(0, "ao.blur_y") + get(1, "ao.stability");
+    println!(
+        "  STF's own steps (blur_y_stf - blur_y + stability): {own:.3} ms, {:+.1}% of the HBAO total",
+        100.0 * own / totals[0].0
+    );
     let blur_x = 1.0 - get(1, "ao.blur_x") / get(2, "ao.blur_x");
     println!(
         "  adaptive vs brute-force blur (radius {}): BlurX {:.1}% faster (talk: 29%), AO total {:.1}% faster (talk: blur total 13%)",

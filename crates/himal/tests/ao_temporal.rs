@@ -121,11 +121,109 @@ fn selective_filter_removes_grass_flicker() {
         grass.len(),
         std_with / std_without
     );
-    // Measured 2026-11-22 (lavapipe): 0.0226 without, 0.0046 with (0.20x) on 907 grass
-    // pixels; the issue asks for at most 1/3. At the scene camera's own 4 m the
+    if let Some(dir) = std::env::var_os("HIMAL_PLOT_DIR") {
+        let path = std::path::Path::new(&dir).join("O2-flicker.svg");
+        std::fs::write(&path, flicker_plot(&without, &with, &grass)).expect("write the plot");
+        eprintln!("wrote {}", path.display());
+    }
+    // Measured 2026-11-22 (lavapipe): 0.0217 without, 0.0050 with (0.23x) on 652 grass
+    // pixels (2 cm sway); the issue asks for at most 1/3. At the scene camera's own 4 m the
     // dense patch reads as continuous with L = 0.1 m (3 cm texels), so half its
     // pixels are classified stable and left unfiltered: 0.37x there.
     assert!(std_with <= std_without / 3.0, "{std_with} vs {std_without}");
+}
+
+/// Per frame: mean |AO_t - AO_(t-1)| over `pixels`.
+fn frame_to_frame_change(frames: &[Vec<[f32; 4]>], pixels: &[usize]) -> Vec<f32> {
+    frames
+        .windows(2)
+        .map(|w| {
+            let sum: f32 = pixels
+                .iter()
+                .map(|&i| (w[1][i][0] - w[0][i][0]).abs())
+                .sum();
+            sum / pixels.len().max(1) as f32
+        })
+        .collect()
+}
+
+/// SVG of the flicker over frames (docs/images/O2-flicker.svg): the mean
+/// frame-to-frame AO change on grass pixels, and the AO of one grass pixel
+/// (the one whose unfiltered flicker is the median), without and with STF.
+fn flicker_plot(without: &[Vec<[f32; 4]>], with: &[Vec<[f32; 4]>], grass: &[usize]) -> String {
+    let mut by_flicker: Vec<(f32, usize)> = grass
+        .iter()
+        .map(|&i| (mean_temporal_std(without, &[i]), i))
+        .collect();
+    by_flicker.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let pixel = by_flicker[by_flicker.len() / 2].1;
+    let trace = |frames: &[Vec<[f32; 4]>]| frames.iter().map(|f| f[pixel][0]).collect::<Vec<_>>();
+    let (w, h, pad) = (640.0, 220.0, 40.0);
+    let n = without.len() as f32;
+    let line = |values: &[f32], first: usize, lo: f32, hi: f32, colour: &str, top: f32| {
+        let points: Vec<String> = values
+            .iter()
+            .enumerate()
+            .map(|(k, v)| {
+                let x = pad + (first + k) as f32 / (n - 1.0) * (w - 2.0 * pad);
+                let y = top + h - pad - (v - lo) / (hi - lo) * (h - 2.0 * pad);
+                format!("{x:.1},{y:.1}")
+            })
+            .collect();
+        format!(
+            "<polyline fill='none' stroke='{colour}' stroke-width='2' points='{}'/>\n",
+            points.join(" ")
+        )
+    };
+    let change = [
+        frame_to_frame_change(without, grass),
+        frame_to_frame_change(with, grass),
+    ];
+    let change_max = change.iter().flatten().fold(1e-6f32, |m, &v| m.max(v));
+    let traces = [trace(without), trace(with)];
+    let (ao_lo, ao_hi) = traces
+        .iter()
+        .flatten()
+        .fold((1.0f32, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let mut svg = format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{}' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n",
+        2.0 * h
+    );
+    for (top, title) in [
+        (
+            0.0,
+            format!(
+                "mean |AO(t) - AO(t-1)| on {} grass pixels (0 .. {change_max:.3})",
+                grass.len()
+            ),
+        ),
+        (
+            h,
+            format!("AO of one grass pixel ({ao_lo:.2} .. {ao_hi:.2})"),
+        ),
+    ] {
+        svg += &format!(
+            "<rect x='{pad}' y='{}' width='{}' height='{}' fill='none' stroke='#999'/>\n<text x='{pad}' y='{}'>{title}</text>\n",
+            top + pad,
+            w - 2.0 * pad,
+            h - 2.0 * pad,
+            top + pad - 6.0
+        );
+    }
+    svg += &line(&change[0], 1, 0.0, change_max, "#d62728", 0.0);
+    svg += &line(&change[1], 1, 0.0, change_max, "#1f77b4", 0.0);
+    svg += &line(&traces[0], 0, ao_lo, ao_hi, "#d62728", h);
+    svg += &line(&traces[1], 0, ao_lo, ao_hi, "#1f77b4", h);
+    svg += &format!(
+        "<text x='{pad}' y='{}' fill='#d62728'>HBAO + blur (--ao hbao)</text><text x='{}' y='{}' fill='#1f77b4'>with the selective temporal filter (--ao hbao+stf)</text><text x='{}' y='{}'>frame 0 .. {}</text>\n</svg>\n",
+        2.0 * h - 12.0,
+        pad + 190.0,
+        2.0 * h - 12.0,
+        w - pad - 80.0,
+        2.0 * h - 12.0,
+        without.len() - 1
+    );
+    svg
 }
 
 /// Centre of the moving sphere at time t (the scene's orbit: radius 2, period 12 s).
