@@ -18,7 +18,7 @@ use crate::graph::FrameGraph;
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::lighting::{LightingInputs, LightingPass};
+use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
     AdaptPass, BloomInputs, BloomPass, LuminanceBuffers, LuminancePass, PostFrame, PostInputs,
     TonemapPass,
@@ -86,6 +86,8 @@ pub struct FrameInputs<'a> {
     pub ao: Option<(&'a AoSettings, &'a AoHistory)>,
     /// 1x1 white texture bound in place of AO when it is off.
     pub ao_placeholder: &'a wgpu::Texture,
+    /// Lighting permutation (prepared by the renderer).
+    pub lighting_key: LightingKey,
     pub errors: &'a FrameErrors,
 }
 
@@ -104,6 +106,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         shadow_placeholder,
         ao,
         ao_placeholder,
+        lighting_key,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
@@ -132,6 +135,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             Some(t) => t.ao,
             None => g.import_texture("ao.off", ao_placeholder),
         },
+        key: lighting_key,
     };
     let hdr = passes
         .lighting

@@ -18,7 +18,7 @@ use crate::math::sh::Sh9Gpu;
 use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView};
 use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::lighting::LightingPass;
+use crate::passes::lighting::{LightingKey, LightingPass};
 use crate::passes::post::{
     AdaptPass, AdaptationSettings, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass,
     TonemapPass,
@@ -198,8 +198,18 @@ impl Resources {
                 (_, Some(h)) => Some((&settings.ao, h)),
             },
             ao_placeholder: &self.ao_placeholder,
+            lighting_key: lighting_key(settings),
             errors,
         })
+    }
+}
+
+/// The lighting permutation a frame with `settings` draws with.
+fn lighting_key(settings: &FrameSettings) -> LightingKey {
+    LightingKey {
+        shadows: settings.shadow_resolution > 0,
+        fog: settings.aerial_extinction > 0.0,
+        ssao: settings.ao.mode != AoMode::Off,
     }
 }
 
@@ -348,6 +358,9 @@ impl Renderer {
             passes.tonemap.prepare(ctx, key)?;
         }
         passes.bloom.prepare(ctx, BloomSettings::MAX_PASSES)?;
+        for key in LightingKey::all() {
+            passes.lighting.prepare(ctx, key)?;
+        }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {
                 match name.parse()? {
@@ -461,6 +474,7 @@ impl Renderer {
             .tonemap
             .prepare(&self.ctx, post_state::tonemap_key(settings))?;
         passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
+        passes.lighting.prepare(&self.ctx, lighting_key(settings))?;
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
         }

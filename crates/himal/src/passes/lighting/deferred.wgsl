@@ -29,6 +29,11 @@ struct Lighting {
     shadow: vec4f,
 }
 
+// E1 permutations (passes/lighting/mod.rs LightingKey): constant branches.
+override SHADOWS: bool = true;
+override FOG: bool = true;
+override SSAO: bool = true;
+
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> lighting: Lighting;
 @group(0) @binding(2) var<uniform> sky: SkyParams;
@@ -76,15 +81,20 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let dist = length(to_camera);
     let v = to_camera / dist;
     var vis = 1.0;
-    if (lighting.shadow.x > 0.5) {
+    if (SHADOWS) {
         let offset_p = p + tbn[2] * lighting.shadow.y;
         vis = sun_shadow_visibility(shadow_map, shadow_sampler, lighting.light_view_proj, offset_p, lighting.shadow.z);
     }
     // Screen-space AO darkens the ambient terms only, like the material's baked AO (O1).
-    let ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
+    var ssao = 1.0;
+    if (SSAO) {
+        ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
+    }
     var c = shade(s, m.x, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
-    let transmittance = exp(-lighting.fog.x * dist);
-    let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
-    c = c * transmittance + inscatter * (1.0 - transmittance);
+    if (FOG) {
+        let transmittance = exp(-lighting.fog.x * dist);
+        let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
+        c = c * transmittance + inscatter * (1.0 - transmittance);
+    }
     return vec4f(c, 1.0);
 }

@@ -1,8 +1,11 @@
 //! Deferred lighting (TECHNIQUES M1, M2, L1 foundation): sun with the
 //! anisotropic GGX BRDF, SH9 sky irradiance, split-sum ambient specular,
-//! aerial perspective. CPU twin: [`reference::shade`].
+//! aerial perspective. CPU twin: [`reference::shade`]. Permutations (E1):
+//! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`).
 
 pub mod reference;
+
+use std::collections::HashMap;
 
 use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
@@ -12,6 +15,48 @@ use crate::passes::common::{draw_fullscreen, target};
 use crate::passes::gbuffer::GBuffer;
 
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The lighting permutation, Far Cry's "environment" axis: which light
+/// terms the shader keeps (static branches on override constants).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LightingKey {
+    /// Sun shadow lookup.
+    pub shadows: bool,
+    /// Aerial perspective.
+    pub fog: bool,
+    /// Screen-space AO fetch.
+    pub ssao: bool,
+}
+
+impl Default for LightingKey {
+    fn default() -> Self {
+        Self {
+            shadows: true,
+            fog: true,
+            ssao: true,
+        }
+    }
+}
+
+impl LightingKey {
+    /// Every permutation (for pre-warming).
+    pub fn all() -> impl Iterator<Item = LightingKey> {
+        (0..8u32).map(|bits| LightingKey {
+            shadows: bits & 1 != 0,
+            fog: bits & 2 != 0,
+            ssao: bits & 4 != 0,
+        })
+    }
+
+    fn constants(self) -> [(&'static str, f64); 3] {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
+        [
+            ("SHADOWS", b(self.shadows)),
+            ("FOG", b(self.fog)),
+            ("SSAO", b(self.ssao)),
+        ]
+    }
+}
 
 /// Uniform buffers the lighting pass reads (owned by the renderer).
 pub struct LightingInputs<'a> {
@@ -23,20 +68,37 @@ pub struct LightingInputs<'a> {
     pub shadow_sampler: &'a wgpu::Sampler,
     /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
     pub ao: TextureHandle,
+    /// The permutation to draw with (prepared beforehand).
+    pub key: LightingKey,
 }
 
 pub struct LightingPass {
     program: Program,
-    pipeline: wgpu::RenderPipeline,
+    pipelines: HashMap<LightingKey, wgpu::RenderPipeline>,
 }
 
 impl LightingPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, "passes/lighting/deferred.wgsl")?;
+        let mut pass = Self {
+            program: Program::new(ctx, "passes/lighting/deferred.wgsl")?,
+            pipelines: HashMap::new(),
+        };
+        pass.prepare(ctx, LightingKey::default())?;
+        Ok(pass)
+    }
+
+    /// Fetches the pipeline of permutation `key` (memory, disk or compile).
+    pub fn prepare(&mut self, ctx: &GpuContext, key: LightingKey) -> Result<(), GpuError> {
+        if self.pipelines.contains_key(&key) {
+            return Ok(());
+        }
         let targets = [target(HDR_FORMAT)];
-        let pipeline =
-            program.render_pipeline(ctx, &RenderSpec::fullscreen("lighting.deferred", &targets))?;
-        Ok(Self { program, pipeline })
+        let mut spec = RenderSpec::fullscreen("lighting.deferred", &targets);
+        let constants = key.constants();
+        spec.constants = &constants;
+        let pipeline = self.program.render_pipeline(ctx, &spec)?;
+        self.pipelines.insert(key, pipeline);
+        Ok(())
     }
 
     /// Shades the G-buffer into a new HDR target (sky pixels stay black).
@@ -61,7 +123,15 @@ impl LightingPass {
             pass.read(t, TextureAccess::Sampled);
         }
         let hdr = pass.write(hdr, TextureAccess::ColorAttachment);
+        let pipeline = self.pipelines.get(&inputs.key);
         pass.execute(move |ctx| {
+            let Some(pipeline) = pipeline else {
+                errors.record::<()>(Err(GpuError::Other(format!(
+                    "lighting permutation {:?} was not prepared",
+                    inputs.key
+                ))));
+                return;
+            };
             let bind_group = self.program.bind(
                 ctx.device,
                 0,
@@ -103,7 +173,7 @@ impl LightingPass {
                 let target = ctx.view(hdr);
                 draw_fullscreen(
                     ctx,
-                    &self.pipeline,
+                    pipeline,
                     &bg,
                     target,
                     wgpu::LoadOp::Clear(wgpu::Color::BLACK),
