@@ -34,6 +34,10 @@ pub struct BenchArgs {
     pub compare_ao: bool,
     #[command(flatten)]
     pub post: PostArgs,
+    /// Capture and filter the environment cube every frame (normally only
+    /// when the sky changes), to time `envmap.*`.
+    #[arg(long)]
+    pub envmap_every_frame: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -46,7 +50,7 @@ pub fn group(pass: &str) -> &'static str {
     match pass.split('.').next().unwrap_or("") {
         "shadows" => "shadows",
         "gbuffer" => "G-buffer",
-        "lighting" | "sky" | "ao" => "lighting",
+        "lighting" | "sky" | "ao" | "envmap" => "lighting",
         "blended" => "blended",
         "post" => "post",
         "aa" => "anti-aliasing",
@@ -77,6 +81,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
     args.post.apply(&mut settings)?;
+    settings.envmap_every_frame = args.envmap_every_frame;
     settings.ao = args.ao.settings()?;
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);

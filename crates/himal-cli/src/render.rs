@@ -83,6 +83,10 @@ pub struct PostArgs {
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
+    /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
+    /// irradiance along the reflection vector.
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub env_specular: String,
 }
 
 impl PostArgs {
@@ -120,6 +124,11 @@ impl PostArgs {
             settings.bloom.passes = n;
         }
         settings.white_point = self.white_point;
+        settings.environment_specular = match self.env_specular.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--env-specular {other}: expected on or off"),
+        };
         Ok(())
     }
 }

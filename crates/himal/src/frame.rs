@@ -1,7 +1,8 @@
 //! The whole frame, top to bottom, in one place to read.
 //!
 //! ```text
-//! shadows.sun ──────────────────────────────┐
+//! envmap.capture ─> envmap.mips ─> envmap.filter ─┐   (only when the sky changed)
+//! shadows.sun ──────────────────────────────┐      │
 //! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ─┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
@@ -17,6 +18,7 @@ use crate::gpu::GpuError;
 use crate::graph::FrameGraph;
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
+use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
@@ -59,6 +61,7 @@ pub struct Passes {
     pub shadows: SunShadowPass,
     pub gbuffer: GBufferPass,
     pub ao: AoPass,
+    pub envmap: EnvMapPass,
     pub lighting: LightingPass,
     pub sky: SkyPass,
     pub luminance: LuminancePass,
@@ -124,6 +127,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         };
         passes.ao.add(&mut g, size, inputs, errors)
     });
+    let env = passes.envmap.add(&mut g, sky, errors);
     let shadow_sampler = &passes.shadows.sampler;
     let lighting_inputs = LightingInputs {
         view,
@@ -135,6 +139,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             Some(t) => t.ao,
             None => g.import_texture("ao.off", ao_placeholder),
         },
+        envmap: &passes.envmap,
+        env,
         key: lighting_key,
     };
     let hdr = passes

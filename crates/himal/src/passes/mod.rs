@@ -4,6 +4,7 @@
 pub mod ao;
 pub mod common;
 pub mod debug;
+pub mod envmap;
 pub mod gbuffer;
 pub mod lighting;
 pub mod post;

@@ -17,6 +17,7 @@ use crate::graph::{PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
 use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView};
 use crate::passes::debug::{DebugPass, DebugView};
+use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingKey, LightingPass};
 use crate::passes::post::{
@@ -124,6 +125,12 @@ pub struct FrameSettings {
     pub shadow_resolution: u32,
     /// Screen-space AO (TECHNIQUES O1-O3).
     pub ao: AoSettings,
+    /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
+    /// along the reflection vector.
+    pub environment_specular: bool,
+    /// Re-capture and re-filter the environment cube every frame (bench rows;
+    /// otherwise only when the sky changes).
+    pub envmap_every_frame: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -145,6 +152,8 @@ impl FrameSettings {
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
             ao: AoSettings::default(),
             time_s: 0.0,
+            environment_specular: true,
+            envmap_every_frame: false,
         }
     }
 }
@@ -210,6 +219,7 @@ fn lighting_key(settings: &FrameSettings) -> LightingKey {
         shadows: settings.shadow_resolution > 0,
         fog: settings.aerial_extinction > 0.0,
         ssao: settings.ao.mode != AoMode::Off,
+        env_specular: settings.environment_specular,
     }
 }
 
@@ -235,6 +245,7 @@ impl Renderer {
             shadows: SunShadowPass::new(&ctx)?,
             gbuffer: GBufferPass::new(&ctx)?,
             ao: AoPass::new(&ctx)?,
+            envmap: EnvMapPass::new(&ctx, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
@@ -315,6 +326,11 @@ impl Renderer {
             frame_index: 0,
             sky_light: None,
         })
+    }
+
+    /// The environment cube and DFG table (L4), for tests and tools.
+    pub fn envmap(&self) -> &EnvMapPass {
+        &self.res.passes.envmap
     }
 
     pub fn context(&self) -> &GpuContext {
@@ -433,6 +449,7 @@ impl Renderer {
             bytemuck::bytes_of(&light.sky.gpu_params()),
         );
         self.sky_light = Some((key, light));
+        self.res.passes.envmap.dirty = true;
     }
 
     /// The compiled pass list for these settings (`himal render --graph`).
@@ -511,6 +528,9 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun);
+        if settings.envmap_every_frame {
+            self.res.passes.envmap.dirty = true;
+        }
         self.res.post.update(&self.ctx.queue, settings);
         let aspect = size.0 as f32 / size.1 as f32;
         let (view, proj) = (camera.view(), camera.projection(aspect));
@@ -605,6 +625,7 @@ impl Renderer {
         self.prev_view_proj = Some(view_proj);
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
+        self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
         if let Some(h) = &mut self.res.ao_history {
             // Only the filter writes the history; any other mode leaves it stale.

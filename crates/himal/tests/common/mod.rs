@@ -28,6 +28,7 @@ pub fn lighting_params(scene: &Scene) -> LightingParams {
         sun_direction: sky.sun_direction,
         sun_illuminance: sky.sun_illuminance,
         sky_irradiance: sky.irradiance_sh,
+        environment: None,
     }
 }
 
@@ -43,4 +44,43 @@ pub fn pixel_ray(camera: &Camera, size: (u32, u32), x: u32, y: u32) -> Vec3 {
     );
     let p = inv * ndc;
     (p.truncate() / p.w - camera.position).normalize()
+}
+
+/// The renderer's filtered environment cube and DFG table read back, for
+/// the lighting twin's `ENV_SPECULAR` path.
+pub fn environment_specular(
+    r: &Renderer,
+) -> himal::passes::lighting::reference::EnvironmentSpecular {
+    use himal::passes::envmap::reference::CubeMip;
+    let env = r.envmap();
+    let ctx = r.context();
+    let read = |texture: &wgpu::Texture, mip: u32, layer: u32| {
+        himal::gpu::read_texture(ctx, texture, mip, layer)
+            .expect("read back")
+            .to_rgba_f32()
+            .expect("float texels")
+    };
+    let filtered = (0..env.filtered().mip_level_count())
+        .map(|mip| {
+            let faces: [Vec<Vec3>; 6] = std::array::from_fn(|face| {
+                read(env.filtered(), mip, face as u32)
+                    .iter()
+                    .map(|t| Vec3::new(t[0], t[1], t[2]))
+                    .collect()
+            });
+            CubeMip {
+                size: (env.size >> mip) as usize,
+                faces,
+            }
+        })
+        .collect();
+    let dfg = read(&env.dfg, 0, 0)
+        .iter()
+        .map(|t| glam::Vec2::new(t[0], t[1]))
+        .collect();
+    himal::passes::lighting::reference::EnvironmentSpecular {
+        filtered,
+        dfg,
+        dfg_size: env.dfg.width() as usize,
+    }
 }

@@ -1,7 +1,8 @@
 // lighting.deferred: full-screen deferred shading of the G-buffer (TECHNIQUES M1, M2, L1 foundation).
 // Sun: anisotropic GGX + height-correlated Smith + Schlick, Lambert diffuse (brdf.wgsl).
-// Sky: third-order SH irradiance; ambient specular uses the split-sum fit with SH
-// evaluated along the reflection vector (stand-in until the L3/L4 probes land).
+// Sky: third-order SH irradiance; ambient specular from the GGX-filtered sky cube
+// along the M4 reflection vector times the GPU DFG table (passes/envmap, L4);
+// with ENV_SPECULAR off, the split-sum fit with SH along the reflection vector.
 // Sun shadow: shaders/shadow.wgsl (S1 foundation), normal offset + depth bias.
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
@@ -13,6 +14,7 @@
 #import sh
 #import sky
 #import shadow
+#import envmap
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -33,6 +35,7 @@ struct Lighting {
 override SHADOWS: bool = true;
 override FOG: bool = true;
 override SSAO: bool = true;
+override ENV_SPECULAR: bool = true;
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> lighting: Lighting;
@@ -44,18 +47,30 @@ override SSAO: bool = true;
 @group(0) @binding(7) var shadow_map: texture_depth_2d;
 @group(0) @binding(8) var shadow_sampler: sampler_comparison;
 @group(0) @binding(9) var ao: texture_2d<f32>;
+@group(0) @binding(10) var env_specular: texture_cube<f32>;
+@group(0) @binding(11) var env_sampler: sampler;
+@group(0) @binding(12) var dfg_lut: texture_2d<f32>;
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
-fn shade(s: Surface, glossiness: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32) -> vec3f {
+fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32) -> vec3f {
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
-    let r = reflect(-v, n);
     let e_n = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
-    let e_r = max(sh9_eval(lighting.sky_irradiance, r), vec3f(0.0));
-    let dfg = env_brdf_approx(s.f0, perceptual_roughness_from_glossiness(glossiness), n_o_v);
-    c += (s.diffuse_albedo * e_n + dfg * e_r) * (ao / PI);
+    let roughness = perceptual_roughness_from_glossiness(glossiness);
+    if (ENV_SPECULAR) {
+        // Radiance (kcd/m^2 = klux/sr): no 1/pi, unlike the irradiance terms.
+        let r = reflect(-v, m4_reflection_normal(n, b, v, anisotropy));
+        let lod = roughness * f32(textureNumLevels(env_specular) - 1u);
+        let prefiltered = textureSampleLevel(env_specular, env_sampler, r, lod).rgb;
+        let ab = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v, roughness), 0.0).xy;
+        c += prefiltered * (s.f0 * ab.x + ab.y) * ao;
+    } else {
+        let e_r = max(sh9_eval(lighting.sky_irradiance, reflect(-v, n)), vec3f(0.0));
+        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao / PI);
+    }
+    c += s.diffuse_albedo * e_n * (ao / PI);
     return c;
 }
 
@@ -90,7 +105,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (SSAO) {
         ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
     }
-    var c = shade(s, m.x, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
+    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);
         let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;

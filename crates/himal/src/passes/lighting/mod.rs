@@ -1,7 +1,7 @@
 //! Deferred lighting (TECHNIQUES M1, M2, L1 foundation): sun with the
 //! anisotropic GGX BRDF, SH9 sky irradiance, split-sum ambient specular,
 //! aerial perspective. CPU twin: [`reference::shade`]. Permutations (E1):
-//! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`).
+//! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`, `ENV_SPECULAR`).
 
 pub mod reference;
 
@@ -12,6 +12,7 @@ use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::{draw_fullscreen, target};
+use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBuffer;
 
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -26,6 +27,9 @@ pub struct LightingKey {
     pub fog: bool,
     /// Screen-space AO fetch.
     pub ssao: bool,
+    /// Ambient specular from the filtered environment cube and the DFG
+    /// table (L4, M4); off: SH along the reflection vector and the fitted DFG.
+    pub env_specular: bool,
 }
 
 impl Default for LightingKey {
@@ -34,6 +38,7 @@ impl Default for LightingKey {
             shadows: true,
             fog: true,
             ssao: true,
+            env_specular: true,
         }
     }
 }
@@ -41,19 +46,21 @@ impl Default for LightingKey {
 impl LightingKey {
     /// Every permutation (for pre-warming).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..8u32).map(|bits| LightingKey {
+        (0..16u32).map(|bits| LightingKey {
             shadows: bits & 1 != 0,
             fog: bits & 2 != 0,
             ssao: bits & 4 != 0,
+            env_specular: bits & 8 != 0,
         })
     }
 
-    fn constants(self) -> [(&'static str, f64); 3] {
+    fn constants(self) -> [(&'static str, f64); 4] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
             ("FOG", b(self.fog)),
             ("SSAO", b(self.ssao)),
+            ("ENV_SPECULAR", b(self.env_specular)),
         ]
     }
 }
@@ -68,6 +75,10 @@ pub struct LightingInputs<'a> {
     pub shadow_sampler: &'a wgpu::Sampler,
     /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
     pub ao: TextureHandle,
+    /// Filtered environment cube and DFG table (L4); `env` orders the read
+    /// after this frame's filtering, if any.
+    pub envmap: &'a EnvMapPass,
+    pub env: TextureHandle,
     /// The permutation to draw with (prepared beforehand).
     pub key: LightingKey,
 }
@@ -119,6 +130,7 @@ impl LightingPass {
             gbuffer.depth,
             inputs.shadow_map,
             inputs.ao,
+            inputs.env,
         ] {
             pass.read(t, TextureAccess::Sampled);
         }
@@ -166,6 +178,18 @@ impl LightingPass {
                     (
                         "ao",
                         wgpu::BindingResource::TextureView(ctx.view(inputs.ao)),
+                    ),
+                    (
+                        "env_specular",
+                        wgpu::BindingResource::TextureView(&inputs.envmap.filtered_cube),
+                    ),
+                    (
+                        "env_sampler",
+                        wgpu::BindingResource::Sampler(&inputs.envmap.sampler),
+                    ),
+                    (
+                        "dfg_lut",
+                        wgpu::BindingResource::TextureView(&inputs.envmap.dfg_view),
                     ),
                 ],
             );

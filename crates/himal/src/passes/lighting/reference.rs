@@ -1,13 +1,43 @@
 //! CPU twin of `deferred.wgsl`: the same shading, term by term, for
 //! GPU-versus-CPU tests.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::math::brdf::{
     Material, brdf_cos, env_brdf_approx, perceptual_roughness_from_glossiness,
     surface_from_material,
 };
 use crate::math::sh::Sh9Rgb;
+use crate::passes::envmap::reference::{CubeMip, m4_reflection_normal, sample_lod};
+
+/// The filtered environment cube and the DFG table (L4), as the lighting
+/// pass samples them.
+#[derive(Clone, Debug)]
+pub struct EnvironmentSpecular {
+    /// Filtered mips; mip m holds perceptual roughness m / (len - 1).
+    pub filtered: Vec<CubeMip>,
+    /// DFG table (A, B), `dfg_size`² texels: x = n.v, y = roughness.
+    pub dfg: Vec<Vec2>,
+    pub dfg_size: usize,
+}
+
+impl EnvironmentSpecular {
+    /// Bilinear (A, B) at texel-centre coordinates, clamped like the GPU sampler.
+    pub fn dfg_at(&self, n_o_v: f32, roughness: f32) -> Vec2 {
+        let n = self.dfg_size;
+        let p = Vec2::new(n_o_v, roughness) * n as f32 - 0.5;
+        let p0 = p.floor();
+        let f = p - p0;
+        let at = |x: f32, y: f32| {
+            let x = (x.max(0.0) as usize).min(n - 1);
+            let y = (y.max(0.0) as usize).min(n - 1);
+            self.dfg[y * n + x]
+        };
+        let top = at(p0.x, p0.y).lerp(at(p0.x + 1.0, p0.y), f.x);
+        let bottom = at(p0.x, p0.y + 1.0).lerp(at(p0.x + 1.0, p0.y + 1.0), f.x);
+        top.lerp(bottom, f.y)
+    }
+}
 
 /// What `Lighting` holds on the GPU.
 #[derive(Clone, Debug)]
@@ -15,6 +45,9 @@ pub struct LightingParams {
     pub sun_direction: Vec3,
     pub sun_illuminance: Vec3,
     pub sky_irradiance: Sh9Rgb,
+    /// Ambient specular from the filtered cube (`ENV_SPECULAR`); `None`: SH
+    /// along the reflection vector with the fitted DFG.
+    pub environment: Option<EnvironmentSpecular>,
 }
 
 /// Outgoing radiance toward `v` of a point with material `m`, material AO
@@ -35,14 +68,19 @@ pub fn shade(
     let l = light.sun_direction;
     let mut c = brdf_cos(&s, t, b, n, v, l) * light.sun_illuminance * sun_visibility;
     let n_o_v = n.dot(v).max(1e-4);
-    let r = (2.0 * n.dot(v)) * n - v;
     let e_n = light.sky_irradiance.eval(n).max(Vec3::ZERO);
-    let e_r = light.sky_irradiance.eval(r).max(Vec3::ZERO);
-    let dfg = env_brdf_approx(
-        s.f0,
-        perceptual_roughness_from_glossiness(m.glossiness),
-        n_o_v,
-    );
-    c += (s.diffuse_albedo * e_n + dfg * e_r) * (ao / std::f32::consts::PI);
+    let roughness = perceptual_roughness_from_glossiness(m.glossiness);
+    if let Some(env) = &light.environment {
+        let n_r = m4_reflection_normal(n, b, v, m.anisotropy);
+        let r = (2.0 * n_r.dot(v)) * n_r - v;
+        let lod = roughness * (env.filtered.len() - 1) as f32;
+        let ab = env.dfg_at(n_o_v, roughness);
+        c += sample_lod(&env.filtered, r, lod) * (s.f0 * ab.x + Vec3::splat(ab.y)) * ao;
+    } else {
+        let r = (2.0 * n.dot(v)) * n - v;
+        let e_r = light.sky_irradiance.eval(r).max(Vec3::ZERO);
+        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao / std::f32::consts::PI);
+    }
+    c += s.diffuse_albedo * e_n * (ao / std::f32::consts::PI);
     c
 }

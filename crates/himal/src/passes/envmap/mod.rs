@@ -1,0 +1,401 @@
+//! Environment map for ambient specular (TECHNIQUES L4, M4): the sky captured
+//! into a cube, its box-filtered mip chain, GGX filtered importance sampling
+//! per roughness mip, and the split-sum DFG table computed on the GPU. The
+//! lighting pass reads the filtered cube along the M4 reflection vector.
+//! Re-run whenever the sky changes (time of day), not every frame.
+//! Math and figures: `docs/techniques/L4.md`; CPU twin: [`reference`].
+
+pub mod reference;
+
+use crate::frame::FrameErrors;
+use wgpu::util::DeviceExt;
+
+use crate::gpu::pipeline::Program;
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+
+pub const ENVMAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Face size of the captured and filtered cubes (the talk: 128x128x6).
+pub const ENVMAP_SIZE: u32 = 128;
+/// Filtered mips: perceptual roughness m / (levels - 1) in mip m; 128 down to 4.
+pub const FILTERED_LEVELS: u32 = 6;
+/// GGX samples per filtered texel; measured against a 16k-sample reference
+/// in `tests/envmap.rs`.
+pub const FILTER_SAMPLES: u32 = 128;
+/// DFG table size (n.v x perceptual roughness).
+pub const DFG_SIZE: u32 = 64;
+
+const WORKGROUP: u32 = 8;
+
+/// Twin of `FilterParams` in `filter.wgsl`; one per filtered mip, 256-byte aligned.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FilterParams {
+    p: [f32; 4],
+    _pad: [f32; 60],
+}
+
+/// Pipelines, the cubes and the DFG table.
+pub struct EnvMapPass {
+    pub size: u32,
+    capture_program: Program,
+    capture: wgpu::ComputePipeline,
+    mips_program: Program,
+    downsample: wgpu::ComputePipeline,
+    filter_program: Program,
+    filter: wgpu::ComputePipeline,
+    copy: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    source: wgpu::Texture,
+    source_cube: wgpu::TextureView,
+    filtered: wgpu::Texture,
+    /// Filtered cube, all mips (what lighting samples).
+    pub filtered_cube: wgpu::TextureView,
+    pub dfg: wgpu::Texture,
+    pub dfg_view: wgpu::TextureView,
+    /// Trilinear, clamped: for the cubes and the DFG table.
+    pub sampler: wgpu::Sampler,
+    /// Capture and filter in the next frame (the sky changed).
+    pub dirty: bool,
+}
+
+fn layer_view(
+    texture: &wgpu::Texture,
+    mip: u32,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(dimension),
+        base_mip_level: mip,
+        mip_level_count: Some(1),
+        ..Default::default()
+    })
+}
+
+fn cube_texture(device: &wgpu::Device, label: &str, size: u32, mips: u32) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 6,
+        },
+        mip_level_count: mips,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: ENVMAP_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
+/// Number of mips of a full chain for `size`.
+pub fn full_mip_count(size: u32) -> u32 {
+    32 - size.max(1).leading_zeros()
+}
+
+impl EnvMapPass {
+    /// Creates the cubes (`size` per face, a power of two >= 32) and computes the DFG table.
+    pub fn new(ctx: &GpuContext, size: u32) -> Result<Self, GpuError> {
+        if !size.is_power_of_two() || size < 32 {
+            return Err(GpuError::Other(format!(
+                "environment map size {size}: must be a power of two >= 32"
+            )));
+        }
+        let device = &ctx.device;
+        let capture_program = Program::new(ctx, "passes/envmap/capture.wgsl")?;
+        let mips_program = Program::new(ctx, "passes/envmap/mips.wgsl")?;
+        let filter_program = Program::new(ctx, "passes/envmap/filter.wgsl")?;
+        let source = cube_texture(device, "envmap.source", size, full_mip_count(size));
+        let filtered = cube_texture(device, "envmap.filtered", size, FILTERED_LEVELS);
+        let cube = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::Cube),
+                ..Default::default()
+            })
+        };
+        let params: Vec<FilterParams> = (0..FILTERED_LEVELS)
+            .map(|m| {
+                let roughness = m as f32 / (FILTERED_LEVELS - 1) as f32;
+                FilterParams {
+                    p: [
+                        (roughness * roughness).max(crate::math::brdf::MIN_ALPHA),
+                        FILTER_SAMPLES as f32,
+                        size as f32,
+                        full_mip_count(size) as f32,
+                    ],
+                    _pad: [0.0; 60],
+                }
+            })
+            .collect();
+        let dfg = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("envmap.dfg"),
+            size: wgpu::Extent3d {
+                width: DFG_SIZE,
+                height: DFG_SIZE,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ENVMAP_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let pass = Self {
+            size,
+            capture: capture_program.compute_pipeline(ctx, "cs_capture", &[])?,
+            capture_program,
+            downsample: mips_program.compute_pipeline(ctx, "cs_downsample", &[])?,
+            mips_program,
+            filter: filter_program.compute_pipeline(ctx, "cs_filter", &[])?,
+            copy: filter_program.compute_pipeline(ctx, "cs_copy", &[])?,
+            filter_program,
+            params: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("envmap.filter.params"),
+                contents: bytemuck::cast_slice(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            source_cube: cube(&source),
+            filtered_cube: cube(&filtered),
+            source,
+            filtered,
+            dfg_view: dfg.create_view(&Default::default()),
+            dfg,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("envmap.sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                ..Default::default()
+            }),
+            dirty: true,
+        };
+        pass.compute_dfg(ctx)?;
+        Ok(pass)
+    }
+
+    fn compute_dfg(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        let program = Program::new(ctx, "passes/envmap/dfg.wgsl")?;
+        let pipeline = program.compute_pipeline(ctx, "cs_dfg", &[])?;
+        let bg = program.bind(
+            &ctx.device,
+            0,
+            &[(
+                "out_texture",
+                wgpu::BindingResource::TextureView(&self.dfg_view),
+            )],
+        )?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut cp = encoder.begin_compute_pass(&Default::default());
+            cp.set_pipeline(&pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            let n = DFG_SIZE.div_ceil(WORKGROUP);
+            cp.dispatch_workgroups(n, n, 1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        ctx.check("envmap.dfg")
+    }
+
+    /// The source cube (captured sky and its box mips), for tests.
+    pub fn source(&self) -> &wgpu::Texture {
+        &self.source
+    }
+
+    /// The filtered cube, for tests and debug views.
+    pub fn filtered(&self) -> &wgpu::Texture {
+        &self.filtered
+    }
+
+    /// Outside a frame: uploads `level0` (6 faces of `size`² linear RGB, rows
+    /// top down) as the source instead of the sky, then builds the mips and
+    /// filters (tests, HDR environments).
+    pub fn filter_faces(
+        &self,
+        ctx: &GpuContext,
+        level0: &[Vec<[f32; 3]>; 6],
+    ) -> Result<(), crate::Error> {
+        let texels = (self.size * self.size) as usize;
+        for (face, texels_rgb) in level0.iter().enumerate() {
+            if texels_rgb.len() != texels {
+                return Err(crate::Error::InvalidSettings(format!(
+                    "environment face {face}: {} texels, expected {texels}",
+                    texels_rgb.len()
+                )));
+            }
+            let bytes: Vec<half::f16> = texels_rgb
+                .iter()
+                .flat_map(|c| [c[0], c[1], c[2], 1.0].map(half::f16::from_f32))
+                .collect();
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.source,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: face as u32,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                bytemuck::cast_slice(&bytes),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.size * 8),
+                    rows_per_image: Some(self.size),
+                },
+                wgpu::Extent3d {
+                    width: self.size,
+                    height: self.size,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        let errors = FrameErrors::default();
+        let mut graph = FrameGraph::new();
+        let filtered = self.add_steps(&mut graph, None, &errors);
+        graph.mark_output(filtered);
+        let commands =
+            graph
+                .compile()?
+                .execute(&ctx.device, &mut crate::graph::TexturePool::new(), None)?;
+        if let Some(e) = errors.take_first() {
+            return Err(e.into());
+        }
+        ctx.queue.submit([commands]);
+        ctx.check("envmap.filter_faces")?;
+        Ok(())
+    }
+
+    /// Adds capture, mips and filtering when [`Self::dirty`]; returns the
+    /// filtered cube's handle for the lighting pass to read.
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        sky: &'a wgpu::Buffer,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        if self.dirty {
+            self.add_steps(graph, Some(sky), errors)
+        } else {
+            graph.import_texture("envmap.filtered", &self.filtered)
+        }
+    }
+
+    /// Capture (from `sky`; `None`: the source was uploaded), mips, filter.
+    fn add_steps<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        sky: Option<&'a wgpu::Buffer>,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let mut source = graph.import_texture("envmap.source", &self.source);
+        let filtered = graph.import_texture("envmap.filtered", &self.filtered);
+        let size = self.size;
+        let faces = |cp: &mut wgpu::ComputePass<'_>, s: u32| {
+            let n = s.div_ceil(WORKGROUP);
+            cp.dispatch_workgroups(n, n, 6);
+        };
+        if let Some(sky) = sky {
+            source = self.add_capture(graph, source, sky, errors);
+        }
+        let mut pass = graph.add_pass("envmap.mips");
+        pass.read(source, TextureAccess::Sampled);
+        let source = pass.write(source, TextureAccess::StorageWrite);
+        pass.execute(move |ctx| {
+            for mip in 1..full_mip_count(size) {
+                let parent = layer_view(&self.source, mip - 1, wgpu::TextureViewDimension::D2Array);
+                let child = layer_view(&self.source, mip, wgpu::TextureViewDimension::D2Array);
+                let bg = self.mips_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("parent", wgpu::BindingResource::TextureView(&parent)),
+                        ("child", wgpu::BindingResource::TextureView(&child)),
+                    ],
+                );
+                let Some(bg) = errors.record(bg) else {
+                    return;
+                };
+                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(&self.downsample);
+                cp.set_bind_group(0, &bg, &[]);
+                faces(&mut cp, (size >> mip).max(1));
+            }
+        });
+        let mut pass = graph.add_pass("envmap.filter");
+        pass.read(source, TextureAccess::Sampled);
+        let filtered = pass.write(filtered, TextureAccess::StorageWrite);
+        pass.execute(move |ctx| {
+            for mip in 0..FILTERED_LEVELS {
+                let target = layer_view(&self.filtered, mip, wgpu::TextureViewDimension::D2Array);
+                let params = wgpu::BufferBinding {
+                    buffer: &self.params,
+                    offset: u64::from(mip) * 256,
+                    size: wgpu::BufferSize::new(16),
+                };
+                let bg = self.filter_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("params", wgpu::BindingResource::Buffer(params)),
+                        (
+                            "source",
+                            wgpu::BindingResource::TextureView(&self.source_cube),
+                        ),
+                        (
+                            "source_sampler",
+                            wgpu::BindingResource::Sampler(&self.sampler),
+                        ),
+                        ("out_texture", wgpu::BindingResource::TextureView(&target)),
+                    ],
+                );
+                let Some(bg) = errors.record(bg) else {
+                    return;
+                };
+                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(if mip == 0 { &self.copy } else { &self.filter });
+                cp.set_bind_group(0, &bg, &[]);
+                faces(&mut cp, (size >> mip).max(1));
+            }
+        });
+        filtered
+    }
+
+    fn add_capture<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        source: TextureHandle,
+        sky: &'a wgpu::Buffer,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let size = self.size;
+        let mut pass = graph.add_pass("envmap.capture");
+        let source = pass.write(source, TextureAccess::StorageWrite);
+        pass.execute(move |ctx| {
+            let target = layer_view(&self.source, 0, wgpu::TextureViewDimension::D2Array);
+            let bg = self.capture_program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("sky", sky.as_entire_binding()),
+                    ("out_texture", wgpu::BindingResource::TextureView(&target)),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(&self.capture);
+                cp.set_bind_group(0, &bg, &[]);
+                let n = size.div_ceil(WORKGROUP);
+                cp.dispatch_workgroups(n, n, 6);
+            }
+        });
+        source
+    }
+}
