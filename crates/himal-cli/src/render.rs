@@ -15,6 +15,9 @@ pub struct RenderArgs {
     /// Scene file (TOML), or `demo` for the built-in demo world.
     #[arg(long, default_value = "demo", value_name = "FILE|demo")]
     pub scene: String,
+    /// A glTF model (.gltf or .glb) instead of --scene, framed by an automatic camera.
+    #[arg(long, value_name = "FILE")]
+    pub gltf: Option<String>,
     /// Named camera of the scene (default: its first camera).
     #[arg(long)]
     pub camera: Option<String>,
@@ -162,10 +165,13 @@ pub fn shadow_resolution(mode: &str, resolution: u32) -> Result<u32> {
     }
 }
 
-/// Loads `demo` or a scene file.
+/// Loads `demo`, a glTF model (.gltf / .glb) or a scene file.
 pub fn load_scene(spec: &str) -> Result<Scene> {
+    let lower = spec.to_ascii_lowercase();
     Ok(if spec == "demo" {
         Scene::demo()?
+    } else if lower.ends_with(".gltf") || lower.ends_with(".glb") {
+        Scene::from_gltf(Path::new(spec))?
     } else {
         Scene::load(Path::new(spec))?
     })
@@ -196,7 +202,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
-    let scene = load_scene(&args.scene)?;
+    let scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut sun = scene.sun.clone();
     if let Some(t) = &args.time {

@@ -3,6 +3,7 @@
 
 pub mod post_state;
 pub mod scene_gpu;
+pub mod textures;
 pub mod uniforms;
 
 use std::collections::HashMap;

@@ -51,6 +51,10 @@ pub struct SceneGpu {
     pub draws_opaque: Vec<Draw>,
     /// Alpha-tested, swaying vegetation (the `VEGETATION` pipelines).
     pub draws_vegetation: Vec<Draw>,
+    /// glTF objects with their material index (the textured G-buffer path).
+    pub draws_textured: Vec<(Draw, usize)>,
+    /// Their textures and material uniforms; `None` without glTF materials.
+    pub materials: Option<super::textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
     pub animated: Vec<(u32, Object)>,
     pub triangles: u64,
@@ -86,6 +90,7 @@ impl SceneGpu {
         }
         let mut objects = Vec::with_capacity(scene.objects.len());
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
+        let mut draws_textured = Vec::new();
         let mut animated = Vec::new();
         let mut triangles = 0u64;
         for (i, object) in scene.objects.iter().enumerate() {
@@ -102,17 +107,17 @@ impl SceneGpu {
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
-            let draws = if object.foliage.is_some() {
-                &mut draws_vegetation
-            } else {
-                &mut draws_opaque
-            };
-            draws.push(Draw {
+            let draw = Draw {
                 first_index,
                 index_count,
                 base_vertex,
                 object: i as u32,
-            });
+            };
+            match (scene.pbr.material_of(object.mesh), object.foliage) {
+                (Some(material), _) => draws_textured.push((draw, material)),
+                (None, Some(_)) => draws_vegetation.push(draw),
+                (None, None) => draws_opaque.push(draw),
+            }
             triangles += index_count as u64 / 3;
         }
         if objects.is_empty() {
@@ -122,9 +127,15 @@ impl SceneGpu {
             indices.extend([0, 0, 0]);
             vertices.push(Vertex::zeroed());
         }
-        let bytes = (std::mem::size_of_val(vertices.as_slice())
-            + std::mem::size_of_val(indices.as_slice())
-            + std::mem::size_of_val(objects.as_slice())) as u64;
+        let materials = if scene.pbr.materials.is_empty() {
+            None
+        } else {
+            Some(super::textures::MaterialTextures::upload(ctx, &scene.pbr)?)
+        };
+        let bytes = materials.as_ref().map_or(0, |m| m.bytes)
+            + (std::mem::size_of_val(vertices.as_slice())
+                + std::mem::size_of_val(indices.as_slice())
+                + std::mem::size_of_val(objects.as_slice())) as u64;
         ctx.scoped("scene upload", || {
             let init = |label, contents: &[u8], usage| {
                 ctx.device
@@ -154,6 +165,8 @@ impl SceneGpu {
                 ),
                 draws_opaque,
                 draws_vegetation,
+                draws_textured,
+                materials,
                 animated,
                 triangles,
                 bytes,
@@ -190,10 +203,14 @@ impl SceneGpu {
         }
     }
 
-    /// Binds the geometry and records the opaque objects.
+    /// Binds the geometry and records the opaque objects, glTF ones
+    /// included (shadow casters; their alpha is not tested there).
     pub fn draw_opaque(&self, rp: &mut wgpu::RenderPass<'_>) {
         self.bind_geometry(rp);
         Self::draw_list(rp, &self.draws_opaque);
+        for (d, _) in &self.draws_textured {
+            Self::draw_list(rp, std::slice::from_ref(d));
+        }
     }
 
     /// Binds the geometry and records the vegetation (set a `VEGETATION` pipeline first).

@@ -149,6 +149,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         cameras,
         sun,
         bounds,
+        pbr: Default::default(),
     })
 }
 

@@ -102,6 +102,7 @@ mod build_vegetation;
 mod camera;
 mod error;
 mod file;
+pub mod gltf;
 pub mod heightfield;
 mod motion;
 pub mod noise;
@@ -406,6 +407,8 @@ pub struct Scene {
     pub sun: SunDesc,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
+    /// Textured (glTF) materials and the meshes drawn with them.
+    pub pbr: gltf::PbrSet,
 }
 
 /// Text of the demo world, embedded so the renderer runs from anywhere.
@@ -434,6 +437,27 @@ impl Scene {
     pub fn demo() -> Result<Scene, SceneError> {
         let base_dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes"));
         Self::from_toml_str(DEMO_TOML, "scenes/demo.toml", base_dir)
+    }
+
+    /// A glTF model (`scene/gltf`) as a scene: its nodes, its cameras after
+    /// an auto-framed `"default"` camera, the default sun.
+    pub fn from_gltf(path: &Path) -> Result<Scene, SceneError> {
+        let asset = gltf::load(path)?;
+        let mut cameras = vec![NamedCamera {
+            name: "default".into(),
+            camera: gltf::framing_camera(&asset.bounds, 40.0),
+        }];
+        cameras.extend(asset.cameras);
+        Ok(Scene {
+            path: Some(path.to_path_buf()),
+            meshes: asset.meshes,
+            objects: asset.objects,
+            materials: Vec::new(),
+            cameras,
+            sun: SunDesc::default(),
+            bounds: asset.bounds,
+            pbr: asset.pbr,
+        })
     }
 
     /// The camera called `name`; the error lists the names there are.

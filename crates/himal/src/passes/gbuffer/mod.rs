@@ -11,6 +11,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
+use crate::renderer::textures::{MaterialTextures, SLOTS};
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -32,6 +33,9 @@ pub struct GBufferPass {
     program: Program,
     pipeline: wgpu::RenderPipeline,
     vegetation: wgpu::RenderPipeline,
+    /// glTF materials (`textured.wgsl`): back-face culled and double-sided.
+    textured: Program,
+    textured_pipelines: [wgpu::RenderPipeline; 2],
 }
 
 impl GBufferPass {
@@ -71,10 +75,18 @@ impl GBufferPass {
             ctx,
             &spec("gbuffer.vegetation", None, &[("VEGETATION", 1.0)]),
         )?;
+        let textured = Program::new(ctx, "passes/gbuffer/textured.wgsl")?;
+        let textured_pipelines = [
+            textured
+                .render_pipeline(ctx, &spec("gbuffer.textured", Some(wgpu::Face::Back), &[]))?,
+            textured.render_pipeline(ctx, &spec("gbuffer.textured.double_sided", None, &[]))?,
+        ];
         Ok(Self {
             program,
             pipeline,
             vegetation,
+            textured,
+            textured_pipelines,
         })
     }
 
@@ -105,6 +117,11 @@ impl GBufferPass {
             depth: pass.write(depth, TextureAccess::DepthAttachment),
         };
         pass.execute(move |ctx| {
+            let materials = match &scene.materials {
+                Some(m) => errors.record(material_bind_groups(&self.textured, ctx.device, m)),
+                None => Some(Vec::new()),
+            };
+            let Some(materials) = materials else { return };
             let Some(bind_group) = errors.record(self.program.bind(
                 ctx.device,
                 0,
@@ -150,12 +167,49 @@ impl GBufferPass {
             });
             rp.set_pipeline(&self.pipeline);
             rp.set_bind_group(0, &bind_group, &[]);
-            scene.draw_opaque(&mut rp);
+            scene.bind_geometry(&mut rp);
+            SceneGpu::draw_list(&mut rp, &scene.draws_opaque);
+            if let Some(m) = &scene.materials {
+                for (draw, material) in &scene.draws_textured {
+                    let Some((group, binding)) =
+                        materials.get(*material).zip(m.materials.get(*material))
+                    else {
+                        continue;
+                    };
+                    rp.set_pipeline(&self.textured_pipelines[binding.double_sided as usize]);
+                    rp.set_bind_group(1, group, &[]);
+                    SceneGpu::draw_list(&mut rp, std::slice::from_ref(draw));
+                }
+            }
             if !scene.draws_vegetation.is_empty() {
                 rp.set_pipeline(&self.vegetation);
+                rp.set_bind_group(0, &bind_group, &[]);
                 SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
             }
         });
         out
     }
+}
+
+/// One bind group (group 1 of textured.wgsl) per glTF material.
+fn material_bind_groups(
+    program: &Program,
+    device: &wgpu::Device,
+    m: &MaterialTextures,
+) -> Result<Vec<wgpu::BindGroup>, GpuError> {
+    let names: Vec<(String, String)> = SLOTS
+        .iter()
+        .map(|s| (format!("{s}_texture"), format!("{s}_sampler")))
+        .collect();
+    m.materials
+        .iter()
+        .map(|mat| {
+            let mut entries = vec![("material", mat.uniform.as_entire_binding())];
+            for ((tex, smp), (view, sampler)) in names.iter().zip(mat.slots) {
+                entries.push((tex, wgpu::BindingResource::TextureView(&m.views[view])));
+                entries.push((smp, wgpu::BindingResource::Sampler(&m.samplers[sampler])));
+            }
+            program.bind(device, 1, &entries)
+        })
+        .collect()
 }

@@ -1,0 +1,151 @@
+// gbuffer.textured: glTF metallic-roughness materials into the same G-buffer
+// as gbuffer.wgsl (docs/gltf.md). Vertices carry the factors (colour = base
+// colour factor * COLOR_0, surface = glossiness, F0 0.04, metallic,
+// anisotropy strength); group 1 holds the material's textures and uniform.
+// Alpha: MASK discards below the cut-off; BLEND uses an ordered 4x4 dither
+// (deferred fallback: no forward pass yet). Emissive is bound but not drawn
+// (no emissive G-buffer target yet).
+#import view
+#import tangent_frame
+#import scene
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+
+struct MaterialGpu {
+    base_color: vec4f,
+    emissive: vec4f,
+    // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
+    params: vec4f,
+    // x mode (0 opaque, 1 mask, 2 blend), y cut-off
+    alpha: vec4f,
+}
+
+@group(1) @binding(0) var<uniform> material: MaterialGpu;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var base_color_sampler: sampler;
+@group(1) @binding(3) var metal_rough_texture: texture_2d<f32>;
+@group(1) @binding(4) var metal_rough_sampler: sampler;
+@group(1) @binding(5) var normal_texture: texture_2d<f32>;
+@group(1) @binding(6) var normal_sampler: sampler;
+@group(1) @binding(7) var occlusion_texture: texture_2d<f32>;
+@group(1) @binding(8) var occlusion_sampler: sampler;
+@group(1) @binding(9) var emissive_texture: texture_2d<f32>;
+@group(1) @binding(10) var emissive_sampler: sampler;
+@group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
+@group(1) @binding(12) var anisotropy_sampler: sampler;
+
+struct VertexIn {
+    @location(0) position: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) tangent: vec4f,
+    @location(3) uv: vec2f,
+    @location(4) color: vec4f,
+    @location(5) surface: vec4f,
+    @builtin(instance_index) object: u32,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4f,
+    @location(0) normal: vec3f,
+    @location(1) tangent: vec4f,
+    @location(2) color: vec4f,
+    @location(3) surface: vec4f,
+    @location(4) curr_clip: vec4f,
+    @location(5) prev_clip: vec4f,
+    @location(6) uv: vec2f,
+}
+
+@vertex
+fn vs_main(in: VertexIn) -> VertexOut {
+    let o = objects[in.object];
+    let world = o.model * vec4f(in.position, 1.0);
+    let prev_world = o.prev_model * vec4f(in.position, 1.0);
+    var out: VertexOut;
+    out.uv = in.uv;
+    out.curr_clip = view.view_proj * world;
+    out.prev_clip = view.prev_view_proj * prev_world;
+    out.clip = out.curr_clip + vec4f(view.jitter.xy * out.curr_clip.w, 0.0, 0.0);
+    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
+    // A mirroring model matrix flips handedness: fold its sign into w.
+    let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
+    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w * sign(det));
+    out.color = in.color;
+    out.surface = in.surface;
+    return out;
+}
+
+// Ordered 4x4 Bayer threshold in (0, 1) for screen-door transparency.
+fn gltf_dither_threshold(p: vec2u) -> f32 {
+    var bayer = array<f32, 16>(0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0, 3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
+    return (bayer[(p.y % 4u) * 4u + (p.x % 4u)] + 0.5) / 16.0;
+}
+
+// KHR_materials_anisotropy strength s at GGX alpha -> himal anisotropy with
+// the same alpha_t / alpha_b ratio (CPU twin: scene::gltf::anisotropy_from_khr).
+fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
+    let a = max(alpha, 0.002);
+    let s = saturate(strength);
+    let alpha_t = a + (1.0 - a) * s * s;
+    return saturate((1.0 - a / alpha_t) / 0.9);
+}
+
+struct GBufferOut {
+    @location(0) albedo: vec4f,
+    @location(1) frame: vec4f,
+    @location(2) material: vec4f,
+    @location(3) motion: vec2f,
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
+    let alpha = material.base_color.a * base.a;
+    // Every sample precedes the discards (uniform control flow for derivatives).
+    let ts = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
+    let at = textureSample(anisotropy_texture, anisotropy_sampler, in.uv).xyz;
+    let mr = textureSample(metal_rough_texture, metal_rough_sampler, in.uv);
+    let occlusion = textureSample(occlusion_texture, occlusion_sampler, in.uv).r;
+    let emissive = textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
+        discard;
+    }
+    if (material.alpha.x > 1.5 && alpha < gltf_dither_threshold(vec2u(in.clip.xy))) {
+        discard;
+    }
+    var n = normalize(in.normal);
+    var tangent = in.tangent;
+    if (!front) {
+        // Double-sided back faces: the glTF rule flips the normal; the
+        // tangent frame mirrors with it.
+        n = -n;
+        tangent.w = -tangent.w;
+    }
+    let scaled = normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4)));
+    let n_mapped = apply_normal_map(n, tangent, scaled);
+    // Anisotropy direction in the tangent plane: texture rg (default +t),
+    // rotated by anisotropyRotation, bitangent = cross(n, t) * w (glTF).
+    let c = cos(material.params.w);
+    let s = sin(material.params.w);
+    let d0 = at.xy * 2.0 - 1.0;
+    let d = vec2f(c * d0.x - s * d0.y, s * d0.x + c * d0.y);
+    let f = shading_frame(n_mapped, tangent);
+    let w = select(1.0, -1.0, tangent.w < 0.0);
+    let aniso_dir = f[0] * d.x + f[1] * (w * d.y);
+    let tbn = shading_frame(n_mapped, vec4f(aniso_dir, 1.0));
+
+    let roughness = saturate((1.0 - in.surface.x) * mr.g);
+    let metallic = saturate(in.surface.z * mr.b);
+    let ao = 1.0 + material.params.y * (occlusion - 1.0);
+    let strength = material.params.z * at.z;
+    var out: GBufferOut;
+    out.albedo = vec4f(in.color.rgb * base.rgb, ao);
+    out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
+    out.material = vec4f(1.0 - roughness, in.surface.y, metallic, anisotropy_from_khr(strength, roughness * roughness));
+    let curr = in.curr_clip.xy / in.curr_clip.w;
+    let prev = in.prev_clip.xy / in.prev_clip.w;
+    out.motion = (prev - curr) * vec2f(0.5, -0.5);
+    // Emissive is sampled so its binding stays in the layout (see header).
+    out.albedo.a = out.albedo.a + 0.0 * emissive.r * material.emissive.r;
+    return out;
+}

@@ -1,0 +1,324 @@
+//! Material textures of glTF scenes on the GPU: images uploaded once per
+//! colour space they are used in (base colour and emissive sRGB, the rest
+//! linear), full mip chains generated on the GPU (`mipmap.wgsl`), one
+//! sampler per distinct glTF sampler, 1x1 defaults for absent slots, and a
+//! uniform of factors per material (twin of `MaterialGpu` in
+//! `passes/gbuffer/textured.wgsl`).
+
+use std::collections::HashMap;
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::{GpuContext, GpuError};
+use crate::passes::common::target;
+use crate::scene::gltf::{
+    AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, Wrap,
+};
+
+/// Twin of `MaterialGpu` in textured.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct MaterialGpu {
+    /// Linear base colour factor and alpha.
+    pub base_color: [f32; 4],
+    /// Linear emissive (not drawn yet: the G-buffer has no emissive target).
+    pub emissive: [f32; 4],
+    /// x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad).
+    pub params: [f32; 4],
+    /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off.
+    pub alpha: [f32; 4],
+}
+
+impl MaterialGpu {
+    pub fn new(m: &PbrMaterial) -> Self {
+        let (mode, cutoff) = match m.alpha_mode {
+            AlphaMode::Opaque => (0.0, 0.0),
+            AlphaMode::Mask(c) => (1.0, c),
+            AlphaMode::Blend => (2.0, 0.0),
+        };
+        MaterialGpu {
+            base_color: m.base_color.to_array(),
+            emissive: m.emissive.extend(0.0).to_array(),
+            params: [
+                m.normal_scale,
+                m.occlusion_strength,
+                m.anisotropy_strength,
+                m.anisotropy_rotation,
+            ],
+            alpha: [mode, cutoff, 0.0, 0.0],
+        }
+    }
+}
+
+/// The six texture slots of a material, as named in textured.wgsl.
+pub const SLOTS: [&str; 6] = [
+    "base_color",
+    "metal_rough",
+    "normal",
+    "occlusion",
+    "emissive",
+    "anisotropy",
+];
+
+/// One material's GPU resources: (view, sampler) per slot and its uniform.
+pub struct MaterialBinding {
+    pub uniform: wgpu::Buffer,
+    /// Per slot: index into `MaterialTextures::views` and `samplers`.
+    pub slots: [(usize, usize); 6],
+    pub double_sided: bool,
+}
+
+pub struct MaterialTextures {
+    pub textures: Vec<wgpu::Texture>,
+    pub views: Vec<wgpu::TextureView>,
+    pub samplers: Vec<wgpu::Sampler>,
+    pub materials: Vec<MaterialBinding>,
+    pub bytes: u64,
+}
+
+fn address(w: Wrap) -> wgpu::AddressMode {
+    match w {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::Mirror => wgpu::AddressMode::MirrorRepeat,
+        Wrap::Clamp => wgpu::AddressMode::ClampToEdge,
+    }
+}
+
+fn filter(linear: bool) -> wgpu::FilterMode {
+    if linear {
+        wgpu::FilterMode::Linear
+    } else {
+        wgpu::FilterMode::Nearest
+    }
+}
+
+/// A wgpu sampler for a glTF sampler; NEAREST / LINEAR min filters clamp to level 0.
+pub fn sampler_descriptor(s: &SamplerDesc) -> wgpu::SamplerDescriptor<'static> {
+    wgpu::SamplerDescriptor {
+        label: Some("gltf.sampler"),
+        address_mode_u: address(s.wrap_u),
+        address_mode_v: address(s.wrap_v),
+        mag_filter: filter(s.mag_linear),
+        min_filter: filter(s.min_linear),
+        mipmap_filter: if s.mip_linear {
+            wgpu::MipmapFilterMode::Linear
+        } else {
+            wgpu::MipmapFilterMode::Nearest
+        },
+        lod_max_clamp: if s.mipmaps { 32.0 } else { 0.0 },
+        ..Default::default()
+    }
+}
+
+/// Mip levels of a full chain down to 1x1.
+pub fn mip_count(width: u32, height: u32) -> u32 {
+    32 - width.max(height).max(1).leading_zeros()
+}
+
+impl MaterialTextures {
+    pub fn upload(ctx: &GpuContext, pbr: &PbrSet) -> Result<Self, GpuError> {
+        let mipmap = Program::new(ctx, "renderer/mipmap.wgsl")?;
+        let mut out = MaterialTextures {
+            textures: Vec::new(),
+            views: Vec::new(),
+            samplers: Vec::new(),
+            materials: Vec::new(),
+            bytes: 0,
+        };
+        let linear_sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        // Defaults for absent slots: white (base colour, metal-rough, occlusion,
+        // emissive scaled by its factor), flat normal, anisotropy along +t at full strength.
+        let one = |rgba: [u8; 4], name: &str| ImageData {
+            name: name.into(),
+            width: 1,
+            height: 1,
+            rgba8: rgba.to_vec(),
+        };
+        let defaults = [
+            one([255, 255, 255, 255], "default.white"),
+            one([128, 128, 255, 255], "default.normal"),
+            one([255, 128, 255, 255], "default.anisotropy"),
+        ];
+        let mut uploaded: HashMap<(usize, bool), usize> = HashMap::new();
+        let mut sampler_ids: HashMap<SamplerDesc, usize> = HashMap::new();
+        let default_sampler = out.sampler(ctx, &mut sampler_ids, &SamplerDesc::default());
+        let white_srgb = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[0], true)?;
+        let white = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[0], false)?;
+        let flat = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[1], false)?;
+        let along_t = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[2], false)?;
+        for m in &pbr.materials {
+            let refs: [(Option<TextureRef>, bool, usize); 6] = [
+                (m.base_color_texture, true, white_srgb),
+                (m.metallic_roughness_texture, false, white),
+                (m.normal_texture, false, flat),
+                (m.occlusion_texture, false, white),
+                (m.emissive_texture, true, white_srgb),
+                (m.anisotropy_texture, false, along_t),
+            ];
+            let mut slots = [(0, 0); 6];
+            for (slot, (r, srgb, fallback)) in slots.iter_mut().zip(refs) {
+                *slot = match r.and_then(|r| pbr.textures.get(r.texture)) {
+                    Some(t) => {
+                        let image = pbr.images.get(t.image).ok_or_else(|| {
+                            GpuError::Other(format!(
+                                "texture names image {} of {}",
+                                t.image,
+                                pbr.images.len()
+                            ))
+                        })?;
+                        let view = match uploaded.get(&(t.image, srgb)) {
+                            Some(&v) => v,
+                            None => {
+                                let v =
+                                    out.add_image(ctx, &mipmap, &linear_sampler, image, srgb)?;
+                                uploaded.insert((t.image, srgb), v);
+                                v
+                            }
+                        };
+                        (view, out.sampler(ctx, &mut sampler_ids, &t.sampler))
+                    }
+                    None => (fallback, default_sampler),
+                };
+            }
+            let uniform = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("gltf.material"),
+                    contents: bytemuck::bytes_of(&MaterialGpu::new(m)),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            out.materials.push(MaterialBinding {
+                uniform,
+                slots,
+                double_sided: m.double_sided,
+            });
+        }
+        ctx.check("gltf textures")?;
+        Ok(out)
+    }
+
+    fn sampler(
+        &mut self,
+        ctx: &GpuContext,
+        ids: &mut HashMap<SamplerDesc, usize>,
+        s: &SamplerDesc,
+    ) -> usize {
+        *ids.entry(*s).or_insert_with(|| {
+            self.samplers
+                .push(ctx.device.create_sampler(&sampler_descriptor(s)));
+            self.samplers.len() - 1
+        })
+    }
+
+    /// Uploads level 0 and renders the rest of the chain; returns the view index.
+    fn add_image(
+        &mut self,
+        ctx: &GpuContext,
+        mipmap: &Program,
+        sampler: &wgpu::Sampler,
+        image: &ImageData,
+        srgb: bool,
+    ) -> Result<usize, GpuError> {
+        let format = if srgb {
+            wgpu::TextureFormat::Rgba8UnormSrgb
+        } else {
+            wgpu::TextureFormat::Rgba8Unorm
+        };
+        let (w, h) = (image.width, image.height);
+        if image.rgba8.len() != (w * h * 4) as usize {
+            return Err(GpuError::Other(format!(
+                "image \"{}\": {} bytes for {w}x{h}",
+                image.name,
+                image.rgba8.len()
+            )));
+        }
+        let levels = mip_count(w, h);
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(&image.name),
+            size,
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &image.rgba8,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(h),
+            },
+            size,
+        );
+        if levels > 1 {
+            let pipeline = mipmap.render_pipeline(
+                ctx,
+                &RenderSpec::fullscreen("renderer.mipmap", &[target(format)]),
+            )?;
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            for level in 1..levels {
+                let view = |l: u32| {
+                    texture.create_view(&wgpu::TextureViewDescriptor {
+                        base_mip_level: l,
+                        mip_level_count: Some(1),
+                        ..Default::default()
+                    })
+                };
+                let (src, dst) = (view(level - 1), view(level));
+                let bind = mipmap.bind(
+                    &ctx.device,
+                    0,
+                    &[
+                        ("source", wgpu::BindingResource::TextureView(&src)),
+                        ("source_sampler", wgpu::BindingResource::Sampler(sampler)),
+                    ],
+                )?;
+                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("renderer.mipmap"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &dst,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                rp.set_pipeline(&pipeline);
+                rp.set_bind_group(0, &bind, &[]);
+                rp.draw(0..3, 0..1);
+            }
+            ctx.queue.submit([encoder.finish()]);
+        }
+        self.bytes += (w as u64 * h as u64 * 4 * 4) / 3;
+        self.views.push(texture.create_view(&Default::default()));
+        self.textures.push(texture);
+        Ok(self.views.len() - 1)
+    }
+}

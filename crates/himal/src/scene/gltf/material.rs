@@ -1,0 +1,421 @@
+//! glTF materials, textures, samplers and images -> [`PbrSet`] entries.
+//!
+//! Metallic-roughness maps onto the himal material (TECHNIQUES M1) as the
+//! inverse of its glossiness mapping: `glossiness = 1 - roughness` (himal's
+//! perceptual roughness is `1 - glossiness`, alpha = roughness²). glTF's
+//! dielectric F0 is 0.04 (ior 1.5); himal's `reflectance` *is* F0, so it is
+//! 0.04 (Filament's reflectance 0.5 ↔ F0 = 0.16·0.5² = 0.04). See docs/gltf.md.
+
+use std::path::Path;
+
+use glam::{Vec3, Vec4};
+
+use super::{GltfContext, MAX_TEXTURE_SIZE};
+use crate::scene::SceneError;
+
+/// Reflectance (F0) of glTF dielectrics: ior 1.5.
+pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
+
+/// How a material's alpha is used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Alpha test: fragments with alpha < cutoff are discarded.
+    Mask(f32),
+    /// Drawn with an ordered-dither alpha test (docs/gltf.md: the deferred fallback).
+    Blend,
+}
+
+/// A texture used by a material slot and the UV set it reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`PbrSet::textures`].
+    pub texture: usize,
+    pub tex_coord: u32,
+}
+
+/// glTF texture wrap modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+/// A sampler: wrap per axis, magnification / minification / mip filters (linear = true).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SamplerDesc {
+    pub wrap_u: Wrap,
+    pub wrap_v: Wrap,
+    pub mag_linear: bool,
+    pub min_linear: bool,
+    pub mip_linear: bool,
+    /// False for NEAREST / LINEAR min filters: only level 0 is sampled.
+    pub mipmaps: bool,
+}
+
+impl Default for SamplerDesc {
+    /// glTF leaves filters to the implementation: trilinear, repeat.
+    fn default() -> Self {
+        SamplerDesc {
+            wrap_u: Wrap::Repeat,
+            wrap_v: Wrap::Repeat,
+            mag_linear: true,
+            min_linear: true,
+            mip_linear: true,
+            mipmaps: true,
+        }
+    }
+}
+
+/// A texture: an image and how to sample it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSlot {
+    /// Index into [`PbrSet::images`].
+    pub image: usize,
+    pub sampler: SamplerDesc,
+}
+
+/// A decoded image, 8-bit RGBA, rows top to bottom (glTF uv (0,0) is the top-left).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageData {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+/// A glTF metallic-roughness material with its extensions, factors linear.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PbrMaterial {
+    pub name: String,
+    /// Linear base colour and alpha.
+    pub base_color: Vec4,
+    pub metallic: f32,
+    /// Perceptual roughness; himal glossiness = 1 - roughness.
+    pub roughness: f32,
+    /// Linear emitted colour times KHR_materials_emissive_strength.
+    pub emissive: Vec3,
+    pub normal_scale: f32,
+    pub occlusion_strength: f32,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+    /// KHR_materials_anisotropy `anisotropyStrength` in [0, 1].
+    pub anisotropy_strength: f32,
+    /// KHR_materials_anisotropy `anisotropyRotation` (radians, counter-clockwise from +u toward +v... in the tangent frame).
+    pub anisotropy_rotation: f32,
+    pub base_color_texture: Option<TextureRef>,
+    /// G roughness, B metallic.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    /// R occlusion.
+    pub occlusion_texture: Option<TextureRef>,
+    pub emissive_texture: Option<TextureRef>,
+    /// RG direction in [-1, 1] (tangent, bitangent), B strength.
+    pub anisotropy_texture: Option<TextureRef>,
+}
+
+impl Default for PbrMaterial {
+    /// glTF's default material: white, fully metallic and rough.
+    fn default() -> Self {
+        PbrMaterial {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            metallic: 1.0,
+            roughness: 1.0,
+            emissive: Vec3::ZERO,
+            normal_scale: 1.0,
+            occlusion_strength: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: 0.0,
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            occlusion_texture: None,
+            emissive_texture: None,
+            anisotropy_texture: None,
+        }
+    }
+}
+
+impl PbrMaterial {
+    /// himal glossiness of this material's roughness factor.
+    pub fn glossiness(&self) -> f32 {
+        glossiness_from_roughness(self.roughness)
+    }
+
+    /// `Vertex::color`: linear base colour and ao 1 (occlusion comes from the texture).
+    pub fn vertex_color(&self) -> [f32; 4] {
+        [self.base_color.x, self.base_color.y, self.base_color.z, 1.0]
+    }
+
+    /// `Vertex::surface`: glossiness, reflectance, metallic, anisotropy strength.
+    pub fn vertex_surface(&self) -> [f32; 4] {
+        [
+            self.glossiness(),
+            GLTF_DIELECTRIC_F0,
+            self.metallic,
+            self.anisotropy_strength,
+        ]
+    }
+
+    /// Number of texture slots in use.
+    pub fn texture_count(&self) -> usize {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture,
+            self.occlusion_texture,
+            self.emissive_texture,
+            self.anisotropy_texture,
+        ]
+        .iter()
+        .flatten()
+        .count()
+    }
+}
+
+/// The inverse of M1's `perceptual_roughness_from_glossiness` (r = 1 - g).
+pub fn glossiness_from_roughness(roughness: f32) -> f32 {
+    1.0 - roughness.clamp(0.0, 1.0)
+}
+
+/// himal anisotropy for a KHR_materials_anisotropy strength at GGX alpha
+/// `alpha`: the extension stretches alpha_t to mix(alpha, 1, s²); himal
+/// divides alpha by aspect = sqrt(1 - 0.9 a) along t and multiplies along b,
+/// so equal ratios alpha_t / alpha_b give 1 / aspect² = mix(alpha, 1, s²) / alpha.
+pub fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
+    let alpha = alpha.max(0.002);
+    let s = strength.clamp(0.0, 1.0);
+    let alpha_t = alpha + (1.0 - alpha) * s * s;
+    ((1.0 - alpha / alpha_t) / 0.9).clamp(0.0, 1.0)
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn wrap(mode: gltf::texture::WrappingMode) -> Wrap {
+    use gltf::texture::WrappingMode as W;
+    match mode {
+        W::Repeat => Wrap::Repeat,
+        W::MirroredRepeat => Wrap::Mirror,
+        W::ClampToEdge => Wrap::Clamp,
+    }
+}
+
+pub(super) fn sampler(s: &gltf::texture::Sampler) -> SamplerDesc {
+    use gltf::texture::{MagFilter, MinFilter};
+    let mut out = SamplerDesc {
+        wrap_u: wrap(s.wrap_s()),
+        wrap_v: wrap(s.wrap_t()),
+        ..SamplerDesc::default()
+    };
+    if let Some(m) = s.mag_filter() {
+        out.mag_linear = m == MagFilter::Linear;
+    }
+    if let Some(m) = s.min_filter() {
+        let (min, mip, mipmaps) = match m {
+            MinFilter::Nearest => (false, false, false),
+            MinFilter::Linear => (true, false, false),
+            MinFilter::NearestMipmapNearest => (false, false, true),
+            MinFilter::LinearMipmapNearest => (true, false, true),
+            MinFilter::NearestMipmapLinear => (false, true, true),
+            MinFilter::LinearMipmapLinear => (true, true, true),
+        };
+        out.min_linear = min;
+        out.mip_linear = mip;
+        out.mipmaps = mipmaps;
+    }
+    out
+}
+
+fn texture_ref(info: &gltf::texture::Info) -> TextureRef {
+    TextureRef {
+        texture: info.texture().index(),
+        tex_coord: info.tex_coord(),
+    }
+}
+
+/// `{ "index": i, "texCoord": k }` of an extension, checked against the texture count.
+fn json_texture_ref(
+    cx: &GltfContext,
+    v: Option<&gltf::json::Value>,
+    textures: usize,
+) -> Result<Option<TextureRef>, SceneError> {
+    let Some(v) = v else { return Ok(None) };
+    let index = v.get("index").and_then(|i| i.as_u64());
+    match index {
+        Some(i) if (i as usize) < textures => Ok(Some(TextureRef {
+            texture: i as usize,
+            tex_coord: v.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0) as u32,
+        })),
+        _ => Err(cx.invalid(format!(
+            "KHR_materials_anisotropy texture {v} names no texture (there are {textures})"
+        ))),
+    }
+}
+
+/// Finite number from extension JSON, `default` when absent.
+fn json_f32(
+    cx: &GltfContext,
+    v: &gltf::json::Value,
+    key: &str,
+    default: f32,
+) -> Result<f32, SceneError> {
+    match v.get(key) {
+        None => Ok(default),
+        Some(x) => match x.as_f64() {
+            Some(f) if f.is_finite() => Ok(f as f32),
+            _ => Err(cx.invalid(format!(
+                "KHR_materials_anisotropy {key} = {x} is not a number"
+            ))),
+        },
+    }
+}
+
+fn finite(cx: &GltfContext, what: &str, values: &[f32]) -> Result<(), SceneError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(cx.invalid(format!("{what} {values:?} must be finite")))
+    }
+}
+
+pub(super) fn material(
+    cx: &GltfContext,
+    m: &gltf::Material,
+    textures: usize,
+) -> Result<PbrMaterial, SceneError> {
+    let pbr = m.pbr_metallic_roughness();
+    let name = m.name().map_or_else(
+        || format!("material{}", m.index().unwrap_or(0)),
+        str::to_string,
+    );
+    let base = pbr.base_color_factor();
+    let emissive = m.emissive_factor();
+    let emissive_strength = m.emissive_strength().unwrap_or(1.0);
+    finite(cx, &format!("material \"{name}\" baseColorFactor"), &base)?;
+    finite(
+        cx,
+        &format!("material \"{name}\" emissiveFactor"),
+        &emissive,
+    )?;
+    let scalars = [
+        pbr.metallic_factor(),
+        pbr.roughness_factor(),
+        emissive_strength,
+    ];
+    finite(cx, &format!("material \"{name}\" factors"), &scalars)?;
+    let alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    };
+    let mut out = PbrMaterial {
+        name,
+        // Factors are linear in glTF (only textures are sRGB-encoded).
+        base_color: Vec4::from(base),
+        metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+        roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+        emissive: Vec3::from(emissive) * emissive_strength.max(0.0),
+        alpha_mode,
+        double_sided: m.double_sided(),
+        base_color_texture: pbr.base_color_texture().as_ref().map(texture_ref),
+        metallic_roughness_texture: pbr.metallic_roughness_texture().as_ref().map(texture_ref),
+        emissive_texture: m.emissive_texture().as_ref().map(texture_ref),
+        ..PbrMaterial::default()
+    };
+    if let Some(n) = m.normal_texture() {
+        out.normal_scale = n.scale();
+        out.normal_texture = Some(TextureRef {
+            texture: n.texture().index(),
+            tex_coord: n.tex_coord(),
+        });
+    }
+    if let Some(o) = m.occlusion_texture() {
+        out.occlusion_strength = o.strength().clamp(0.0, 1.0);
+        out.occlusion_texture = Some(TextureRef {
+            texture: o.texture().index(),
+            tex_coord: o.tex_coord(),
+        });
+    }
+    // The gltf crate has no typed KHR_materials_anisotropy: read the JSON.
+    if let Some(a) = m.extension_value("KHR_materials_anisotropy") {
+        out.anisotropy_strength = json_f32(cx, a, "anisotropyStrength", 0.0)?.clamp(0.0, 1.0);
+        out.anisotropy_rotation = json_f32(cx, a, "anisotropyRotation", 0.0)?;
+        out.anisotropy_texture = json_texture_ref(cx, a.get("anisotropyTexture"), textures)?;
+    }
+    Ok(out)
+}
+
+/// Decodes image `index` (PNG or JPEG, from a file beside the model, a
+/// buffer view, or a data URI) to RGBA8, refusing sizes over [`MAX_TEXTURE_SIZE`].
+pub(super) fn image(
+    cx: &GltfContext,
+    img: &gltf::Image,
+    buffers: &[Vec<u8>],
+) -> Result<ImageData, SceneError> {
+    let index = img.index();
+    let (bytes, label): (std::borrow::Cow<[u8]>, String) = match img.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data = super::view_bytes(cx, &view, buffers)?;
+            (
+                data.into(),
+                format!("image {index} (buffer view {})", view.index()),
+            )
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let bytes = cx.read_uri(uri)?;
+            (bytes.into(), format!("image {index} \"{uri}\""))
+        }
+    };
+    decode(cx, &bytes, &label, img.name().unwrap_or(&label))
+}
+
+fn decode(
+    cx: &GltfContext,
+    bytes: &[u8],
+    label: &str,
+    name: &str,
+) -> Result<ImageData, SceneError> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| cx.invalid(format!("{label}: {e}")))?;
+    let (w, h) = reader
+        .into_dimensions()
+        .map_err(|e| cx.invalid(format!("{label}: cannot decode: {e}")))?;
+    if w == 0 || h == 0 || w > MAX_TEXTURE_SIZE || h > MAX_TEXTURE_SIZE {
+        return Err(cx.invalid(format!(
+            "{label}: size {w}x{h} is outside 1..={MAX_TEXTURE_SIZE} per side"
+        )));
+    }
+    let decoded = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| cx.invalid(format!("{label}: {e}")))?
+        .decode()
+        .map_err(|e| cx.invalid(format!("{label}: cannot decode: {e}")))?
+        .into_rgba8();
+    Ok(ImageData {
+        name: name.to_string(),
+        width: w,
+        height: h,
+        rgba8: decoded.into_raw(),
+    })
+}
+
+/// Linear base colour of an sRGB-encoded 8-bit texel (CPU twin for tests).
+pub fn srgb8_to_linear(c: u8) -> f32 {
+    srgb_to_linear(c as f32 / 255.0)
+}
+
+/// `path`'s folder, where relative URIs resolve.
+pub(super) fn base_dir(path: &Path) -> &Path {
+    path.parent().unwrap_or(Path::new("."))
+}

@@ -1,0 +1,542 @@
+//! glTF 2.0 import (.gltf + .bin and .glb) into himal meshes, objects,
+//! materials, cameras and punctual lights. See `docs/gltf.md`.
+//!
+//! Each primitive becomes one [`Mesh`] (vertices carry the material's
+//! factors in `color` / `surface`, as the per-vertex G-buffer path reads
+//! them) and each node instance of it one [`Object`] with the node's world
+//! transform. [`PbrSet`] keeps what the textured G-buffer path needs: the
+//! materials, textures, samplers and decoded images, and which mesh uses
+//! which material. Missing tangents are generated with MikkTSpace
+//! (`tangents.rs`). Every problem is an error naming the file.
+
+mod material;
+mod tangents;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Vec3};
+
+pub use material::{
+    AlphaMode, GLTF_DIELECTRIC_F0, ImageData, PbrMaterial, SamplerDesc, TextureRef, TextureSlot,
+    Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
+};
+
+use super::{Aabb, Camera, Mesh, NamedCamera, Object, SceneError, Vertex};
+
+/// Largest accepted image side (texels); larger ones are refused, not decoded.
+pub const MAX_TEXTURE_SIZE: u32 = 8192;
+/// Largest accepted vertex or index count per primitive.
+const MAX_ELEMENTS: usize = 1 << 26;
+
+/// Materials and textures of the textured G-buffer path.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PbrSet {
+    pub materials: Vec<PbrMaterial>,
+    pub textures: Vec<TextureSlot>,
+    pub images: Vec<ImageData>,
+    /// `(mesh index in the scene, material index)`: meshes drawn textured.
+    pub mesh_material: Vec<(usize, usize)>,
+}
+
+impl PbrSet {
+    /// The material of scene mesh `mesh`, if it is drawn by the textured path.
+    pub fn material_of(&self, mesh: usize) -> Option<usize> {
+        self.mesh_material
+            .iter()
+            .find(|(m, _)| *m == mesh)
+            .map(|(_, i)| *i)
+    }
+}
+
+/// KHR_lights_punctual kinds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    Directional,
+    Point,
+    /// Cone angles in radians.
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
+}
+
+/// A KHR_lights_punctual light placed by its node (parsed, not yet lit:
+/// wiring into lighting is the lead's, with the S3 point / spot lights).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PunctualLight {
+    pub name: String,
+    pub kind: LightKind,
+    /// Linear colour times intensity (candela for point / spot, lux for directional).
+    pub color: Vec3,
+    pub intensity: f32,
+    pub range: Option<f32>,
+    pub position: Vec3,
+    /// Unit direction the light points to (the node's -Z).
+    pub direction: Vec3,
+}
+
+/// A loaded glTF file.
+#[derive(Clone, Debug)]
+pub struct GltfAsset {
+    pub path: PathBuf,
+    /// One per primitive, in (mesh, primitive) order.
+    pub meshes: Vec<Mesh>,
+    /// Node instances of `meshes` with world transforms.
+    pub objects: Vec<Object>,
+    /// `pbr.mesh_material` indexes `meshes`.
+    pub pbr: PbrSet,
+    pub cameras: Vec<NamedCamera>,
+    pub lights: Vec<PunctualLight>,
+    /// Counts as in the file: meshes, primitives.
+    pub gltf_meshes: usize,
+    pub gltf_primitives: usize,
+    /// World bounds of all objects.
+    pub bounds: Aabb,
+}
+
+/// The file being loaded, for messages and relative URIs.
+pub(crate) struct GltfContext {
+    path: PathBuf,
+}
+
+impl GltfContext {
+    fn invalid(&self, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            file: self.path.display().to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// Bytes of a URI: a `data:` URI (base64) or a file beside the model.
+    fn read_uri(&self, uri: &str) -> Result<Vec<u8>, SceneError> {
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let (_, data) = rest
+                .split_once(";base64,")
+                .ok_or_else(|| self.invalid("data URI is not base64"))?;
+            return base64_decode(data).ok_or_else(|| self.invalid("data URI: bad base64"));
+        }
+        let relative = percent_decode(uri);
+        if relative.contains("://") {
+            return Err(self.invalid(format!("URI \"{uri}\": only files and data URIs are read")));
+        }
+        let file = material::base_dir(&self.path).join(&relative);
+        std::fs::read(&file)
+            .map_err(|e| self.invalid(format!("cannot read \"{}\": {e}", file.display())))
+    }
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%'
+            && i + 2 < b.len()
+            && let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2]))
+        {
+            out.push((h * 16 + l) as u8);
+            i += 3;
+            continue;
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn base64_decode(s: &str) -> Option<Vec<u8>> {
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => Some(c - b'A'),
+        b'a'..=b'z' => Some(c - b'a' + 26),
+        b'0'..=b'9' => Some(c - b'0' + 52),
+        b'+' | b'-' => Some(62),
+        b'/' | b'_' => Some(63),
+        _ => None,
+    };
+    let mut out = Vec::with_capacity(s.len() * 3 / 4);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in s.bytes().filter(|c| !c.is_ascii_whitespace()) {
+        if c == b'=' {
+            break;
+        }
+        acc = (acc << 6) | value(c)? as u32;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+        }
+    }
+    Some(out)
+}
+
+/// Bytes of a buffer view, range-checked.
+fn view_bytes<'b>(
+    cx: &GltfContext,
+    view: &gltf::buffer::View,
+    buffers: &'b [Vec<u8>],
+) -> Result<&'b [u8], SceneError> {
+    let data = &buffers[view.buffer().index()];
+    data.get(view.offset()..view.offset().saturating_add(view.length()))
+        .ok_or_else(|| {
+            cx.invalid(format!(
+                "buffer view {} (bytes {}..+{}) is outside buffer {} ({} bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index(),
+                data.len()
+            ))
+        })
+}
+
+/// Checks that every accessor's elements lie inside its buffer view, so
+/// the gltf crate's readers never run off the data.
+fn check_accessors(
+    cx: &GltfContext,
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+) -> Result<(), SceneError> {
+    for a in doc.accessors() {
+        let elem = a.size();
+        if a.count() == 0 || a.count() > MAX_ELEMENTS {
+            return Err(cx.invalid(format!("accessor {} has count {}", a.index(), a.count())));
+        }
+        let Some(view) = a.view() else { continue };
+        let bytes = view_bytes(cx, &view, buffers)?;
+        let stride = view.stride().unwrap_or(elem).max(elem);
+        let end = (a.count() - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(a.offset()))
+            .and_then(|x| x.checked_add(elem));
+        if end.is_none_or(|e| e > bytes.len()) {
+            return Err(cx.invalid(format!(
+                "accessor {} ({} elements of {elem} bytes, stride {stride}, offset {}) runs past buffer view {} ({} bytes)",
+                a.index(),
+                a.count(),
+                a.offset(),
+                view.index(),
+                bytes.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Loads a .gltf (with its .bin and images) or a .glb file.
+pub fn load(path: &Path) -> Result<GltfAsset, SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    load_from_bytes(path, &bytes)
+}
+
+/// Like [`load`] for bytes already read; `path` names it and resolves URIs.
+pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneError> {
+    let cx = GltfContext {
+        path: path.to_path_buf(),
+    };
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::from_slice(bytes).map_err(|e| cx.invalid(format!("not valid glTF: {e}")))?;
+    let mut blob = blob;
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                cx.invalid(format!(
+                    "buffer {} refers to a missing GLB BIN chunk",
+                    b.index()
+                ))
+            })?,
+            gltf::buffer::Source::Uri(uri) => cx.read_uri(uri)?,
+        };
+        if data.len() < b.length() {
+            return Err(cx.invalid(format!(
+                "buffer {} has {} bytes, the file declares {}",
+                b.index(),
+                data.len(),
+                b.length()
+            )));
+        }
+        buffers.push(data);
+    }
+    check_accessors(&cx, &doc, &buffers)?;
+
+    let mut pbr = PbrSet::default();
+    for img in doc.images() {
+        pbr.images.push(material::image(&cx, &img, &buffers)?);
+    }
+    for t in doc.textures() {
+        pbr.textures.push(TextureSlot {
+            image: t.source().index(),
+            sampler: material::sampler(&t.sampler()),
+        });
+    }
+    let texture_count = pbr.textures.len();
+    for m in doc.materials() {
+        pbr.materials
+            .push(material::material(&cx, &m, texture_count)?);
+    }
+    // glTF's default material, appended only when a primitive has none.
+    let default_material = pbr.materials.len();
+    let fallback = PbrMaterial::default();
+
+    // Meshes: one himal mesh per primitive.
+    let mut first_mesh = Vec::new();
+    let mut meshes = Vec::new();
+    let mut gltf_primitives = 0;
+    for m in doc.meshes() {
+        first_mesh.push(meshes.len());
+        for p in m.primitives() {
+            gltf_primitives += 1;
+            let material = p.material().index().unwrap_or(default_material);
+            let desc = pbr.materials.get(material).unwrap_or(&fallback);
+            let mesh = primitive(&cx, &m, &p, &buffers, desc)?;
+            pbr.mesh_material.push((meshes.len(), material));
+            meshes.push(mesh);
+        }
+    }
+
+    if pbr
+        .mesh_material
+        .iter()
+        .any(|(_, m)| *m == default_material)
+    {
+        pbr.materials.push(fallback);
+    }
+
+    // Nodes: world transforms from the default scene (or every root).
+    let mut out = GltfAsset {
+        path: path.to_path_buf(),
+        objects: Vec::new(),
+        pbr,
+        cameras: Vec::new(),
+        lights: Vec::new(),
+        gltf_meshes: doc.meshes().count(),
+        gltf_primitives,
+        bounds: Aabb::EMPTY,
+        meshes: Vec::new(),
+    };
+    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s.nodes().collect(),
+        None => Vec::new(),
+    };
+    let mut stack: Vec<(gltf::Node, Mat4, usize)> =
+        roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > 256 {
+            return Err(cx.invalid("node hierarchy deeper than 256 (a cycle?)"));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !local.is_finite() {
+            return Err(cx.invalid(format!("node {} has a non-finite transform", node.index())));
+        }
+        let world = parent * local;
+        let name = node
+            .name()
+            .map_or_else(|| format!("node{}", node.index()), str::to_string);
+        if let Some(m) = node.mesh() {
+            let count = m.primitives().count();
+            for k in 0..count {
+                let mesh = first_mesh[m.index()] + k;
+                out.bounds = out.bounds.union(&meshes[mesh].bounds.transform(&world));
+                out.objects.push(Object {
+                    name: if count == 1 {
+                        name.clone()
+                    } else {
+                        format!("{name}.{k}")
+                    },
+                    mesh,
+                    transform: world,
+                    motion: None,
+                    foliage: None,
+                });
+            }
+        }
+        if let Some(c) = node.camera() {
+            out.cameras.push(camera(&name, &c, &world));
+        }
+        if let Some(l) = node.light() {
+            out.lights.push(light(&name, &l, &world));
+        }
+        for child in node.children() {
+            stack.push((child, world, depth + 1));
+        }
+    }
+    out.meshes = meshes;
+    Ok(out)
+}
+
+fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world
+        .transform_vector3(Vec3::NEG_Z)
+        .normalize_or(Vec3::NEG_Z);
+    let up = world.transform_vector3(Vec3::Y).normalize_or(Vec3::Y);
+    let (fov, near) = match c.projection() {
+        gltf::camera::Projection::Perspective(p) => (p.yfov().to_degrees(), p.znear()),
+        // Orthographic cameras become 40-degree perspective ones.
+        gltf::camera::Projection::Orthographic(o) => (40.0, o.znear().max(0.01)),
+    };
+    NamedCamera {
+        name: c.name().unwrap_or(name).to_string(),
+        camera: Camera {
+            position,
+            forward,
+            up,
+            fov_y_deg: if fov > 0.0 && fov < 179.0 { fov } else { 40.0 },
+            near: if near > 0.0 { near } else { 0.01 },
+        },
+    }
+}
+
+fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> PunctualLight {
+    use gltf::khr_lights_punctual::Kind;
+    let kind = match l.kind() {
+        Kind::Directional => LightKind::Directional,
+        Kind::Point => LightKind::Point,
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => LightKind::Spot {
+            inner_cone: inner_cone_angle,
+            outer_cone: outer_cone_angle,
+        },
+    };
+    PunctualLight {
+        name: l.name().unwrap_or(name).to_string(),
+        kind,
+        color: Vec3::from(l.color()),
+        intensity: l.intensity(),
+        range: l.range(),
+        position: world.transform_point3(Vec3::ZERO),
+        direction: world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize_or(Vec3::NEG_Z),
+    }
+}
+
+fn primitive(
+    cx: &GltfContext,
+    mesh: &gltf::Mesh,
+    p: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    material: &PbrMaterial,
+) -> Result<Mesh, SceneError> {
+    let name = format!(
+        "{}.{}",
+        mesh.name()
+            .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string),
+        p.index()
+    );
+    if p.mode() != gltf::mesh::Mode::Triangles {
+        return Err(cx.invalid(format!(
+            "mesh \"{name}\": primitive mode {:?} is not supported (triangles only)",
+            p.mode()
+        )));
+    }
+    let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| cx.invalid(format!("mesh \"{name}\" has no POSITION")))?
+        .collect();
+    let n = positions.len();
+    let count_ok = |len: usize, what: &str| {
+        if len == n {
+            Ok(())
+        } else {
+            Err(cx.invalid(format!(
+                "mesh \"{name}\": {what} has {len} elements, POSITION {n}"
+            )))
+        }
+    };
+    if positions.iter().flatten().any(|c| !c.is_finite()) {
+        return Err(cx.invalid(format!("mesh \"{name}\": non-finite POSITION")));
+    }
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    if !indices.len().is_multiple_of(3) {
+        return Err(cx.invalid(format!(
+            "mesh \"{name}\": {} indices is not whole triangles",
+            indices.len()
+        )));
+    }
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(cx.invalid(format!(
+            "mesh \"{name}\": index {bad} is out of range (vertices: {n})"
+        )));
+    }
+    let uv_set = material.base_color_texture.map_or(0, |t| t.tex_coord);
+    let uvs: Vec<[f32; 2]> = match reader.read_tex_coords(uv_set) {
+        Some(t) => t.into_f32().collect(),
+        None => vec![[0.0; 2]; n],
+    };
+    count_ok(uvs.len(), "TEXCOORD")?;
+    let normals: Vec<[f32; 3]> = match reader.read_normals() {
+        Some(r) => r.collect(),
+        None => tangents::flat_normals(&positions, &indices),
+    };
+    count_ok(normals.len(), "NORMAL")?;
+    let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
+    if let Some(c) = &colors {
+        count_ok(c.len(), "COLOR_0")?;
+    }
+    let (color, surface) = (material.vertex_color(), material.vertex_surface());
+    let mut vertices: Vec<Vertex> = (0..n)
+        .map(|i| {
+            let c = colors.as_ref().map_or([1.0; 4], |c| c[i]);
+            Vertex {
+                position: positions[i],
+                normal: Vec3::from(normals[i]).normalize_or(Vec3::Y).to_array(),
+                tangent: [1.0, 0.0, 0.0, 1.0],
+                uv: uvs[i],
+                color: [color[0] * c[0], color[1] * c[1], color[2] * c[2], color[3]],
+                surface,
+            }
+        })
+        .collect();
+    let mut indices = indices;
+    match reader.read_tangents() {
+        Some(t) => {
+            let t: Vec<[f32; 4]> = t.collect();
+            count_ok(t.len(), "TANGENT")?;
+            for (v, t) in vertices.iter_mut().zip(t) {
+                let w = if t[3] < 0.0 { -1.0 } else { 1.0 };
+                v.tangent = [t[0], t[1], t[2], w];
+            }
+        }
+        // Only normal-mapped or anisotropic materials need a tangent frame from the UVs.
+        None if material.normal_texture.is_some() || material.anisotropy_strength > 0.0 => {
+            (vertices, indices) = tangents::generate(&vertices, &indices);
+        }
+        None => {}
+    }
+    let bounds = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
+    Ok(Mesh {
+        name,
+        vertices,
+        indices,
+        bounds,
+    })
+}
+
+/// A camera on +Z looking at the centre of `bounds` (glTF models face +Z),
+/// a little above it, far enough that the bounding sphere fills the
+/// vertical field of view `fov_y_deg` (square images) with a 10 % margin.
+pub fn framing_camera(bounds: &Aabb, fov_y_deg: f32) -> Camera {
+    let (centre, radius) = if bounds.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
+    };
+    let distance = 1.1 * radius / (fov_y_deg.to_radians() * 0.5).sin();
+    let direction = Vec3::new(0.0, 0.25, 1.0).normalize();
+    let mut camera = Camera::look_at(centre + direction * distance, centre, fov_y_deg);
+    camera.near = (distance - radius).max(distance * 1e-3) * 0.5;
+    camera
+}

@@ -1,0 +1,362 @@
+//! glTF import: counts against the Khronos sample files, tangents, bad input.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use himal::scene::gltf::{self, AlphaMode};
+
+fn asset(model: &str, file: &str) -> PathBuf {
+    Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/assets/gltf"
+    ))
+    .join(model)
+    .join("glTF")
+    .join(file)
+}
+
+/// (model, file, meshes, primitives, materials, textures, images, objects),
+/// counted from the JSON independently of the loader (materials: the
+/// file's, plus glTF's default one where a primitive names none).
+type Counts = (
+    &'static str,
+    &'static str,
+    usize,
+    usize,
+    usize,
+    usize,
+    usize,
+    usize,
+);
+
+const MODELS: [Counts; 9] = [
+    (
+        "AlphaBlendModeTest",
+        "AlphaBlendModeTest.gltf",
+        9,
+        9,
+        6,
+        4,
+        4,
+        9,
+    ),
+    (
+        "AnisotropyRotationTest",
+        "AnisotropyRotationTest.gltf",
+        6,
+        6,
+        6,
+        7,
+        6,
+        11,
+    ),
+    (
+        "AnisotropyStrengthTest",
+        "AnisotropyStrengthTest.gltf",
+        50,
+        50,
+        50,
+        1,
+        1,
+        50,
+    ),
+    ("DamagedHelmet", "DamagedHelmet.gltf", 1, 1, 1, 5, 5, 1),
+    (
+        "MetalRoughSpheresNoTextures",
+        "MetalRoughSpheresNoTextures.gltf",
+        102,
+        123,
+        99,
+        0,
+        0,
+        123,
+    ),
+    (
+        "NormalTangentMirrorTest",
+        "NormalTangentMirrorTest.gltf",
+        1,
+        1,
+        1,
+        3,
+        3,
+        1,
+    ),
+    (
+        "NormalTangentTest",
+        "NormalTangentTest.gltf",
+        1,
+        1,
+        1,
+        3,
+        3,
+        1,
+    ),
+    (
+        "OrientationTest",
+        "OrientationTest.gltf",
+        13,
+        13,
+        7,
+        0,
+        0,
+        13,
+    ),
+    (
+        "TextureSettingsTest",
+        "TextureSettingsTest.gltf",
+        10,
+        10,
+        10,
+        9,
+        3,
+        10,
+    ),
+];
+
+#[test]
+fn every_sample_model_loads_with_the_files_counts() {
+    for (model, file, meshes, prims, mats, tex, imgs, objects) in MODELS {
+        let a = gltf::load(&asset(model, file)).unwrap_or_else(|e| panic!("{model}: {e}"));
+        let got = (
+            a.gltf_meshes,
+            a.gltf_primitives,
+            a.pbr.materials.len(),
+            a.pbr.textures.len(),
+            a.pbr.images.len(),
+            a.objects.len(),
+        );
+        assert_eq!(got, (meshes, prims, mats, tex, imgs, objects), "{model}");
+        assert_eq!(a.meshes.len(), prims, "{model}: one mesh per primitive");
+        assert_eq!(a.pbr.mesh_material.len(), prims, "{model}");
+        // No sample model has KHR_lights_punctual or cameras.
+        assert_eq!((a.lights.len(), a.cameras.len()), (0, 0), "{model}");
+        for m in &a.meshes {
+            assert!(
+                m.indices.iter().all(|&i| (i as usize) < m.vertices.len()),
+                "{model} {}",
+                m.name
+            );
+            for v in &m.vertices {
+                let t = Vec3::from_slice(&v.tangent[..3]);
+                assert!(
+                    t.is_finite() && v.tangent[3].abs() == 1.0,
+                    "{model} {}: tangent {:?}",
+                    m.name,
+                    v.tangent
+                );
+            }
+        }
+        assert!(
+            !a.bounds.is_empty() && a.bounds.min.is_finite() && a.bounds.max.is_finite(),
+            "{model}"
+        );
+    }
+}
+
+#[test]
+fn materials_map_metal_rough_alpha_and_anisotropy() {
+    let a = gltf::load(&asset("AlphaBlendModeTest", "AlphaBlendModeTest.gltf")).unwrap();
+    let modes: Vec<AlphaMode> = a.pbr.materials.iter().map(|m| m.alpha_mode).collect();
+    assert!(modes.contains(&AlphaMode::Blend) && modes.contains(&AlphaMode::Opaque));
+    // The file's cut-offs: default 0.5 plus explicit 0.25 and 0.75.
+    for cutoff in [0.25, 0.5, 0.75] {
+        assert!(
+            modes.contains(&AlphaMode::Mask(cutoff)),
+            "{modes:?} lacks cut-off {cutoff}"
+        );
+    }
+    let s = gltf::load(&asset(
+        "AnisotropyStrengthTest",
+        "AnisotropyStrengthTest.gltf",
+    ))
+    .unwrap();
+    let strengths: Vec<f32> = s
+        .pbr
+        .materials
+        .iter()
+        .map(|m| m.anisotropy_strength)
+        .collect();
+    assert!(
+        strengths.contains(&0.0) && strengths.contains(&1.0),
+        "{strengths:?}"
+    );
+    let r = gltf::load(&asset(
+        "AnisotropyRotationTest",
+        "AnisotropyRotationTest.gltf",
+    ))
+    .unwrap();
+    let rot: Vec<f32> = r
+        .pbr
+        .materials
+        .iter()
+        .map(|m| m.anisotropy_rotation)
+        .collect();
+    assert!(
+        rot.iter()
+            .any(|x| (x - std::f32::consts::FRAC_PI_6).abs() < 1e-6),
+        "{rot:?}"
+    );
+    assert!(
+        r.pbr
+            .materials
+            .iter()
+            .filter(|m| m.anisotropy_texture.is_some())
+            .count()
+            >= 2
+    );
+    // Roughness 0.1 -> glossiness 0.9 (the inverse of M1's 1 - glossiness).
+    assert!((r.pbr.materials[0].glossiness() - 0.9).abs() < 1e-6);
+    let h = gltf::load(&asset("DamagedHelmet", "DamagedHelmet.gltf")).unwrap();
+    let m = &h.pbr.materials[0];
+    assert_eq!(m.texture_count(), 5);
+    assert!(m.emissive.max_element() > 0.0);
+    assert_eq!(m.vertex_surface()[1], gltf::GLTF_DIELECTRIC_F0);
+}
+
+#[test]
+fn anisotropy_mapping_matches_the_extension_ratio() {
+    assert_eq!(gltf::anisotropy_from_khr(0.0, 0.3), 0.0);
+    for (s, alpha) in [(0.5f32, 0.01f32), (0.3, 0.2), (1.0, 0.5)] {
+        let a = gltf::anisotropy_from_khr(s, alpha);
+        let khr_ratio = (alpha + (1.0 - alpha) * s * s) / alpha;
+        let himal_ratio = 1.0 / (1.0 - 0.9 * a);
+        // Exact unless clamped at anisotropy 1 (ratio 10).
+        assert!(
+            (himal_ratio - khr_ratio.min(10.0)).abs() < 1e-3 * khr_ratio,
+            "{s} {alpha}: {himal_ratio} vs {khr_ratio}"
+        );
+    }
+}
+
+/// MikkTSpace on the mirror test's geometry reproduces the tangents its
+/// exporter supplied (same algorithm), including the mirrored half's sign.
+#[test]
+fn generated_tangents_match_the_supplied_ones() {
+    let path = asset("NormalTangentMirrorTest", "NormalTangentMirrorTest.gltf");
+    let text = std::fs::read_to_string(&path).unwrap();
+    // The same file with TANGENT removed from the attributes.
+    let stripped = text.replace("\"TANGENT\"", "\"_TANGENT\"");
+    assert_ne!(stripped, text, "the file names TANGENT");
+    let supplied = gltf::load(&path).unwrap();
+    let generated = gltf::load_from_bytes(&path, stripped.as_bytes()).unwrap();
+    let (s, g) = (&supplied.meshes[0], &generated.meshes[0]);
+    assert!(
+        s.vertices.iter().any(|v| v.tangent[3] < 0.0),
+        "mirrored UVs have w = -1"
+    );
+    // Compare per position + normal + uv (welding may reorder).
+    let key = |v: &himal::scene::Vertex| format!("{:?}{:?}{:?}", v.position, v.normal, v.uv);
+    let map: std::collections::HashMap<String, [f32; 4]> =
+        s.vertices.iter().map(|v| (key(v), v.tangent)).collect();
+    let (mut agree, mut total) = (0, 0);
+    for v in &g.vertices {
+        if let Some(t) = map.get(&key(v)) {
+            total += 1;
+            let dot = Vec3::from_slice(&t[..3])
+                .normalize()
+                .dot(Vec3::from_slice(&v.tangent[..3]).normalize());
+            if dot > 0.9 && t[3] == v.tangent[3] {
+                agree += 1;
+            }
+        }
+    }
+    let share = agree as f32 / total.max(1) as f32;
+    eprintln!("tangents agreeing: {agree} of {total}");
+    // measured 2770 of 2770 (1.0) on 2026-11-22; threshold 0.95
+    assert!(
+        total > 100 && share > 0.95,
+        "{agree} of {total} tangents agree"
+    );
+}
+
+fn load_err(name: &str, bytes: &[u8]) -> String {
+    let dir = std::env::temp_dir().join(format!("himal-gltf-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let e = gltf::load(&path).expect_err(name).to_string();
+    assert!(e.contains(name), "message does not name the file: {e}");
+    e
+}
+
+#[test]
+fn bad_input_is_an_error_naming_file_and_problem() {
+    let orig = std::fs::read_to_string(asset("OrientationTest", "OrientationTest.gltf")).unwrap();
+    let bin = std::fs::read(asset("OrientationTest", "OrientationTest.bin")).unwrap();
+    // Invalid JSON.
+    let e = load_err("broken.gltf", &orig.as_bytes()[..orig.len() / 2]);
+    assert!(e.contains("not valid glTF"), "{e}");
+    // Missing .bin (the URI resolves beside the temporary file).
+    let e = load_err("nobin.gltf", orig.as_bytes());
+    assert!(e.contains("OrientationTest.bin"), "{e}");
+    // A GLB: the same JSON with the BIN chunk; then truncated.
+    let glb = make_glb(
+        &orig.replace("\"uri\" : \"OrientationTest.bin\"", "\"name\" : \"bin\""),
+        &bin,
+    );
+    let dir = std::env::temp_dir().join(format!("himal-gltf-ok-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("ok.glb"), &glb).unwrap();
+    let ok = gltf::load(&dir.join("ok.glb")).expect("well-formed GLB");
+    assert_eq!(ok.objects.len(), 13);
+    let e = load_err("truncated.glb", &glb[..glb.len() - 100]);
+    assert!(e.contains("not valid glTF") || e.contains("bytes"), "{e}");
+    // A short BIN chunk: the declared buffer length does not fit.
+    let e = load_err(
+        "short.glb",
+        &make_glb(
+            &orig.replace("\"uri\" : \"OrientationTest.bin\"", "\"name\" : \"bin\""),
+            &bin[..bin.len() / 2],
+        ),
+    );
+    assert!(e.contains("bytes"), "{e}");
+    // Non-triangle primitives.
+    let points = orig.replacen("\"material\"", "\"mode\" : 0, \"material\"", 1);
+    std::fs::write(dir.join("OrientationTest.bin"), &bin).unwrap();
+    std::fs::write(dir.join("points.gltf"), &points).unwrap();
+    let e = gltf::load(&dir.join("points.gltf"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("points.gltf") && e.contains("triangles only"),
+        "{e}"
+    );
+    // Non-finite transforms: 1e39 overflows f32 to infinity (JSON has no NaN).
+    let nan = orig.replacen(
+        "\"translation\" : [",
+        "\"translation\" : [1e39, 0, 0], \"extras\" : [",
+        1,
+    );
+    std::fs::write(dir.join("nan.gltf"), &nan).unwrap();
+    let e = gltf::load(&dir.join("nan.gltf")).unwrap_err().to_string();
+    assert!(e.contains("nan.gltf") && e.contains("non-finite"), "{e}");
+    // Out-of-range accessor: the first accessor claims 100x its count.
+    let text = orig.replacen("\"count\" : ", "\"count\" : 100", 1);
+    std::fs::write(dir.join("range.gltf"), &text).unwrap();
+    let e = gltf::load(&dir.join("range.gltf")).unwrap_err().to_string();
+    assert!(e.contains("range.gltf") && e.contains("runs past"), "{e}");
+}
+
+/// A GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
+fn make_glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut j = json.as_bytes().to_vec();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let mut b = bin.to_vec();
+    while !b.len().is_multiple_of(4) {
+        b.push(0);
+    }
+    let total = 12 + 8 + j.len() + 8 + b.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((j.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(&j);
+    out.extend((b.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(&b);
+    out
+}
