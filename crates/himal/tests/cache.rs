@@ -77,8 +77,9 @@ fn after_prewarm_a_16_frame_sequence_compiles_nothing() {
     let LoadStatus::Loaded { keys, .. } = status else {
         panic!("cache not loaded: {status:?}");
     };
-    // Measured 65 permutations: the passes' fixed pipelines, 8 lighting and
-    // 4 tone-map permutations, 8 Kawase offsets, the debug and AO views x 2 formats.
+    // Measured 77 permutations: the passes' fixed pipelines (environment
+    // filtering included), 16 lighting and 4 tone-map permutations, 8 Kawase
+    // offsets, the debug and AO views x 2 formats, the scene's G-buffer ones.
     assert_eq!(
         keys as u64, prewarm.compiles,
         "index holds every pre-warmed key"
@@ -170,4 +171,23 @@ fn corrupted_or_foreign_cache_is_ignored_and_rebuilt() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn prewarm_covers_the_material_types_of_the_scene() {
+    // E1's material-type axis: a scene with vegetation pre-warms the
+    // vegetation G-buffer permutation, one without does not.
+    let grass =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/grass_patch.toml"))
+            .expect("grass scene");
+    let count = |scene: &Scene| {
+        let ctx = GpuContext::new(&GpuOptions::default()).expect("GPU");
+        let mut r = Renderer::new(ctx, scene).expect("renderer");
+        r.prewarm().expect("prewarm");
+        r.context().pipelines.len()
+    };
+    let (plain, with_grass) = (count(&scene()), count(&grass));
+    // Measured 2026-11-22: 77 and 78 (+ gbuffer.vegetation).
+    eprintln!("pre-warmed pipelines: {plain} without vegetation, {with_grass} with");
+    assert_eq!(with_grass, plain + 1);
 }

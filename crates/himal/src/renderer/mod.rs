@@ -19,7 +19,7 @@ use crate::math::sh::Sh9Gpu;
 use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView};
 use crate::passes::debug::{DebugPass, DebugView};
 use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass};
-use crate::passes::gbuffer::GBufferPass;
+use crate::passes::gbuffer::{GBufferKey, GBufferPass};
 use crate::passes::lighting::{LightingKey, LightingPass};
 use crate::passes::post::{
     AdaptPass, AdaptationSettings, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass,
@@ -242,7 +242,7 @@ struct SunKey(f32, f32, u32, f32);
 impl Renderer {
     /// Creates every pipeline and uploads the scene.
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
-        let passes = Passes {
+        let mut passes = Passes {
             shadows: SunShadowPass::new(&ctx)?,
             gbuffer: GBufferPass::new(&ctx)?,
             ao: AoPass::new(&ctx)?,
@@ -256,6 +256,9 @@ impl Renderer {
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        for key in GBufferKey::for_scene(&scene_gpu) {
+            passes.gbuffer.prepare(&ctx, key)?;
+        }
         let view_buffer =
             uniform_buffer(&ctx, "view", &bytemuck::Zeroable::zeroed() as &ViewUniform);
         let lighting_buffer = uniform_buffer(
@@ -366,8 +369,10 @@ impl Renderer {
     }
 
     /// E1 pre-warm: fetches every pipeline permutation a frame of this
-    /// renderer can ask for (tone-map variants, bloom passes, debug views in
-    /// both formats), so none compiles mid-sequence. Save the cache after it
+    /// renderer can ask for (tone-map and lighting variants, bloom passes,
+    /// debug views in both formats; the G-buffer permutations of the scene's
+    /// material types were fetched by [`Renderer::new`]), so none compiles
+    /// mid-sequence. Save the cache after it
     /// with [`GpuContext::save_pipeline_cache`].
     pub fn prewarm(&mut self) -> Result<(), Error> {
         let (ctx, passes) = (&self.ctx, &mut self.res.passes);

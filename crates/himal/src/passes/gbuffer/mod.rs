@@ -4,6 +4,10 @@
 //! with its CPU twin in `math/quat_frame.rs`. Opaque objects draw first with
 //! back-face culling and no discard (early-Z); vegetation follows with the
 //! same shader specialised by `VEGETATION` (alpha test, sway, no culling).
+//! Pipelines are permutations keyed by [`GBufferKey`] (E1's material-type
+//! axis), created for the material types the scene uses.
+
+use std::collections::HashMap;
 
 use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
@@ -29,18 +33,86 @@ pub struct GBuffer {
     pub depth: TextureHandle,
 }
 
+/// Material type: which shader and specialisation draws an object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MaterialType {
+    /// Per-vertex materials (`gbuffer.wgsl`): the demo world.
+    Vertex,
+    /// Alpha-tested, swaying cards (`gbuffer.wgsl`, `VEGETATION`).
+    Vegetation,
+    /// glTF metal-rough materials with textures (`textured.wgsl`).
+    Textured,
+}
+
+/// A G-buffer permutation: material type x usage (double-sided).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct GBufferKey {
+    pub material: MaterialType,
+    pub double_sided: bool,
+}
+
+impl GBufferKey {
+    pub const VERTEX: Self = Self {
+        material: MaterialType::Vertex,
+        double_sided: false,
+    };
+    /// Cards are seen from both sides.
+    pub const VEGETATION: Self = Self {
+        material: MaterialType::Vegetation,
+        double_sided: true,
+    };
+
+    pub const fn textured(double_sided: bool) -> Self {
+        Self {
+            material: MaterialType::Textured,
+            double_sided,
+        }
+    }
+
+    /// The permutations `scene` draws with (the per-vertex one always: it
+    /// also clears the targets when nothing else draws).
+    pub fn for_scene(scene: &SceneGpu) -> Vec<GBufferKey> {
+        let mut keys = vec![Self::VERTEX];
+        if !scene.draws_vegetation.is_empty() {
+            keys.push(Self::VEGETATION);
+        }
+        if let Some(m) = &scene.materials {
+            for (_, material) in &scene.draws_textured {
+                if let Some(binding) = m.materials.get(*material) {
+                    let key = Self::textured(binding.double_sided);
+                    if !keys.contains(&key) {
+                        keys.push(key);
+                    }
+                }
+            }
+        }
+        keys
+    }
+}
+
 pub struct GBufferPass {
     program: Program,
-    pipeline: wgpu::RenderPipeline,
-    vegetation: wgpu::RenderPipeline,
-    /// glTF materials (`textured.wgsl`): back-face culled and double-sided.
+    /// glTF materials (`textured.wgsl`).
     textured: Program,
-    textured_pipelines: [wgpu::RenderPipeline; 2],
+    pipelines: HashMap<GBufferKey, wgpu::RenderPipeline>,
 }
 
 impl GBufferPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?;
+        let mut pass = Self {
+            program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
+            textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
+            pipelines: HashMap::new(),
+        };
+        pass.prepare(ctx, GBufferKey::VERTEX)?;
+        Ok(pass)
+    }
+
+    /// Fetches the pipeline of permutation `key` (memory, disk or compile).
+    pub fn prepare(&mut self, ctx: &GpuContext, key: GBufferKey) -> Result<(), GpuError> {
+        if self.pipelines.contains_key(&key) {
+            return Ok(());
+        }
         let targets = [
             target(ALBEDO_FORMAT),
             target(FRAME_FORMAT),
@@ -68,26 +140,25 @@ impl GBufferPass {
             },
             constants,
         };
-        let pipeline =
-            program.render_pipeline(ctx, &spec("gbuffer", Some(wgpu::Face::Back), &[]))?;
-        // Cards are seen from both sides.
-        let vegetation = program.render_pipeline(
-            ctx,
-            &spec("gbuffer.vegetation", None, &[("VEGETATION", 1.0)]),
-        )?;
-        let textured = Program::new(ctx, "passes/gbuffer/textured.wgsl")?;
-        let textured_pipelines = [
-            textured
-                .render_pipeline(ctx, &spec("gbuffer.textured", Some(wgpu::Face::Back), &[]))?,
-            textured.render_pipeline(ctx, &spec("gbuffer.textured.double_sided", None, &[]))?,
-        ];
-        Ok(Self {
-            program,
-            pipeline,
-            vegetation,
-            textured,
-            textured_pipelines,
-        })
+        let cull = if key.double_sided {
+            None
+        } else {
+            Some(wgpu::Face::Back)
+        };
+        let pipeline = match key.material {
+            MaterialType::Vertex => self
+                .program
+                .render_pipeline(ctx, &spec("gbuffer", cull, &[]))?,
+            MaterialType::Vegetation => self.program.render_pipeline(
+                ctx,
+                &spec("gbuffer.vegetation", cull, &[("VEGETATION", 1.0)]),
+            )?,
+            MaterialType::Textured => self
+                .textured
+                .render_pipeline(ctx, &spec("gbuffer.textured", cull, &[]))?,
+        };
+        self.pipelines.insert(key, pipeline);
+        Ok(())
     }
 
     pub fn add<'a>(
@@ -116,7 +187,14 @@ impl GBufferPass {
             motion: pass.write(motion, TextureAccess::ColorAttachment),
             depth: pass.write(depth, TextureAccess::DepthAttachment),
         };
+        let pipelines = &self.pipelines;
         pass.execute(move |ctx| {
+            let Some(vertex) = pipelines.get(&GBufferKey::VERTEX) else {
+                errors.record::<()>(Err(GpuError::Other(
+                    "G-buffer pipeline not prepared".into(),
+                )));
+                return;
+            };
             let materials = match &scene.materials {
                 Some(m) => errors.record(material_bind_groups(&self.textured, ctx.device, m)),
                 None => Some(Vec::new()),
@@ -165,7 +243,7 @@ impl GBufferPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            rp.set_pipeline(&self.pipeline);
+            rp.set_pipeline(vertex);
             rp.set_bind_group(0, &bind_group, &[]);
             scene.bind_geometry(&mut rp);
             SceneGpu::draw_list(&mut rp, &scene.draws_opaque);
@@ -176,13 +254,26 @@ impl GBufferPass {
                     else {
                         continue;
                     };
-                    rp.set_pipeline(&self.textured_pipelines[binding.double_sided as usize]);
+                    let key = GBufferKey::textured(binding.double_sided);
+                    let Some(pipeline) = pipelines.get(&key) else {
+                        errors.record::<()>(Err(GpuError::Other(format!(
+                            "G-buffer permutation {key:?} was not prepared"
+                        ))));
+                        return;
+                    };
+                    rp.set_pipeline(pipeline);
                     rp.set_bind_group(1, group, &[]);
                     SceneGpu::draw_list(&mut rp, std::slice::from_ref(draw));
                 }
             }
             if !scene.draws_vegetation.is_empty() {
-                rp.set_pipeline(&self.vegetation);
+                let Some(pipeline) = pipelines.get(&GBufferKey::VEGETATION) else {
+                    errors.record::<()>(Err(GpuError::Other(
+                        "G-buffer vegetation permutation was not prepared".into(),
+                    )));
+                    return;
+                };
+                rp.set_pipeline(pipeline);
                 rp.set_bind_group(0, &bind_group, &[]);
                 SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
             }
