@@ -24,6 +24,10 @@ pub struct RenderArgs {
     /// Time of day, HH:MM (default: the scene's).
     #[arg(long, value_name = "HH:MM")]
     pub time: Option<String>,
+    /// Time-lapse: with --frames N, the sun moves from the first time to the
+    /// second over the sequence while the camera stays put (each frame is a cut).
+    #[arg(long, value_name = "HH:MM..HH:MM")]
+    pub time_lapse: Option<String>,
     /// Image size.
     #[arg(long, default_value = "1280x720", value_name = "WxH")]
     pub size: String,
@@ -136,6 +140,16 @@ impl PostArgs {
     }
 }
 
+/// Parses `HH:MM..HH:MM` into hours.
+fn parse_time_lapse(s: &str) -> Result<(f32, f32)> {
+    let (a, b) = s
+        .split_once("..")
+        .with_context(|| format!("--time-lapse {s}: expected HH:MM..HH:MM"))?;
+    let parse =
+        |t: &str| himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time-lapse {s}: {e}"));
+    Ok((parse(a)?, parse(b)?))
+}
+
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let (w, h) = s
@@ -208,6 +222,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(t) = &args.time {
         sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
     }
+    let time_lapse = args
+        .time_lapse
+        .as_deref()
+        .map(parse_time_lapse)
+        .transpose()?;
     let mut settings = FrameSettings::new(width, height, sun);
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
@@ -232,7 +251,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     });
     for i in 0..args.frames {
         let mut cam = camera.clone();
-        cam.position += cam.forward * (args.speed * i as f32);
+        if let Some((start, end)) = time_lapse {
+            let f = i as f32 / (args.frames - 1).max(1) as f32;
+            settings.sun.time_hours = start + (end - start) * f;
+            // Hours pass between frames: no history, adaptation starts adapted.
+            renderer.reset_history();
+        } else {
+            cam.position += cam.forward * (args.speed * i as f32);
+        }
         // Animation (moving objects, sway) at 30 frames per second of sequence time.
         settings.time_s = i as f32 / 30.0;
         let frame = renderer.render(&cam, &settings)?;

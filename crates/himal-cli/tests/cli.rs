@@ -112,3 +112,34 @@ fn renders_a_png() {
     let img = image::open(&path).expect("a PNG");
     assert_eq!((img.width(), img.height()), (64, 36));
 }
+
+#[test]
+fn time_lapse_writes_a_day_sequence() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-lapse-{}", std::process::id()));
+    let p = dir.join("day.png").to_string_lossy().to_string();
+    let (ok, _, err) = himal(&[
+        "render",
+        "--size",
+        "48x27",
+        "--camera",
+        "village",
+        "--frames",
+        "3",
+        "--time-lapse",
+        "07:00..19:00",
+        "--out",
+        &p,
+    ]);
+    assert!(ok, "{err}");
+    let frames: Vec<_> = (0..3)
+        .map(|i| {
+            image::open(dir.join(format!("day_{i:04}.png")))
+                .expect("a frame")
+                .to_rgb8()
+        })
+        .collect();
+    // Morning, noon and evening light differ (sun direction and colour).
+    assert_ne!(frames[0].as_raw(), frames[1].as_raw());
+    assert_ne!(frames[1].as_raw(), frames[2].as_raw());
+    fails_with(&["render", "--time-lapse", "07:00-19:00"], "HH:MM..HH:MM");
+}
