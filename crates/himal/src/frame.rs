@@ -19,6 +19,7 @@ use crate::graph::FrameGraph;
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::EnvMapPass;
+use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
@@ -62,6 +63,7 @@ pub struct Passes {
     pub gbuffer: GBufferPass,
     pub ao: AoPass,
     pub envmap: EnvMapPass,
+    pub probes: ProbeSet,
     pub lighting: LightingPass,
     pub sky: SkyPass,
     pub luminance: LuminancePass,
@@ -78,6 +80,11 @@ pub struct FrameInputs<'a> {
     pub view: &'a wgpu::Buffer,
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
+    /// Sky parameters without the sun disk (environment maps: the sun is lit analytically).
+    pub sky_no_disk: &'a wgpu::Buffer,
+    /// The probe whose relit cube feeds ambient specular (L3), and whether
+    /// its G-buffer cube must be captured this frame; `None`: the sky alone.
+    pub probe: Option<(usize, bool)>,
     pub luminance: &'a LuminanceBuffers,
     pub post: PostFrame<'a>,
     pub output: &'a wgpu::Texture,
@@ -110,6 +117,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         ao,
         ao_placeholder,
         lighting_key,
+        sky_no_disk,
+        probe,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
@@ -127,8 +136,53 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         };
         passes.ao.add(&mut g, size, inputs, errors)
     });
-    let env = passes.envmap.add(&mut g, sky, errors);
     let shadow_sampler = &passes.shadows.sampler;
+    let env = match probe {
+        Some((index, capture)) if passes.envmap.dirty => {
+            // L3: relight the probe's G-buffer cube face by face with the
+            // lighting and sky passes (sun unshadowed, sky unoccluded).
+            let probes = &passes.probes;
+            let size = (probes.size, probes.size);
+            let mut source = passes.envmap.import_source(&mut g);
+            let env_before = g.import_texture("envmap.filtered.before", passes.envmap.filtered());
+            for face in 0..6 {
+                g.set_pass_prefix(Some(format!("envmap.probe{index}.face{face}")));
+                let view = &probes.probes[index].faces[face].view;
+                let stored = if capture {
+                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, errors);
+                    probes.add_store(&mut g, index, face, fresh)
+                } else {
+                    probes.import_face(&mut g, index, face)
+                };
+                let relight = LightingInputs {
+                    view,
+                    lighting,
+                    sky,
+                    shadow_map: g.import_texture("shadow.off", shadow_placeholder),
+                    shadow_sampler,
+                    ao: g.import_texture("ao.off", ao_placeholder),
+                    envmap: &passes.envmap,
+                    env: env_before,
+                    key: LightingKey::RELIGHT,
+                };
+                let hdr = passes.lighting.add(&mut g, size, stored, relight, errors);
+                let hdr = passes
+                    .sky
+                    .add(&mut g, hdr, stored.depth, view, sky_no_disk, errors);
+                source = probes.add_mirror(
+                    &mut g,
+                    face,
+                    hdr,
+                    source,
+                    passes.envmap.source_level0(),
+                    errors,
+                );
+            }
+            g.set_pass_prefix(None);
+            passes.envmap.add_mips_and_filter(&mut g, source, errors)
+        }
+        _ => passes.envmap.add(&mut g, sky_no_disk, errors),
+    };
     let lighting_inputs = LightingInputs {
         view,
         lighting,

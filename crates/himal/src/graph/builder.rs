@@ -96,6 +96,8 @@ pub struct FrameGraph<'a> {
     pub(crate) passes: Vec<PassDecl<'a>>,
     /// Misuse outside passes (e.g. `mark_output` with a foreign handle).
     pub(crate) errors: Vec<GraphError>,
+    /// Prepended to pass ids while set (a pass reused for another view).
+    prefix: Option<String>,
 }
 
 impl Default for FrameGraph<'_> {
@@ -111,12 +113,24 @@ impl<'a> FrameGraph<'a> {
             resources: Vec::new(),
             passes: Vec::new(),
             errors: Vec::new(),
+            prefix: None,
         }
     }
 
+    /// Until cleared with `None`, pass ids and resource names become
+    /// `prefix.id`: lets a pass
+    /// record again for another view (e.g. `envmap.probe0.face2.gbuffer`).
+    pub fn set_pass_prefix(&mut self, prefix: Option<String>) {
+        self.prefix = prefix;
+    }
+
     fn push(&mut self, name: &str, kind: ResourceKind<'a>) -> u32 {
+        let name = match &self.prefix {
+            Some(p) => format!("{p}.{name}"),
+            None => name.to_string(),
+        };
         self.resources.push(Resource {
-            name: name.to_string(),
+            name,
             kind,
             latest: 0,
             output: false,
@@ -221,8 +235,12 @@ impl<'a> FrameGraph<'a> {
     /// Starts a pass; `id` is dotted (`ao.hbao`) and unique in the graph.
     /// The pass is registered only by [`PassBuilder::execute`].
     pub fn add_pass(&mut self, id: &str) -> PassBuilder<'_, 'a> {
+        let id = match &self.prefix {
+            Some(p) => format!("{p}.{id}"),
+            None => id.to_string(),
+        };
         self.passes.push(PassDecl {
-            id: id.to_string(),
+            id,
             reads: Vec::new(),
             writes: Vec::new(),
             side_effect: false,

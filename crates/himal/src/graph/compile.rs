@@ -109,6 +109,7 @@ pub(crate) fn compile(graph: FrameGraph<'_>) -> Result<CompiledGraph<'_>, GraphE
         resources,
         passes,
         errors,
+        ..
     } = graph;
     if let Some(e) = errors.into_iter().next() {
         return Err(e);

@@ -18,6 +18,7 @@ use crate::graph::{PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
 use crate::passes::ao::{AoHistory, AoMode, AoPass, AoSettings, AoUniform, AoView};
 use crate::passes::debug::{DebugPass, DebugView};
+use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass};
 use crate::passes::gbuffer::{GBufferKey, GBufferPass};
 use crate::passes::lighting::{LightingKey, LightingPass};
@@ -129,6 +130,9 @@ pub struct FrameSettings {
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
     /// along the reflection vector.
     pub environment_specular: bool,
+    /// L3: ambient specular from the relit G-buffer cube of the probe
+    /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.
+    pub environment_probes: bool,
     /// Re-capture and re-filter the environment cube every frame (bench rows;
     /// otherwise only when the sky changes).
     pub envmap_every_frame: bool,
@@ -154,6 +158,7 @@ impl FrameSettings {
             ao: AoSettings::default(),
             time_s: 0.0,
             environment_specular: true,
+            environment_probes: true,
             envmap_every_frame: false,
         }
     }
@@ -174,6 +179,9 @@ struct Resources {
     view_buffer: wgpu::Buffer,
     lighting_buffer: wgpu::Buffer,
     sky_buffer: wgpu::Buffer,
+    sky_no_disk_buffer: wgpu::Buffer,
+    /// The probe feeding ambient specular (L3), `None`: the sky alone.
+    active_probe: Option<usize>,
     luminance: Option<((u32, u32), LuminanceBuffers)>,
     post: PostState,
     outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
@@ -209,6 +217,10 @@ impl Resources {
             },
             ao_placeholder: &self.ao_placeholder,
             lighting_key: lighting_key(settings),
+            sky_no_disk: &self.sky_no_disk_buffer,
+            probe: self
+                .active_probe
+                .map(|p| (p, !self.passes.probes.probes[p].captured)),
             errors,
         })
     }
@@ -247,6 +259,7 @@ impl Renderer {
             gbuffer: GBufferPass::new(&ctx)?,
             ao: AoPass::new(&ctx)?,
             envmap: EnvMapPass::new(&ctx, ENVMAP_SIZE)?,
+            probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
@@ -259,6 +272,9 @@ impl Renderer {
         for key in GBufferKey::for_scene(&scene_gpu) {
             passes.gbuffer.prepare(&ctx, key)?;
         }
+        if !scene.probes.is_empty() {
+            passes.lighting.prepare(&ctx, LightingKey::RELIGHT)?;
+        }
         let view_buffer =
             uniform_buffer(&ctx, "view", &bytemuck::Zeroable::zeroed() as &ViewUniform);
         let lighting_buffer = uniform_buffer(
@@ -269,7 +285,13 @@ impl Renderer {
         // Filled by `update_sky` before the first frame.
         let sky_buffer =
             uniform_buffer(&ctx, "sky", &<SkyGpuParams as bytemuck::Zeroable>::zeroed());
-        let timer = PassTimer::new(&ctx.device, &ctx.queue, 32);
+        let sky_no_disk_buffer = uniform_buffer(
+            &ctx,
+            "sky.no_disk",
+            &<SkyGpuParams as bytemuck::Zeroable>::zeroed(),
+        );
+        // A probe capture adds 30 passes (6 faces x G-buffer, store, relight, sky, mirror).
+        let timer = PassTimer::new(&ctx.device, &ctx.queue, 96);
         let shadow_placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow.off"),
             size: wgpu::Extent3d {
@@ -315,6 +337,8 @@ impl Renderer {
                 view_buffer,
                 lighting_buffer,
                 sky_buffer,
+                sky_no_disk_buffer,
+                active_probe: None,
                 luminance: None,
                 post,
                 outputs: HashMap::new(),
@@ -449,10 +473,16 @@ impl Renderer {
             sun.day_of_year,
             sun.turbidity,
         );
+        let params = light.sky.gpu_params();
+        self.ctx
+            .queue
+            .write_buffer(&self.res.sky_buffer, 0, bytemuck::bytes_of(&params));
+        let mut no_disk = params;
+        no_disk.sun_disk[2] = 0.0;
         self.ctx.queue.write_buffer(
-            &self.res.sky_buffer,
+            &self.res.sky_no_disk_buffer,
             0,
-            bytemuck::bytes_of(&light.sky.gpu_params()),
+            bytemuck::bytes_of(&no_disk),
         );
         self.sky_light = Some((key, light));
         self.res.passes.envmap.dirty = true;
@@ -534,6 +564,15 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun);
+        let probe = if settings.environment_probes {
+            self.res.passes.probes.nearest(camera.position)
+        } else {
+            None
+        };
+        if probe != self.res.active_probe {
+            self.res.active_probe = probe;
+            self.res.passes.envmap.dirty = true;
+        }
         if settings.envmap_every_frame {
             self.res.passes.envmap.dirty = true;
         }
@@ -631,6 +670,11 @@ impl Renderer {
         self.prev_view_proj = Some(view_proj);
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
+        if self.res.passes.envmap.dirty
+            && let Some(p) = self.res.active_probe
+        {
+            self.res.passes.probes.probes[p].captured = true;
+        }
         self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
         if let Some(h) = &mut self.res.ao_history {

@@ -129,6 +129,11 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
     let sun = build_sun(&ck, file.sun.as_ref())?;
     let materials = build_materials(&ck, &file.material)?;
     let cameras = build_cameras(&ck, &file.camera)?;
+    let probes = file
+        .probe
+        .iter()
+        .map(|p| ck.finite3(&p.position, "position"))
+        .collect::<Result<Vec<_>>>()?;
     let mut world = World {
         ck: &ck,
         base_dir,
@@ -150,6 +155,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         sun,
         bounds,
         pbr: Default::default(),
+        probes,
     })
 }
 

@@ -18,6 +18,15 @@ pub(crate) struct FileScene {
     pub object: Vec<FileObject>,
     #[serde(default)]
     pub camera: Vec<FileCamera>,
+    #[serde(default)]
+    pub probe: Vec<FileProbe>,
+}
+
+/// An environment probe (L3): where a G-buffer cube is captured.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileProbe {
+    pub position: Spanned<[f32; 3]>,
 }
 
 #[derive(Deserialize)]

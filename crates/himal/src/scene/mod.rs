@@ -409,6 +409,8 @@ pub struct Scene {
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
     pub pbr: gltf::PbrSet,
+    /// Environment probe positions (L3: G-buffer cubes relit with the sky).
+    pub probes: Vec<Vec3>,
 }
 
 /// Text of the demo world, embedded so the renderer runs from anywhere.
@@ -457,6 +459,7 @@ impl Scene {
             sun: SunDesc::default(),
             bounds: asset.bounds,
             pbr: asset.pbr,
+            probes: Vec::new(),
         })
     }
 

@@ -5,6 +5,7 @@
 //! Re-run whenever the sky changes (time of day), not every frame.
 //! Math and figures: `docs/techniques/L4.md`; CPU twin: [`reference`].
 
+pub mod probe;
 pub mod reference;
 
 use crate::frame::FrameErrors;
@@ -48,6 +49,7 @@ pub struct EnvMapPass {
     params: wgpu::Buffer,
     source: wgpu::Texture,
     source_cube: wgpu::TextureView,
+    source_level0: wgpu::TextureView,
     filtered: wgpu::Texture,
     /// Filtered cube, all mips (what lighting samples).
     pub filtered_cube: wgpu::TextureView,
@@ -162,6 +164,7 @@ impl EnvMapPass {
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
             source_cube: cube(&source),
+            source_level0: layer_view(&source, 0, wgpu::TextureViewDimension::D2Array),
             filtered_cube: cube(&filtered),
             source,
             filtered,
@@ -295,16 +298,36 @@ impl EnvMapPass {
         sky: Option<&'a wgpu::Buffer>,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let mut source = graph.import_texture("envmap.source", &self.source);
+        let mut source = self.import_source(graph);
+        if let Some(sky) = sky {
+            source = self.add_capture(graph, source, sky, errors);
+        }
+        self.add_mips_and_filter(graph, source, errors)
+    }
+
+    /// The source cube in `graph` (for passes that fill its level 0).
+    pub fn import_source<'a>(&'a self, graph: &mut FrameGraph<'a>) -> TextureHandle {
+        graph.import_texture("envmap.source", &self.source)
+    }
+
+    /// Level 0 of the source cube as a storage view (all six layers).
+    pub fn source_level0(&self) -> &wgpu::TextureView {
+        &self.source_level0
+    }
+
+    /// Box mips of the filled source, then GGX filtering; returns the filtered cube.
+    pub fn add_mips_and_filter<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        source: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
         let filtered = graph.import_texture("envmap.filtered", &self.filtered);
         let size = self.size;
         let faces = |cp: &mut wgpu::ComputePass<'_>, s: u32| {
             let n = s.div_ceil(WORKGROUP);
             cp.dispatch_workgroups(n, n, 6);
         };
-        if let Some(sky) = sky {
-            source = self.add_capture(graph, source, sky, errors);
-        }
         let mut pass = graph.add_pass("envmap.mips");
         pass.read(source, TextureAccess::Sampled);
         let source = pass.write(source, TextureAccess::StorageWrite);
@@ -379,13 +402,15 @@ impl EnvMapPass {
         let mut pass = graph.add_pass("envmap.capture");
         let source = pass.write(source, TextureAccess::StorageWrite);
         pass.execute(move |ctx| {
-            let target = layer_view(&self.source, 0, wgpu::TextureViewDimension::D2Array);
             let bg = self.capture_program.bind(
                 ctx.device,
                 0,
                 &[
                     ("sky", sky.as_entire_binding()),
-                    ("out_texture", wgpu::BindingResource::TextureView(&target)),
+                    (
+                        "out_texture",
+                        wgpu::BindingResource::TextureView(&self.source_level0),
+                    ),
                 ],
             );
             if let Some(bg) = errors.record(bg) {

@@ -44,6 +44,14 @@ impl Default for LightingKey {
 }
 
 impl LightingKey {
+    /// Relighting environment probes (L3): sun unshadowed, sky SH, nothing else.
+    pub const RELIGHT: LightingKey = LightingKey {
+        shadows: false,
+        fog: false,
+        ssao: false,
+        env_specular: false,
+    };
+
     /// Every permutation (for pre-warming).
     pub fn all() -> impl Iterator<Item = LightingKey> {
         (0..16u32).map(|bits| LightingKey {

@@ -1,0 +1,270 @@
+//! Environment probes (TECHNIQUES L3): a G-buffer cube (albedo, tangent
+//! frame, material, depth; 128² per face) captured once per probe with the
+//! G-buffer pass, then relit by the deferred lighting pass (sun unshadowed,
+//! sky SH unoccluded, no fog, no AO) and the sky pass whenever the time of
+//! day changes, mirrored into the source cube and filtered like the sky
+//! (L4). The probe nearest the camera is used.
+
+use glam::{Mat4, Vec3};
+
+use crate::gpu::pipeline::{Program, uniform_buffer};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::passes::gbuffer::{ALBEDO_FORMAT, DEPTH_FORMAT, FRAME_FORMAT, GBuffer, MATERIAL_FORMAT};
+use crate::renderer::uniforms::ViewUniform;
+use crate::scene::Camera;
+
+/// (forward, up) of the cube faces +X, -X, +Y, -Y, +Z, -Z (Vulkan convention).
+pub const FACE_AXES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::Y),
+    (Vec3::NEG_X, Vec3::Y),
+    (Vec3::Y, Vec3::NEG_Z),
+    (Vec3::NEG_Y, Vec3::Z),
+    (Vec3::Z, Vec3::Y),
+    (Vec3::NEG_Z, Vec3::Y),
+];
+
+/// Near plane of the face cameras (metres).
+pub const PROBE_NEAR: f32 = 0.05;
+
+/// The camera that renders face `face` of a probe at `position`.
+pub fn face_camera(position: Vec3, face: usize) -> Camera {
+    let (forward, up) = FACE_AXES[face];
+    Camera {
+        position,
+        forward,
+        up,
+        fov_y_deg: 90.0,
+        near: PROBE_NEAR,
+    }
+}
+
+/// One face's persistent G-buffer and its view uniform.
+pub struct ProbeFace {
+    pub albedo: wgpu::Texture,
+    pub frame: wgpu::Texture,
+    pub material: wgpu::Texture,
+    pub depth: wgpu::Texture,
+    pub view: wgpu::Buffer,
+}
+
+pub struct Probe {
+    pub position: Vec3,
+    pub faces: Vec<ProbeFace>,
+    /// The G-buffer cube holds the scene (set after the capturing frame).
+    pub captured: bool,
+}
+
+/// Probes of a scene and the mirror pipelines (one per face).
+pub struct ProbeSet {
+    pub probes: Vec<Probe>,
+    pub size: u32,
+    program: Program,
+    mirror: Vec<wgpu::ComputePipeline>,
+}
+
+fn face_texture(
+    ctx: &GpuContext,
+    label: &str,
+    size: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        // Render attachment: the sky pass depth-tests against the stored depth.
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+impl ProbeSet {
+    pub fn new(ctx: &GpuContext, positions: &[Vec3], size: u32) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, "passes/envmap/face.wgsl")?;
+        let mirror = (0..6)
+            .map(|f| program.compute_pipeline(ctx, "cs_mirror", &[("FACE", f as f64)]))
+            .collect::<Result<_, _>>()?;
+        let probes = positions
+            .iter()
+            .enumerate()
+            .map(|(p, &position)| {
+                let faces = (0..6)
+                    .map(|f| {
+                        let label = format!("probe{p}.face{f}");
+                        let camera = face_camera(position, f);
+                        let proj = camera.projection(1.0);
+                        let view = camera.view();
+                        let uniform = ViewUniform::new(
+                            view,
+                            proj,
+                            proj * view,
+                            position,
+                            PROBE_NEAR,
+                            (size, size),
+                            0,
+                            0.0,
+                        );
+                        ProbeFace {
+                            albedo: face_texture(ctx, &label, size, ALBEDO_FORMAT),
+                            frame: face_texture(ctx, &label, size, FRAME_FORMAT),
+                            material: face_texture(ctx, &label, size, MATERIAL_FORMAT),
+                            depth: face_texture(ctx, &label, size, DEPTH_FORMAT),
+                            view: uniform_buffer(ctx, &label, &uniform),
+                        }
+                    })
+                    .collect();
+                Probe {
+                    position,
+                    faces,
+                    captured: false,
+                }
+            })
+            .collect();
+        Ok(Self {
+            probes,
+            size,
+            program,
+            mirror,
+        })
+    }
+
+    /// The probe nearest `camera_position`, if any.
+    pub fn nearest(&self, camera_position: Vec3) -> Option<usize> {
+        self.probes
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                let da = a.1.position.distance_squared(camera_position);
+                let db = b.1.position.distance_squared(camera_position);
+                da.total_cmp(&db)
+            })
+            .map(|(i, _)| i)
+    }
+
+    /// Copies a freshly rendered G-buffer face into the probe's textures;
+    /// returns them (as the relight's input).
+    pub fn add_store<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        probe: usize,
+        face: usize,
+        gbuffer: GBuffer,
+    ) -> GBuffer {
+        let f = &self.probes[probe].faces[face];
+        let pairs = [
+            (gbuffer.albedo, &f.albedo, "probe.albedo"),
+            (gbuffer.frame, &f.frame, "probe.frame"),
+            (gbuffer.material, &f.material, "probe.material"),
+            (gbuffer.depth, &f.depth, "probe.depth"),
+        ];
+        let imported: Vec<(TextureHandle, TextureHandle, &'a wgpu::Texture)> = pairs
+            .into_iter()
+            .map(|(src, dst, name)| (src, graph.import_texture(name, dst), dst))
+            .collect();
+        let mut pass = graph.add_pass("store");
+        let mut outputs = Vec::new();
+        for (src, dst, _) in &imported {
+            pass.read(*src, TextureAccess::CopySrc);
+            outputs.push(pass.write(*dst, TextureAccess::CopyDst));
+        }
+        let size = self.size;
+        pass.execute(move |ctx| {
+            for (src, _, dst) in &imported {
+                ctx.encoder.copy_texture_to_texture(
+                    ctx.texture(*src).as_image_copy(),
+                    dst.as_image_copy(),
+                    wgpu::Extent3d {
+                        width: size,
+                        height: size,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+        });
+        for o in &outputs {
+            graph.mark_output(*o);
+        }
+        GBuffer {
+            albedo: outputs[0],
+            frame: outputs[1],
+            material: outputs[2],
+            motion: outputs[0],
+            depth: outputs[3],
+        }
+    }
+
+    /// The stored G-buffer of a probe face, imported for relighting.
+    pub fn import_face<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        probe: usize,
+        face: usize,
+    ) -> GBuffer {
+        let f = &self.probes[probe].faces[face];
+        let albedo = graph.import_texture("probe.albedo", &f.albedo);
+        GBuffer {
+            albedo,
+            frame: graph.import_texture("probe.frame", &f.frame),
+            material: graph.import_texture("probe.material", &f.material),
+            // Lighting does not read motion.
+            motion: albedo,
+            depth: graph.import_texture("probe.depth", &f.depth),
+        }
+    }
+
+    /// Writes relit face `hdr` (camera layout) into layer `face` of `source`.
+    pub fn add_mirror<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        face: usize,
+        hdr: TextureHandle,
+        source: TextureHandle,
+        source_level0: &'a wgpu::TextureView,
+        errors: &'a crate::frame::FrameErrors,
+    ) -> TextureHandle {
+        let mut pass = graph.add_pass("mirror");
+        pass.read(hdr, TextureAccess::Sampled);
+        let source = pass.write(source, TextureAccess::StorageWrite);
+        let size = self.size;
+        pass.execute(move |ctx| {
+            let bg = self.program.bind(
+                ctx.device,
+                0,
+                &[
+                    (
+                        "face_hdr",
+                        wgpu::BindingResource::TextureView(ctx.view(hdr)),
+                    ),
+                    (
+                        "out_texture",
+                        wgpu::BindingResource::TextureView(source_level0),
+                    ),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(&self.mirror[face]);
+                cp.set_bind_group(0, &bg, &[]);
+                let n = size.div_ceil(8);
+                cp.dispatch_workgroups(n, n, 1);
+            }
+        });
+        source
+    }
+}
+
+/// View-projection of probe face `face` (tests).
+pub fn face_view_projection(position: Vec3, face: usize) -> Mat4 {
+    face_camera(position, face).view_projection(1.0)
+}
