@@ -1,23 +1,98 @@
-// Sun shadow lookup shared by lighting passes (TECHNIQUES S1 foundation).
-// A 3x3 grid of hardware-compared bilinear taps (a 4x4-texel tent): smooth
-// edges, no noise, so the result is deterministic. Checked against CPU ray
-// casting in tests/shadows.rs.
+// Sun shadow lookup shared by the shadow passes (TECHNIQUES S1, Ryse):
+// per-pixel rotated Poisson-disk filtering of hardware-compared bilinear taps,
+// the cascade choice, and the mask pass's parameters. CPU twin:
+// passes/shadows/reference.rs (`poisson_visibility`, `rotation_angle`).
 
-// Visibility in [0,1] of world point `p` (already offset along its normal)
-// for a light-space matrix mapping world to clip (xy in [-1,1], z in [0,1]).
-fn sun_shadow_visibility(map: texture_depth_2d, cmp: sampler_comparison, light_view_proj: mat4x4f,
-                         p: vec3f, depth_bias: f32) -> f32 {
-    let c = light_view_proj * vec4f(p, 1.0);
+// 16-tap Poisson disk in the unit circle (minimum distance ~0.3).
+const SHADOW_POISSON_16 = array<vec2f, 16>(
+    vec2f(-0.94201624, -0.39906216), vec2f(0.94558609, -0.76890725),
+    vec2f(-0.09418410, -0.92938870), vec2f(0.34495938, 0.29387760),
+    vec2f(-0.91588581, 0.45771432), vec2f(-0.81544232, -0.87912464),
+    vec2f(-0.38277543, 0.27676845), vec2f(0.97484398, 0.75648379),
+    vec2f(0.44323325, -0.97511554), vec2f(0.53742981, -0.47373420),
+    vec2f(-0.26496911, -0.41893023), vec2f(0.79197514, 0.19090188),
+    vec2f(-0.24188840, 0.99706507), vec2f(-0.81409955, 0.91437590),
+    vec2f(0.19984126, 0.78641367), vec2f(0.14383161, -0.14100790),
+);
+
+// Parameters of shadows.mask (twin: passes/shadows/mod.rs `MaskParamsGpu`).
+struct ShadowMaskParams {
+    // world -> clip of cascades 0..3
+    cascades: array<mat4x4f, 4>,
+    static_map: mat4x4f,
+    hero: mat4x4f,
+    // far view distance (along the camera axis) of cascades 0..3 (m)
+    splits: vec4f,
+    // world size of a texel of cascades 0..3 (m)
+    texel: vec4f,
+    // depth range of cascades 0..3 (m)
+    depth_range: vec4f,
+    // x: static map shown (1/0), y: its texel (m), z: its depth range (m),
+    // w: first cascade it replaces
+    static_info: vec4f,
+    // x: hero map on (1/0), y: its texel (m), z: its depth range (m)
+    hero_info: vec4f,
+    // x: Poisson radius (texels), y: normal offset (texels), z: depth bias (texels),
+    // w: number of cascades rendered
+    filter_params: vec4f,
+    // xyz: camera forward (unit)
+    camera_forward: vec4f,
+}
+
+// Rotation of the disk for one cell of the shadow map (interleaved gradient
+// noise, Jimenez 2014). Keyed on the map's texel, not the screen pixel, so a
+// snapped map gives the same pattern at the same world point every frame.
+fn shadow_rotation_angle(cell: vec2f) -> f32 {
+    return 6.2831853 * fract(52.9829189 * fract(dot(cell, vec2f(0.06711056, 0.00583715))));
+}
+
+// Visibility in [0,1] at `uv` of layer `layer`: the mean of 16 bilinear
+// comparisons (stored >= depth_ref is lit) at Poisson offsets rotated by
+// `angle`, scaled to `radius_texels`.
+fn shadow_poisson_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                             uv: vec2f, depth_ref: f32, radius_texels: f32, angle: f32) -> f32 {
+    let texel = 1.0 / vec2f(textureDimensions(map));
+    let cs = vec2f(cos(angle), sin(angle));
+    var disk = SHADOW_POISSON_16;
+    var sum = 0.0;
+    for (var k = 0; k < 16; k = k + 1) {
+        let o = disk[k];
+        let r = vec2f(o.x * cs.x - o.y * cs.y, o.x * cs.y + o.y * cs.x);
+        sum = sum + textureSampleCompareLevel(map, cmp, uv + r * (radius_texels * texel), layer, depth_ref);
+    }
+    return sum / 16.0;
+}
+
+// Sun visibility of world point `p` (normal `n`) in one map: normal offset and
+// depth bias in texels of that map; points outside it are lit.
+fn shadow_map_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                         light_view_proj: mat4x4f, p: vec3f, n: vec3f, texel_world: f32,
+                         depth_range: f32, filter_params: vec4f) -> f32 {
+    let c = light_view_proj * vec4f(p + n * (filter_params.y * texel_world), 1.0);
     let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
     if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
         return 1.0;
     }
-    let texel = 1.0 / vec2f(textureDimensions(map));
-    var sum = 0.0;
-    for (var j = -1; j <= 1; j = j + 1) {
-        for (var i = -1; i <= 1; i = i + 1) {
-            sum = sum + textureSampleCompareLevel(map, cmp, uv + vec2f(f32(i), f32(j)) * texel, c.z - depth_bias);
+    let cell = floor(uv * vec2f(textureDimensions(map)));
+    let depth_ref = c.z - filter_params.z * texel_world / depth_range;
+    return shadow_poisson_visibility(map, cmp, layer, uv, depth_ref, filter_params.x, shadow_rotation_angle(cell));
+}
+
+// Map a point at view distance `dist` reads: 0..3 cascades, 4 static map, -1 none.
+fn shadow_map_index(params: ShadowMaskParams, dist: f32) -> i32 {
+    var i = -1;
+    let rendered = i32(params.filter_params.w);
+    for (var k = 3; k >= 0; k = k - 1) {
+        if (dist <= params.splits[k]) {
+            i = k;
         }
     }
-    return sum / 9.0;
+    let static_on = params.static_info.x > 0.5;
+    if (static_on && (i < 0 || i >= i32(params.static_info.w))) {
+        return 4;
+    }
+    if (i >= rendered) {
+        return -1;
+    }
+    return i;
 }

@@ -2,17 +2,16 @@
 // Sun: anisotropic GGX + height-correlated Smith + Schlick, Lambert diffuse (brdf.wgsl).
 // Sky: third-order SH irradiance; ambient specular uses the split-sum fit with SH
 // evaluated along the reflection vector (stand-in until the L3/L4 probes land).
-// Sun shadow: shaders/shadow.wgsl (S1 foundation), normal offset + depth bias.
+// Sun shadow: R of the shadow mask written by shadows.mask (S1-S4).
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
-// shadow_map + shadow_sampler, ao (screen-space AO in .x, passes/ao; 1x1 white when off).
+// shadow_mask, ao (screen-space AO in .x, passes/ao; 1x1 white when off).
 // CPU twin: passes/lighting/reference.rs (`shade`).
 #import view
 #import brdf
 #import tangent_frame
 #import sh
 #import sky
-#import shadow
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -23,10 +22,6 @@ struct Lighting {
     sky_irradiance: Sh9,
     // x: extinction per metre, y: amount of aerial perspective (0 = off)
     fog: vec4f,
-    // world -> sun shadow clip space
-    light_view_proj: mat4x4f,
-    // x: 1 = shadows on, y: normal offset (m), z: depth bias (light NDC)
-    shadow: vec4f,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -36,9 +31,8 @@ struct Lighting {
 @group(0) @binding(4) var gbuffer_frame: texture_2d<f32>;
 @group(0) @binding(5) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(6) var depth: texture_depth_2d;
-@group(0) @binding(7) var shadow_map: texture_depth_2d;
-@group(0) @binding(8) var shadow_sampler: sampler_comparison;
-@group(0) @binding(9) var ao: texture_2d<f32>;
+@group(0) @binding(7) var shadow_mask: texture_2d<f32>;
+@group(0) @binding(8) var ao: texture_2d<f32>;
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
@@ -75,11 +69,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let to_camera = view.camera_position.xyz - p;
     let dist = length(to_camera);
     let v = to_camera / dist;
-    var vis = 1.0;
-    if (lighting.shadow.x > 0.5) {
-        let offset_p = p + tbn[2] * lighting.shadow.y;
-        vis = sun_shadow_visibility(shadow_map, shadow_sampler, lighting.light_view_proj, offset_p, lighting.shadow.z);
-    }
+    let vis = textureLoad(shadow_mask, min(px, vec2i(textureDimensions(shadow_mask)) - 1), 0).r;
     // Screen-space AO darkens the ambient terms only, like the material's baked AO (O1).
     let ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
     var c = shade(s, m.x, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);

@@ -18,9 +18,8 @@ pub struct LightingInputs<'a> {
     pub view: &'a wgpu::Buffer,
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
-    /// Sun shadow map (a 1x1 imported placeholder when shadows are off).
-    pub shadow_map: TextureHandle,
-    pub shadow_sampler: &'a wgpu::Sampler,
+    /// Shadow mask of `shadows.mask`, R = sun visibility (1x1 white when off).
+    pub shadow_mask: TextureHandle,
     /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
     pub ao: TextureHandle,
 }
@@ -55,7 +54,7 @@ impl LightingPass {
             gbuffer.frame,
             gbuffer.material,
             gbuffer.depth,
-            inputs.shadow_map,
+            inputs.shadow_mask,
             inputs.ao,
         ] {
             pass.read(t, TextureAccess::Sampled);
@@ -86,12 +85,8 @@ impl LightingPass {
                         wgpu::BindingResource::TextureView(ctx.view(gbuffer.depth)),
                     ),
                     (
-                        "shadow_map",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_map)),
-                    ),
-                    (
-                        "shadow_sampler",
-                        wgpu::BindingResource::Sampler(inputs.shadow_sampler),
+                        "shadow_mask",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_mask)),
                     ),
                     (
                         "ao",

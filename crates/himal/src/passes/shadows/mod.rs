@@ -1,10 +1,22 @@
-//! Sun shadow map (foundation of TECHNIQUES S1): one orthographic depth map
-//! fitted to the scene's bounds, sampled with a 3x3 tent of hardware
-//! comparisons in the lighting pass (`shaders/shadow.wgsl`). Cascades, the
-//! static far map, the atlas and the hero map (S1-S4) build on this pass.
-//! Reference: [`reference`] and `tests/shadows.rs` (CPU ray casting).
+//! Sun shadows (TECHNIQUES S1, S2, S4; Ryse): four cascades with a practical
+//! split and texel snapping ([`cascades`]), a static map of the far field
+//! filled once with time-sliced updates ([`static_map`]), a hero map fitted
+//! to one object ([`hero`]), all resolved in the full-screen `shadows.mask`
+//! pass into a shadow-mask texture (R = sun) that lighting reads. The filter
+//! is a per-texel rotated 16-tap Poisson disk (`shaders/shadow.wgsl`, twin
+//! [`reference`]). [`atlas`]: the S3 local-light atlas allocator.
+//! Docs: `docs/techniques/S1.md`..`S4.md`.
 
+pub mod atlas;
+pub mod cascades;
+pub mod casters;
+pub mod depth;
+pub mod hero;
 pub mod reference;
+pub mod settings;
+pub mod static_map;
+
+use std::collections::HashMap;
 
 use glam::{Mat4, Vec3};
 
@@ -12,198 +24,627 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
-use crate::scene::Aabb;
+use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::gbuffer::GBuffer;
+use crate::renderer::scene_gpu::SceneGpu;
+use crate::scene::{Camera, Scene};
+pub use cascades::{CASCADES, ShadowFit};
+use casters::{Casters, DrawLists};
+use depth::{DepthPipelines, ShadowViewGpu};
+pub use settings::{ShadowMode, ShadowSettings, ShadowView};
+use static_map::{STATIC_FORMAT, StaticMapState, StaticUpdate};
 
+/// Depth format of the cascades and the hero map.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Format of the shadow mask (R sun; G, B, A local lights).
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-/// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
-const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
-    wgpu::VertexAttribute {
-        format: wgpu::VertexFormat::Float32x3,
-        offset: 0,
-        shader_location: 0,
-    },
-    wgpu::VertexAttribute {
-        format: wgpu::VertexFormat::Float32x2,
-        offset: 40,
-        shader_location: 3,
-    },
-];
+/// Normal offset and depth bias in texels of the map sampled: with the
+/// 1.5-texel disk, 1 texel of bias left acne on the demo's plinth; 2 do not.
+const NORMAL_OFFSET_TEXELS: f32 = 1.5;
+const DEPTH_BIAS_TEXELS: f32 = 2.0;
 
-/// Light-space fit of the sun shadow map; see [`reference::sun_shadow_fit`].
-#[derive(Clone, Copy, Debug)]
-pub struct ShadowFit {
-    pub light_view_proj: Mat4,
-    /// World size of one shadow texel (metres).
-    pub texel_world: f32,
-    /// Depth range of the orthographic projection (metres).
-    pub depth_range: f32,
-}
-
-/// Twin of `ShadowView` in `sun.wgsl`.
+/// Twin of `ShadowMaskParams` in `shaders/shadow.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadowViewGpu {
-    light_view_proj: [[f32; 4]; 4],
-    /// x animation time (s)
-    time: [f32; 4],
+struct MaskParamsGpu {
+    cascades: [[[f32; 4]; 4]; CASCADES],
+    static_map: [[f32; 4]; 4],
+    hero: [[f32; 4]; 4],
+    splits: [f32; 4],
+    texel: [f32; 4],
+    depth_range: [f32; 4],
+    static_info: [f32; 4],
+    hero_info: [f32; 4],
+    filter_params: [f32; 4],
+    camera_forward: [f32; 4],
 }
 
-pub struct SunShadowPass {
-    program: Program,
-    pipeline: wgpu::RenderPipeline,
-    /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
-    vegetation: wgpu::RenderPipeline,
-    uniform: wgpu::Buffer,
-    /// Comparison sampler the lighting pass uses with the map.
+/// What this frame's shadow passes render (planned by [`ShadowPass::update`]).
+#[derive(Default)]
+struct FramePlan {
+    cascades: Vec<(ShadowFit, DrawLists)>,
+    static_update: Option<(StaticUpdate, DrawLists)>,
+    hero: Option<(ShadowFit, DrawLists)>,
+}
+
+/// Per-frame numbers of the shadow passes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadowStats {
+    /// Shadow draw calls this frame (cascades + static slice + hero).
+    pub draws: u32,
+    /// Cascades rendered (3 once the static map replaces the far one).
+    pub cascades_rendered: u32,
+    /// Draws of the static map this frame (at most the cap).
+    pub static_draws: u32,
+    /// The static map is complete and shown.
+    pub static_shown: bool,
+    /// Fits of the cascades rendered (for tests and docs).
+    pub fits: Vec<ShadowFit>,
+    /// Far view distance of each cascade (m).
+    pub splits: [f32; CASCADES],
+}
+
+pub struct ShadowPass {
+    depth_program: Program,
+    depth32: DepthPipelines,
+    depth16: DepthPipelines,
+    /// Sun views: cascades 0..3, static map, hero map.
+    views: Vec<wgpu::Buffer>,
+    mask_program: Program,
+    mask: wgpu::RenderPipeline,
+    hero_blend: wgpu::RenderPipeline,
+    params: wgpu::Buffer,
+    view_program: Program,
+    debug_views: HashMap<(ShadowView, wgpu::TextureFormat), wgpu::RenderPipeline>,
+    /// Comparison sampler of every map.
     pub sampler: wgpu::Sampler,
+    /// 1x1 depth bound where a map is absent.
+    placeholder: wgpu::Texture,
+    casters: Casters,
+    static_state: StaticMapState,
+    /// The two static maps (shown and filling) and their edge.
+    static_maps: Option<(u32, [wgpu::Texture; 2])>,
+    plan: Option<FramePlan>,
+    cascade_resolution: u32,
+    hero_resolution: u32,
 }
 
-impl SunShadowPass {
-    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, "passes/shadows/sun.wgsl")?;
-        let mut layout = vertex_layout();
-        layout.attributes = &layout.attributes[..1]; // position only
-        let mut veg_layout = vertex_layout();
-        veg_layout.attributes = &VEGETATION_ATTRIBUTES;
-        let depth_stencil = wgpu::DepthStencilState {
-            format: SHADOW_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: Default::default(),
-            // Slope-scaled bias against acne on surfaces grazing the sun.
-            bias: wgpu::DepthBiasState {
-                constant: 0,
-                slope_scale: 1.5,
-                clamp: 0.0,
-            },
-        };
-        let vegetation = program.render_pipeline(
-            ctx,
-            &RenderSpec {
-                label: "shadows.sun.vegetation",
-                vertex_entry: "vs_vegetation",
-                fragment_entry: Some("fs_vegetation"),
-                vertex_buffers: &[Some(veg_layout)],
-                targets: &[],
-                depth_stencil: Some(depth_stencil.clone()),
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
+fn depth_texture(
+    ctx: &GpuContext,
+    label: &str,
+    size: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    })
+}
+
+/// A view of one layer as a 2D array of one (how every map is bound) or as a 2D target.
+fn layer_view(t: &wgpu::Texture, layer: u32, array: bool) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(if array {
+            wgpu::TextureViewDimension::D2Array
+        } else {
+            wgpu::TextureViewDimension::D2
+        }),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+impl ShadowPass {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let depth_program = Program::new(ctx, "passes/shadows/depth.wgsl")?;
+        let depth32 = DepthPipelines::new(ctx, &depth_program, SHADOW_FORMAT)?;
+        let depth16 = DepthPipelines::new(ctx, &depth_program, STATIC_FORMAT)?;
+        let views = (0..CASCADES + 2)
+            .map(|i| depth::view_buffer(ctx, &format!("shadows.view{i}")))
+            .collect();
+        let mask_program = Program::new(ctx, "passes/shadows/mask.wgsl")?;
+        let targets = [crate::passes::common::target(MASK_FORMAT)];
+        let mask =
+            mask_program.render_pipeline(ctx, &RenderSpec::fullscreen("shadows.mask", &targets))?;
+        // Min on R = max of the occlusions (Ryse's hero blend); G, B, A untouched.
+        let min_blend = [Some(wgpu::ColorTargetState {
+            format: MASK_FORMAT,
+            blend: Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Min,
                 },
-                constants: &[],
-            },
-        )?;
-        let pipeline = program.render_pipeline(
+                alpha: wgpu::BlendComponent::REPLACE,
+            }),
+            write_mask: wgpu::ColorWrites::RED,
+        })];
+        let mut hero_spec = RenderSpec::fullscreen("shadows.mask.hero", &min_blend);
+        hero_spec.fragment_entry = Some("fs_hero");
+        let hero_blend = mask_program.render_pipeline(ctx, &hero_spec)?;
+        let params = uniform_buffer(
             ctx,
-            &RenderSpec {
-                label: "shadows.sun",
-                vertex_entry: "vs_main",
-                fragment_entry: None,
-                vertex_buffers: &[Some(layout)],
-                targets: &[],
-                depth_stencil: Some(depth_stencil),
-                // Both faces cast: the terrain is single-sided.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                constants: &[],
-            },
-        )?;
-        let uniform = uniform_buffer(
-            ctx,
-            "shadows.sun.view",
-            &ShadowViewGpu {
-                light_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
-                time: [0.0; 4],
-            },
+            "shadows.mask.params",
+            &<MaskParamsGpu as bytemuck::Zeroable>::zeroed(),
         );
+        let view_program = Program::new(ctx, "passes/shadows/view.wgsl")?;
         let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("shadows.sun.compare"),
+            label: Some("shadows.compare"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        let placeholder = depth_texture(ctx, "shadows.placeholder", 1, SHADOW_FORMAT);
         Ok(Self {
-            program,
-            pipeline,
-            vegetation,
-            uniform,
+            depth_program,
+            depth32,
+            depth16,
+            views,
+            mask_program,
+            mask,
+            hero_blend,
+            params,
+            view_program,
+            debug_views: HashMap::new(),
             sampler,
+            placeholder,
+            casters: Casters::from_scene(scene),
+            static_state: StaticMapState::default(),
+            static_maps: None,
+            plan: None,
+            cascade_resolution: 0,
+            hero_resolution: 0,
         })
     }
 
-    /// Fits the map to `bounds` for `sun_direction` and uploads the matrix
-    /// and the animation time `time_s` (vegetation sway).
-    pub fn update(
-        &self,
-        queue: &wgpu::Queue,
-        bounds: &Aabb,
-        sun_direction: Vec3,
-        resolution: u32,
-        time_s: f32,
-    ) -> ShadowFit {
-        let fit = reference::sun_shadow_fit(bounds, sun_direction, resolution);
-        let gpu = ShadowViewGpu {
-            light_view_proj: fit.light_view_proj.to_cols_array_2d(),
-            time: [time_s, 0.0, 0.0, 0.0],
+    /// Creates the pipeline of a shadow debug view in `format`.
+    pub fn prepare_view(
+        &mut self,
+        ctx: &GpuContext,
+        view: ShadowView,
+        format: wgpu::TextureFormat,
+    ) -> Result<(), GpuError> {
+        if self.debug_views.contains_key(&(view, format)) {
+            return Ok(());
+        }
+        let id = match view {
+            ShadowView::Mask => 1,
+            ShadowView::Cascades => 2,
         };
-        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&gpu));
-        fit
+        let pipeline = view_pipeline(ctx, &self.view_program, "shadows.view", id, format)?;
+        self.debug_views.insert((view, format), pipeline);
+        Ok(())
     }
 
+    /// Plans this frame (fits, culled draw lists, the static slice, the hero)
+    /// and uploads the uniforms; `None` settings = shadows off.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        camera: &Camera,
+        aspect: f32,
+        sun_direction: Vec3,
+        cascade_resolution: u32,
+        settings: Option<&ShadowSettings>,
+        time_s: f32,
+    ) -> ShadowStats {
+        let Some(s) = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0)
+        else {
+            self.plan = None;
+            return ShadowStats::default();
+        };
+        let bounds = self.casters.scene;
+        let mut stats = ShadowStats::default();
+        let mut plan = FramePlan::default();
+        let mut params = <MaskParamsGpu as bytemuck::Zeroable>::zeroed();
+        let write_view = |i: usize, m: Mat4| {
+            ctx.queue.write_buffer(
+                &self.views[i],
+                0,
+                bytemuck::bytes_of(&ShadowViewGpu::new(m, time_s)),
+            );
+        };
+
+        // S2: plan the static slice first; a complete map replaces cascade 3.
+        let static_on = s.mode == ShadowMode::CsmStatic;
+        if static_on {
+            if self
+                .static_maps
+                .as_ref()
+                .is_none_or(|(n, _)| *n != s.static_resolution)
+            {
+                let n = s.static_resolution;
+                let make = |i| depth_texture(ctx, &format!("shadows.static{i}"), n, STATIC_FORMAT);
+                self.static_maps = Some((n, [make(0), make(1)]));
+                self.static_state.reset();
+            }
+            let all = self.static_draws(scene);
+            let update = self.static_state.plan(
+                &bounds,
+                sun_direction,
+                s.static_resolution,
+                all.len(),
+                s.static_draw_cap as usize,
+            );
+            if let Some(u) = update {
+                let slice = take_range(&all, &u.range);
+                stats.static_draws = slice.len() as u32;
+                write_view(CASCADES, u.fit.light_view_proj);
+                plan.static_update = Some((u, slice));
+            }
+            if let Some((_, fit)) = self.static_state.shown {
+                stats.static_shown = true;
+                params.static_map = fit.light_view_proj.to_cols_array_2d();
+                params.static_info = [1.0, fit.texel_world, fit.depth_range, (CASCADES - 1) as f32];
+            }
+        } else {
+            // Leaving csm+static frees 256 MB and restarts the fill next time.
+            self.static_maps = None;
+            self.static_state.reset();
+        }
+
+        // S1: the cascades (the far one only while no static map is shown).
+        let splits =
+            cascades::practical_splits(camera.near.max(0.05), s.max_distance, s.split_lambda);
+        let rendered = if stats.static_shown {
+            CASCADES - 1
+        } else {
+            CASCADES
+        };
+        for i in 0..CASCADES {
+            stats.splits[i] = splits[i + 1];
+            params.splits[i] = splits[i + 1];
+            let fit = cascades::fit_cascade(
+                camera,
+                aspect,
+                &splits,
+                i,
+                sun_direction,
+                &bounds,
+                cascade_resolution,
+                s.snap,
+            );
+            params.cascades[i] = fit.light_view_proj.to_cols_array_2d();
+            params.texel[i] = fit.texel_world;
+            params.depth_range[i] = fit.depth_range;
+            if i < rendered {
+                let mut lists = DrawLists::default();
+                self.casters.cull_into(
+                    &scene.draws_opaque,
+                    &scene.draws_vegetation,
+                    &fit,
+                    |_| true,
+                    &mut lists,
+                );
+                write_view(i, fit.light_view_proj);
+                stats.fits.push(fit);
+                plan.cascades.push((fit, lists));
+            }
+        }
+        stats.cascades_rendered = rendered as u32;
+
+        // S4: the hero map.
+        if s.hero_resolution > 0
+            && let Some(h) = self.casters.hero_index(s.hero.as_deref())
+            && let Some((object, mesh)) = self.casters.objects.get(h)
+        {
+            let fit = hero::hero_fit(
+                object,
+                mesh,
+                time_s,
+                sun_direction,
+                &bounds,
+                s.hero_resolution,
+            );
+            let mut lists = DrawLists::default();
+            let is_hero = |d: &&crate::renderer::scene_gpu::Draw| d.object as usize == h;
+            lists
+                .opaque
+                .extend(scene.draws_opaque.iter().filter(is_hero).cloned());
+            lists
+                .vegetation
+                .extend(scene.draws_vegetation.iter().filter(is_hero).cloned());
+            write_view(CASCADES + 1, fit.light_view_proj);
+            params.hero = fit.light_view_proj.to_cols_array_2d();
+            params.hero_info = [1.0, fit.texel_world, fit.depth_range, 0.0];
+            plan.hero = Some((fit, lists));
+        }
+
+        params.filter_params = [
+            s.filter_radius_texels,
+            NORMAL_OFFSET_TEXELS,
+            DEPTH_BIAS_TEXELS,
+            rendered as f32,
+        ];
+        params.camera_forward = camera
+            .forward
+            .normalize_or(Vec3::NEG_Z)
+            .extend(0.0)
+            .to_array();
+        ctx.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+
+        stats.draws = plan
+            .cascades
+            .iter()
+            .map(|(_, l)| l.len() as u32)
+            .sum::<u32>()
+            + stats.static_draws
+            + plan.hero.as_ref().map_or(0, |(_, l)| l.len() as u32);
+        self.cascade_resolution = cascade_resolution;
+        self.hero_resolution = s.hero_resolution;
+        self.plan = Some(plan);
+        stats
+    }
+
+    /// Every static object's draws, opaque first (the static map's fill order).
+    fn static_draws(&self, scene: &SceneGpu) -> Vec<(crate::renderer::scene_gpu::Draw, bool)> {
+        let keep = |d: &crate::renderer::scene_gpu::Draw| {
+            !self
+                .casters
+                .moving
+                .get(d.object as usize)
+                .copied()
+                .unwrap_or(true)
+        };
+        let opaque = scene
+            .draws_opaque
+            .iter()
+            .filter(|d| keep(d))
+            .map(|d| (d.clone(), false));
+        let veg = scene
+            .draws_vegetation
+            .iter()
+            .filter(|d| keep(d))
+            .map(|d| (d.clone(), true));
+        opaque.chain(veg).collect()
+    }
+
+    /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
+    /// (no plan this frame).
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
-        resolution: u32,
+        size: (u32, u32),
+        gbuffer: GBuffer,
+        view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
         errors: &'a FrameErrors,
-    ) -> TextureHandle {
-        let map = graph.create_texture(
-            "shadow.sun",
-            TextureDesc::new_2d(resolution, resolution, SHADOW_FORMAT),
+    ) -> Option<TextureHandle> {
+        let plan = self.plan.as_ref()?;
+        let (g_depth, g_frame) = (gbuffer.depth, gbuffer.frame);
+        let n = self.cascade_resolution;
+        let mut desc = TextureDesc::new_2d(n, n, SHADOW_FORMAT);
+        desc.depth_or_layers = CASCADES as u32;
+        let mut cascades = graph.create_texture("shadow.cascades", desc);
+        for (i, (_, lists)) in plan.cascades.iter().enumerate() {
+            let mut pass = graph.add_pass(&format!("shadows.cascade{i}"));
+            cascades = pass.write(cascades, TextureAccess::DepthAttachment);
+            let map = cascades;
+            pass.execute(move |ctx| {
+                let bg = self.depth_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("shadow", self.views[i].as_entire_binding()),
+                        ("objects", scene.objects.as_entire_binding()),
+                    ],
+                );
+                let Some(bg) = errors.record(bg) else { return };
+                let target = layer_view(ctx.texture(map), i as u32, false);
+                let label = ctx.pass_id();
+                self.depth32
+                    .record(ctx.encoder, label, &target, true, &bg, scene, lists);
+            });
+        }
+        // The static slice writes the back map, outside the graph's pool.
+        let mut static_written = None;
+        if let (Some((update, lists)), Some((_, maps))) = (&plan.static_update, &self.static_maps) {
+            let name = if update.target == 0 {
+                "shadow.static0"
+            } else {
+                "shadow.static1"
+            };
+            let h = graph.import_texture(name, &maps[update.target]);
+            let mut pass = graph.add_pass("shadows.static");
+            // The back map is read in a later frame: keep the pass even unread.
+            pass.side_effect();
+            let h = pass.write(h, TextureAccess::DepthAttachment);
+            static_written = Some((update.target, h));
+            pass.execute(move |ctx| {
+                let bg = self.depth_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("shadow", self.views[CASCADES].as_entire_binding()),
+                        ("objects", scene.objects.as_entire_binding()),
+                    ],
+                );
+                let Some(bg) = errors.record(bg) else { return };
+                let target = layer_view(ctx.texture(h), 0, false);
+                let label = ctx.pass_id();
+                self.depth16
+                    .record(ctx.encoder, label, &target, update.clear, &bg, scene, lists);
+            });
+        }
+        let hero_map = plan.hero.as_ref().map(|(_, lists)| {
+            let r = self.hero_resolution;
+            let map = graph.create_texture("shadow.hero", TextureDesc::new_2d(r, r, SHADOW_FORMAT));
+            let mut pass = graph.add_pass("shadows.hero");
+            let map = pass.write(map, TextureAccess::DepthAttachment);
+            pass.execute(move |ctx| {
+                let bg = self.depth_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("shadow", self.views[CASCADES + 1].as_entire_binding()),
+                        ("objects", scene.objects.as_entire_binding()),
+                    ],
+                );
+                let Some(bg) = errors.record(bg) else { return };
+                let target = layer_view(ctx.texture(map), 0, false);
+                let label = ctx.pass_id();
+                self.depth32
+                    .record(ctx.encoder, label, &target, true, &bg, scene, lists);
+            });
+            map
+        });
+
+        let mask = graph.create_texture(
+            "shadow.mask",
+            TextureDesc::new_2d(size.0, size.1, MASK_FORMAT),
         );
-        let mut pass = graph.add_pass("shadows.sun");
-        let map = pass.write(map, TextureAccess::DepthAttachment);
+        let mut pass = graph.add_pass("shadows.mask");
+        for t in [gbuffer.depth, gbuffer.frame] {
+            pass.read(t, TextureAccess::Sampled);
+        }
+        if !plan.cascades.is_empty() {
+            pass.read(cascades, TextureAccess::Sampled);
+        }
+        // The shown static map: this frame's slice when it just completed.
+        let shown = self.static_state.shown.map(|(i, _)| i);
+        let static_read = match static_written {
+            Some((i, h)) if Some(i) == shown => Some(pass.read(h, TextureAccess::Sampled)),
+            _ => None,
+        };
+        if let Some(h) = hero_map {
+            pass.read(h, TextureAccess::Sampled);
+        }
+        let mask = pass.write(mask, TextureAccess::ColorAttachment);
+        let has_cascades = !plan.cascades.is_empty();
         pass.execute(move |ctx| {
-            let bind_group = self.program.bind(
+            let cascades_view = if has_cascades {
+                ctx.texture(cascades)
+                    .create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2Array),
+                        ..Default::default()
+                    })
+            } else {
+                layer_view(&self.placeholder, 0, true)
+            };
+            let static_view = match (static_read, shown, &self.static_maps) {
+                (Some(h), _, _) => layer_view(ctx.texture(h), 0, true),
+                (None, Some(i), Some((_, maps))) => layer_view(&maps[i], 0, true),
+                _ => layer_view(&self.placeholder, 0, true),
+            };
+            let hero_view = match hero_map {
+                Some(h) => layer_view(ctx.texture(h), 0, true),
+                None => layer_view(&self.placeholder, 0, true),
+            };
+            let tv = wgpu::BindingResource::TextureView;
+            let bg = self.mask_program.bind(
                 ctx.device,
                 0,
                 &[
-                    ("shadow", self.uniform.as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
+                    ("view", view.as_entire_binding()),
+                    ("params", self.params.as_entire_binding()),
+                    ("depth", tv(ctx.view(g_depth))),
+                    ("gbuffer_frame", tv(ctx.view(g_frame))),
+                    ("cascades", tv(&cascades_view)),
+                    ("static_map", tv(&static_view)),
+                    ("hero_map", tv(&hero_view)),
+                    (
+                        "shadow_sampler",
+                        wgpu::BindingResource::Sampler(&self.sampler),
+                    ),
                 ],
             );
-            let Some(bg) = errors.record(bind_group) else {
-                return;
-            };
-            let view = ctx.view(map);
-            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadows.sun"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_pipeline(&self.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            scene.draw_opaque(&mut rp);
-            if !scene.draws_vegetation.is_empty() {
-                rp.set_pipeline(&self.vegetation);
-                SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
+            let Some(bg) = errors.record(bg) else { return };
+            let target = ctx.view(mask);
+            draw_fullscreen(
+                ctx,
+                &self.mask,
+                &bg,
+                target,
+                wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                None,
+            );
+            if hero_map.is_some() {
+                draw_fullscreen(ctx, &self.hero_blend, &bg, target, wgpu::LoadOp::Load, None);
             }
         });
-        map
+        Some(mask)
     }
+
+    /// `--view shadow-mask | cascades` from the mask into `output`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_view<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        kind: ShadowView,
+        mask: TextureHandle,
+        depth: TextureHandle,
+        view: &'a wgpu::Buffer,
+        output: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let format = graph.texture_desc(output).map(|d| d.format);
+        let pipeline = format.and_then(|f| self.debug_views.get(&(kind, f)));
+        let mut pass = graph.add_pass("shadows.view");
+        pass.read(mask, TextureAccess::Sampled);
+        pass.read(depth, TextureAccess::Sampled);
+        let output = pass.write(output, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let Some(pipeline) = pipeline else {
+                errors.record::<()>(Err(GpuError::Other(format!(
+                    "shadow view {kind:?} was not prepared"
+                ))));
+                return;
+            };
+            let tv = wgpu::BindingResource::TextureView;
+            let bg = self.view_program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("view", view.as_entire_binding()),
+                    ("params", self.params.as_entire_binding()),
+                    ("depth", tv(ctx.view(depth))),
+                    ("mask", tv(ctx.view(mask))),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let target = ctx.view(output);
+                draw_fullscreen(
+                    ctx,
+                    pipeline,
+                    &bg,
+                    target,
+                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    None,
+                );
+            }
+        });
+        output
+    }
+}
+
+/// The draws of `all[range]` split back into opaque and vegetation lists.
+fn take_range(
+    all: &[(crate::renderer::scene_gpu::Draw, bool)],
+    range: &std::ops::Range<usize>,
+) -> DrawLists {
+    let mut lists = DrawLists::default();
+    for (d, veg) in &all[range.start.min(all.len())..range.end.min(all.len())] {
+        if *veg {
+            lists.vegetation.push(d.clone());
+        } else {
+            lists.opaque.push(d.clone());
+        }
+    }
+    lists
 }

@@ -1,0 +1,1 @@
+//! S3 local-light shadow atlas allocator (pure CPU).
