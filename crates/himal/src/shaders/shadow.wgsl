@@ -37,6 +37,9 @@ struct ShadowMaskParams {
     filter_params: vec4f,
     // xyz: camera forward (unit)
     camera_forward: vec4f,
+    // world -> light view (rotation only), shared by every map: anchors the
+    // disk rotation to world texels
+    light_rotation: mat4x4f,
 }
 
 // Rotation of the disk for one cell of the shadow map (interleaved gradient
@@ -65,15 +68,18 @@ fn shadow_poisson_visibility(map: texture_depth_2d_array, cmp: sampler_compariso
 
 // Sun visibility of world point `p` (normal `n`) in one map: normal offset and
 // depth bias in texels of that map; points outside it are lit.
+// `light_rotation`: world -> light view; the disk's rotation is keyed on the
+// world texel (light-view xy / texel), the same cell whatever the map's offset.
 fn shadow_map_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
-                         light_view_proj: mat4x4f, p: vec3f, n: vec3f, texel_world: f32,
-                         depth_range: f32, filter_params: vec4f) -> f32 {
-    let c = light_view_proj * vec4f(p + n * (filter_params.y * texel_world), 1.0);
+                         light_view_proj: mat4x4f, light_rotation: mat4x4f, p: vec3f, n: vec3f,
+                         texel_world: f32, depth_range: f32, filter_params: vec4f) -> f32 {
+    let q = vec4f(p + n * (filter_params.y * texel_world), 1.0);
+    let c = light_view_proj * q;
     let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
     if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
         return 1.0;
     }
-    let cell = floor(uv * vec2f(textureDimensions(map)));
+    let cell = floor((light_rotation * q).xy / texel_world);
     let depth_ref = c.z - filter_params.z * texel_world / depth_range;
     return shadow_poisson_visibility(map, cmp, layer, uv, depth_ref, filter_params.x, shadow_rotation_angle(cell));
 }

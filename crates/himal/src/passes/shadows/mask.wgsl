@@ -48,10 +48,10 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let i = shadow_map_index(params, r.dist);
     var vis = 1.0;
     if (i == 4) {
-        vis = shadow_map_visibility(static_map, shadow_sampler, 0, params.static_map, r.p, r.n,
+        vis = shadow_map_visibility(static_map, shadow_sampler, 0, params.static_map, params.light_rotation, r.p, r.n,
                                     params.static_info.y, params.static_info.z, params.filter_params);
     } else if (i >= 0) {
-        vis = shadow_map_visibility(cascades, shadow_sampler, i, params.cascades[i], r.p, r.n,
+        vis = shadow_map_visibility(cascades, shadow_sampler, i, params.cascades[i], params.light_rotation, r.p, r.n,
                                     params.texel[i], params.depth_range[i], params.filter_params);
     }
     return vec4f(vis, 1.0, 1.0, 1.0);
@@ -65,7 +65,7 @@ fn fs_hero(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         return vec4f(1.0);
     }
     let r = receiver(frag, d);
-    let vis = shadow_map_visibility(hero_map, shadow_sampler, 0, params.hero, r.p, r.n,
+    let vis = shadow_map_visibility(hero_map, shadow_sampler, 0, params.hero, params.light_rotation, r.p, r.n,
                                     params.hero_info.y, params.hero_info.z, params.filter_params);
     return vec4f(vis, 1.0, 1.0, 1.0);
 }

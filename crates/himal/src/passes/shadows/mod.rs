@@ -58,6 +58,7 @@ struct MaskParamsGpu {
     hero_info: [f32; 4],
     filter_params: [f32; 4],
     camera_forward: [f32; 4],
+    light_rotation: [[f32; 4]; 4],
 }
 
 /// What this frame's shadow passes render (planned by [`ShadowPass::update`]).
@@ -376,6 +377,7 @@ impl ShadowPass {
             .normalize_or(Vec3::NEG_Z)
             .extend(0.0)
             .to_array();
+        params.light_rotation = cascades::light_rotation(sun_direction).to_cols_array_2d();
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
 
