@@ -59,8 +59,8 @@ impl StaticMapState {
         *self = Self::default();
     }
 
-    /// Plans this frame: starts a new fill when the sun moved by more than
-    /// [`SUN_EPSILON`] (or the resolution changed), then takes up to `cap`
+    /// Plans this frame: when no fill is running, starts one if the sun moved
+    /// by more than [`SUN_EPSILON`] (or the resolution changed); then takes up to `cap`
     /// draws of the `total` static ones. A fill that ends this frame is shown
     /// from this frame on.
     pub fn plan(
@@ -75,7 +75,9 @@ impl StaticMapState {
         let moved = self.last.is_none_or(|(s, n)| {
             n != resolution || s.dot(sun).clamp(-1.0, 1.0).acos() > SUN_EPSILON
         });
-        if moved {
+        // A fill in progress finishes first, else a sun moving faster than
+        // the fill would never show a map; the next fill catches up.
+        if moved && self.filling.is_none() {
             self.filling = Some((static_fit(scene, sun, resolution), sun, 0));
             self.last = Some((sun, resolution));
         }
