@@ -10,18 +10,18 @@ use glam::Vec2;
 pub const POISSON_16: [[f32; 2]; 16] = [
     [-0.942_016_24, -0.399_062_16],
     [0.945_586_09, -0.768_907_25],
+    [0.974_843_98, 0.756_483_79],
+    [-0.814_099_55, 0.914_375_9],
     [-0.094_184_1, -0.929_388_7],
     [0.344_959_38, 0.293_877_6],
     [-0.915_885_81, 0.457_714_32],
     [-0.815_442_32, -0.879_124_64],
     [-0.382_775_43, 0.276_768_45],
-    [0.974_843_98, 0.756_483_79],
     [0.443_233_25, -0.975_115_54],
     [0.537_429_81, -0.473_734_2],
     [-0.264_969_11, -0.418_930_23],
     [0.791_975_14, 0.190_901_88],
     [-0.241_888_4, 0.997_065_07],
-    [-0.814_099_55, 0.914_375_9],
     [0.199_841_26, 0.786_413_67],
     [0.143_831_61, -0.141_007_9],
 ];
@@ -62,7 +62,8 @@ impl DepthMap<'_> {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// `shadow_poisson_visibility`: mean of 16 rotated, scaled disk taps.
+    /// `shadow_poisson_visibility`: mean of 16 rotated, scaled disk taps, or
+    /// of the outer four when they agree.
     pub fn poisson_visibility(
         &self,
         uv: Vec2,
@@ -72,13 +73,14 @@ impl DepthMap<'_> {
     ) -> f32 {
         let texel = Vec2::new(1.0 / self.width as f32, 1.0 / self.height as f32);
         let (s, c) = angle.sin_cos();
-        POISSON_16
-            .iter()
-            .map(|&[ox, oy]| {
-                let r = Vec2::new(ox * c - oy * s, ox * s + oy * c);
-                self.sample_compare(uv + r * radius_texels * texel, depth_ref)
-            })
-            .sum::<f32>()
-            / 16.0
+        let tap = |&[ox, oy]: &[f32; 2]| {
+            let r = Vec2::new(ox * c - oy * s, ox * s + oy * c);
+            self.sample_compare(uv + r * radius_texels * texel, depth_ref)
+        };
+        let ring: f32 = POISSON_16[..4].iter().map(tap).sum();
+        if ring == 0.0 || ring == 4.0 {
+            return ring / 4.0;
+        }
+        (ring + POISSON_16[4..].iter().map(tap).sum::<f32>()) / 16.0
     }
 }
