@@ -1,4 +1,5 @@
-// shadows.view: `--view shadow-mask` (VIEW 1: the mask's RGBA as stored) and
+// shadows.view: `--view shadow-mask` (VIEW 1: raw, the mask's RGBA as stored;
+// displayed, R·(G, B, A): the sun in grey, local lights' shadows coloured) and
 // `--view cascades` (VIEW 2: sun visibility tinted by the map the pixel reads:
 // red, green, blue, yellow = cascades 0..3, magenta = static map, grey = none).
 // DISPLAY = true writes viewable values (sRGB target), false raw (EXR).
@@ -25,6 +26,10 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2i(frag.xy);
     let m = textureLoad(mask, px, 0);
     var c = m;
+    if (VIEW == 1u && DISPLAY) {
+        // Sun in grey; a local light's shadow (G, B, A) removes one primary.
+        c = vec4f(m.r * m.gba, 1.0);
+    }
     if (VIEW == 2u) {
         let d = textureLoad(depth, px, 0);
         var tint = vec3f(0.0);
