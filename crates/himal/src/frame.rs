@@ -130,6 +130,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             Some(t) => t.ao,
             None => g.import_texture("ao.off", ao_placeholder),
         },
+        lights: &passes.shadows.local_lights,
     };
     let hdr = passes
         .lighting

@@ -129,6 +129,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
     let sun = build_sun(&ck, file.sun.as_ref())?;
     let materials = build_materials(&ck, &file.material)?;
     let cameras = build_cameras(&ck, &file.camera)?;
+    let lights = super::lights::build_lights(&ck, &file.light)?;
     let mut world = World {
         ck: &ck,
         base_dir,
@@ -148,6 +149,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         materials,
         cameras,
         sun,
+        lights,
         bounds,
     })
 }

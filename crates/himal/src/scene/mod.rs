@@ -103,6 +103,7 @@ mod camera;
 mod error;
 mod file;
 pub mod heightfield;
+mod lights;
 mod motion;
 pub mod noise;
 mod place;
@@ -117,6 +118,7 @@ use glam::{Mat4, Vec3};
 pub use camera::{Camera, DEFAULT_NEAR};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
+pub use lights::{LightDesc, LightKind};
 pub use motion::{Motion, Orbit};
 
 /// One vertex as the G-buffer pass reads it (80 bytes).
@@ -404,6 +406,8 @@ pub struct Scene {
     pub materials: Vec<MaterialDesc>,
     pub cameras: Vec<NamedCamera>,
     pub sun: SunDesc,
+    /// Point and spot lights (`[[light]]`, S3).
+    pub lights: Vec<LightDesc>,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
 }

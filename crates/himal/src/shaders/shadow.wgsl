@@ -125,3 +125,57 @@ fn shadow_map_index(params: ShadowMaskParams, dist: f32) -> i32 {
     }
     return i;
 }
+
+// A point or spot light (S3; twin: passes/shadows/local.rs `LocalLightGpu`).
+struct LocalLight {
+    // xyz: position, w: range (m)
+    position_range: vec4f,
+    // rgb: colour x intensity in klux at 1 m, w: 0 point, 1 spot
+    color_kind: vec4f,
+    // xyz: spot axis, w: cos of the outer half angle
+    direction_cos_outer: vec4f,
+    // x: cos of the inner half angle, y: shadow-mask channel (0 none, 1..3 = G, B, A),
+    // z: first atlas tile, w: unused
+    params: vec4f,
+}
+
+struct LocalLights {
+    // x: number of lights
+    count: vec4u,
+    lights: array<LocalLight>,
+}
+
+// One projector's tile of the shadow atlas (twin: `ShadowTileGpu`).
+struct ShadowTile {
+    // world -> clip (perspective, depth 0 near .. 1 far)
+    view_proj: mat4x4f,
+    // xy: atlas uv of the tile's corner, zw: its uv size
+    rect: vec4f,
+    // x: world texel size per metre of distance
+    info: vec4f,
+}
+
+// Windowed inverse square: 1/d² · (1 − (d/range)⁴)², zero at the range
+// (Karis 2013), d clamped to 1 cm.
+fn local_light_falloff(d: f32, range: f32) -> f32 {
+    let x = d / range;
+    let window = clamp(1.0 - x * x * x * x, 0.0, 1.0);
+    return window * window / max(d * d, 1e-4);
+}
+
+// Spot cone: 1 inside the inner angle, 0 outside the outer, smooth between.
+fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+    return smoothstep(cos_outer, cos_inner, cos_angle);
+}
+
+// Cube face of direction `d` (light to point): 0..5 = +X, -X, +Y, -Y, +Z, -Z.
+fn shadow_cube_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
+}

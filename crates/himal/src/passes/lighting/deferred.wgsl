@@ -3,15 +3,18 @@
 // Sky: third-order SH irradiance; ambient specular uses the split-sum fit with SH
 // evaluated along the reflection vector (stand-in until the L3/L4 probes land).
 // Sun shadow: R of the shadow mask written by shadows.mask (S1-S4).
+// Local lights (S3): point and spot lights from `lights`, the same BRDF,
+// windowed inverse-square falloff, shadow from their mask channel (G, B, A).
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
-// shadow_mask, ao (screen-space AO in .x, passes/ao; 1x1 white when off).
+// shadow_mask, ao, lights (screen-space AO in .x, passes/ao; 1x1 white when off).
 // CPU twin: passes/lighting/reference.rs (`shade`).
 #import view
 #import brdf
 #import tangent_frame
 #import sh
 #import sky
+#import shadow
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -33,6 +36,31 @@ struct Lighting {
 @group(0) @binding(6) var depth: texture_depth_2d;
 @group(0) @binding(7) var shadow_mask: texture_2d<f32>;
 @group(0) @binding(8) var ao: texture_2d<f32>;
+@group(0) @binding(9) var<storage, read> lights: LocalLights;
+
+// Reflected radiance of the local lights at p (mask: the shadow mask texel).
+fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f) -> vec3f {
+    var c = vec3f(0.0);
+    for (var k = 0u; k < lights.count.x; k = k + 1u) {
+        let l = lights.lights[k];
+        let to_l = l.position_range.xyz - p;
+        let d = length(to_l);
+        if (d >= l.position_range.w || d <= 0.0) {
+            continue;
+        }
+        let dir = to_l / d;
+        var e = l.color_kind.rgb * local_light_falloff(d, l.position_range.w);
+        if (l.color_kind.w > 0.5) {
+            e *= spot_cone(dot(-dir, l.direction_cos_outer.xyz), l.direction_cos_outer.w, l.params.x);
+        }
+        let channel = u32(l.params.y);
+        if (channel > 0u) {
+            e *= mask[channel];
+        }
+        c += brdf_cos(s, t, b, n, v, dir) * e;
+    }
+    return c;
+}
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
@@ -69,10 +97,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let to_camera = view.camera_position.xyz - p;
     let dist = length(to_camera);
     let v = to_camera / dist;
-    let vis = textureLoad(shadow_mask, min(px, vec2i(textureDimensions(shadow_mask)) - 1), 0).r;
+    let mask = textureLoad(shadow_mask, min(px, vec2i(textureDimensions(shadow_mask)) - 1), 0);
+    let vis = mask.r;
     // Screen-space AO darkens the ambient terms only, like the material's baked AO (O1).
     let ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
     var c = shade(s, m.x, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
+    c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask);
     let transmittance = exp(-lighting.fog.x * dist);
     let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
     c = c * transmittance + inscatter * (1.0 - transmittance);

@@ -22,6 +22,8 @@ pub struct LightingInputs<'a> {
     pub shadow_mask: TextureHandle,
     /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
     pub ao: TextureHandle,
+    /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
+    pub lights: &'a wgpu::Buffer,
 }
 
 pub struct LightingPass {
@@ -92,6 +94,7 @@ impl LightingPass {
                         "ao",
                         wgpu::BindingResource::TextureView(ctx.view(inputs.ao)),
                     ),
+                    ("lights", inputs.lights.as_entire_binding()),
                 ],
             );
             if let Some(bg) = errors.record(bind_group) {

@@ -95,4 +95,27 @@ impl Casters {
         out.vegetation
             .extend(vegetation.iter().filter(take).cloned());
     }
+
+    /// Appends the draws whose bounds overlap `region` (a light's reach),
+    /// leaving out casters more than `max_extent` across: the terrain would be
+    /// drawn into every projector for shadows it hardly casts on itself.
+    pub fn cull_local_into(
+        &self,
+        opaque: &[Draw],
+        vegetation: &[Draw],
+        region: &Aabb,
+        max_extent: f32,
+        out: &mut DrawLists,
+    ) {
+        let take = |d: &&Draw| {
+            self.bounds.get(d.object as usize).is_some_and(|b| {
+                !b.max.cmplt(region.min).any()
+                    && !b.min.cmpgt(region.max).any()
+                    && b.extent().max_element() <= max_extent
+            })
+        };
+        out.opaque.extend(opaque.iter().filter(take).cloned());
+        out.vegetation
+            .extend(vegetation.iter().filter(take).cloned());
+    }
 }

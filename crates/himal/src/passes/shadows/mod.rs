@@ -12,6 +12,7 @@ pub mod cascades;
 pub mod casters;
 pub mod depth;
 pub mod hero;
+pub mod local;
 pub mod reference;
 pub mod settings;
 pub mod static_map;
@@ -27,10 +28,12 @@ use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::{draw_fullscreen, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::renderer::scene_gpu::SceneGpu;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, LightDesc, Scene};
+use atlas::AtlasAllocator;
 pub use cascades::{CASCADES, ShadowFit};
 use casters::{Casters, DrawLists};
 use depth::{DepthPipelines, ShadowViewGpu};
+use local::{LocalLightGpu, Projector, ShadowTileGpu};
 pub use settings::{ShadowMode, ShadowSettings, ShadowView};
 use static_map::{STATIC_FORMAT, StaticMapState, StaticUpdate};
 
@@ -67,7 +70,13 @@ struct FramePlan {
     cascades: Vec<(ShadowFit, DrawLists)>,
     static_update: Option<(StaticUpdate, DrawLists)>,
     hero: Option<(ShadowFit, DrawLists)>,
+    /// S3 projectors into the atlas.
+    projectors: Vec<Projector>,
 }
+
+/// Smallest and largest atlas tiles (S3).
+const ATLAS_MIN_TILE: u32 = 64;
+const ATLAS_MAX_TILE: u32 = 1024;
 
 /// Per-frame numbers of the shadow passes.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -84,6 +93,8 @@ pub struct ShadowStats {
     pub fits: Vec<ShadowFit>,
     /// Far view distance of each cascade (m).
     pub splits: [f32; CASCADES],
+    /// Atlas tiles rendered (S3 projectors).
+    pub atlas_tiles: u32,
 }
 
 pub struct ShadowPass {
@@ -109,6 +120,24 @@ pub struct ShadowPass {
     plan: Option<FramePlan>,
     cascade_resolution: u32,
     hero_resolution: u32,
+    /// S3: the scene's lights, the allocator (keeps last frame's sizes),
+    /// the light list the lighting pass reads, tiles, one view per projector.
+    lights: Vec<LightDesc>,
+    atlas: Option<AtlasAllocator>,
+    /// `LocalLights` (count + lights) for lighting and the mask.
+    pub local_lights: wgpu::Buffer,
+    light_tiles: wgpu::Buffer,
+    atlas_views: Vec<wgpu::Buffer>,
+    atlas_resolution: u32,
+}
+
+fn storage_buffer(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 fn depth_texture(
@@ -189,6 +218,11 @@ impl ShadowPass {
             ..Default::default()
         });
         let placeholder = depth_texture(ctx, "shadows.placeholder", 1, SHADOW_FORMAT);
+        let n_lights = scene.lights.len().max(1) as u64;
+        let light_size = std::mem::size_of::<LocalLightGpu>() as u64;
+        let tile_size = std::mem::size_of::<ShadowTileGpu>() as u64;
+        let local_lights = storage_buffer(ctx, "shadows.local_lights", 16 + light_size * n_lights);
+        let light_tiles = storage_buffer(ctx, "shadows.light_tiles", tile_size * 6 * n_lights);
         Ok(Self {
             depth_program,
             depth32,
@@ -208,6 +242,12 @@ impl ShadowPass {
             plan: None,
             cascade_resolution: 0,
             hero_resolution: 0,
+            lights: scene.lights.clone(),
+            atlas: None,
+            local_lights,
+            light_tiles,
+            atlas_views: Vec::new(),
+            atlas_resolution: 0,
         })
     }
 
@@ -244,14 +284,56 @@ impl ShadowPass {
         settings: Option<&ShadowSettings>,
         time_s: f32,
     ) -> ShadowStats {
-        let Some(s) = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0)
-        else {
+        let on = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0);
+        // S3: the light list (lit with or without shadows), tiles when on.
+        let atlas_n = on.map_or(0, |s| s.atlas_resolution);
+        if atlas_n == 0 {
+            self.atlas = None;
+        } else if self
+            .atlas
+            .as_ref()
+            .is_none_or(|a| a.size != atlas_n.next_power_of_two())
+        {
+            self.atlas = Some(AtlasAllocator::new(atlas_n, ATLAS_MIN_TILE, ATLAS_MAX_TILE));
+        }
+        let local = local::plan(
+            &self.lights,
+            camera.position,
+            self.atlas.as_mut(),
+            &self.casters,
+            scene,
+        );
+        let mut bytes = bytemuck::bytes_of(&[local.lights.len() as u32, 0, 0, 0]).to_vec();
+        bytes.extend_from_slice(bytemuck::cast_slice(&local.lights));
+        ctx.queue.write_buffer(&self.local_lights, 0, &bytes);
+        if !local.tiles.is_empty() {
+            ctx.queue
+                .write_buffer(&self.light_tiles, 0, bytemuck::cast_slice(&local.tiles));
+        }
+        while self.atlas_views.len() < local.projectors.len() {
+            let i = self.atlas_views.len();
+            self.atlas_views
+                .push(depth::view_buffer(ctx, &format!("shadows.atlas.view{i}")));
+        }
+        for (p, buffer) in local.projectors.iter().zip(&self.atlas_views) {
+            ctx.queue.write_buffer(
+                buffer,
+                0,
+                bytemuck::bytes_of(&ShadowViewGpu::new(p.view_proj, time_s)),
+            );
+        }
+        self.atlas_resolution = self.atlas.as_ref().map_or(0, |a| a.size);
+        let Some(s) = on else {
             self.plan = None;
             return ShadowStats::default();
         };
         let bounds = self.casters.scene;
         let mut stats = ShadowStats::default();
-        let mut plan = FramePlan::default();
+        let mut plan = FramePlan {
+            projectors: local.projectors,
+            ..FramePlan::default()
+        };
+        stats.atlas_tiles = plan.projectors.len() as u32;
         let mut params = <MaskParamsGpu as bytemuck::Zeroable>::zeroed();
         let write_view = |i: usize, m: Mat4| {
             ctx.queue.write_buffer(
@@ -262,7 +344,10 @@ impl ShadowPass {
         };
 
         // S2: plan the static slice first; a complete map replaces cascade 3.
-        let static_on = s.mode == ShadowMode::CsmStatic;
+        // Below the horizon the sun lights nothing (lighting scales it to ~0):
+        // no sun maps at night, R stays 1 and the local lights keep the frame.
+        let sun_up = sun_direction.y > 0.0;
+        let static_on = s.mode == ShadowMode::CsmStatic && sun_up;
         if static_on {
             if self
                 .static_maps
@@ -293,7 +378,7 @@ impl ShadowPass {
                 params.static_map = fit.light_view_proj.to_cols_array_2d();
                 params.static_info = [1.0, fit.texel_world, fit.depth_range, (CASCADES - 1) as f32];
             }
-        } else {
+        } else if s.mode != ShadowMode::CsmStatic {
             // Leaving csm+static frees 256 MB and restarts the fill next time.
             self.static_maps = None;
             self.static_state.reset();
@@ -302,7 +387,9 @@ impl ShadowPass {
         // S1: the cascades (the far one only while no static map is shown).
         let splits =
             cascades::practical_splits(camera.near.max(0.05), s.max_distance, s.split_lambda);
-        let rendered = if stats.static_shown {
+        let rendered = if !sun_up {
+            0
+        } else if stats.static_shown {
             CASCADES - 1
         } else {
             CASCADES
@@ -341,6 +428,7 @@ impl ShadowPass {
 
         // S4: the hero map.
         if s.hero_resolution > 0
+            && sun_up
             && let Some(h) = self.casters.hero_index(s.hero.as_deref())
             && let Some((object, mesh)) = self.casters.objects.get(h)
         {
@@ -387,7 +475,12 @@ impl ShadowPass {
             .map(|(_, l)| l.len() as u32)
             .sum::<u32>()
             + stats.static_draws
-            + plan.hero.as_ref().map_or(0, |(_, l)| l.len() as u32);
+            + plan.hero.as_ref().map_or(0, |(_, l)| l.len() as u32)
+            + plan
+                .projectors
+                .iter()
+                .map(|p| p.draws.len() as u32)
+                .sum::<u32>();
         self.cascade_resolution = cascade_resolution;
         self.hero_resolution = s.hero_resolution;
         self.plan = Some(plan);
@@ -507,6 +600,16 @@ impl ShadowPass {
             map
         });
 
+        let atlas_map = (!plan.projectors.is_empty()).then(|| {
+            let n = self.atlas_resolution;
+            let map =
+                graph.create_texture("shadow.atlas", TextureDesc::new_2d(n, n, SHADOW_FORMAT));
+            let mut pass = graph.add_pass("shadows.atlas");
+            let map = pass.write(map, TextureAccess::DepthAttachment);
+            pass.execute(move |ctx| self.record_atlas(ctx, map, scene, errors));
+            map
+        });
+
         let mask = graph.create_texture(
             "shadow.mask",
             TextureDesc::new_2d(size.0, size.1, MASK_FORMAT),
@@ -524,7 +627,7 @@ impl ShadowPass {
             Some((i, h)) if Some(i) == shown => Some(pass.read(h, TextureAccess::Sampled)),
             _ => None,
         };
-        if let Some(h) = hero_map {
+        for h in [hero_map, atlas_map].into_iter().flatten() {
             pass.read(h, TextureAccess::Sampled);
         }
         let mask = pass.write(mask, TextureAccess::ColorAttachment);
@@ -548,6 +651,10 @@ impl ShadowPass {
                 Some(h) => layer_view(ctx.texture(h), 0, true),
                 None => layer_view(&self.placeholder, 0, true),
             };
+            let atlas_view = match atlas_map {
+                Some(h) => layer_view(ctx.texture(h), 0, true),
+                None => layer_view(&self.placeholder, 0, true),
+            };
             let tv = wgpu::BindingResource::TextureView;
             let bg = self.mask_program.bind(
                 ctx.device,
@@ -560,6 +667,9 @@ impl ShadowPass {
                     ("cascades", tv(&cascades_view)),
                     ("static_map", tv(&static_view)),
                     ("hero_map", tv(&hero_view)),
+                    ("atlas", tv(&atlas_view)),
+                    ("local_lights", self.local_lights.as_entire_binding()),
+                    ("light_tiles", self.light_tiles.as_entire_binding()),
                     (
                         "shadow_sampler",
                         wgpu::BindingResource::Sampler(&self.sampler),
@@ -581,6 +691,67 @@ impl ShadowPass {
             }
         });
         Some(mask)
+    }
+
+    /// Records every projector into its atlas tile (one render pass, a viewport per tile).
+    fn record_atlas(
+        &self,
+        ctx: &mut crate::graph::PassContext<'_>,
+        map: TextureHandle,
+        scene: &SceneGpu,
+        errors: &FrameErrors,
+    ) {
+        let Some(plan) = &self.plan else { return };
+        let mut groups = Vec::with_capacity(plan.projectors.len());
+        for buffer in &self.atlas_views[..plan.projectors.len()] {
+            let bg = self.depth_program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("shadow", buffer.as_entire_binding()),
+                    ("objects", scene.objects.as_entire_binding()),
+                ],
+            );
+            let Some(bg) = errors.record(bg) else { return };
+            groups.push(bg);
+        }
+        let target = ctx.view(map);
+        let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadows.atlas"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: target,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        scene.bind_geometry(&mut rp);
+        for (p, bg) in plan.projectors.iter().zip(&groups) {
+            let t = p.tile;
+            rp.set_viewport(
+                t.x as f32,
+                t.y as f32,
+                t.size as f32,
+                t.size as f32,
+                0.0,
+                1.0,
+            );
+            rp.set_bind_group(0, bg, &[]);
+            if !p.draws.opaque.is_empty() {
+                rp.set_pipeline(&self.depth32.opaque);
+                SceneGpu::draw_list(&mut rp, &p.draws.opaque);
+            }
+            if !p.draws.vegetation.is_empty() {
+                rp.set_pipeline(&self.depth32.vegetation);
+                SceneGpu::draw_list(&mut rp, &p.draws.vegetation);
+            }
+        }
     }
 
     /// `--view shadow-mask | cascades` from the mask into `output`.

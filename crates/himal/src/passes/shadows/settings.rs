@@ -49,6 +49,8 @@ pub struct ShadowSettings {
     pub hero_resolution: u32,
     /// Object given the hero map; `None` = the scene's first moving object.
     pub hero: Option<String>,
+    /// Local-light shadow atlas edge in texels (S3); 0 = no local shadows.
+    pub atlas_resolution: u32,
 }
 
 impl Default for ShadowSettings {
@@ -63,6 +65,7 @@ impl Default for ShadowSettings {
             static_draw_cap: 48,
             hero_resolution: 1024,
             hero: None,
+            atlas_resolution: 4096,
         }
     }
 }
@@ -95,6 +98,12 @@ impl ShadowSettings {
             return bad(format!(
                 "hero shadow map edge {} is above 8192",
                 self.hero_resolution
+            ));
+        }
+        if self.atlas_resolution > 16384 {
+            return bad(format!(
+                "shadow atlas edge {} is above 16384",
+                self.atlas_resolution
             ));
         }
         Ok(())
