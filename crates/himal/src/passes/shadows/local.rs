@@ -190,10 +190,33 @@ pub fn plan(
             plan.projectors.push(Projector {
                 tile: *t,
                 view_proj,
-                draws: draws.clone(),
+                draws: cull_frustum(&draws, casters, view_proj),
             });
         }
     }
     plan.lights = out;
     plan
+}
+
+/// The draws of `lists` whose bounds may be inside the frustum `view_proj`
+/// (not all eight corners beyond one clip plane): a cube face sees about a
+/// sixth of the light's sphere.
+fn cull_frustum(lists: &DrawLists, casters: &Casters, view_proj: Mat4) -> DrawLists {
+    let inside = |d: &&crate::renderer::scene_gpu::Draw| {
+        let Some(b) = casters.bounds.get(d.object as usize) else {
+            return false;
+        };
+        let clip = b.corners().map(|c| view_proj * c.extend(1.0));
+        let all = |f: &dyn Fn(&glam::Vec4) -> bool| clip.iter().all(f);
+        !(all(&|c| c.x < -c.w)
+            || all(&|c| c.x > c.w)
+            || all(&|c| c.y < -c.w)
+            || all(&|c| c.y > c.w)
+            || all(&|c| c.z < 0.0)
+            || all(&|c| c.z > c.w))
+    };
+    DrawLists {
+        opaque: lists.opaque.iter().filter(inside).cloned().collect(),
+        vegetation: lists.vegetation.iter().filter(inside).cloned().collect(),
+    }
 }
