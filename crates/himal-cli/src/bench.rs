@@ -9,7 +9,7 @@ use clap::Args;
 use himal::{FrameSettings, Renderer};
 
 use crate::GpuArgs;
-use crate::render::{PostArgs, load_scene, parse_size, pick_camera, shadow_resolution};
+use crate::render::{PostArgs, ShadowArgs, load_scene, parse_size, pick_camera};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -22,11 +22,8 @@ pub struct BenchArgs {
     /// Frames measured (after one warm-up frame).
     #[arg(long, default_value_t = 16)]
     pub frames: u32,
-    /// Sun shadows: off or sun (compare the two in one session for the cost ratio).
-    #[arg(long, default_value = "sun", value_name = "off|sun")]
-    pub shadows: String,
-    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
-    pub shadow_resolution: u32,
+    #[command(flatten)]
+    pub shadows: ShadowArgs,
     #[command(flatten)]
     pub ao: crate::ao::AoArgs,
     /// Compare AO variants (HBAO, + STF, brute-force blur) in one interleaved run and print the ratios.
@@ -79,7 +76,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
-    settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    args.shadows.apply(&mut settings)?;
     args.post.apply(&mut settings)?;
     settings.envmap_every_frame = args.envmap_every_frame;
     settings.ao = args.ao.settings()?;
@@ -91,6 +88,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut wall = Vec::new();
+    // Shadow draw calls per measured frame (S2: the static map saves them).
+    let mut shadow_draws: Vec<u32> = Vec::new();
     for i in 0..args.frames {
         // A fixed path: a slow dolly, the same for every run.
         let mut cam = camera.clone();
@@ -98,6 +97,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let t = Instant::now();
         let frame = renderer.render(&cam, &settings)?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);
+        shadow_draws.push(frame.shadows.draws);
         for t in frame.timings {
             if !order.contains(&t.id) {
                 order.push(t.id.clone());
@@ -121,6 +121,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         .collect();
     let total: f64 = rows.iter().map(|r| r.1).sum();
     let wall_median = median(&mut wall);
+    let draws_mean = shadow_draws.iter().sum::<u32>() as f64 / shadow_draws.len().max(1) as f64;
+    let draws_max = shadow_draws.iter().copied().max().unwrap_or(0);
     let adapter = renderer.context().info.to_string();
     let cache = renderer.context().pipelines.stats();
     crate::save_cache(renderer.context());
@@ -141,7 +143,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
             cache.memory_hits,
@@ -200,6 +202,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             if total > 0.0 { 100.0 * ms / total } else { 0.0 }
         );
     }
+    println!("shadow draw calls per frame: mean {draws_mean:.1}, max {draws_max}");
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
     println!("pipeline cache (whole run, E1): {cache}");
     println!("memory:");

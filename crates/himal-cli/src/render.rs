@@ -45,12 +45,8 @@ pub struct RenderArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub post: PostArgs,
-    /// Sun shadows: off, or sun (one shadow map over the scene).
-    #[arg(long, default_value = "sun", value_name = "off|sun")]
-    pub shadows: String,
-    /// Sun shadow map edge in texels.
-    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
-    pub shadow_resolution: u32,
+    #[command(flatten)]
+    pub shadows: ShadowArgs,
     /// Print each frame's log-average and adapted luminance (read back after the frame).
     #[arg(long)]
     pub print_exposure: bool,
@@ -169,13 +165,46 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     Ok((w, h))
 }
 
-/// `--shadows off|sun` with `--shadow-resolution N` to the renderer's setting (0 = off).
-pub fn shadow_resolution(mode: &str, resolution: u32) -> Result<u32> {
-    match mode {
-        "off" => Ok(0),
-        "sun" if (16..=16384).contains(&resolution) => Ok(resolution),
-        "sun" => bail!("--shadow-resolution {resolution}: expected 16..16384"),
-        other => bail!("--shadows {other}: expected off or sun"),
+/// Shadow options shared by render and bench (S1-S4).
+#[derive(Args, Clone, Debug)]
+pub struct ShadowArgs {
+    /// Sun shadows: off, csm (4 cascades), csm+static (far cascade from the static map); `sun` = csm.
+    #[arg(long, default_value = "csm", value_name = "off|csm|csm+static")]
+    pub shadows: String,
+    /// Edge of each sun cascade in texels.
+    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
+    pub shadow_resolution: u32,
+    /// Edge of the static shadow map in texels (csm+static).
+    #[arg(long, default_value_t = 8192)]
+    pub static_resolution: u32,
+    /// Object with the hero shadow map, or off (default: the first moving object).
+    #[arg(long, value_name = "NAME|off")]
+    pub hero: Option<String>,
+}
+
+impl ShadowArgs {
+    /// Writes the shadow options into `settings` (cascade edge 0 = off).
+    pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        let mode: himal::passes::shadows::ShadowMode = self.shadows.parse()?;
+        let n = self.shadow_resolution;
+        if !(16..=16384).contains(&n) {
+            bail!("--shadow-resolution {n}: expected 16..16384");
+        }
+        settings.shadow_resolution = if mode == himal::passes::shadows::ShadowMode::Off {
+            0
+        } else {
+            n
+        };
+        let s = &mut settings.shadows;
+        s.mode = mode;
+        s.static_resolution = self.static_resolution;
+        match self.hero.as_deref() {
+            Some("off") => s.hero_resolution = 0,
+            Some(name) => s.hero = Some(name.to_string()),
+            None => {}
+        }
+        s.validate()?;
+        Ok(())
     }
 }
 
@@ -231,7 +260,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
     args.post.apply(&mut settings)?;
-    settings.shadow_resolution = shadow_resolution(&args.shadows, args.shadow_resolution)?;
+    args.shadows.apply(&mut settings)?;
     settings.ao = args.ao.settings()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     if args.graph {

@@ -1,9 +1,10 @@
 //! The whole frame, top to bottom, in one place to read.
 //!
 //! ```text
-//! envmap.capture ─> envmap.mips ─> envmap.filter ─┐   (only when the sky changed)
-//! shadows.sun ──────────────────────────────┐      │
-//! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ─┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
+//! envmap.capture | envmap.probeN.* ─> envmap.mips ─> envmap.filter ──────────────┐ (when the sky changed)
+//! shadows.cascade0..3, shadows.static, shadows.hero ─┐
+//! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
+//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
@@ -26,7 +27,7 @@ use crate::passes::post::{
     AdaptPass, BloomInputs, BloomPass, LuminanceBuffers, LuminancePass, PostFrame, PostInputs,
     TonemapPass,
 };
-use crate::passes::shadows::SunShadowPass;
+use crate::passes::shadows::ShadowPass;
 use crate::passes::sky::SkyPass;
 use crate::renderer::ViewBuffer;
 use crate::renderer::scene_gpu::SceneGpu;
@@ -59,7 +60,7 @@ impl FrameErrors {
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
-    pub shadows: SunShadowPass,
+    pub shadows: ShadowPass,
     pub gbuffer: GBufferPass,
     pub ao: AoPass,
     pub envmap: EnvMapPass,
@@ -88,9 +89,7 @@ pub struct FrameInputs<'a> {
     pub luminance: &'a LuminanceBuffers,
     pub post: PostFrame<'a>,
     pub output: &'a wgpu::Texture,
-    /// Sun shadow map resolution; `None` = shadows off.
-    pub shadow_resolution: Option<u32>,
-    /// 1x1 depth texture bound in place of the map when shadows are off.
+    /// 1x1 white mask bound when shadows are off (the pass planned nothing).
     pub shadow_placeholder: &'a wgpu::Texture,
     /// AO settings and history; `None` = AO off.
     pub ao: Option<(&'a AoSettings, &'a AoHistory)>,
@@ -112,7 +111,6 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         luminance,
         post,
         output,
-        shadow_resolution,
         shadow_placeholder,
         ao,
         ao_placeholder,
@@ -122,11 +120,10 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
-    let shadow_map = match shadow_resolution {
-        Some(resolution) => passes.shadows.add(&mut g, resolution, scene, errors),
-        None => g.import_texture("shadow.off", shadow_placeholder),
-    };
     let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, errors);
+    let shadow_mask = passes
+        .shadows
+        .add(&mut g, size, gbuffer, view, scene, errors);
     let ao_targets = ao.map(|(settings, history)| {
         let inputs = AoInputs {
             settings,
@@ -136,7 +133,6 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         };
         passes.ao.add(&mut g, size, inputs, errors)
     });
-    let shadow_sampler = &passes.shadows.sampler;
     let env = match probe {
         Some((index, capture)) if passes.envmap.dirty => {
             // L3: relight the probe's G-buffer cube face by face with the
@@ -158,9 +154,9 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                     view,
                     lighting,
                     sky,
-                    shadow_map: g.import_texture("shadow.off", shadow_placeholder),
-                    shadow_sampler,
+                    shadow_mask: g.import_texture("shadow.off", shadow_placeholder),
                     ao: g.import_texture("ao.off", ao_placeholder),
+                    lights: &passes.shadows.local_lights,
                     envmap: &passes.envmap,
                     env: env_before,
                     key: LightingKey::RELIGHT,
@@ -187,12 +183,15 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         view,
         lighting,
         sky,
-        shadow_map,
-        shadow_sampler,
+        shadow_mask: match shadow_mask {
+            Some(m) => m,
+            None => g.import_texture("shadow.off", shadow_placeholder),
+        },
         ao: match ao_targets {
             Some(t) => t.ao,
             None => g.import_texture("ao.off", ao_placeholder),
         },
+        lights: &passes.shadows.local_lights,
         envmap: &passes.envmap,
         env,
         key: lighting_key,
@@ -245,6 +244,17 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             None => {
                 errors.record::<()>(Err(GpuError::Other(
                     "AO views need AO on (--ao hbao or hbao+stf)".into(),
+                )));
+                out
+            }
+        },
+        ViewBuffer::Shadow(v) => match shadow_mask {
+            Some(m) => passes
+                .shadows
+                .add_view(&mut g, v, m, gbuffer.depth, view, out, errors),
+            None => {
+                errors.record::<()>(Err(GpuError::Other(
+                    "shadow views need shadows on (--shadows csm or csm+static)".into(),
                 )));
                 out
             }

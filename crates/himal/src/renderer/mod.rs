@@ -26,9 +26,9 @@ use crate::passes::post::{
     AdaptPass, AdaptationSettings, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass,
     TonemapPass,
 };
-use crate::passes::shadows::SunShadowPass;
+use crate::passes::shadows::{ShadowPass, ShadowSettings, ShadowStats, ShadowView};
 use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
-use crate::scene::{Aabb, Camera, Scene, SunDesc};
+use crate::scene::{Camera, Scene, SunDesc};
 use post_state::PostState;
 use scene_gpu::SceneGpu;
 use uniforms::{LightingUniform, ViewUniform};
@@ -38,9 +38,9 @@ pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormS
 /// Format of raw float output (EXR of a debug view).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
-/// Sun shadow map edge: 4096 texels over the demo's 1.5 km bounding sphere
-/// gives ~0.37 m texels, enough for houses; cascades (S1) refine it later.
-pub const DEFAULT_SHADOW_RESOLUTION: u32 = 4096;
+/// Sun cascade edge (S1): four 2048² cascades hold as many texels as the
+/// single 4096² map they replaced (docs/techniques/S1.md).
+pub const DEFAULT_SHADOW_RESOLUTION: u32 = 2048;
 
 /// The buffer a frame shows (`--view`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -50,10 +50,12 @@ pub enum ViewBuffer {
     Debug(DebugView),
     /// AO buffers (`ao`, `ao-raw`, `stability-mask`).
     Ao(AoView),
+    /// Shadow buffers (`shadow-mask`, `cascades`).
+    Shadow(ShadowView),
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 16] = [
+    pub const NAMES: [&'static str; 18] = [
         "final",
         "albedo",
         "normal",
@@ -70,6 +72,8 @@ impl ViewBuffer {
         "stability-mask",
         "luminance",
         "bloom",
+        "shadow-mask",
+        "cascades",
     ];
 }
 
@@ -94,6 +98,8 @@ impl std::str::FromStr for ViewBuffer {
             "stability-mask" => ViewBuffer::Ao(AoView::Stability),
             "luminance" => ViewBuffer::Debug(D::Luminance),
             "bloom" => ViewBuffer::Debug(D::Bloom),
+            "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
+            "cascades" => ViewBuffer::Shadow(ShadowView::Cascades),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -123,8 +129,10 @@ pub struct FrameSettings {
     pub bloom: BloomSettings,
     /// Aerial perspective extinction per metre (0 = off).
     pub aerial_extinction: f32,
-    /// Sun shadow map edge in texels; 0 = shadows off.
+    /// Sun cascade edge in texels; 0 = shadows off.
     pub shadow_resolution: u32,
+    /// Shadow mode, split, static map, hero (S1-S4).
+    pub shadows: ShadowSettings,
     /// Screen-space AO (TECHNIQUES O1-O3).
     pub ao: AoSettings,
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
@@ -155,6 +163,7 @@ impl FrameSettings {
             bloom: BloomSettings::default(),
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
+            shadows: ShadowSettings::default(),
             ao: AoSettings::default(),
             time_s: 0.0,
             environment_specular: true,
@@ -169,6 +178,8 @@ pub struct RenderedFrame {
     pub image: TextureData,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
+    /// Shadow draw calls and what the shadow passes rendered.
+    pub shadows: ShadowStats,
 }
 
 /// GPU resources the frame graph borrows (everything but the pool and timer,
@@ -188,7 +199,6 @@ struct Resources {
     shadow_placeholder: wgpu::Texture,
     ao_history: Option<AoHistory>,
     ao_placeholder: wgpu::Texture,
-    bounds: Aabb,
 }
 
 impl Resources {
@@ -208,8 +218,6 @@ impl Resources {
             luminance: &self.luminance.as_ref()?.1,
             post: self.post.frame(settings),
             output: self.outputs.get(&(size.0, size.1, format))?,
-            shadow_resolution: (settings.shadow_resolution > 0)
-                .then_some(settings.shadow_resolution),
             shadow_placeholder: &self.shadow_placeholder,
             ao: match (settings.ao.mode, &self.ao_history) {
                 (AoMode::Off, _) | (_, None) => None,
@@ -255,7 +263,7 @@ impl Renderer {
     /// Creates every pipeline and uploads the scene.
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
         let mut passes = Passes {
-            shadows: SunShadowPass::new(&ctx)?,
+            shadows: ShadowPass::new(&ctx, scene)?,
             gbuffer: GBufferPass::new(&ctx)?,
             ao: AoPass::new(&ctx)?,
             envmap: EnvMapPass::new(&ctx, ENVMAP_SIZE)?,
@@ -290,28 +298,15 @@ impl Renderer {
             "sky.no_disk",
             &<SkyGpuParams as bytemuck::Zeroable>::zeroed(),
         );
-        // A probe capture adds 30 passes (6 faces x G-buffer, store, relight, sky, mirror).
-        let timer = PassTimer::new(&ctx.device, &ctx.queue, 96);
-        let shadow_placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow.off"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: crate::passes::shadows::SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let ao_placeholder = {
+        // A probe capture adds 30 passes (6 faces x G-buffer, store, relight,
+        // sky, mirror) to the shadow, AO, lighting and post passes.
+        let timer = PassTimer::new(&ctx.device, &ctx.queue, 128);
+        let white = |label| {
             use wgpu::util::DeviceExt;
             ctx.device.create_texture_with_data(
                 &ctx.queue,
                 &wgpu::TextureDescriptor {
-                    label: Some("ao.off"),
+                    label: Some(label),
                     size: wgpu::Extent3d {
                         width: 1,
                         height: 1,
@@ -328,6 +323,9 @@ impl Renderer {
                 &[255; 4],
             )
         };
+        // 1x1 white: the shadow mask when shadows are off, AO when AO is off.
+        let shadow_placeholder = white("shadow.off");
+        let ao_placeholder = white("ao.off");
         let post = PostState::new(&ctx);
         Ok(Self {
             ctx,
@@ -345,7 +343,6 @@ impl Renderer {
                 shadow_placeholder,
                 ao_history: None,
                 ao_placeholder,
-                bounds: scene.bounds,
             },
             pool: TexturePool::new(),
             timer,
@@ -412,6 +409,7 @@ impl Renderer {
                 match name.parse()? {
                     ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format)?,
                     ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format)?,
+                    ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format)?,
                     ViewBuffer::Final => {}
                 }
             }
@@ -449,6 +447,14 @@ impl Renderer {
             )));
         }
         settings.ao.validate()?;
+        settings.shadows.validate()?;
+        let shadows_off = settings.shadow_resolution == 0
+            || settings.shadows.mode == crate::passes::shadows::ShadowMode::Off;
+        if matches!(settings.view, ViewBuffer::Shadow(_)) && shadows_off {
+            return Err(Error::InvalidSettings(
+                "the shadow views need shadows on (--shadows csm or csm+static)".into(),
+            ));
+        }
         if matches!(settings.view, ViewBuffer::Ao(_)) && settings.ao.mode == AoMode::Off {
             return Err(Error::InvalidSettings(
                 "the AO views need AO on (--ao hbao or hbao+stf)".into(),
@@ -493,6 +499,21 @@ impl Renderer {
         Self::validate(settings)?;
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
+        // Plan the shadow passes as a frame would (from a camera at the origin).
+        self.update_sky(&settings.sun);
+        if let Some((_, light)) = &self.sky_light {
+            let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
+            self.res.passes.shadows.update(
+                &self.ctx,
+                &self.res.scene,
+                &camera,
+                size.0 as f32 / size.1 as f32,
+                light.sun_direction,
+                settings.shadow_resolution,
+                Some(&settings.shadows),
+                settings.time_s,
+            );
+        }
         let errors = FrameErrors::default();
         let inputs = self
             .res
@@ -505,7 +526,9 @@ impl Renderer {
 
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Debug(_) | ViewBuffer::Ao(_) if settings.raw => RAW_FORMAT,
+            ViewBuffer::Debug(_) | ViewBuffer::Ao(_) | ViewBuffer::Shadow(_) if settings.raw => {
+                RAW_FORMAT
+            }
             _ => DISPLAY_FORMAT,
         }
     }
@@ -517,6 +540,7 @@ impl Renderer {
         match settings.view {
             ViewBuffer::Debug(v) => self.res.passes.debug.prepare(&self.ctx, v, format)?,
             ViewBuffer::Ao(v) => self.res.passes.ao.prepare_view(&self.ctx, v, format)?,
+            ViewBuffer::Shadow(v) => self.res.passes.shadows.prepare_view(&self.ctx, v, format)?,
             ViewBuffer::Final => {}
         }
         if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
@@ -606,7 +630,7 @@ impl Renderer {
         let Some((_, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
-        let mut lighting = LightingUniform::new(
+        let lighting = LightingUniform::new(
             light.sun_direction,
             light.sun_illuminance,
             Sh9Gpu::from(&light.irradiance_sh),
@@ -621,24 +645,16 @@ impl Renderer {
                 0.0,
             ),
         );
-        if settings.shadow_resolution > 0 {
-            let fit = self.res.passes.shadows.update(
-                &self.ctx.queue,
-                &self.res.bounds,
-                light.sun_direction,
-                settings.shadow_resolution,
-                settings.time_s,
-            );
-            lighting.light_view_proj = fit.light_view_proj.to_cols_array_2d();
-            // Normal offset 1.5 texels and depth bias 2 texels: 1 texel left
-            // acne bands on the demo's plinth at 14:30; no visible gap under houses.
-            lighting.shadow = [
-                1.0,
-                1.5 * fit.texel_world,
-                2.0 * fit.texel_world / fit.depth_range,
-                0.0,
-            ];
-        }
+        let shadow_stats = self.res.passes.shadows.update(
+            &self.ctx,
+            &self.res.scene,
+            camera,
+            aspect,
+            light.sun_direction,
+            settings.shadow_resolution,
+            Some(&settings.shadows),
+            settings.time_s,
+        );
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
@@ -685,6 +701,10 @@ impl Renderer {
                 h.invalidate();
             }
         }
-        Ok(RenderedFrame { image, timings })
+        Ok(RenderedFrame {
+            image,
+            timings,
+            shadows: shadow_stats,
+        })
     }
 }

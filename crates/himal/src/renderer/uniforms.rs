@@ -64,10 +64,6 @@ pub struct LightingUniform {
     pub sky_irradiance: Sh9Gpu,
     /// x extinction per metre, y aerial perspective amount
     pub fog: [f32; 4],
-    /// world -> sun shadow clip space
-    pub light_view_proj: [[f32; 4]; 4],
-    /// x shadows on (1/0), y normal offset (m), z depth bias (light NDC)
-    pub shadow: [f32; 4],
 }
 
 impl LightingUniform {
@@ -82,8 +78,6 @@ impl LightingUniform {
             sun_illuminance: sun_illuminance.extend(0.0).to_array(),
             sky_irradiance,
             fog: fog.to_array(),
-            light_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
-            shadow: [0.0; 4],
         }
     }
 }

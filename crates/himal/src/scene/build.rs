@@ -134,6 +134,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         .iter()
         .map(|p| ck.finite3(&p.position, "position"))
         .collect::<Result<Vec<_>>>()?;
+    let lights = super::lights::build_lights(&ck, &file.light)?;
     let mut world = World {
         ck: &ck,
         base_dir,
@@ -153,6 +154,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         materials,
         cameras,
         sun,
+        lights,
         bounds,
         pbr: Default::default(),
         probes,

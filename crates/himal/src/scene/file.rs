@@ -19,6 +19,8 @@ pub(crate) struct FileScene {
     #[serde(default)]
     pub camera: Vec<FileCamera>,
     #[serde(default)]
+    pub light: Vec<FileLight>,
+    #[serde(default)]
     pub probe: Vec<FileProbe>,
 }
 
@@ -27,6 +29,22 @@ pub(crate) struct FileScene {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileProbe {
     pub position: Spanned<[f32; 3]>,
+}
+
+/// `[[light]]`: a point or spot light (S3).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileLight {
+    pub name: Spanned<String>,
+    pub kind: Spanned<String>,
+    pub position: Spanned<[f32; 3]>,
+    pub color: Option<Spanned<[f32; 3]>>,
+    pub intensity: Spanned<f32>,
+    pub range: Spanned<f32>,
+    pub direction: Option<Spanned<[f32; 3]>>,
+    pub inner_angle: Option<Spanned<f32>>,
+    pub outer_angle: Option<Spanned<f32>>,
+    pub shadow: Option<bool>,
 }
 
 #[derive(Deserialize)]

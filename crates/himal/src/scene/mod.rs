@@ -104,6 +104,7 @@ mod error;
 mod file;
 pub mod gltf;
 pub mod heightfield;
+mod lights;
 mod motion;
 pub mod noise;
 mod place;
@@ -118,6 +119,7 @@ use glam::{Mat4, Vec3};
 pub use camera::{Camera, DEFAULT_NEAR};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
+pub use lights::{LightDesc, LightKind};
 pub use motion::{Motion, Orbit};
 
 /// One vertex as the G-buffer pass reads it (80 bytes).
@@ -405,6 +407,8 @@ pub struct Scene {
     pub materials: Vec<MaterialDesc>,
     pub cameras: Vec<NamedCamera>,
     pub sun: SunDesc,
+    /// Point and spot lights (`[[light]]`, S3).
+    pub lights: Vec<LightDesc>,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -459,6 +463,7 @@ impl Scene {
             sun: SunDesc::default(),
             bounds: asset.bounds,
             pbr: asset.pbr,
+            lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
             probes: Vec::new(),
         })
     }

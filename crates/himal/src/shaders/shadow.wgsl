@@ -1,23 +1,181 @@
-// Sun shadow lookup shared by lighting passes (TECHNIQUES S1 foundation).
-// A 3x3 grid of hardware-compared bilinear taps (a 4x4-texel tent): smooth
-// edges, no noise, so the result is deterministic. Checked against CPU ray
-// casting in tests/shadows.rs.
+// Sun shadow lookup shared by the shadow passes (TECHNIQUES S1, Ryse):
+// per-pixel rotated Poisson-disk filtering of hardware-compared bilinear taps,
+// the cascade choice, and the mask pass's parameters. CPU twin:
+// passes/shadows/reference.rs (`poisson_visibility`, `rotation_angle`).
 
-// Visibility in [0,1] of world point `p` (already offset along its normal)
-// for a light-space matrix mapping world to clip (xy in [-1,1], z in [0,1]).
-fn sun_shadow_visibility(map: texture_depth_2d, cmp: sampler_comparison, light_view_proj: mat4x4f,
-                         p: vec3f, depth_bias: f32) -> f32 {
-    let c = light_view_proj * vec4f(p, 1.0);
+// 16-tap Poisson disk in the unit circle (minimum distance ~0.3); the first
+// four are the outer ring, one per quadrant (early out, below).
+const SHADOW_POISSON_16 = array<vec2f, 16>(
+    vec2f(-0.94201624, -0.39906216), vec2f(0.94558609, -0.76890725),
+    vec2f(0.97484398, 0.75648379), vec2f(-0.81409955, 0.91437590),
+    vec2f(-0.09418410, -0.92938870), vec2f(0.34495938, 0.29387760),
+    vec2f(-0.91588581, 0.45771432), vec2f(-0.81544232, -0.87912464),
+    vec2f(-0.38277543, 0.27676845), vec2f(0.44323325, -0.97511554),
+    vec2f(0.53742981, -0.47373420), vec2f(-0.26496911, -0.41893023),
+    vec2f(0.79197514, 0.19090188), vec2f(-0.24188840, 0.99706507),
+    vec2f(0.19984126, 0.78641367), vec2f(0.14383161, -0.14100790),
+);
+
+// Parameters of shadows.mask (twin: passes/shadows/mod.rs `MaskParamsGpu`).
+struct ShadowMaskParams {
+    // world -> clip of cascades 0..3
+    cascades: array<mat4x4f, 4>,
+    static_map: mat4x4f,
+    hero: mat4x4f,
+    // far view distance (along the camera axis) of cascades 0..3 (m)
+    splits: vec4f,
+    // world size of a texel of cascades 0..3 (m)
+    texel: vec4f,
+    // depth range of cascades 0..3 (m)
+    depth_range: vec4f,
+    // x: static map shown (1/0), y: its texel (m), z: its depth range (m),
+    // w: first cascade it replaces
+    static_info: vec4f,
+    // x: hero map on (1/0), y: its texel (m), z: its depth range (m)
+    hero_info: vec4f,
+    // x: Poisson radius (texels), y: normal offset (texels), z: depth bias (texels),
+    // w: number of cascades rendered
+    filter_params: vec4f,
+    // xyz: camera forward (unit)
+    camera_forward: vec4f,
+    // world -> light view (rotation only), shared by every map: anchors the
+    // disk rotation to world texels
+    light_rotation: mat4x4f,
+}
+
+// Rotation of the disk for one cell of the shadow map (interleaved gradient
+// noise, Jimenez 2014). Keyed on the map's texel, not the screen pixel, so a
+// snapped map gives the same pattern at the same world point every frame.
+fn shadow_rotation_angle(cell: vec2f) -> f32 {
+    return 6.2831853 * fract(52.9829189 * fract(dot(cell, vec2f(0.06711056, 0.00583715))));
+}
+
+// Visibility in [0,1] at `uv` of layer `layer`: the mean of 16 bilinear
+// comparisons (stored >= depth_ref is lit) at Poisson offsets rotated by
+// `angle`, scaled to `radius_texels`. When the outer four taps agree (fully
+// lit or fully shadowed, most pixels) their mean is returned: a quarter of
+// the cost, at the price of missing occluders thinner than the ring's gaps.
+fn shadow_poisson_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                             uv: vec2f, depth_ref: f32, radius_texels: f32, angle: f32) -> f32 {
+    // Unrolled with constant indices: a dynamically indexed copy of the disk
+    // was the largest cost of the pass on lavapipe.
+    let scale = radius_texels / vec2f(textureDimensions(map));
+    let cs = vec2f(cos(angle), sin(angle));
+    let ring = shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[0])
+        + shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[1])
+        + shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[2])
+        + shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[3]);
+    if (ring == 0.0 || ring == 4.0) {
+        return ring / 4.0;
+    }
+    var sum = ring;
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[4]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[5]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[6]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[7]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[8]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[9]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[10]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[11]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[12]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[13]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[14]);
+    sum += shadow_poisson_tap(map, cmp, layer, uv, depth_ref, scale, cs, SHADOW_POISSON_16[15]);
+    return sum / 16.0;
+}
+
+// One hardware-compared bilinear tap at disk point `o` rotated by (cos, sin) = `cs`.
+fn shadow_poisson_tap(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                      uv: vec2f, depth_ref: f32, scale: vec2f, cs: vec2f, o: vec2f) -> f32 {
+    let r = vec2f(o.x * cs.x - o.y * cs.y, o.x * cs.y + o.y * cs.x);
+    return textureSampleCompareLevel(map, cmp, uv + r * scale, layer, depth_ref);
+}
+
+// `light_rotation`: world -> light view; the disk's rotation is keyed on the
+// world texel (light-view xy / texel), the same cell whatever the map's offset.
+fn shadow_map_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                         light_view_proj: mat4x4f, light_rotation: mat4x4f, p: vec3f, n: vec3f,
+                         texel_world: f32, depth_range: f32, filter_params: vec4f) -> f32 {
+    let q = vec4f(p + n * (filter_params.y * texel_world), 1.0);
+    let c = light_view_proj * q;
     let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
     if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
         return 1.0;
     }
-    let texel = 1.0 / vec2f(textureDimensions(map));
-    var sum = 0.0;
-    for (var j = -1; j <= 1; j = j + 1) {
-        for (var i = -1; i <= 1; i = i + 1) {
-            sum = sum + textureSampleCompareLevel(map, cmp, uv + vec2f(f32(i), f32(j)) * texel, c.z - depth_bias);
+    let cell = floor((light_rotation * q).xy / texel_world);
+    let depth_ref = c.z - filter_params.z * texel_world / depth_range;
+    return shadow_poisson_visibility(map, cmp, layer, uv, depth_ref, filter_params.x, shadow_rotation_angle(cell));
+}
+
+// Map a point at view distance `dist` reads: 0..3 cascades, 4 static map, -1 none.
+fn shadow_map_index(params: ShadowMaskParams, dist: f32) -> i32 {
+    var i = -1;
+    let rendered = i32(params.filter_params.w);
+    for (var k = 3; k >= 0; k = k - 1) {
+        if (dist <= params.splits[k]) {
+            i = k;
         }
     }
-    return sum / 9.0;
+    let static_on = params.static_info.x > 0.5;
+    if (static_on && (i < 0 || i >= i32(params.static_info.w))) {
+        return 4;
+    }
+    if (i >= rendered) {
+        return -1;
+    }
+    return i;
+}
+
+// A point or spot light (S3; twin: passes/shadows/local.rs `LocalLightGpu`).
+struct LocalLight {
+    // xyz: position, w: range (m)
+    position_range: vec4f,
+    // rgb: colour x intensity in klux at 1 m, w: 0 point, 1 spot
+    color_kind: vec4f,
+    // xyz: spot axis, w: cos of the outer half angle
+    direction_cos_outer: vec4f,
+    // x: cos of the inner half angle, y: shadow-mask channel (0 none, 1..3 = G, B, A),
+    // z: first atlas tile, w: unused
+    params: vec4f,
+}
+
+struct LocalLights {
+    // x: number of lights
+    count: vec4u,
+    lights: array<LocalLight>,
+}
+
+// One projector's tile of the shadow atlas (twin: `ShadowTileGpu`).
+struct ShadowTile {
+    // world -> clip (perspective, depth 0 near .. 1 far)
+    view_proj: mat4x4f,
+    // xy: atlas uv of the tile's corner, zw: its uv size
+    rect: vec4f,
+    // x: world texel size per metre of distance
+    info: vec4f,
+}
+
+// Windowed inverse square: 1/d² · (1 − (d/range)⁴)², zero at the range
+// (Karis 2013), d clamped to 1 cm.
+fn local_light_falloff(d: f32, range: f32) -> f32 {
+    let x = d / range;
+    let window = clamp(1.0 - x * x * x * x, 0.0, 1.0);
+    return window * window / max(d * d, 1e-4);
+}
+
+// Spot cone: 1 inside the inner angle, 0 outside the outer, smooth between.
+fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+    return smoothstep(cos_outer, cos_inner, cos_angle);
+}
+
+// Cube face of direction `d` (light to point): 0..5 = +X, -X, +Y, -Y, +Z, -Z.
+fn shadow_cube_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
 }

@@ -1,12 +1,15 @@
 // lighting.deferred: full-screen deferred shading of the G-buffer (TECHNIQUES M1, M2, L1 foundation).
 // Sun: anisotropic GGX + height-correlated Smith + Schlick, Lambert diffuse (brdf.wgsl).
-// Sky: third-order SH irradiance; ambient specular from the GGX-filtered sky cube
-// along the M4 reflection vector times the GPU DFG table (passes/envmap, L4);
-// with ENV_SPECULAR off, the split-sum fit with SH along the reflection vector.
-// Sun shadow: shaders/shadow.wgsl (S1 foundation), normal offset + depth bias.
+// Sky: third-order SH irradiance; ambient specular from the GGX-filtered sky or
+// probe cube along the M4 reflection vector times the GPU DFG table
+// (passes/envmap, L3/L4); with ENV_SPECULAR off, the split-sum fit with SH
+// along the reflection vector.
+// Sun shadow: R of the shadow mask written by shadows.mask (S1-S4).
+// Local lights (S3): point and spot lights from `lights`, the same BRDF,
+// windowed inverse-square falloff, shadow from their mask channel (G, B, A).
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
-// shadow_map + shadow_sampler, ao (screen-space AO in .x, passes/ao; 1x1 white when off).
+// shadow_mask, ao, lights (screen-space AO in .x, passes/ao; 1x1 white when off).
 // CPU twin: passes/lighting/reference.rs (`shade`).
 #import view
 #import brdf
@@ -25,10 +28,6 @@ struct Lighting {
     sky_irradiance: Sh9,
     // x: extinction per metre, y: amount of aerial perspective (0 = off)
     fog: vec4f,
-    // world -> sun shadow clip space
-    light_view_proj: mat4x4f,
-    // x: 1 = shadows on, y: normal offset (m), z: depth bias (light NDC)
-    shadow: vec4f,
 }
 
 // E1 permutations (passes/lighting/mod.rs LightingKey): constant branches.
@@ -44,12 +43,36 @@ override ENV_SPECULAR: bool = true;
 @group(0) @binding(4) var gbuffer_frame: texture_2d<f32>;
 @group(0) @binding(5) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(6) var depth: texture_depth_2d;
-@group(0) @binding(7) var shadow_map: texture_depth_2d;
-@group(0) @binding(8) var shadow_sampler: sampler_comparison;
-@group(0) @binding(9) var ao: texture_2d<f32>;
+@group(0) @binding(7) var shadow_mask: texture_2d<f32>;
+@group(0) @binding(8) var ao: texture_2d<f32>;
+@group(0) @binding(9) var<storage, read> lights: LocalLights;
 @group(0) @binding(10) var env_specular: texture_cube<f32>;
 @group(0) @binding(11) var env_sampler: sampler;
 @group(0) @binding(12) var dfg_lut: texture_2d<f32>;
+
+// Reflected radiance of the local lights at p (mask: the shadow mask texel).
+fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f) -> vec3f {
+    var c = vec3f(0.0);
+    for (var k = 0u; k < lights.count.x; k = k + 1u) {
+        let l = lights.lights[k];
+        let to_l = l.position_range.xyz - p;
+        let d = length(to_l);
+        if (d >= l.position_range.w || d <= 0.0) {
+            continue;
+        }
+        let dir = to_l / d;
+        var e = l.color_kind.rgb * local_light_falloff(d, l.position_range.w);
+        if (l.color_kind.w > 0.5) {
+            e *= spot_cone(dot(-dir, l.direction_cos_outer.xyz), l.direction_cos_outer.w, l.params.x);
+        }
+        let channel = u32(l.params.y);
+        if (channel > 0u) {
+            e *= mask[channel];
+        }
+        c += brdf_cos(s, t, b, n, v, dir) * e;
+    }
+    return c;
+}
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
@@ -95,17 +118,17 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let to_camera = view.camera_position.xyz - p;
     let dist = length(to_camera);
     let v = to_camera / dist;
-    var vis = 1.0;
+    var mask = vec4f(1.0);
     if (SHADOWS) {
-        let offset_p = p + tbn[2] * lighting.shadow.y;
-        vis = sun_shadow_visibility(shadow_map, shadow_sampler, lighting.light_view_proj, offset_p, lighting.shadow.z);
+        mask = textureLoad(shadow_mask, min(px, vec2i(textureDimensions(shadow_mask)) - 1), 0);
     }
     // Screen-space AO darkens the ambient terms only, like the material's baked AO (O1).
     var ssao = 1.0;
     if (SSAO) {
         ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
     }
-    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, vis);
+    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, mask.r);
+    c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);
         let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;

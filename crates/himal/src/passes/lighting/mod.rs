@@ -78,11 +78,12 @@ pub struct LightingInputs<'a> {
     pub view: &'a wgpu::Buffer,
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
-    /// Sun shadow map (a 1x1 imported placeholder when shadows are off).
-    pub shadow_map: TextureHandle,
-    pub shadow_sampler: &'a wgpu::Sampler,
+    /// Shadow mask of `shadows.mask`, R = sun visibility (1x1 white when off).
+    pub shadow_mask: TextureHandle,
     /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
     pub ao: TextureHandle,
+    /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
+    pub lights: &'a wgpu::Buffer,
     /// Filtered environment cube and DFG table (L4); `env` orders the read
     /// after this frame's filtering, if any.
     pub envmap: &'a EnvMapPass,
@@ -136,7 +137,7 @@ impl LightingPass {
             gbuffer.frame,
             gbuffer.material,
             gbuffer.depth,
-            inputs.shadow_map,
+            inputs.shadow_mask,
             inputs.ao,
             inputs.env,
         ] {
@@ -176,17 +177,14 @@ impl LightingPass {
                         wgpu::BindingResource::TextureView(ctx.view(gbuffer.depth)),
                     ),
                     (
-                        "shadow_map",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_map)),
-                    ),
-                    (
-                        "shadow_sampler",
-                        wgpu::BindingResource::Sampler(inputs.shadow_sampler),
+                        "shadow_mask",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_mask)),
                     ),
                     (
                         "ao",
                         wgpu::BindingResource::TextureView(ctx.view(inputs.ao)),
                     ),
+                    ("lights", inputs.lights.as_entire_binding()),
                     (
                         "env_specular",
                         wgpu::BindingResource::TextureView(&inputs.envmap.filtered_cube),

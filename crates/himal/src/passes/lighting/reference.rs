@@ -84,3 +84,45 @@ pub fn shade(
     c += s.diffuse_albedo * e_n * (ao / std::f32::consts::PI);
     c
 }
+
+/// `local_light_falloff`: windowed inverse square, 1/d² · (1 − (d/range)⁴)².
+pub fn local_light_falloff(d: f32, range: f32) -> f32 {
+    let x = d / range;
+    let window = (1.0 - x.powi(4)).clamp(0.0, 1.0);
+    window * window / (d * d).max(1e-4)
+}
+
+/// `spot_cone`: smoothstep from the outer to the inner cosine.
+pub fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+    let t = ((cos_angle - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// `shade_local` for one light at `p` (unshadowed): BRDF · cos · E, E in klux
+/// (`intensity` in cd, `color` linear).
+#[allow(clippy::too_many_arguments)]
+pub fn shade_local(
+    m: &Material,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    p: Vec3,
+    light: &crate::scene::LightDesc,
+) -> Vec3 {
+    let to_l = light.position - p;
+    let d = to_l.length();
+    if d >= light.range || d <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let l = to_l / d;
+    let mut e = light.color * light.intensity * 1e-3 * local_light_falloff(d, light.range);
+    if light.kind == crate::scene::LightKind::Spot {
+        e *= spot_cone(
+            (-l).dot(light.direction),
+            light.outer_deg.to_radians().cos(),
+            light.inner_deg.to_radians().cos(),
+        );
+    }
+    brdf_cos(&surface_from_material(m), t, b, n, v, l) * e
+}

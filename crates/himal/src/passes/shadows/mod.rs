@@ -1,10 +1,24 @@
-//! Sun shadow map (foundation of TECHNIQUES S1): one orthographic depth map
-//! fitted to the scene's bounds, sampled with a 3x3 tent of hardware
-//! comparisons in the lighting pass (`shaders/shadow.wgsl`). Cascades, the
-//! static far map, the atlas and the hero map (S1-S4) build on this pass.
-//! Reference: [`reference`] and `tests/shadows.rs` (CPU ray casting).
+//! Sun shadows (TECHNIQUES S1, S2, S4; Ryse): four cascades with a practical
+//! split and texel snapping ([`cascades`]), a static map of the far field
+//! filled once with time-sliced updates ([`static_map`]), a hero map fitted
+//! to one object ([`hero`]), all resolved in the full-screen `shadows.mask`
+//! pass into a shadow-mask texture (R = sun) that lighting reads. The filter
+//! is a per-texel rotated 16-tap Poisson disk (`shaders/shadow.wgsl`, twin
+//! [`reference`]). [`atlas`]: the S3 local-light atlas allocator.
+//! Docs: `docs/techniques/S1.md`..`S4.md`.
 
+pub mod atlas;
+pub mod cascades;
+pub mod casters;
+pub mod depth;
+pub mod hero;
+pub mod local;
+mod nodes;
 pub mod reference;
+pub mod settings;
+pub mod static_map;
+
+use std::collections::HashMap;
 
 use glam::{Mat4, Vec3};
 
@@ -12,198 +26,504 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
-use crate::scene::Aabb;
+use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::gbuffer::GBuffer;
+use crate::renderer::scene_gpu::SceneGpu;
+use crate::scene::{Camera, LightDesc, Scene};
+use atlas::AtlasAllocator;
+pub use cascades::{CASCADES, ShadowFit};
+use casters::{Casters, DrawLists};
+use depth::{DepthPipelines, ShadowViewGpu};
+use local::{LocalLightGpu, Projector, ShadowTileGpu};
+pub use settings::{ShadowMode, ShadowSettings, ShadowView};
+use static_map::{STATIC_FORMAT, StaticMapState, StaticUpdate};
 
+/// Depth format of the cascades and the hero map.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Format of the shadow mask (R sun; G, B, A local lights).
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-/// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
-const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
-    wgpu::VertexAttribute {
-        format: wgpu::VertexFormat::Float32x3,
-        offset: 0,
-        shader_location: 0,
-    },
-    wgpu::VertexAttribute {
-        format: wgpu::VertexFormat::Float32x2,
-        offset: 40,
-        shader_location: 3,
-    },
-];
+/// Normal offset and depth bias in texels of the map sampled: with the
+/// 1.5-texel disk, 1 texel of bias left acne on the demo's plinth; 2 do not.
+const NORMAL_OFFSET_TEXELS: f32 = 1.5;
+const DEPTH_BIAS_TEXELS: f32 = 2.0;
 
-/// Light-space fit of the sun shadow map; see [`reference::sun_shadow_fit`].
-#[derive(Clone, Copy, Debug)]
-pub struct ShadowFit {
-    pub light_view_proj: Mat4,
-    /// World size of one shadow texel (metres).
-    pub texel_world: f32,
-    /// Depth range of the orthographic projection (metres).
-    pub depth_range: f32,
-}
-
-/// Twin of `ShadowView` in `sun.wgsl`.
+/// Twin of `ShadowMaskParams` in `shaders/shadow.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadowViewGpu {
-    light_view_proj: [[f32; 4]; 4],
-    /// x animation time (s)
-    time: [f32; 4],
+struct MaskParamsGpu {
+    cascades: [[[f32; 4]; 4]; CASCADES],
+    static_map: [[f32; 4]; 4],
+    hero: [[f32; 4]; 4],
+    splits: [f32; 4],
+    texel: [f32; 4],
+    depth_range: [f32; 4],
+    static_info: [f32; 4],
+    hero_info: [f32; 4],
+    filter_params: [f32; 4],
+    camera_forward: [f32; 4],
+    light_rotation: [[f32; 4]; 4],
 }
 
-pub struct SunShadowPass {
-    program: Program,
-    pipeline: wgpu::RenderPipeline,
-    /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
-    vegetation: wgpu::RenderPipeline,
-    uniform: wgpu::Buffer,
-    /// Comparison sampler the lighting pass uses with the map.
+/// What this frame's shadow passes render (planned by [`ShadowPass::update`]).
+#[derive(Default)]
+struct FramePlan {
+    cascades: Vec<(ShadowFit, DrawLists)>,
+    static_update: Option<(StaticUpdate, DrawLists)>,
+    hero: Option<(ShadowFit, DrawLists)>,
+    /// S3 projectors into the atlas.
+    projectors: Vec<Projector>,
+}
+
+/// Smallest and largest atlas tiles (S3).
+const ATLAS_MIN_TILE: u32 = 64;
+const ATLAS_MAX_TILE: u32 = 1024;
+
+/// Per-frame numbers of the shadow passes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadowStats {
+    /// Shadow draw calls this frame (cascades + static slice + hero).
+    pub draws: u32,
+    /// Cascades rendered (3 once the static map replaces the far one).
+    pub cascades_rendered: u32,
+    /// Draws of the static map this frame (at most the cap).
+    pub static_draws: u32,
+    /// The static map is complete and shown.
+    pub static_shown: bool,
+    /// Fits of the cascades rendered (for tests and docs).
+    pub fits: Vec<ShadowFit>,
+    /// Far view distance of each cascade (m).
+    pub splits: [f32; CASCADES],
+    /// Atlas tiles rendered (S3 projectors).
+    pub atlas_tiles: u32,
+}
+
+pub struct ShadowPass {
+    depth_program: Program,
+    depth32: DepthPipelines,
+    depth16: DepthPipelines,
+    /// Sun views: cascades 0..3, static map, hero map.
+    views: Vec<wgpu::Buffer>,
+    mask_program: Program,
+    mask: wgpu::RenderPipeline,
+    hero_blend: wgpu::RenderPipeline,
+    params: wgpu::Buffer,
+    view_program: Program,
+    debug_views: HashMap<(ShadowView, wgpu::TextureFormat), wgpu::RenderPipeline>,
+    /// Comparison sampler of every map.
     pub sampler: wgpu::Sampler,
+    /// 1x1 depth bound where a map is absent.
+    placeholder: wgpu::Texture,
+    casters: Casters,
+    static_state: StaticMapState,
+    /// The two static maps (shown and filling) and their edge.
+    static_maps: Option<(u32, [wgpu::Texture; 2])>,
+    plan: Option<FramePlan>,
+    cascade_resolution: u32,
+    hero_resolution: u32,
+    /// S3: the scene's lights, the allocator (keeps last frame's sizes),
+    /// the light list the lighting pass reads, tiles, one view per projector.
+    lights: Vec<LightDesc>,
+    atlas: Option<AtlasAllocator>,
+    /// `LocalLights` (count + lights) for lighting and the mask.
+    pub local_lights: wgpu::Buffer,
+    light_tiles: wgpu::Buffer,
+    atlas_views: Vec<wgpu::Buffer>,
+    atlas_resolution: u32,
 }
 
-impl SunShadowPass {
-    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, "passes/shadows/sun.wgsl")?;
-        let mut layout = vertex_layout();
-        layout.attributes = &layout.attributes[..1]; // position only
-        let mut veg_layout = vertex_layout();
-        veg_layout.attributes = &VEGETATION_ATTRIBUTES;
-        let depth_stencil = wgpu::DepthStencilState {
-            format: SHADOW_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: Default::default(),
-            // Slope-scaled bias against acne on surfaces grazing the sun.
-            bias: wgpu::DepthBiasState {
-                constant: 0,
-                slope_scale: 1.5,
-                clamp: 0.0,
-            },
-        };
-        let vegetation = program.render_pipeline(
-            ctx,
-            &RenderSpec {
-                label: "shadows.sun.vegetation",
-                vertex_entry: "vs_vegetation",
-                fragment_entry: Some("fs_vegetation"),
-                vertex_buffers: &[Some(veg_layout)],
-                targets: &[],
-                depth_stencil: Some(depth_stencil.clone()),
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
+fn storage_buffer(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn depth_texture(
+    ctx: &GpuContext,
+    label: &str,
+    size: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    })
+}
+
+/// A view of one layer as a 2D array of one (how every map is bound) or as a 2D target.
+fn layer_view(t: &wgpu::Texture, layer: u32, array: bool) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(if array {
+            wgpu::TextureViewDimension::D2Array
+        } else {
+            wgpu::TextureViewDimension::D2
+        }),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+impl ShadowPass {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let depth_program = Program::new(ctx, "passes/shadows/depth.wgsl")?;
+        let depth32 = DepthPipelines::new(ctx, &depth_program, SHADOW_FORMAT)?;
+        let depth16 = DepthPipelines::new(ctx, &depth_program, STATIC_FORMAT)?;
+        let views = (0..CASCADES + 2)
+            .map(|i| depth::view_buffer(ctx, &format!("shadows.view{i}")))
+            .collect();
+        let mask_program = Program::new(ctx, "passes/shadows/mask.wgsl")?;
+        let targets = [crate::passes::common::target(MASK_FORMAT)];
+        let mask =
+            mask_program.render_pipeline(ctx, &RenderSpec::fullscreen("shadows.mask", &targets))?;
+        // Min on R = max of the occlusions (Ryse's hero blend); G, B, A untouched.
+        let min_blend = [Some(wgpu::ColorTargetState {
+            format: MASK_FORMAT,
+            blend: Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Min,
                 },
-                constants: &[],
-            },
-        )?;
-        let pipeline = program.render_pipeline(
+                alpha: wgpu::BlendComponent::REPLACE,
+            }),
+            write_mask: wgpu::ColorWrites::RED,
+        })];
+        let mut hero_spec = RenderSpec::fullscreen("shadows.mask.hero", &min_blend);
+        hero_spec.fragment_entry = Some("fs_hero");
+        let hero_blend = mask_program.render_pipeline(ctx, &hero_spec)?;
+        let params = uniform_buffer(
             ctx,
-            &RenderSpec {
-                label: "shadows.sun",
-                vertex_entry: "vs_main",
-                fragment_entry: None,
-                vertex_buffers: &[Some(layout)],
-                targets: &[],
-                depth_stencil: Some(depth_stencil),
-                // Both faces cast: the terrain is single-sided.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                constants: &[],
-            },
-        )?;
-        let uniform = uniform_buffer(
-            ctx,
-            "shadows.sun.view",
-            &ShadowViewGpu {
-                light_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
-                time: [0.0; 4],
-            },
+            "shadows.mask.params",
+            &<MaskParamsGpu as bytemuck::Zeroable>::zeroed(),
         );
+        let view_program = Program::new(ctx, "passes/shadows/view.wgsl")?;
         let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("shadows.sun.compare"),
+            label: Some("shadows.compare"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        let placeholder = depth_texture(ctx, "shadows.placeholder", 1, SHADOW_FORMAT);
+        let n_lights = scene.lights.len().max(1) as u64;
+        let light_size = std::mem::size_of::<LocalLightGpu>() as u64;
+        let tile_size = std::mem::size_of::<ShadowTileGpu>() as u64;
+        let local_lights = storage_buffer(ctx, "shadows.local_lights", 16 + light_size * n_lights);
+        let light_tiles = storage_buffer(ctx, "shadows.light_tiles", tile_size * 6 * n_lights);
         Ok(Self {
-            program,
-            pipeline,
-            vegetation,
-            uniform,
+            depth_program,
+            depth32,
+            depth16,
+            views,
+            mask_program,
+            mask,
+            hero_blend,
+            params,
+            view_program,
+            debug_views: HashMap::new(),
             sampler,
+            placeholder,
+            casters: Casters::from_scene(scene),
+            static_state: StaticMapState::default(),
+            static_maps: None,
+            plan: None,
+            cascade_resolution: 0,
+            hero_resolution: 0,
+            lights: scene.lights.clone(),
+            atlas: None,
+            local_lights,
+            light_tiles,
+            atlas_views: Vec::new(),
+            atlas_resolution: 0,
         })
     }
 
-    /// Fits the map to `bounds` for `sun_direction` and uploads the matrix
-    /// and the animation time `time_s` (vegetation sway).
-    pub fn update(
-        &self,
-        queue: &wgpu::Queue,
-        bounds: &Aabb,
-        sun_direction: Vec3,
-        resolution: u32,
-        time_s: f32,
-    ) -> ShadowFit {
-        let fit = reference::sun_shadow_fit(bounds, sun_direction, resolution);
-        let gpu = ShadowViewGpu {
-            light_view_proj: fit.light_view_proj.to_cols_array_2d(),
-            time: [time_s, 0.0, 0.0, 0.0],
+    /// Creates the pipeline of a shadow debug view in `format`.
+    pub fn prepare_view(
+        &mut self,
+        ctx: &GpuContext,
+        view: ShadowView,
+        format: wgpu::TextureFormat,
+    ) -> Result<(), GpuError> {
+        if self.debug_views.contains_key(&(view, format)) {
+            return Ok(());
+        }
+        let id = match view {
+            ShadowView::Mask => 1,
+            ShadowView::Cascades => 2,
         };
-        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&gpu));
-        fit
+        let pipeline = view_pipeline(ctx, &self.view_program, "shadows.view", id, format)?;
+        self.debug_views.insert((view, format), pipeline);
+        Ok(())
     }
 
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        resolution: u32,
-        scene: &'a SceneGpu,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
-        let map = graph.create_texture(
-            "shadow.sun",
-            TextureDesc::new_2d(resolution, resolution, SHADOW_FORMAT),
+    /// Plans this frame (fits, culled draw lists, the static slice, the hero)
+    /// and uploads the uniforms; `None` settings = shadows off.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        camera: &Camera,
+        aspect: f32,
+        sun_direction: Vec3,
+        cascade_resolution: u32,
+        settings: Option<&ShadowSettings>,
+        time_s: f32,
+    ) -> ShadowStats {
+        let on = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0);
+        // S3: the light list (lit with or without shadows), tiles when on.
+        let atlas_n = on.map_or(0, |s| s.atlas_resolution);
+        if atlas_n == 0 {
+            self.atlas = None;
+        } else if self
+            .atlas
+            .as_ref()
+            .is_none_or(|a| a.size != atlas_n.next_power_of_two())
+        {
+            self.atlas = Some(AtlasAllocator::new(atlas_n, ATLAS_MIN_TILE, ATLAS_MAX_TILE));
+        }
+        let local = local::plan(
+            &self.lights,
+            camera.position,
+            self.atlas.as_mut(),
+            &self.casters,
+            scene,
         );
-        let mut pass = graph.add_pass("shadows.sun");
-        let map = pass.write(map, TextureAccess::DepthAttachment);
-        pass.execute(move |ctx| {
-            let bind_group = self.program.bind(
-                ctx.device,
+        let mut bytes = bytemuck::bytes_of(&[local.lights.len() as u32, 0, 0, 0]).to_vec();
+        bytes.extend_from_slice(bytemuck::cast_slice(&local.lights));
+        ctx.queue.write_buffer(&self.local_lights, 0, &bytes);
+        if !local.tiles.is_empty() {
+            ctx.queue
+                .write_buffer(&self.light_tiles, 0, bytemuck::cast_slice(&local.tiles));
+        }
+        while self.atlas_views.len() < local.projectors.len() {
+            let i = self.atlas_views.len();
+            self.atlas_views
+                .push(depth::view_buffer(ctx, &format!("shadows.atlas.view{i}")));
+        }
+        for (p, buffer) in local.projectors.iter().zip(&self.atlas_views) {
+            ctx.queue.write_buffer(
+                buffer,
                 0,
-                &[
-                    ("shadow", self.uniform.as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
-                ],
+                bytemuck::bytes_of(&ShadowViewGpu::new(p.view_proj, time_s)),
             );
-            let Some(bg) = errors.record(bind_group) else {
-                return;
-            };
-            let view = ctx.view(map);
-            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadows.sun"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_pipeline(&self.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            scene.draw_opaque(&mut rp);
-            if !scene.draws_vegetation.is_empty() {
-                rp.set_pipeline(&self.vegetation);
-                SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
+        }
+        self.atlas_resolution = self.atlas.as_ref().map_or(0, |a| a.size);
+        let Some(s) = on else {
+            self.plan = None;
+            return ShadowStats::default();
+        };
+        let bounds = self.casters.scene;
+        let mut stats = ShadowStats::default();
+        let mut plan = FramePlan {
+            projectors: local.projectors,
+            ..FramePlan::default()
+        };
+        stats.atlas_tiles = plan.projectors.len() as u32;
+        let mut params = <MaskParamsGpu as bytemuck::Zeroable>::zeroed();
+        let write_view = |i: usize, m: Mat4| {
+            ctx.queue.write_buffer(
+                &self.views[i],
+                0,
+                bytemuck::bytes_of(&ShadowViewGpu::new(m, time_s)),
+            );
+        };
+
+        // S2: plan the static slice first; a complete map replaces cascade 3.
+        // Below the horizon the sun lights nothing (lighting scales it to ~0):
+        // no sun maps at night, R stays 1 and the local lights keep the frame.
+        let sun_up = sun_direction.y > 0.0;
+        let static_on = s.mode == ShadowMode::CsmStatic && sun_up;
+        if static_on {
+            if self
+                .static_maps
+                .as_ref()
+                .is_none_or(|(n, _)| *n != s.static_resolution)
+            {
+                let n = s.static_resolution;
+                let make = |i| depth_texture(ctx, &format!("shadows.static{i}"), n, STATIC_FORMAT);
+                self.static_maps = Some((n, [make(0), make(1)]));
+                self.static_state.reset();
             }
-        });
-        map
+            let all = self.static_draws(scene);
+            let update = self.static_state.plan(
+                &bounds,
+                sun_direction,
+                s.static_resolution,
+                all.len(),
+                s.static_draw_cap as usize,
+            );
+            if let Some(u) = update {
+                let slice = take_range(&all, &u.range);
+                stats.static_draws = slice.len() as u32;
+                write_view(CASCADES, u.fit.light_view_proj);
+                plan.static_update = Some((u, slice));
+            }
+            if let Some((_, fit)) = self.static_state.shown {
+                stats.static_shown = true;
+                params.static_map = fit.light_view_proj.to_cols_array_2d();
+                params.static_info = [1.0, fit.texel_world, fit.depth_range, (CASCADES - 1) as f32];
+            }
+        } else if s.mode != ShadowMode::CsmStatic {
+            // Leaving csm+static frees 256 MB and restarts the fill next time.
+            self.static_maps = None;
+            self.static_state.reset();
+        }
+
+        // S1: the cascades (the far one only while no static map is shown).
+        let splits =
+            cascades::practical_splits(camera.near.max(0.05), s.max_distance, s.split_lambda);
+        let rendered = if !sun_up {
+            0
+        } else if stats.static_shown {
+            CASCADES - 1
+        } else {
+            CASCADES
+        };
+        for i in 0..CASCADES {
+            stats.splits[i] = splits[i + 1];
+            params.splits[i] = splits[i + 1];
+            let fit = cascades::fit_cascade(
+                camera,
+                aspect,
+                &splits,
+                i,
+                sun_direction,
+                &bounds,
+                cascade_resolution,
+                s.snap,
+            );
+            params.cascades[i] = fit.light_view_proj.to_cols_array_2d();
+            params.texel[i] = fit.texel_world;
+            params.depth_range[i] = fit.depth_range;
+            if i < rendered {
+                let mut lists = DrawLists::default();
+                self.casters.cull_into(
+                    &scene.draws_opaque,
+                    &scene.draws_vegetation,
+                    &fit,
+                    |_| true,
+                    &mut lists,
+                );
+                write_view(i, fit.light_view_proj);
+                stats.fits.push(fit);
+                plan.cascades.push((fit, lists));
+            }
+        }
+        stats.cascades_rendered = rendered as u32;
+
+        // S4: the hero map.
+        if s.hero_resolution > 0
+            && sun_up
+            && let Some(h) = self.casters.hero_index(s.hero.as_deref())
+            && let Some((object, mesh)) = self.casters.objects.get(h)
+        {
+            let fit = hero::hero_fit(
+                object,
+                mesh,
+                time_s,
+                sun_direction,
+                &bounds,
+                s.hero_resolution,
+            );
+            let mut lists = DrawLists::default();
+            let is_hero = |d: &&crate::renderer::scene_gpu::Draw| d.object as usize == h;
+            lists
+                .opaque
+                .extend(scene.draws_opaque.iter().filter(is_hero).cloned());
+            lists
+                .vegetation
+                .extend(scene.draws_vegetation.iter().filter(is_hero).cloned());
+            write_view(CASCADES + 1, fit.light_view_proj);
+            params.hero = fit.light_view_proj.to_cols_array_2d();
+            params.hero_info = [1.0, fit.texel_world, fit.depth_range, 0.0];
+            plan.hero = Some((fit, lists));
+        }
+
+        params.filter_params = [
+            s.filter_radius_texels,
+            NORMAL_OFFSET_TEXELS,
+            DEPTH_BIAS_TEXELS,
+            rendered as f32,
+        ];
+        params.camera_forward = camera
+            .forward
+            .normalize_or(Vec3::NEG_Z)
+            .extend(0.0)
+            .to_array();
+        params.light_rotation = cascades::light_rotation(sun_direction).to_cols_array_2d();
+        ctx.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+
+        stats.draws = plan
+            .cascades
+            .iter()
+            .map(|(_, l)| l.len() as u32)
+            .sum::<u32>()
+            + stats.static_draws
+            + plan.hero.as_ref().map_or(0, |(_, l)| l.len() as u32)
+            + plan
+                .projectors
+                .iter()
+                .map(|p| p.draws.len() as u32)
+                .sum::<u32>();
+        self.cascade_resolution = cascade_resolution;
+        self.hero_resolution = s.hero_resolution;
+        self.plan = Some(plan);
+        stats
     }
+
+    /// Every static object's draws, opaque first (the static map's fill order).
+    fn static_draws(&self, scene: &SceneGpu) -> Vec<(crate::renderer::scene_gpu::Draw, bool)> {
+        let keep = |d: &crate::renderer::scene_gpu::Draw| {
+            !self
+                .casters
+                .moving
+                .get(d.object as usize)
+                .copied()
+                .unwrap_or(true)
+        };
+        let opaque = scene
+            .draws_opaque
+            .iter()
+            .filter(|d| keep(d))
+            .map(|d| (d.clone(), false));
+        let veg = scene
+            .draws_vegetation
+            .iter()
+            .filter(|d| keep(d))
+            .map(|d| (d.clone(), true));
+        opaque.chain(veg).collect()
+    }
+}
+
+/// The draws of `all[range]` split back into opaque and vegetation lists.
+fn take_range(
+    all: &[(crate::renderer::scene_gpu::Draw, bool)],
+    range: &std::ops::Range<usize>,
+) -> DrawLists {
+    let mut lists = DrawLists::default();
+    for (d, veg) in &all[range.start.min(all.len())..range.end.min(all.len())] {
+        if *veg {
+            lists.vegetation.push(d.clone());
+        } else {
+            lists.opaque.push(d.clone());
+        }
+    }
+    lists
 }

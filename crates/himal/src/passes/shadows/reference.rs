@@ -1,35 +1,86 @@
-//! CPU side of the sun shadow map: the light-space fit, used by the GPU path.
-//! The map and its filter are checked end to end against CPU ray casting
-//! (`tests/shadows.rs`): a box on a plane under three sun positions.
+//! CPU twins of `shaders/shadow.wgsl`: the disk rotation and the rotated
+//! Poisson-disk filter of hardware-compared bilinear taps, for the
+//! GPU-versus-CPU test on a tiny depth map (`tests/shadows_filter.rs`).
+//! The whole chain is checked against CPU ray casting in `tests/shadows.rs`.
 
-use glam::Vec3;
+use glam::Vec2;
 
-use super::ShadowFit;
-use crate::scene::Aabb;
+/// `SHADOW_POISSON_16` of shadow.wgsl.
+#[allow(clippy::excessive_precision)] // digits as in shadow.wgsl
+pub const POISSON_16: [[f32; 2]; 16] = [
+    [-0.942_016_24, -0.399_062_16],
+    [0.945_586_09, -0.768_907_25],
+    [0.974_843_98, 0.756_483_79],
+    [-0.814_099_55, 0.914_375_9],
+    [-0.094_184_1, -0.929_388_7],
+    [0.344_959_38, 0.293_877_6],
+    [-0.915_885_81, 0.457_714_32],
+    [-0.815_442_32, -0.879_124_64],
+    [-0.382_775_43, 0.276_768_45],
+    [0.443_233_25, -0.975_115_54],
+    [0.537_429_81, -0.473_734_2],
+    [-0.264_969_11, -0.418_930_23],
+    [0.791_975_14, 0.190_901_88],
+    [-0.241_888_4, 0.997_065_07],
+    [0.199_841_26, 0.786_413_67],
+    [0.143_831_61, -0.141_007_9],
+];
 
-/// Orthographic sun view around the bounding sphere of `bounds`: the whole
-/// scene casts and receives; texel size = diameter / resolution.
-pub fn sun_shadow_fit(bounds: &Aabb, sun_direction: Vec3, resolution: u32) -> ShadowFit {
-    let (center, radius) = if bounds.is_empty() {
-        (Vec3::ZERO, 1.0)
-    } else {
-        (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
-    };
-    let d = sun_direction.normalize_or(Vec3::Y);
-    let up = if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-    let view = glam::camera::rh::view::look_at_mat4(center + d * radius, center, up);
-    // wgpu clip space: y up, depth in [0, 1] (glam's "directx" convention).
-    let proj = glam::camera::rh::proj::directx::orthographic(
-        -radius,
-        radius,
-        -radius,
-        radius,
-        0.0,
-        2.0 * radius,
-    );
-    ShadowFit {
-        light_view_proj: proj * view,
-        texel_world: 2.0 * radius / resolution.max(1) as f32,
-        depth_range: 2.0 * radius,
+/// `shadow_rotation_angle`: interleaved gradient noise of a map cell.
+pub fn rotation_angle(cell: Vec2) -> f32 {
+    let f = |x: f32| x - x.floor();
+    std::f32::consts::TAU * f(52.982_918 * f(cell.dot(Vec2::new(0.067_110_56, 0.005_837_15))))
+}
+
+/// A depth map on the CPU (row-major, texel (x, y) at `depth[y * width + x]`).
+pub struct DepthMap<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub depth: &'a [f32],
+}
+
+impl DepthMap<'_> {
+    /// Comparison LessEqual of texel (x, y), clamped to the edge: 1 = lit.
+    fn compare(&self, x: i64, y: i64, depth_ref: f32) -> f32 {
+        let x = x.clamp(0, self.width as i64 - 1) as usize;
+        let y = y.clamp(0, self.height as i64 - 1) as usize;
+        let stored = self.depth[y * self.width as usize + x];
+        if depth_ref <= stored { 1.0 } else { 0.0 }
+    }
+
+    /// One linear-filtered comparison at `uv` (Vulkan: compare the four
+    /// nearest texels, then weight the results bilinearly).
+    pub fn sample_compare(&self, uv: Vec2, depth_ref: f32) -> f32 {
+        let p = uv * Vec2::new(self.width as f32, self.height as f32) - 0.5;
+        let (x0, y0) = (p.x.floor(), p.y.floor());
+        let (fx, fy) = (p.x - x0, p.y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top =
+            self.compare(x0, y0, depth_ref) * (1.0 - fx) + self.compare(x0 + 1, y0, depth_ref) * fx;
+        let bottom = self.compare(x0, y0 + 1, depth_ref) * (1.0 - fx)
+            + self.compare(x0 + 1, y0 + 1, depth_ref) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// `shadow_poisson_visibility`: mean of 16 rotated, scaled disk taps, or
+    /// of the outer four when they agree.
+    pub fn poisson_visibility(
+        &self,
+        uv: Vec2,
+        depth_ref: f32,
+        radius_texels: f32,
+        angle: f32,
+    ) -> f32 {
+        let texel = Vec2::new(1.0 / self.width as f32, 1.0 / self.height as f32);
+        let (s, c) = angle.sin_cos();
+        let tap = |&[ox, oy]: &[f32; 2]| {
+            let r = Vec2::new(ox * c - oy * s, ox * s + oy * c);
+            self.sample_compare(uv + r * radius_texels * texel, depth_ref)
+        };
+        let ring: f32 = POISSON_16[..4].iter().map(tap).sum();
+        if ring == 0.0 || ring == 4.0 {
+            return ring / 4.0;
+        }
+        (ring + POISSON_16[4..].iter().map(tap).sum::<f32>()) / 16.0
     }
 }

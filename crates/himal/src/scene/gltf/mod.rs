@@ -393,6 +393,38 @@ fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
     }
 }
 
+/// A KHR_lights_punctual point or spot light as a scene light (S3);
+/// directional lights are left to the sun. Without a range, the light fades
+/// out where it falls to 0.05 lux (clamped to 1..200 m).
+pub fn local_light(l: &PunctualLight) -> Option<crate::scene::LightDesc> {
+    let (kind, inner_deg, outer_deg) = match l.kind {
+        LightKind::Directional => return None,
+        LightKind::Point => (crate::scene::LightKind::Point, 0.0, 0.0),
+        LightKind::Spot {
+            inner_cone,
+            outer_cone,
+        } => (
+            crate::scene::LightKind::Spot,
+            inner_cone.to_degrees(),
+            outer_cone.to_degrees(),
+        ),
+    };
+    Some(crate::scene::LightDesc {
+        name: l.name.clone(),
+        kind,
+        position: l.position,
+        color: l.color,
+        intensity: l.intensity,
+        range: l
+            .range
+            .unwrap_or_else(|| (l.intensity.max(0.0) / 0.05).sqrt().clamp(1.0, 200.0)),
+        direction: l.direction,
+        inner_deg,
+        outer_deg,
+        shadow: true,
+    })
+}
+
 fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> PunctualLight {
     use gltf::khr_lights_punctual::Kind;
     let kind = match l.kind() {

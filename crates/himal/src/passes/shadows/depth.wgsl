@@ -1,5 +1,5 @@
-// shadows.sun: depth of every object seen from the sun (orthographic), the
-// single-map foundation of TECHNIQUES S1 (cascades replace the fit later).
+// shadows.cascade0..3, shadows.static, shadows.hero: depth of the casters seen
+// from the sun (orthographic), one map per draw of this shader (TECHNIQUES S1, S2, S4).
 // Bindings: shadow (uniform ShadowView: light view-projection, time), objects (as gbuffer).
 // Standard depth here (0 near .. 1 far, compare LessEqual), unlike the camera's reverse-Z.
 // Vegetation (vs_vegetation / fs_vegetation) sways and alpha-tests as in the

@@ -1,0 +1,145 @@
+//! S1 cascade fitting on the CPU: the practical split, one bounding sphere
+//! per view-frustum slice, texel snapping, and the orthographic sun view that
+//! every shadow map (cascades, static, hero) shares.
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::{Aabb, Camera};
+
+/// Sun cascades per frame.
+pub const CASCADES: usize = 4;
+
+/// An orthographic sun view: what is rendered and how it is sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowFit {
+    /// World to clip (xy in [-1, 1], z in [0, 1], 0 nearest the sun).
+    pub light_view_proj: Mat4,
+    /// World to light view (rotation only; the sun looks down -Z).
+    pub light_rotation: Mat4,
+    /// Light-view box covered: x, y extents and z from the far plane (min)
+    /// to the near plane (max, toward the sun).
+    pub min: Vec3,
+    pub max: Vec3,
+    /// World size of one texel (m).
+    pub texel_world: f32,
+    /// Depth range of the projection (m).
+    pub depth_range: f32,
+}
+
+impl ShadowFit {
+    /// Could `bounds` (world) cast into this map? Overlaps the box in x, y
+    /// and is not wholly beyond the far plane (all casters toward the sun count).
+    pub fn may_cast(&self, bounds: &Aabb) -> bool {
+        let b = bounds.transform(&self.light_rotation);
+        b.max.x >= self.min.x
+            && b.min.x <= self.max.x
+            && b.max.y >= self.min.y
+            && b.min.y <= self.max.y
+            && b.max.z >= self.min.z
+    }
+}
+
+/// Rotation from world to the sun's view (looking along -`sun_direction`);
+/// independent of the camera, so texel grids stay put in the world.
+pub fn light_rotation(sun_direction: Vec3) -> Mat4 {
+    let d = sun_direction.normalize_or(Vec3::Y);
+    let up = if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    glam::camera::rh::view::look_to_mat4(Vec3::ZERO, -d, up)
+}
+
+/// Orthographic fit of the light-view rectangle centred on `center_ls`
+/// (light-view x, y) with half size `half`, its near plane at `z_near` (toward
+/// the sun) and far plane at `z_far`, for an `n`-texel map.
+pub fn ortho_fit(
+    rotation: Mat4,
+    center_ls: Vec3,
+    half: f32,
+    z_near: f32,
+    z_far: f32,
+    n: u32,
+) -> ShadowFit {
+    let (cx, cy) = (center_ls.x, center_ls.y);
+    // glam's "directx" convention is wgpu's clip space; distances along -Z.
+    let proj = glam::camera::rh::proj::directx::orthographic(
+        cx - half,
+        cx + half,
+        cy - half,
+        cy + half,
+        -z_near,
+        -z_far,
+    );
+    ShadowFit {
+        light_view_proj: proj * rotation,
+        light_rotation: rotation,
+        min: Vec3::new(cx - half, cy - half, z_far),
+        max: Vec3::new(cx + half, cy + half, z_near),
+        texel_world: 2.0 * half / n.max(1) as f32,
+        depth_range: z_near - z_far,
+    }
+}
+
+/// Highest light-view z of `bounds` (every caster lies below it), plus 1 m.
+pub fn top_of(rotation: Mat4, bounds: &Aabb) -> f32 {
+    if bounds.is_empty() {
+        return 1.0;
+    }
+    bounds.transform(&rotation).max.z + 1.0
+}
+
+/// Practical split (Zhang et al.): d_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N),
+/// i = 0..=N; λ = 1 is logarithmic (equal texel density ratio per cascade),
+/// λ = 0 uniform.
+pub fn practical_splits(near: f32, far: f32, lambda: f32) -> [f32; CASCADES + 1] {
+    let mut d = [0.0; CASCADES + 1];
+    for (i, di) in d.iter_mut().enumerate() {
+        let s = i as f32 / CASCADES as f32;
+        let log = near * (far / near).powf(s);
+        let uniform = near + (far - near) * s;
+        *di = lambda * log + (1.0 - lambda) * uniform;
+    }
+    d
+}
+
+/// Smallest sphere around the view-frustum slice [d_near, d_far]: centre on
+/// the view axis at t = (d_n + d_f)(1 + k²)/2 (clamped to d_f), k² =
+/// tan²(fov/2)(1 + aspect²). Depends on the slice only, never on the camera's
+/// position or orientation, so its size cannot change as the camera moves.
+pub fn slice_sphere(camera: &Camera, aspect: f32, d_near: f32, d_far: f32) -> (Vec3, f32) {
+    let tan = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let k2 = tan * tan * (1.0 + aspect * aspect);
+    let t = ((d_near + d_far) * (1.0 + k2) * 0.5).min(d_far);
+    let radius = ((t - d_near).powi(2) + d_near * d_near * k2)
+        .sqrt()
+        .max(((d_far - t).powi(2) + d_far * d_far * k2).sqrt());
+    let forward = camera.forward.normalize_or(Vec3::NEG_Z);
+    (camera.position + forward * t, radius)
+}
+
+/// Fits cascade `i` of `splits`: the slice's sphere seen from the sun, the
+/// centre snapped to whole texels when `snap` (a camera move then shifts the
+/// map by whole texels, so edges do not crawl), near plane above `scene`.
+/// Two texels of margin per side cover the snap and the filter footprint.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_cascade(
+    camera: &Camera,
+    aspect: f32,
+    splits: &[f32; CASCADES + 1],
+    i: usize,
+    sun_direction: Vec3,
+    scene: &Aabb,
+    resolution: u32,
+    snap: bool,
+) -> ShadowFit {
+    let (center, radius) = slice_sphere(camera, aspect, splits[i], splits[i + 1]);
+    let rotation = light_rotation(sun_direction);
+    let mut c = rotation.transform_point3(center);
+    let n = resolution.max(8) as f32;
+    let half = radius * n / (n - 4.0);
+    if snap {
+        let texel = 2.0 * half / n;
+        c.x = (c.x / texel).round() * texel;
+        c.y = (c.y / texel).round() * texel;
+    }
+    let z_near = top_of(rotation, scene).max(c.z + radius);
+    ortho_fit(rotation, c, half, z_near, c.z - radius, resolution)
+}

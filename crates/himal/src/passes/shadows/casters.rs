@@ -1,0 +1,121 @@
+//! Shadow casters on the CPU: per-object bounds, which objects are static
+//! (S2) and the per-map draw lists culled against a sun view.
+
+use crate::renderer::scene_gpu::Draw;
+use crate::scene::{Aabb, Object, Scene};
+
+use super::cascades::ShadowFit;
+
+/// The draws of one shadow map: opaque and vegetation (own pipeline).
+#[derive(Clone, Debug, Default)]
+pub struct DrawLists {
+    pub opaque: Vec<Draw>,
+    pub vegetation: Vec<Draw>,
+}
+
+impl DrawLists {
+    pub fn len(&self) -> usize {
+        self.opaque.len() + self.vegetation.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn clear(&mut self) {
+        self.opaque.clear();
+        self.vegetation.clear();
+    }
+}
+
+/// What the shadow passes know of each object (indexed like the scene's objects).
+pub struct Casters {
+    /// World bounds over all time (moving objects: the swept path).
+    pub bounds: Vec<Aabb>,
+    /// Objects that move (`orbit`); they never enter the static map.
+    pub moving: Vec<bool>,
+    /// Name, mesh bounds and motion of each object (hero fitting).
+    pub objects: Vec<(Object, Aabb)>,
+    /// Bounds of the whole scene.
+    pub scene: Aabb,
+}
+
+impl Casters {
+    pub fn from_scene(scene: &Scene) -> Self {
+        let mut bounds = Vec::with_capacity(scene.objects.len());
+        let mut moving = Vec::with_capacity(scene.objects.len());
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            let mesh = scene.meshes.get(o.mesh).map_or_else(
+                || Aabb::new(glam::Vec3::ZERO, glam::Vec3::ZERO),
+                |m| m.bounds,
+            );
+            bounds.push(o.swept_bounds(&mesh));
+            moving.push(o.motion.is_some());
+            objects.push((o.clone(), mesh));
+        }
+        Self {
+            bounds,
+            moving,
+            objects,
+            scene: scene.bounds,
+        }
+    }
+
+    /// Index of the object called `name`, or of the first moving object.
+    pub fn hero_index(&self, name: Option<&str>) -> Option<usize> {
+        match name {
+            Some(n) => self.objects.iter().position(|(o, _)| o.name == n),
+            None => self.moving.iter().position(|&m| m),
+        }
+    }
+
+    fn is_static(&self, d: &Draw) -> bool {
+        !self.moving.get(d.object as usize).copied().unwrap_or(true)
+    }
+
+    /// Appends to `out` the draws of `opaque` / `vegetation` that may cast
+    /// into `fit` and pass `keep` (`true` = static object).
+    pub fn cull_into(
+        &self,
+        opaque: &[Draw],
+        vegetation: &[Draw],
+        fit: &ShadowFit,
+        keep: impl Fn(bool) -> bool,
+        out: &mut DrawLists,
+    ) {
+        let take = |d: &&Draw| {
+            keep(self.is_static(d))
+                && self
+                    .bounds
+                    .get(d.object as usize)
+                    .is_some_and(|b| fit.may_cast(b))
+        };
+        out.opaque.extend(opaque.iter().filter(take).cloned());
+        out.vegetation
+            .extend(vegetation.iter().filter(take).cloned());
+    }
+
+    /// Appends the draws whose bounds overlap `region` (a light's reach),
+    /// leaving out casters more than `max_extent` across: the terrain would be
+    /// drawn into every projector for shadows it hardly casts on itself.
+    pub fn cull_local_into(
+        &self,
+        opaque: &[Draw],
+        vegetation: &[Draw],
+        region: &Aabb,
+        max_extent: f32,
+        out: &mut DrawLists,
+    ) {
+        let take = |d: &&Draw| {
+            self.bounds.get(d.object as usize).is_some_and(|b| {
+                !b.max.cmplt(region.min).any()
+                    && !b.min.cmpgt(region.max).any()
+                    && b.extent().max_element() <= max_extent
+            })
+        };
+        out.opaque.extend(opaque.iter().filter(take).cloned());
+        out.vegetation
+            .extend(vegetation.iter().filter(take).cloned());
+    }
+}

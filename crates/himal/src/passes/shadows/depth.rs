@@ -1,0 +1,153 @@
+//! Depth rendering of one sun view (cascade, static map, hero map):
+//! pipelines per depth format and the recording of a draw list.
+
+use glam::Mat4;
+
+use super::casters::DrawLists;
+use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
+use crate::gpu::{GpuContext, GpuError};
+use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
+
+/// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
+const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x3,
+        offset: 0,
+        shader_location: 0,
+    },
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x2,
+        offset: 40,
+        shader_location: 3,
+    },
+];
+
+/// Twin of `ShadowView` in `depth.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadowViewGpu {
+    pub light_view_proj: [[f32; 4]; 4],
+    /// x animation time (s)
+    pub time: [f32; 4],
+}
+
+impl ShadowViewGpu {
+    pub fn new(light_view_proj: Mat4, time_s: f32) -> Self {
+        Self {
+            light_view_proj: light_view_proj.to_cols_array_2d(),
+            time: [time_s, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// Opaque and vegetation pipelines writing one depth format.
+pub struct DepthPipelines {
+    pub opaque: wgpu::RenderPipeline,
+    /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
+    pub vegetation: wgpu::RenderPipeline,
+}
+
+impl DepthPipelines {
+    pub fn new(
+        ctx: &GpuContext,
+        program: &Program,
+        format: wgpu::TextureFormat,
+    ) -> Result<Self, GpuError> {
+        let mut layout = vertex_layout();
+        layout.attributes = &layout.attributes[..1]; // position only
+        let mut veg_layout = vertex_layout();
+        veg_layout.attributes = &VEGETATION_ATTRIBUTES;
+        let depth_stencil = wgpu::DepthStencilState {
+            format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+            stencil: Default::default(),
+            // Slope-scaled bias against acne on surfaces grazing the sun.
+            bias: wgpu::DepthBiasState {
+                constant: 0,
+                slope_scale: 1.5,
+                clamp: 0.0,
+            },
+        };
+        // Both faces cast: the terrain is single-sided.
+        let primitive = wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        };
+        let vegetation = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "shadows.depth.vegetation",
+                vertex_entry: "vs_vegetation",
+                fragment_entry: Some("fs_vegetation"),
+                vertex_buffers: &[Some(veg_layout)],
+                targets: &[],
+                depth_stencil: Some(depth_stencil.clone()),
+                primitive,
+                constants: &[],
+            },
+        )?;
+        let opaque = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "shadows.depth",
+                vertex_entry: "vs_main",
+                fragment_entry: None,
+                vertex_buffers: &[Some(layout)],
+                targets: &[],
+                depth_stencil: Some(depth_stencil),
+                primitive,
+                constants: &[],
+            },
+        )?;
+        Ok(Self { opaque, vegetation })
+    }
+
+    /// Records `lists` into `target` (cleared to the far plane first when `clear`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        target: &wgpu::TextureView,
+        clear: bool,
+        bind_group: &wgpu::BindGroup,
+        scene: &SceneGpu,
+        lists: &DrawLists,
+    ) {
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: target,
+                depth_ops: Some(wgpu::Operations {
+                    load: if clear {
+                        wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    },
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rp.set_bind_group(0, bind_group, &[]);
+        scene.bind_geometry(&mut rp);
+        if !lists.opaque.is_empty() {
+            rp.set_pipeline(&self.opaque);
+            SceneGpu::draw_list(&mut rp, &lists.opaque);
+        }
+        if !lists.vegetation.is_empty() {
+            rp.set_pipeline(&self.vegetation);
+            SceneGpu::draw_list(&mut rp, &lists.vegetation);
+        }
+    }
+}
+
+/// A uniform buffer for one sun view.
+pub fn view_buffer(ctx: &GpuContext, label: &str) -> wgpu::Buffer {
+    uniform_buffer(ctx, label, &ShadowViewGpu::new(Mat4::IDENTITY, 0.0))
+}

@@ -1,0 +1,93 @@
+//! `[[light]]` tables: point and spot lights (TECHNIQUES S3), built and
+//! checked like the rest of the scene file.
+
+use glam::Vec3;
+
+use super::SceneError;
+use super::build::Checker;
+use super::file::FileLight;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Point light (all directions) or spot light (a cone).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    Point,
+    Spot,
+}
+
+/// A local light. Illuminance at distance d: `intensity / d²` lux (candela),
+/// faded to zero at `range` by `(1 − (d/range)⁴)²`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightDesc {
+    pub name: String,
+    pub kind: LightKind,
+    pub position: Vec3,
+    /// Linear colour (multiplies the intensity).
+    pub color: Vec3,
+    /// Luminous intensity (cd).
+    pub intensity: f32,
+    /// Distance at which the light fades out (m).
+    pub range: f32,
+    /// Spot axis (unit); unused for point lights.
+    pub direction: Vec3,
+    /// Spot cone: full intensity inside `inner_deg`, none outside `outer_deg` (half angles).
+    pub inner_deg: f32,
+    pub outer_deg: f32,
+    /// Casts shadows (S3 atlas).
+    pub shadow: bool,
+}
+
+pub(crate) fn build_lights(ck: &Checker, file: &[FileLight]) -> Result<Vec<LightDesc>> {
+    file.iter()
+        .map(|l| {
+            let kind = match l.kind.get_ref().as_str() {
+                "point" => LightKind::Point,
+                "spot" => LightKind::Spot,
+                other => {
+                    return Err(ck.err(
+                        &l.kind.span(),
+                        format!("light kind \"{other}\": expected point or spot"),
+                    ));
+                }
+            };
+            let position = ck.finite3(&l.position, "position")?;
+            let color = match &l.color {
+                Some(c) => ck.finite3(c, "color")?.max(Vec3::ZERO),
+                None => Vec3::ONE,
+            };
+            let intensity = ck.positive(&l.intensity, "intensity")?;
+            let range = ck.positive(&l.range, "range")?;
+            let direction = match &l.direction {
+                Some(d) => {
+                    let v = ck.finite3(d, "direction")?;
+                    if v.length_squared() < 1e-12 {
+                        return Err(ck.err(&d.span(), "direction must not be zero"));
+                    }
+                    v.normalize()
+                }
+                None => Vec3::NEG_Y,
+            };
+            let outer_deg = match &l.outer_angle {
+                Some(a) => ck.range(a, "outer_angle", 1.0, 89.0)?,
+                None => 45.0,
+            };
+            let inner_deg = match &l.inner_angle {
+                Some(a) => ck.range(a, "inner_angle", 0.0, outer_deg)?,
+                None => outer_deg * 0.8,
+            };
+            Ok(LightDesc {
+                name: l.name.get_ref().clone(),
+                kind,
+                position,
+                color,
+                intensity,
+                range,
+                direction,
+                inner_deg,
+                outer_deg,
+                shadow: l.shadow.unwrap_or(true),
+            })
+        })
+        .collect()
+}
