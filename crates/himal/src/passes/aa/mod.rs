@@ -2,3 +2,4 @@
 //! FLIPQUAD, TAA, unsharp recovery, and the sampling-pattern study.
 
 pub mod patterns;
+pub mod smaa;
