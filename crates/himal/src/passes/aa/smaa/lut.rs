@@ -73,7 +73,11 @@ fn area_under(p1: (f64, f64), p2: (f64, f64), x: f64) -> Area {
     let xc = -p1.1 * d.0 / d.1 + p1.0;
     let frac = xc.fract();
     let a1 = if xc > p1.0 { y1 * frac / 2.0 } else { 0.0 };
-    let a2 = if xc < p2.0 { y2 * (1.0 - frac) / 2.0 } else { 0.0 };
+    let a2 = if xc < p2.0 {
+        y2 * (1.0 - frac) / 2.0
+    } else {
+        0.0
+    };
     let a = if a1.abs() > a2.abs() { a1 } else { -a2 };
     if a < 0.0 {
         [a1.abs(), a2.abs()]
@@ -201,7 +205,11 @@ pub fn search_texture() -> Vec<u8> {
     for ty in 0..h {
         let y = 32 - ty;
         for (tx, texel) in tex[ty * w..(ty + 1) * w].iter_mut().enumerate() {
-            let (x, right) = if tx < 33 { (tx, false) } else { (tx - 33, true) };
+            let (x, right) = if tx < 33 {
+                (tx, false)
+            } else {
+                (tx - 33, true)
+            };
             if let (Some(left), Some(top)) = (edges[x], edges[y]) {
                 let d = if right {
                     delta_right(left, top)

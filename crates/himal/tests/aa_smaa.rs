@@ -1,0 +1,324 @@
+//! A1 SMAA: GPU passes against their CPU twins on a small synthetic image
+//! (rotated high-contrast polygon, a thin line, a depth step).
+
+use himal::frame::FrameErrors;
+use himal::gpu::testing::shared_context;
+use himal::gpu::{GpuContext, read_texture};
+use himal::graph::{FrameGraph, TexturePool};
+use himal::passes::aa::smaa::reference::{
+    EdgeSettings, Luts, Plane, blending_weights, detect_edges, linear_to_srgb, neighbourhood_blend,
+    srgb_to_linear,
+};
+use himal::passes::aa::smaa::{EDGES_FORMAT, SmaaInputs, SmaaPass, WEIGHTS_FORMAT};
+
+const W: usize = 48;
+const H: usize = 40;
+
+fn texture(ctx: &GpuContext, format: wgpu::TextureFormat, bytes: &[u8], bpp: u32) -> wgpu::Texture {
+    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("test.smaa"),
+        size: wgpu::Extent3d {
+            width: W as u32,
+            height: H as u32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    if !bytes.is_empty() {
+        ctx.queue.write_texture(
+            t.as_image_copy(),
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(W as u32 * bpp),
+                rows_per_image: None,
+            },
+            t.size(),
+        );
+    }
+    t
+}
+
+/// sRGB bytes of the scene: a polygon rotated 20° (dark on light), a thin
+/// bright line at 70°, a soft gradient (no edges); depth steps at the polygon.
+fn scene() -> (Vec<[u8; 4]>, Vec<f32>) {
+    let mut color = Vec::with_capacity(W * H);
+    let mut depth = Vec::with_capacity(W * H);
+    let (s, c) = 20f32.to_radians().sin_cos();
+    for y in 0..H {
+        for x in 0..W {
+            let (px, py) = (x as f32 + 0.5 - 18.0, y as f32 + 0.5 - 20.0);
+            let (u, v) = (c * px + s * py, -s * px + c * py);
+            let inside = u.abs() < 9.0 && v.abs() < 6.0;
+            // Line through (34, 0) at 70° from the x axis, 1 px wide.
+            let (ls, lc) = 70f32.to_radians().sin_cos();
+            let dist = ((x as f32 + 0.5 - 34.0) * ls - (y as f32 + 0.5) * lc).abs();
+            let g = (150.0 + x as f32) as u8;
+            let rgb = if inside {
+                [30, 40, 60]
+            } else if dist < 0.5 {
+                [250, 250, 240]
+            } else {
+                [g, g, g]
+            };
+            color.push([rgb[0], rgb[1], rgb[2], 255]);
+            // Values exact in f16 (the test draws depth through an R16Float).
+            depth.push(if inside { 0.25 } else { 0.0625 });
+        }
+    }
+    (color, depth)
+}
+
+fn to_plane(color: &[[u8; 4]]) -> Plane<4> {
+    let mut p = Plane::new(W, H);
+    for (t, b) in p.texels.iter_mut().zip(color) {
+        *t = [
+            srgb_to_linear(b[0] as f32 / 255.0),
+            srgb_to_linear(b[1] as f32 / 255.0),
+            srgb_to_linear(b[2] as f32 / 255.0),
+            1.0,
+        ];
+    }
+    p
+}
+
+/// Depth32Float cannot be written by copies: draw it from an R32Float texture.
+fn depth_texture(ctx: &GpuContext, depth: &[f32]) -> wgpu::Texture {
+    use himal::gpu::pipeline::{Program, RenderSpec};
+    // R16Float: the reflected layout asks for a filterable texture.
+    let half: Vec<half::f16> = depth.iter().map(|&d| half::f16::from_f32(d)).collect();
+    let src = texture(
+        ctx,
+        wgpu::TextureFormat::R16Float,
+        bytemuck::cast_slice(&half),
+        2,
+    );
+    let dst = texture(ctx, wgpu::TextureFormat::Depth32Float, &[], 4);
+    let program = Program::from_source(
+        ctx,
+        "test.depth",
+        "#import view\n\
+         @group(0) @binding(0) var src: texture_2d<f32>;\n\
+         @vertex fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f { return fullscreen_clip(i); }\n\
+         @fragment fn fs_main(@builtin(position) frag: vec4f) -> @builtin(frag_depth) f32 { return textureLoad(src, vec2i(frag.xy), 0).r; }\n",
+    )
+    .expect("depth writer");
+    let mut spec = RenderSpec::fullscreen("test.depth", &[]);
+    spec.depth_stencil = Some(wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: Default::default(),
+        bias: Default::default(),
+    });
+    let pipeline = program.render_pipeline(ctx, &spec).expect("pipeline");
+    let view = src.create_view(&Default::default());
+    let bg = program
+        .bind(
+            &ctx.device,
+            0,
+            &[("src", wgpu::BindingResource::TextureView(&view))],
+        )
+        .expect("bind");
+    let target = dst.create_view(&Default::default());
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("test.depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &target,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    dst
+}
+
+struct GpuRun {
+    edges: Plane<2>,
+    weights: Plane<4>,
+    output: Plane<4>,
+}
+
+fn run_gpu(color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
+    let ctx = shared_context().expect("GPU (lavapipe)");
+    let smaa = SmaaPass::new(ctx, wgpu::TextureFormat::Rgba8UnormSrgb).expect("pipelines");
+    let color_t = texture(
+        ctx,
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+        bytemuck::cast_slice(color),
+        4,
+    );
+    let depth_t = depth_texture(ctx, depth);
+    let edges_t = texture(ctx, EDGES_FORMAT, &[], 2);
+    let weights_t = texture(ctx, WEIGHTS_FORMAT, &[], 4);
+    let out_t = texture(ctx, wgpu::TextureFormat::Rgba8UnormSrgb, &[], 4);
+    let errors = FrameErrors::default();
+    let mut g = FrameGraph::new();
+    let inputs = SmaaInputs {
+        color: g.import_texture("color", &color_t),
+        depth: g.import_texture("depth", &depth_t),
+    };
+    let e = g.import_texture("edges", &edges_t);
+    let e = smaa.add_edges(&mut g, inputs, e, &errors);
+    let wt = g.import_texture("weights", &weights_t);
+    let wt = smaa.add_weights(&mut g, e, wt, &errors);
+    let o = g.import_texture("out", &out_t);
+    let o = smaa.add_blend(&mut g, inputs.color, wt, o, &errors);
+    g.mark_output(o);
+    g.mark_output(e);
+    g.mark_output(wt);
+    let mut pool = TexturePool::new();
+    let commands = g
+        .compile()
+        .expect("compile")
+        .execute(&ctx.device, &mut pool, None)
+        .expect("execute");
+    if let Some(e) = errors.take_first() {
+        panic!("recording: {e}");
+    }
+    ctx.queue.submit([commands]);
+    ctx.wait("test").expect("gpu");
+    let bytes = |t: &wgpu::Texture| read_texture(ctx, t, 0, 0).expect("read back").bytes;
+    let mut edges = Plane::new(W, H);
+    for (t, b) in edges.texels.iter_mut().zip(bytes(&edges_t).chunks_exact(2)) {
+        *t = [b[0] as f32 / 255.0, b[1] as f32 / 255.0];
+    }
+    let mut weights = Plane::new(W, H);
+    for (t, b) in weights
+        .texels
+        .iter_mut()
+        .zip(bytes(&weights_t).chunks_exact(4))
+    {
+        *t = b
+            .iter()
+            .map(|&v| v as f32 / 255.0)
+            .collect::<Vec<_>>()
+            .try_into()
+            .expect("4");
+    }
+    let mut output = Plane::new(W, H);
+    for (t, b) in output.texels.iter_mut().zip(bytes(&out_t).chunks_exact(4)) {
+        *t = b
+            .iter()
+            .map(|&v| v as f32 / 255.0)
+            .collect::<Vec<_>>()
+            .try_into()
+            .expect("4");
+    }
+    GpuRun {
+        edges,
+        weights,
+        output,
+    }
+}
+
+fn max_diff<const N: usize>(a: &Plane<N>, b: &Plane<N>) -> (f32, usize) {
+    let mut worst = (0.0f32, 0);
+    for (i, (x, y)) in a.texels.iter().zip(&b.texels).enumerate() {
+        for c in 0..N {
+            let d = (x[c] - y[c]).abs();
+            if d > worst.0 {
+                worst = (d, i);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn smaa_passes_match_their_cpu_twins() {
+    let (color, depth) = scene();
+    let gpu = run_gpu(&color, &depth);
+    let linear = to_plane(&color);
+    let mut depth_plane = Plane::new(W, H);
+    for (t, &d) in depth_plane.texels.iter_mut().zip(&depth) {
+        *t = [d];
+    }
+
+    // Edges: exact (0/1).
+    let cpu_edges = detect_edges(&linear, &depth_plane, EdgeSettings::default());
+    let edge_count = cpu_edges
+        .texels
+        .iter()
+        .filter(|e| e[0] + e[1] > 0.0)
+        .count();
+    let differ = cpu_edges
+        .texels
+        .iter()
+        .zip(&gpu.edges.texels)
+        .filter(|(a, b)| a != b)
+        .count();
+    println!("edges: {edge_count} edge pixels, {differ} differ");
+    // Measured 2026-11-22: 0 of 48x40 differ; 157 edge pixels.
+    assert!(
+        edge_count > 80,
+        "the scene should have edges ({edge_count})"
+    );
+    assert_eq!(differ, 0, "edge pixels that differ");
+
+    // Weights from the GPU's edges (isolates this step).
+    let luts = Luts::generate();
+    let cpu_weights = blending_weights(&gpu.edges, &luts, 8.0, [0.0, 0.0]);
+    let (dw, at) = max_diff(&cpu_weights, &gpu.weights);
+    let nonzero = cpu_weights
+        .texels
+        .iter()
+        .filter(|t| t.iter().any(|&v| v > 0.0))
+        .count();
+    println!("weights: {nonzero} non-zero, max |diff| {dw} at {at}");
+    assert!(
+        nonzero > 40,
+        "weights should be non-zero along edges ({nonzero})"
+    );
+    // Measured 2026-11-22: max |diff| 0.0019 (under one 8-bit step); threshold 2 steps.
+    assert!(
+        dw <= 2.0 / 255.0 + 1e-6,
+        "weights differ by {dw} at pixel {at}"
+    );
+
+    // Blend from the GPU's weights; compare sRGB-encoded output.
+    let mut cpu_out = neighbourhood_blend(&linear, &gpu.weights);
+    for t in &mut cpu_out.texels {
+        for v in t.iter_mut().take(3) {
+            *v = linear_to_srgb(*v);
+        }
+    }
+    let (db, at) = max_diff(&cpu_out, &gpu.output);
+    let changed = to_plane(&color)
+        .texels
+        .iter()
+        .zip(&cpu_out.texels)
+        .filter(|(a, b)| (linear_to_srgb(a[0]) - b[0]).abs() > 2.0 / 255.0)
+        .count();
+    println!("blend: {changed} pixels changed, max |diff| {db} at {at}");
+    assert!(
+        changed > 40,
+        "blending should change edge pixels ({changed})"
+    );
+    // Measured 2026-11-22: max |diff| 0.0027 (146 pixels changed); threshold 2/255.
+    assert!(
+        db <= 2.0 / 255.0 + 1e-6,
+        "blend differs by {db} at pixel {at}"
+    );
+}
