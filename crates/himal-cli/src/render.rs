@@ -83,11 +83,16 @@ pub struct PostArgs {
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
+    /// Anti-aliasing after tone mapping (smaa-t2x, tfq, taa, hraa: not built yet).
+    #[arg(long, default_value = "smaa", value_name = "none|smaa")]
+    pub aa: String,
 }
 
 impl PostArgs {
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
+            .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
         match self.exposure.as_str() {
             "auto" => {
                 settings.adaptation.enabled = true;

@@ -5,6 +5,7 @@
 //! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ─┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
+//!          │                                        (--aa smaa: post.tonemap ─> ldr ─> aa.smaa.edges ─> aa.smaa.weights ─> aa.smaa.blend ─> output)
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
@@ -14,7 +15,8 @@
 use std::cell::RefCell;
 
 use crate::gpu::GpuError;
-use crate::graph::FrameGraph;
+use crate::graph::{FrameGraph, TextureDesc};
+use crate::passes::aa::{AaMode, SmaaInputs, SmaaPass};
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::gbuffer::GBufferPass;
@@ -65,6 +67,7 @@ pub struct Passes {
     pub adapt: AdaptPass,
     pub bloom: BloomPass,
     pub tonemap: TonemapPass,
+    pub smaa: SmaaPass,
     pub debug: DebugPass,
 }
 
@@ -86,6 +89,8 @@ pub struct FrameInputs<'a> {
     pub ao: Option<(&'a AoSettings, &'a AoHistory)>,
     /// 1x1 white texture bound in place of AO when it is off.
     pub ao_placeholder: &'a wgpu::Texture,
+    /// Anti-aliasing after tone mapping.
+    pub aa: AaMode,
     pub errors: &'a FrameErrors,
 }
 
@@ -104,6 +109,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         shadow_placeholder,
         ao,
         ao_placeholder,
+        aa,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
@@ -171,6 +177,19 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     };
     let out = g.import_texture("output", output);
     let out = match shown {
+        ViewBuffer::Final if aa == AaMode::Smaa => {
+            let format = g.texture_desc(out).map(|d| d.format);
+            let format = format.unwrap_or(wgpu::TextureFormat::Rgba8UnormSrgb);
+            let ldr = g.create_texture("ldr", TextureDesc::new_2d(size.0, size.1, format));
+            let ldr = passes
+                .tonemap
+                .add(&mut g, post.tonemap, hdr, post_inputs, ldr, errors);
+            let smaa_inputs = SmaaInputs {
+                color: ldr,
+                depth: gbuffer.depth,
+            };
+            passes.smaa.add(&mut g, smaa_inputs, size, out, errors)
+        }
         ViewBuffer::Final => {
             passes
                 .tonemap

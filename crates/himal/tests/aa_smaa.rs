@@ -14,12 +14,18 @@ use himal::passes::aa::smaa::{EDGES_FORMAT, SmaaInputs, SmaaPass, WEIGHTS_FORMAT
 const W: usize = 48;
 const H: usize = 40;
 
-fn texture(ctx: &GpuContext, format: wgpu::TextureFormat, bytes: &[u8], bpp: u32) -> wgpu::Texture {
+fn texture(
+    ctx: &GpuContext,
+    (w, h): (usize, usize),
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+    bpp: u32,
+) -> wgpu::Texture {
     let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("test.smaa"),
         size: wgpu::Extent3d {
-            width: W as u32,
-            height: H as u32,
+            width: w as u32,
+            height: h as u32,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -38,7 +44,7 @@ fn texture(ctx: &GpuContext, format: wgpu::TextureFormat, bytes: &[u8], bpp: u32
             bytes,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
-                bytes_per_row: Some(W as u32 * bpp),
+                bytes_per_row: Some(w as u32 * bpp),
                 rows_per_image: None,
             },
             t.size(),
@@ -91,17 +97,18 @@ fn to_plane(color: &[[u8; 4]]) -> Plane<4> {
 }
 
 /// Depth32Float cannot be written by copies: draw it from an R32Float texture.
-fn depth_texture(ctx: &GpuContext, depth: &[f32]) -> wgpu::Texture {
+fn depth_texture(ctx: &GpuContext, size: (usize, usize), depth: &[f32]) -> wgpu::Texture {
     use himal::gpu::pipeline::{Program, RenderSpec};
     // R16Float: the reflected layout asks for a filterable texture.
     let half: Vec<half::f16> = depth.iter().map(|&d| half::f16::from_f32(d)).collect();
     let src = texture(
         ctx,
+        size,
         wgpu::TextureFormat::R16Float,
         bytemuck::cast_slice(&half),
         2,
     );
-    let dst = texture(ctx, wgpu::TextureFormat::Depth32Float, &[], 4);
+    let dst = texture(ctx, size, wgpu::TextureFormat::Depth32Float, &[], 4);
     let program = Program::from_source(
         ctx,
         "test.depth",
@@ -160,19 +167,16 @@ struct GpuRun {
     output: Plane<4>,
 }
 
-fn run_gpu(color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
+fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
+    let (w, h) = size;
     let ctx = shared_context().expect("GPU (lavapipe)");
     let smaa = SmaaPass::new(ctx, wgpu::TextureFormat::Rgba8UnormSrgb).expect("pipelines");
-    let color_t = texture(
-        ctx,
-        wgpu::TextureFormat::Rgba8UnormSrgb,
-        bytemuck::cast_slice(color),
-        4,
-    );
-    let depth_t = depth_texture(ctx, depth);
-    let edges_t = texture(ctx, EDGES_FORMAT, &[], 2);
-    let weights_t = texture(ctx, WEIGHTS_FORMAT, &[], 4);
-    let out_t = texture(ctx, wgpu::TextureFormat::Rgba8UnormSrgb, &[], 4);
+    let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let color_t = texture(ctx, size, srgb, bytemuck::cast_slice(color), 4);
+    let depth_t = depth_texture(ctx, size, depth);
+    let edges_t = texture(ctx, size, EDGES_FORMAT, &[], 2);
+    let weights_t = texture(ctx, size, WEIGHTS_FORMAT, &[], 4);
+    let out_t = texture(ctx, size, srgb, &[], 4);
     let errors = FrameErrors::default();
     let mut g = FrameGraph::new();
     let inputs = SmaaInputs {
@@ -200,11 +204,11 @@ fn run_gpu(color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
     ctx.queue.submit([commands]);
     ctx.wait("test").expect("gpu");
     let bytes = |t: &wgpu::Texture| read_texture(ctx, t, 0, 0).expect("read back").bytes;
-    let mut edges = Plane::new(W, H);
+    let mut edges = Plane::new(w, h);
     for (t, b) in edges.texels.iter_mut().zip(bytes(&edges_t).chunks_exact(2)) {
         *t = [b[0] as f32 / 255.0, b[1] as f32 / 255.0];
     }
-    let mut weights = Plane::new(W, H);
+    let mut weights = Plane::new(w, h);
     for (t, b) in weights
         .texels
         .iter_mut()
@@ -217,7 +221,7 @@ fn run_gpu(color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
             .try_into()
             .expect("4");
     }
-    let mut output = Plane::new(W, H);
+    let mut output = Plane::new(w, h);
     for (t, b) in output.texels.iter_mut().zip(bytes(&out_t).chunks_exact(4)) {
         *t = b
             .iter()
@@ -249,7 +253,7 @@ fn max_diff<const N: usize>(a: &Plane<N>, b: &Plane<N>) -> (f32, usize) {
 #[test]
 fn smaa_passes_match_their_cpu_twins() {
     let (color, depth) = scene();
-    let gpu = run_gpu(&color, &depth);
+    let gpu = run_gpu((W, H), &color, &depth);
     let linear = to_plane(&color);
     let mut depth_plane = Plane::new(W, H);
     for (t, &d) in depth_plane.texels.iter_mut().zip(&depth) {
@@ -321,4 +325,70 @@ fn smaa_passes_match_their_cpu_twins() {
         db <= 2.0 / 255.0 + 1e-6,
         "blend differs by {db} at pixel {at}"
     );
+}
+
+/// Coverage of the analytic edge scene at a point (pixels of a 128x128
+/// image): 1 = white shape, 0 = black background. Rotated squares
+/// (7°, 23°, 41°), thin lines (0.4 and 0.8 px wide at 3° and 62°), and an
+/// alpha-tested fence (bars 0.6 px wide, 3.3 px apart, tilted 12°).
+fn edge_scene(x: f32, y: f32) -> bool {
+    let rotated_square = |cx: f32, cy: f32, half: f32, deg: f32| {
+        let (s, c) = deg.to_radians().sin_cos();
+        let (px, py) = (x - cx, y - cy);
+        (c * px + s * py).abs() < half && (-s * px + c * py).abs() < half
+    };
+    let line = |x0: f32, y0: f32, deg: f32, width: f32| {
+        let (s, c) = deg.to_radians().sin_cos();
+        ((x - x0) * s - (y - y0) * c).abs() < width * 0.5
+    };
+    let fence = {
+        let (s, c) = 12f32.to_radians().sin_cos();
+        let u = c * (x - 64.0) + s * (y - 100.0);
+        let v = -s * (x - 64.0) + c * (y - 100.0);
+        v.abs() < 20.0 && u.abs() < 60.0 && (u / 3.3).rem_euclid(1.0) < 0.6 / 3.3
+    };
+    rotated_square(30.0, 30.0, 18.0, 7.0)
+        || rotated_square(90.0, 28.0, 16.0, 23.0)
+        || rotated_square(64.0, 60.0, 10.0, 41.0)
+        || line(0.0, 70.0, 3.0, 0.8)
+        || line(100.0, 50.0, 62.0, 0.4)
+        || fence
+}
+
+#[test]
+fn smaa_lowers_edge_error_against_a_16x16_supersampled_reference() {
+    const N: usize = 128;
+    const SS: usize = 16;
+    let mut aliased = Vec::with_capacity(N * N);
+    let mut reference = Vec::with_capacity(N * N);
+    for y in 0..N {
+        for x in 0..N {
+            let centre = edge_scene(x as f32 + 0.5, y as f32 + 0.5);
+            let v = if centre { 255u8 } else { 0 };
+            aliased.push([v, v, v, 255]);
+            let mut hits = 0;
+            for j in 0..SS {
+                for i in 0..SS {
+                    let sx = x as f32 + (i as f32 + 0.5) / SS as f32;
+                    let sy = y as f32 + (j as f32 + 0.5) / SS as f32;
+                    hits += edge_scene(sx, sy) as u32;
+                }
+            }
+            // Box filter in linear light, displayed in sRGB.
+            reference.push(linear_to_srgb(hits as f32 / (SS * SS) as f32));
+        }
+    }
+    let depth = vec![0.25f32; N * N];
+    let gpu = run_gpu((N, N), &aliased, &depth);
+    let rmse = |img: &dyn Fn(usize) -> f32| {
+        let sum: f32 = (0..N * N).map(|i| (img(i) - reference[i]).powi(2)).sum();
+        (sum / (N * N) as f32).sqrt()
+    };
+    let none = rmse(&|i| aliased[i][0] as f32 / 255.0);
+    let smaa = rmse(&|i| gpu.output.texels[i][0]);
+    println!("edge scene RMSE (sRGB) vs 16x16 supersampled: none {none:.4}, smaa {smaa:.4}");
+    // Measured 2026-11-22: none 0.1845, smaa 0.1696 (-8%; the sub-pixel
+    // lines and fence bars are beyond any post-process, they need the
+    // temporal modes); threshold: at least 5% lower.
+    assert!(smaa < 0.95 * none, "smaa {smaa} vs none {none}");
 }

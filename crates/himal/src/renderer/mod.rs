@@ -124,6 +124,8 @@ pub struct FrameSettings {
     pub shadow_resolution: u32,
     /// Screen-space AO (TECHNIQUES O1-O3).
     pub ao: AoSettings,
+    /// Anti-aliasing after tone mapping (TECHNIQUES A1-A4).
+    pub aa: crate::passes::aa::AaMode,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -144,6 +146,7 @@ impl FrameSettings {
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
             ao: AoSettings::default(),
+            aa: crate::passes::aa::AaMode::None,
             time_s: 0.0,
         }
     }
@@ -198,6 +201,7 @@ impl Resources {
                 (_, Some(h)) => Some((&settings.ao, h)),
             },
             ao_placeholder: &self.ao_placeholder,
+            aa: settings.aa,
             errors,
         })
     }
@@ -231,6 +235,7 @@ impl Renderer {
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
             tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
+            smaa: crate::passes::aa::SmaaPass::new(&ctx, DISPLAY_FORMAT)?,
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
