@@ -83,8 +83,12 @@ pub struct PostArgs {
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
-    /// Anti-aliasing after tone mapping (smaa-t2x, tfq, taa, hraa: not built yet).
-    #[arg(long, default_value = "smaa", value_name = "none|smaa")]
+    /// Anti-aliasing after tone mapping; hraa = SMAA + temporal FLIPQUAD + TAA + unsharp.
+    #[arg(
+        long,
+        default_value = "hraa",
+        value_name = "none|smaa|smaa-t2x|tfq|taa|hraa"
+    )]
     pub aa: String,
 }
 

@@ -5,7 +5,8 @@
 //! gbuffer ─┬─> ao.hbao ─> … ─> ao.blur_y_stf ─┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
-//!          │                                        (--aa smaa: post.tonemap ─> ldr ─> aa.smaa.edges ─> aa.smaa.weights ─> aa.smaa.blend ─> output)
+//!          │        (--aa: post.tonemap ─> [aa.smaa.edges ─> .weights ─> .blend] ─> [aa.resolve ─> aa.taa ─> aa.unsharp] ─> output,
+//!          │         passes/aa/mod.rs `add_chain`)
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
@@ -15,8 +16,8 @@
 use std::cell::RefCell;
 
 use crate::gpu::GpuError;
-use crate::graph::{FrameGraph, TextureDesc};
-use crate::passes::aa::{AaMode, SmaaInputs, SmaaPass};
+use crate::graph::FrameGraph;
+use crate::passes::aa::{AaFrame, AaHistory, AaMode, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::gbuffer::GBufferPass;
@@ -68,6 +69,7 @@ pub struct Passes {
     pub bloom: BloomPass,
     pub tonemap: TonemapPass,
     pub smaa: SmaaPass,
+    pub temporal: TemporalPass,
     pub debug: DebugPass,
 }
 
@@ -90,8 +92,16 @@ pub struct FrameInputs<'a> {
     /// 1x1 white texture bound in place of AO when it is off.
     pub ao_placeholder: &'a wgpu::Texture,
     /// Anti-aliasing after tone mapping.
-    pub aa: AaMode,
+    pub aa: FrameAa<'a>,
     pub errors: &'a FrameErrors,
+}
+
+/// The anti-aliasing of one frame (mode, SMAA subsample, temporal history).
+#[derive(Clone, Copy)]
+pub struct FrameAa<'a> {
+    pub mode: AaMode,
+    pub subsample: u32,
+    pub history: Option<&'a AaHistory>,
 }
 
 /// Builds the frame graph; a debug `shown` view replaces tone mapping.
@@ -177,23 +187,22 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     };
     let out = g.import_texture("output", output);
     let out = match shown {
-        ViewBuffer::Final if aa == AaMode::Smaa => {
-            let format = g.texture_desc(out).map(|d| d.format);
-            let format = format.unwrap_or(wgpu::TextureFormat::Rgba8UnormSrgb);
-            let ldr = g.create_texture("ldr", TextureDesc::new_2d(size.0, size.1, format));
-            let ldr = passes
-                .tonemap
-                .add(&mut g, post.tonemap, hdr, post_inputs, ldr, errors);
-            let smaa_inputs = SmaaInputs {
-                color: ldr,
-                depth: gbuffer.depth,
-            };
-            passes.smaa.add(&mut g, smaa_inputs, size, out, errors)
-        }
         ViewBuffer::Final => {
-            passes
-                .tonemap
-                .add(&mut g, post.tonemap, hdr, post_inputs, out, errors)
+            let chain = AaFrame {
+                mode: aa.mode,
+                subsample: aa.subsample,
+                history: aa.history,
+                smaa: &passes.smaa,
+                temporal: &passes.temporal,
+                depth: gbuffer.depth,
+                motion: gbuffer.motion,
+            };
+            let tonemap = |g: &mut FrameGraph<'a>, target| {
+                passes
+                    .tonemap
+                    .add(g, post.tonemap, hdr, post_inputs, target, errors)
+            };
+            crate::passes::aa::add_chain(&mut g, chain, out, tonemap, errors)
         }
         ViewBuffer::Ao(v) => match ao_targets {
             Some(t) => passes.ao.add_view(&mut g, v, t, out, errors),

@@ -186,7 +186,7 @@ fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32]) -> GpuRun {
     let e = g.import_texture("edges", &edges_t);
     let e = smaa.add_edges(&mut g, inputs, e, &errors);
     let wt = g.import_texture("weights", &weights_t);
-    let wt = smaa.add_weights(&mut g, e, wt, &errors);
+    let wt = smaa.add_weights(&mut g, e, wt, 0, &errors);
     let o = g.import_texture("out", &out_t);
     let o = smaa.add_blend(&mut g, inputs.color, wt, o, &errors);
     g.mark_output(o);

@@ -32,7 +32,8 @@ pub struct SmaaPass {
     weights_program: Program,
     blend_program: Program,
     edges: wgpu::RenderPipeline,
-    weights: wgpu::RenderPipeline,
+    /// By area-table subsample index (0 = 1x; 1, 2 = T2x frames).
+    weights: [wgpu::RenderPipeline; 3],
     blend: wgpu::RenderPipeline,
     area: wgpu::Texture,
     search: wgpu::Texture,
@@ -79,8 +80,13 @@ impl SmaaPass {
         let edges =
             edges_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.edges", &t))?;
         let t = [target(WEIGHTS_FORMAT)];
-        let weights =
-            weights_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.weights", &t))?;
+        let weights_for = |index: u32| {
+            let mut spec = RenderSpec::fullscreen("aa.smaa.weights", &t);
+            let constants = [("SUBSAMPLE_H", index as f64), ("SUBSAMPLE_V", index as f64)];
+            spec.constants = &constants;
+            weights_program.render_pipeline(ctx, &spec)
+        };
+        let weights = [weights_for(0)?, weights_for(1)?, weights_for(2)?];
         let t = [target(output_format)];
         let blend =
             blend_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.blend", &t))?;
@@ -157,14 +163,17 @@ impl SmaaPass {
         out
     }
 
-    /// `aa.smaa.weights` into `out` ([`WEIGHTS_FORMAT`]); returns its new version.
+    /// `aa.smaa.weights` into `out` ([`WEIGHTS_FORMAT`]) with area-table
+    /// `subsample` index (0 for 1x; T2x frames use 1 and 2); returns its new version.
     pub fn add_weights<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         edges: TextureHandle,
         out: TextureHandle,
+        subsample: u32,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
+        let pipeline = &self.weights[(subsample as usize).min(2)];
         let mut pass = graph.add_pass("aa.smaa.weights");
         pass.read(edges, TextureAccess::Sampled);
         let out = pass.write(out, TextureAccess::ColorAttachment);
@@ -190,7 +199,7 @@ impl SmaaPass {
             );
             if let Some(bg) = errors.record(bg) {
                 let load = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
-                draw_fullscreen(ctx, &self.weights, &bg, ctx.view(out), load, None);
+                draw_fullscreen(ctx, pipeline, &bg, ctx.view(out), load, None);
             }
         });
         out
@@ -233,12 +242,13 @@ impl SmaaPass {
         output
     }
 
-    /// The whole chain: edges → weights → blend into `output`.
+    /// The whole chain: edges → weights (area table `subsample`) → blend into `output`.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         inputs: SmaaInputs,
         size: (u32, u32),
+        subsample: u32,
         output: TextureHandle,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
@@ -247,7 +257,7 @@ impl SmaaPass {
         let edges = self.add_edges(graph, inputs, edges, errors);
         let weights =
             graph.create_texture("aa.smaa.weights", TextureDesc::new_2d(w, h, WEIGHTS_FORMAT));
-        let weights = self.add_weights(graph, edges, weights, errors);
+        let weights = self.add_weights(graph, edges, weights, subsample, errors);
         self.add_blend(graph, inputs.color, weights, output, errors)
     }
 }
