@@ -95,12 +95,19 @@ fn motion(f: impl Fn(usize, usize) -> [f32; 2]) -> (Vec<f16>, Plane<2>) {
 
 fn read_f16(ctx: &GpuContext, t: &wgpu::Texture) -> Vec<f32> {
     let bytes = read_texture(ctx, t, 0, 0).expect("read back").bytes;
-    bytemuck::cast_slice::<u8, f16>(&bytes).iter().map(|v| f32::from(*v)).collect()
+    bytemuck::cast_slice::<u8, f16>(&bytes)
+        .iter()
+        .map(|v| f32::from(*v))
+        .collect()
 }
 
 fn submit(ctx: &GpuContext, g: FrameGraph<'_>, errors: &FrameErrors) {
     let mut pool = TexturePool::new();
-    let commands = g.compile().expect("compile").execute(&ctx.device, &mut pool, None).expect("execute");
+    let commands = g
+        .compile()
+        .expect("compile")
+        .execute(&ctx.device, &mut pool, None)
+        .expect("execute");
     if let Some(e) = errors.take_first() {
         panic!("recording: {e}");
     }
@@ -148,7 +155,12 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let t_mn = texture(ctx, MOTION_FORMAT, &[], 4);
     // TAA history: the previous image, linear, as f16.
     let hist_plane = linear(&prev);
-    let hist: Vec<f16> = hist_plane.texels.iter().flatten().map(|&v| f16::from_f32(v)).collect();
+    let hist: Vec<f16> = hist_plane
+        .texels
+        .iter()
+        .flatten()
+        .map(|&v| f16::from_f32(v))
+        .collect();
     let t_hist = texture(ctx, RESOLVED_FORMAT, bytemuck::cast_slice(&hist), 8);
     let t_hist_next = texture(ctx, RESOLVED_FORMAT, &[], 8);
     let t_taa_out = texture(ctx, RESOLVED_FORMAT, &[], 8);
@@ -163,7 +175,16 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let m = g.import_texture("m", &t_m);
     let mp = g.import_texture("mp", &t_mp);
     let mn = g.import_texture("mn", &t_mn);
-    let (resolved, mn) = pass.add_resolve(&mut g, ResolveMode::FlipQuad, c, (p1, p2), m, mp, mn, &errors);
+    let (resolved, mn) = pass.add_resolve(
+        &mut g,
+        ResolveMode::FlipQuad,
+        c,
+        (p1, p2),
+        m,
+        mp,
+        mn,
+        &errors,
+    );
     let keep = g.import_texture("resolved.copy", &t_resolved);
     let keep = pass.add_unsharp(&mut g, resolved, keep, &errors);
     g.mark_output(keep);
@@ -202,7 +223,11 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         .texels
         .iter()
         .enumerate()
-        .map(|(i, t)| (gpu_motion[2 * i] - t[0]).abs().max((gpu_motion[2 * i + 1] - t[1]).abs()))
+        .map(|(i, t)| {
+            (gpu_motion[2 * i] - t[0])
+                .abs()
+                .max((gpu_motion[2 * i + 1] - t[1]).abs())
+        })
         .fold(0.0, f32::max);
     // f16 storage of the same f32 value: 0 measured 2026-11-22; threshold 1e-4.
     assert!(dm < 1e-4, "motion history differs by {dm}");
@@ -216,14 +241,21 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         .zip(&linear(&cur).texels)
         .filter(|(a, b)| (a[0] - b[0]).abs() > 1e-3)
         .count();
-    println!("resolve+unsharp: max |diff| {d_resolve}, {accepted} pixels differ from the current frame");
+    println!(
+        "resolve+unsharp: max |diff| {d_resolve}, {accepted} pixels differ from the current frame"
+    );
     // Measured 2026-11-22: 0.0022 (f16 targets); threshold 0.004.
     assert!(d_resolve < 0.004, "resolve + unsharp differ by {d_resolve}");
     assert!(accepted > 50, "the resolve should mix frames ({accepted})");
 
     let mut gpu_in = Plane::<4>::new(W, H);
     for (k, t) in gpu_in.texels.iter_mut().enumerate() {
-        *t = [gpu_unsharp0[4 * k], gpu_unsharp0[4 * k + 1], gpu_unsharp0[4 * k + 2], 1.0];
+        *t = [
+            gpu_unsharp0[4 * k],
+            gpu_unsharp0[4 * k + 1],
+            gpu_unsharp0[4 * k + 2],
+            1.0,
+        ];
     }
     let mut hist_f16 = hist_plane.clone();
     for t in &mut hist_f16.texels {

@@ -53,7 +53,7 @@ pub struct SamplePattern {
     pub talk: Option<f64>,
 }
 
-/// The six patterns of the talk, in its order.
+/// The six patterns of the talk, in its order, then himal's temporal FLIPQUAD.
 pub fn patterns() -> Vec<SamplePattern> {
     let q = 0.25;
     vec![
@@ -113,6 +113,22 @@ pub fn patterns() -> Vec<SamplePattern> {
                 s(0.0, 2.0 / 3.0, q),
             ],
             talk: Some(0.364),
+        },
+        SamplePattern {
+            // himal's temporal FLIPQUAD (A2): a projection jitter is the same
+            // for every pixel, so the mirrored pixels of FLIPQUAD cannot be
+            // had; frame A samples the middle of the left edge, frame B of
+            // the top edge, and the resolve averages the own and the right
+            // (A) / lower (B) neighbour's samples.
+            name: "TFQ (himal)",
+            cost: 2.0,
+            samples: vec![
+                s(0.0, 0.5, q),
+                s(1.0, 0.5, q),
+                s(0.5, 0.0, q),
+                s(0.5, 1.0, q),
+            ],
+            talk: None,
         },
     ]
 }

@@ -19,10 +19,14 @@ pub enum AaMode {
     Hraa,
 }
 
-/// TFQ frame A sample: pixel's left edge, 1/6 above the centre (pixels, y down).
-pub const TFQ_JITTER_A: [f32; 2] = [-0.5, -1.0 / 6.0];
-/// TFQ frame B sample: pixel's top edge, 1/6 right of the centre.
-pub const TFQ_JITTER_B: [f32; 2] = [1.0 / 6.0, -0.5];
+/// TFQ frame A sample: middle of the pixel's left edge (pixels, y down).
+/// A projection jitter is global, so FLIPQUAD's mirrored pixels cannot be
+/// had; among global layouts (own + right/lower neighbour's sample) the
+/// edge midpoints score best in the A5 study (E 0.485; FLIPQUAD 0.407,
+/// quincunx 0.538; left edge 1/6 above the centre scores 0.670).
+pub const TFQ_JITTER_A: [f32; 2] = [-0.5, 0.0];
+/// TFQ frame B sample: middle of the pixel's top edge.
+pub const TFQ_JITTER_B: [f32; 2] = [0.0, -0.5];
 /// SMAA T2x jitters (Jimenez et al. 2012: ±0.25 on the diagonal).
 pub const T2X_JITTER: [[f32; 2]; 2] = [[0.25, -0.25], [-0.25, 0.25]];
 

@@ -36,7 +36,9 @@ pub struct AaParams {
 pub struct TemporalTuning {
     /// Motion coherence: |m_N − m_N−1| below this many pixels.
     pub motion_tolerance_px: f32,
-    /// Colour coherence: the N−2 sample may lie this far outside the 3x3 box.
+    /// Colour coherence: the N−2 sample (resolve) and the history (TAA) may
+    /// lie this far outside the 3x3 box; `f32::INFINITY` turns the colour
+    /// test off (the ghosting test's "without").
     pub colour_tolerance: f32,
     /// Weight of the new frame where the 3x3 box is flat (few frames accumulate).
     pub alpha_low_frequency: f32,
@@ -56,7 +58,7 @@ impl Default for TemporalTuning {
             alpha_low_frequency: 0.25,
             alpha_high_frequency: 0.1,
             contrast_scale: 4.0,
-            unsharp: 0.5,
+            unsharp: 0.25,
         }
     }
 }

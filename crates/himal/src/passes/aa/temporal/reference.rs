@@ -127,13 +127,14 @@ pub fn taa(
             let contrast = luminance(srgb(hi)) - luminance(srgb(lo));
             let k = (contrast * p.tuning[3]).clamp(0.0, 1.0);
             let mut alpha = p.state[2] + (p.state[3] - p.state[2]) * k;
-            if p.state[0] < 2.0 || !motion_ok || !inside {
+            if p.state[0] < 3.0 || !motion_ok || !inside {
                 alpha = 1.0;
             }
             let hs = rgb(history.sample(uv[0], uv[1]));
             let i = y as usize * w + x as usize;
             for c in 0..3 {
-                let hc = hs[c].clamp(lo[c], hi[c]);
+                let t = p.tuning[1];
+                let hc = hs[c].clamp(lo[c] - t, hi[c] + t);
                 out.texels[i][c] = hc + (xv[c] - hc) * alpha;
             }
             out.texels[i][3] = 1.0;

@@ -1,8 +1,8 @@
 // aa.taa: temporal anti-aliasing (TECHNIQUES A3; Far Cry 4 HRAA, Ryse SMAA 1TX).
 // Exponential history: H_N = lerp(clamp(H_N-1(q), box3x3), X_N, alpha), q = p + jitter-free
-// motion (bilinear). Same acceptance as the resolve: history older than one frame
-// and coherent motion (N vs N-1), else alpha = 1; the colour test clamps the
-// history into the 3x3 box of the input. Sample count follows signal frequency
+// motion (bilinear). Same acceptance as the resolve: history from complete
+// resolves (3 frames) and coherent motion (N vs N-1), else alpha = 1; the colour test clamps the
+// history into the 3x3 box of the input, widened by the colour tolerance. Sample count follows signal frequency
 // (Ryse): alpha = mix(alpha_low, alpha_high, saturate(luma contrast of the box * k)),
 // fewer frames where the image is smooth, more on edges and detail.
 // Target 0: next history (linear, Rgba16Float); target 1: the frame's colour.
@@ -52,10 +52,13 @@ fn fs_main(@builtin(position) frag: vec4f) -> TaaOut {
     let motion_ok = length((m - m_prev) * size) < params.tuning.x;
     let contrast = luminance(linear_to_srgb(hi)) - luminance(linear_to_srgb(lo));
     var alpha = mix(params.state.z, params.state.w, saturate(contrast * params.tuning.w));
-    if (params.state.x < 2.0 || !motion_ok || !inside) {
+    // The resolve's first complete output is the third frame (it needs N-2):
+    // an earlier history would carry its one-frame fallback for many frames.
+    if (params.state.x < 3.0 || !motion_ok || !inside) {
         alpha = 1.0;
     }
-    let h = clamp(textureSampleLevel(history, linear_sampler, uv, 0.0).rgb, lo, hi);
+    let tolerance = vec3f(params.tuning.y);
+    let h = clamp(textureSampleLevel(history, linear_sampler, uv, 0.0).rgb, lo - tolerance, hi + tolerance);
     let result = mix(h, x, alpha);
     var out: TaaOut;
     out.history = vec4f(result, 1.0);
