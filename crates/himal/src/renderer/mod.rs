@@ -343,6 +343,13 @@ impl Renderer {
                 "AO history",
                 self.res.ao_history.as_ref().map_or(0, AoHistory::bytes),
             ),
+            (
+                "AA history",
+                self.res
+                    .aa_history
+                    .as_ref()
+                    .map_or(0, crate::passes::aa::AaHistory::bytes),
+            ),
         ]
     }
 
