@@ -195,6 +195,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                 smaa: &passes.smaa,
                 temporal: &passes.temporal,
                 depth: gbuffer.depth,
+                normals: gbuffer.frame,
                 motion: gbuffer.motion,
             };
             let tonemap = |g: &mut FrameGraph<'a>, target| {

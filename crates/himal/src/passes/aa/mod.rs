@@ -26,6 +26,8 @@ pub struct AaFrame<'a> {
     pub smaa: &'a SmaaPass,
     pub temporal: &'a TemporalPass,
     pub depth: TextureHandle,
+    /// G-buffer tangent frame (normal predication of SMAA).
+    pub normals: TextureHandle,
     pub motion: TextureHandle,
 }
 
@@ -74,6 +76,7 @@ pub fn add_chain<'a>(
         let inputs = SmaaInputs {
             color: ldr,
             depth: aa.depth,
+            normals: aa.normals,
         };
         aa.smaa.add(g, inputs, size, aa.subsample, stage, errors)
     } else {

@@ -24,6 +24,8 @@ pub struct SmaaInputs {
     pub color: TextureHandle,
     /// Device depth for predication (reverse-Z).
     pub depth: TextureHandle,
+    /// G-buffer tangent frame (quaternion, Rgb10a2) for normal predication.
+    pub normals: TextureHandle,
 }
 
 /// The three SMAA pipelines, lookup textures and samplers.
@@ -139,6 +141,7 @@ impl SmaaPass {
         let mut pass = graph.add_pass("aa.smaa.edges");
         pass.read(inputs.color, TextureAccess::Sampled);
         pass.read(inputs.depth, TextureAccess::Sampled);
+        pass.read(inputs.normals, TextureAccess::Sampled);
         let out = pass.write(out, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
             let bg = self.edges_program.bind(
@@ -152,6 +155,10 @@ impl SmaaPass {
                     (
                         "depth",
                         wgpu::BindingResource::TextureView(ctx.view(inputs.depth)),
+                    ),
+                    (
+                        "gbuffer_frame",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.normals)),
                     ),
                 ],
             );

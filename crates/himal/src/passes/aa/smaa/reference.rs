@@ -67,6 +67,8 @@ pub struct EdgeSettings {
     pub predication_threshold: f32,
     pub predication_scale: f32,
     pub predication_strength: f32,
+    pub normal_predication: bool,
+    pub normal_cos: f32,
 }
 
 impl Default for EdgeSettings {
@@ -77,6 +79,8 @@ impl Default for EdgeSettings {
             predication_threshold: 0.01,
             predication_scale: 2.0,
             predication_strength: 0.4,
+            normal_predication: true,
+            normal_cos: 0.906,
         }
     }
 }
@@ -105,8 +109,14 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-/// Twin of `edges.wgsl`: `color` linear RGBA, `depth` device depth.
-pub fn detect_edges(color: &Plane<4>, depth: &Plane<1>, s: EdgeSettings) -> Plane<2> {
+/// Twin of `edges.wgsl`: `color` linear RGBA, `depth` device depth,
+/// `normals` decoded from the G-buffer frame.
+pub fn detect_edges(
+    color: &Plane<4>,
+    depth: &Plane<1>,
+    normals: &Plane<3>,
+    s: EdgeSettings,
+) -> Plane<2> {
     let luma = |x: i64, y: i64| {
         let c = color.load(x, y);
         let g = |v: f32| linear_to_srgb(v.clamp(0.0, 1.0));
@@ -121,12 +131,17 @@ pub fn detect_edges(color: &Plane<4>, depth: &Plane<1>, s: EdgeSettings) -> Plan
             let mut threshold = [s.threshold; 2];
             if s.predication {
                 let d = depth.load(x, y)[0];
-                let steps = [
-                    depth_step(d, depth.load(x - 1, y)[0]),
-                    depth_step(d, depth.load(x, y - 1)[0]),
-                ];
-                for k in 0..2 {
-                    let edge = step(s.predication_threshold, steps[k]);
+                let neighbours = [(x - 1, y), (x, y - 1)];
+                for (k, &(nx, ny)) in neighbours.iter().enumerate() {
+                    let dn = depth.load(nx, ny)[0];
+                    let mut edge = step(s.predication_threshold, depth_step(d, dn));
+                    if s.normal_predication && d > 0.0 && dn > 0.0 {
+                        let (a, b) = (normals.load(x, y), normals.load(nx, ny));
+                        let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+                        if cos < s.normal_cos {
+                            edge = 1.0;
+                        }
+                    }
                     threshold[k] =
                         s.predication_scale * s.threshold * (1.0 - s.predication_strength * edge);
                 }
@@ -231,19 +246,16 @@ pub fn blending_weights(
                 tc[0] - 0.125 * rt[0],
                 tc[1] + 1.25 * rt[1],
             ];
-            let steps = 2.0 * max_search_steps;
-            let off2 = [
-                off0[0] - steps * rt[0],
-                off0[2] + steps * rt[0],
-                off1[1] - steps * rt[1],
-                off1[3] + steps * rt[1],
-            ];
+            let steps = max_search_steps as i32;
             let e = edges.load(x as i64, y as i64);
             let mut weights = [0.0f32; 4];
             if e[1] > 0.0 {
                 // Left.
                 let (mut u, mut ee) = (off0[0], [0.0, 1.0]);
-                while u > off2[0] && ee[1] > 0.8281 && ee[0] == 0.0 {
+                for _ in 0..steps {
+                    if !(ee[1] > 0.8281 && ee[0] == 0.0) {
+                        break;
+                    }
                     ee = at(u, off0[1]);
                     u -= 2.0 * rt[0];
                 }
@@ -251,7 +263,10 @@ pub fn blending_weights(
                 let e1 = at(left, off1[1])[0];
                 // Right.
                 let (mut u, mut ee) = (off0[2], [0.0, 1.0]);
-                while u < off2[1] && ee[1] > 0.8281 && ee[0] == 0.0 {
+                for _ in 0..steps {
+                    if !(ee[1] > 0.8281 && ee[0] == 0.0) {
+                        break;
+                    }
                     ee = at(u, off0[3]);
                     u += 2.0 * rt[0];
                 }
@@ -268,7 +283,10 @@ pub fn blending_weights(
             if e[0] > 0.0 {
                 // Up.
                 let (mut v, mut ee) = (off1[1], [1.0, 0.0]);
-                while v > off2[2] && ee[0] > 0.8281 && ee[1] == 0.0 {
+                for _ in 0..steps {
+                    if !(ee[0] > 0.8281 && ee[1] == 0.0) {
+                        break;
+                    }
                     ee = at(off1[0], v);
                     v -= 2.0 * rt[1];
                 }
@@ -278,7 +296,10 @@ pub fn blending_weights(
                 let e1 = at(off0[0], up)[1];
                 // Down.
                 let (mut v, mut ee) = (off1[3], [1.0, 0.0]);
-                while v < off2[3] && ee[0] > 0.8281 && ee[1] == 0.0 {
+                for _ in 0..steps {
+                    if !(ee[0] > 0.8281 && ee[1] == 0.0) {
+                        break;
+                    }
                     ee = at(off1[2], v);
                     v += 2.0 * rt[1];
                 }

@@ -2,7 +2,8 @@
 // 2012, SMAABlendingWeightCalculationPS without diagonal and corner detection,
 // the reference's MEDIUM preset). For a pixel with a top (left) edge, search
 // the edge line's ends left/right (up/down), 2 pixels per bilinear fetch, the
-// last step finished by the search texture; read the crossing edges at both
+// last step finished by the search texture (the reference stops at a texture
+// coordinate; an iteration count gives the same steps without float ties); read the crossing edges at both
 // ends; look up the area texture at (crossing edges, sqrt distances).
 // Output: RG = top edge weights, BA = left edge weights. CPU twin: smaa/reference.rs.
 #import view
@@ -39,10 +40,10 @@ fn smaa_search_length(e: vec2f, offset: f32) -> f32 {
     return textureSampleLevel(search_tex, point_sampler, scale * e + bias, 0.0).r;
 }
 
-fn smaa_search_x_left(start: vec2f, end: f32, rt: vec4f) -> f32 {
+fn smaa_search_x_left(start: vec2f, rt: vec4f) -> f32 {
     var tc = start;
     var e = vec2f(0.0, 1.0);
-    while (tc.x > end && e.g > 0.8281 && e.r == 0.0) {
+    for (var i = 0.0; i < MAX_SEARCH_STEPS && e.g > 0.8281 && e.r == 0.0; i += 1.0) {
         e = smaa_edges_at(tc);
         tc.x -= 2.0 * rt.x;
     }
@@ -50,10 +51,10 @@ fn smaa_search_x_left(start: vec2f, end: f32, rt: vec4f) -> f32 {
     return rt.x * offset + tc.x;
 }
 
-fn smaa_search_x_right(start: vec2f, end: f32, rt: vec4f) -> f32 {
+fn smaa_search_x_right(start: vec2f, rt: vec4f) -> f32 {
     var tc = start;
     var e = vec2f(0.0, 1.0);
-    while (tc.x < end && e.g > 0.8281 && e.r == 0.0) {
+    for (var i = 0.0; i < MAX_SEARCH_STEPS && e.g > 0.8281 && e.r == 0.0; i += 1.0) {
         e = smaa_edges_at(tc);
         tc.x += 2.0 * rt.x;
     }
@@ -61,10 +62,10 @@ fn smaa_search_x_right(start: vec2f, end: f32, rt: vec4f) -> f32 {
     return -rt.x * offset + tc.x;
 }
 
-fn smaa_search_y_up(start: vec2f, end: f32, rt: vec4f) -> f32 {
+fn smaa_search_y_up(start: vec2f, rt: vec4f) -> f32 {
     var tc = start;
     var e = vec2f(1.0, 0.0);
-    while (tc.y > end && e.r > 0.8281 && e.g == 0.0) {
+    for (var i = 0.0; i < MAX_SEARCH_STEPS && e.r > 0.8281 && e.g == 0.0; i += 1.0) {
         e = smaa_edges_at(tc);
         tc.y -= 2.0 * rt.y;
     }
@@ -72,10 +73,10 @@ fn smaa_search_y_up(start: vec2f, end: f32, rt: vec4f) -> f32 {
     return rt.y * offset + tc.y;
 }
 
-fn smaa_search_y_down(start: vec2f, end: f32, rt: vec4f) -> f32 {
+fn smaa_search_y_down(start: vec2f, rt: vec4f) -> f32 {
     var tc = start;
     var e = vec2f(1.0, 0.0);
-    while (tc.y < end && e.r > 0.8281 && e.g == 0.0) {
+    for (var i = 0.0; i < MAX_SEARCH_STEPS && e.r > 0.8281 && e.g == 0.0; i += 1.0) {
         e = smaa_edges_at(tc);
         tc.y += 2.0 * rt.y;
     }
@@ -98,13 +99,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let tc = frag.xy * rt.xy;
     let off0 = rt.xyxy * vec4f(-0.25, -0.125, 1.25, -0.125) + tc.xyxy;
     let off1 = rt.xyxy * vec4f(-0.125, -0.25, -0.125, 1.25) + tc.xyxy;
-    let off2 = rt.xxyy * vec4f(-2.0, 2.0, -2.0, 2.0) * MAX_SEARCH_STEPS + vec4f(off0.xz, off1.yw);
     var weights = vec4f(0.0);
     let e = textureLoad(edges_tex, vec2i(frag.xy), 0).rg;
     if (e.g > 0.0) {
-        let left = smaa_search_x_left(off0.xy, off2.x, rt);
+        let left = smaa_search_x_left(off0.xy, rt);
         let e1 = smaa_edges_at(vec2f(left, off1.y)).r;
-        let right = smaa_search_x_right(off0.zw, off2.y, rt);
+        let right = smaa_search_x_right(off0.zw, rt);
         let e2 = smaa_edges_at(vec2f(right + rt.x, off1.y)).r;
         let d = abs(round(rt.zz * vec2f(left, right) - frag.xx));
         let a = smaa_area(sqrt(d), e1, e2, SUBSAMPLE_H);
@@ -112,9 +112,9 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         weights.y = a.y;
     }
     if (e.r > 0.0) {
-        let up = smaa_search_y_up(off1.xy, off2.z, rt);
+        let up = smaa_search_y_up(off1.xy, rt);
         let e1 = smaa_edges_at(vec2f(off0.x, up)).g;
-        let down = smaa_search_y_down(off1.zw, off2.w, rt);
+        let down = smaa_search_y_down(off1.zw, rt);
         let e2 = smaa_edges_at(vec2f(off0.x, down + rt.y)).g;
         let d = abs(round(rt.ww * vec2f(up, down) - frag.yy));
         let a = smaa_area(sqrt(d), e1, e2, SUBSAMPLE_V);
