@@ -557,7 +557,11 @@ impl Renderer {
         // Projection jitter (A2, A3): the matrices carry it, so passes that
         // reconstruct positions from depth stay exact; View.jitter.xy repeats
         // it in clip units. Sample offset j (px, y down) = image shifted by -j.
-        let jitter = settings.aa.jitter(self.frame_index);
+        // Debug views show the G-buffer as rasterised: no jitter there.
+        let jitter = match settings.view {
+            ViewBuffer::Final => settings.aa.jitter(self.frame_index),
+            _ => [0.0, 0.0],
+        };
         let jitter_clip = Vec3::new(
             -2.0 * jitter[0] / size.0 as f32,
             2.0 * jitter[1] / size.1 as f32,
