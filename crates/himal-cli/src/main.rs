@@ -1,6 +1,7 @@
 //! `himal`: render the demo world or a scene headless, time every pass,
 //! list adapters.
 
+mod aa_patterns;
 mod ao;
 mod bench;
 mod bench_ao;
@@ -33,6 +34,8 @@ enum Command {
     Prewarm(prewarm::PrewarmArgs),
     /// List adapters, the chosen one, its features and limits.
     Info(GpuArgs),
+    /// A5: error estimate of six anti-aliasing sample patterns (CPU only).
+    AaPatterns(aa_patterns::AaPatternsArgs),
 }
 
 /// Adapter choice shared by every command.
@@ -140,5 +143,6 @@ fn main() -> Result<()> {
         Command::Bench(a) => bench::run(&a),
         Command::Prewarm(a) => prewarm::run(&a),
         Command::Info(a) => info(&a),
+        Command::AaPatterns(a) => aa_patterns::run(&a),
     }
 }

@@ -90,11 +90,24 @@ pub struct PostArgs {
     /// irradiance along the reflection vector.
     #[arg(long, default_value = "on", value_name = "on|off")]
     pub env_specular: String,
+    /// L3: ambient specular from the relit cube of the probe nearest the
+    /// camera (scenes with `[[probe]]`); off: the sky cube.
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub env_probes: String,
+    /// Anti-aliasing after tone mapping; hraa = SMAA + temporal FLIPQUAD + TAA + unsharp.
+    #[arg(
+        long,
+        default_value = "hraa",
+        value_name = "none|smaa|smaa-t2x|tfq|taa|hraa"
+    )]
+    pub aa: String,
 }
 
 impl PostArgs {
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
+            .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
         match self.exposure.as_str() {
             "auto" => {
                 settings.adaptation.enabled = true;
@@ -131,6 +144,11 @@ impl PostArgs {
             "on" => true,
             "off" => false,
             other => bail!("--env-specular {other}: expected on or off"),
+        };
+        settings.environment_probes = match self.env_probes.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--env-probes {other}: expected on or off"),
         };
         Ok(())
     }

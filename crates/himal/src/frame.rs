@@ -7,6 +7,8 @@
 //!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
+//!          │        (--aa: post.tonemap ─> [aa.smaa.edges ─> .weights ─> .blend] ─> [aa.resolve ─> aa.taa ─> aa.unsharp] ─> output,
+//!          │         passes/aa/mod.rs `add_chain`)
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
@@ -17,6 +19,7 @@ use std::cell::RefCell;
 
 use crate::gpu::GpuError;
 use crate::graph::FrameGraph;
+use crate::passes::aa::{AaFrame, AaHistory, AaMode, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::EnvMapPass;
@@ -71,6 +74,8 @@ pub struct Passes {
     pub adapt: AdaptPass,
     pub bloom: BloomPass,
     pub tonemap: TonemapPass,
+    pub smaa: SmaaPass,
+    pub temporal: TemporalPass,
     pub debug: DebugPass,
 }
 
@@ -97,7 +102,17 @@ pub struct FrameInputs<'a> {
     pub ao_placeholder: &'a wgpu::Texture,
     /// Lighting permutation (prepared by the renderer).
     pub lighting_key: LightingKey,
+    /// Anti-aliasing after tone mapping.
+    pub aa: FrameAa<'a>,
     pub errors: &'a FrameErrors,
+}
+
+/// The anti-aliasing of one frame (mode, SMAA subsample, temporal history).
+#[derive(Clone, Copy)]
+pub struct FrameAa<'a> {
+    pub mode: AaMode,
+    pub subsample: u32,
+    pub history: Option<&'a AaHistory>,
 }
 
 /// Builds the frame graph; a debug `shown` view replaces tone mapping.
@@ -117,6 +132,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         lighting_key,
         sky_no_disk,
         probe,
+        aa,
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
@@ -235,9 +251,22 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     let out = g.import_texture("output", output);
     let out = match shown {
         ViewBuffer::Final => {
-            passes
-                .tonemap
-                .add(&mut g, post.tonemap, hdr, post_inputs, out, errors)
+            let chain = AaFrame {
+                mode: aa.mode,
+                subsample: aa.subsample,
+                history: aa.history,
+                smaa: &passes.smaa,
+                temporal: &passes.temporal,
+                depth: gbuffer.depth,
+                normals: gbuffer.frame,
+                motion: gbuffer.motion,
+            };
+            let tonemap = |g: &mut FrameGraph<'a>, target| {
+                passes
+                    .tonemap
+                    .add(g, post.tonemap, hdr, post_inputs, target, errors)
+            };
+            crate::passes::aa::add_chain(&mut g, chain, out, tonemap, errors)
         }
         ViewBuffer::Ao(v) => match ao_targets {
             Some(t) => passes.ao.add_view(&mut g, v, t, out, errors),

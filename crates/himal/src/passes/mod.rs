@@ -1,6 +1,7 @@
 //! Frame passes, one folder per technique group: `mod.rs` (pipelines and
 //! graph nodes), one `.wgsl` per step, and `reference.rs` (the CPU twin).
 
+pub mod aa;
 pub mod ao;
 pub mod common;
 pub mod debug;

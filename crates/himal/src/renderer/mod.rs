@@ -8,7 +8,7 @@ pub mod uniforms;
 
 use std::collections::HashMap;
 
-use glam::{Mat4, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 use crate::Error;
 use crate::frame::{self, FrameErrors, FrameInputs, Passes};
@@ -144,6 +144,10 @@ pub struct FrameSettings {
     /// Re-capture and re-filter the environment cube every frame (bench rows;
     /// otherwise only when the sky changes).
     pub envmap_every_frame: bool,
+    /// Anti-aliasing after tone mapping (TECHNIQUES A1-A4).
+    pub aa: crate::passes::aa::AaMode,
+    /// Tuning of the temporal anti-aliasing passes.
+    pub aa_tuning: crate::passes::aa::TemporalTuning,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -165,6 +169,8 @@ impl FrameSettings {
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
             shadows: ShadowSettings::default(),
             ao: AoSettings::default(),
+            aa: crate::passes::aa::AaMode::None,
+            aa_tuning: Default::default(),
             time_s: 0.0,
             environment_specular: true,
             environment_probes: true,
@@ -199,6 +205,7 @@ struct Resources {
     shadow_placeholder: wgpu::Texture,
     ao_history: Option<AoHistory>,
     ao_placeholder: wgpu::Texture,
+    aa_history: Option<crate::passes::aa::AaHistory>,
 }
 
 impl Resources {
@@ -206,6 +213,7 @@ impl Resources {
         &'a self,
         settings: &'a FrameSettings,
         format: wgpu::TextureFormat,
+        frame_index: u64,
         errors: &'a FrameErrors,
     ) -> Option<FrameInputs<'a>> {
         let size = (settings.width, settings.height);
@@ -229,6 +237,11 @@ impl Resources {
             probe: self
                 .active_probe
                 .map(|p| (p, !self.passes.probes.probes[p].captured)),
+            aa: crate::frame::FrameAa {
+                mode: settings.aa,
+                subsample: settings.aa.smaa_subsample(frame_index),
+                history: self.aa_history.as_ref().filter(|_| settings.aa.temporal()),
+            },
             errors,
         })
     }
@@ -254,6 +267,8 @@ pub struct Renderer {
     prev_time: Option<f32>,
     frame_index: u64,
     sky_light: Option<(SunKey, SkyLight)>,
+    /// Anti-aliasing mode of the previous frame (a change restarts the history).
+    aa_last: Option<crate::passes::aa::AaMode>,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -274,6 +289,8 @@ impl Renderer {
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
             tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
+            smaa: crate::passes::aa::SmaaPass::new(&ctx, DISPLAY_FORMAT)?,
+            temporal: crate::passes::aa::TemporalPass::new(&ctx, DISPLAY_FORMAT)?,
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
@@ -343,6 +360,7 @@ impl Renderer {
                 shadow_placeholder,
                 ao_history: None,
                 ao_placeholder,
+                aa_history: None,
             },
             pool: TexturePool::new(),
             timer,
@@ -350,6 +368,7 @@ impl Renderer {
             prev_time: None,
             frame_index: 0,
             sky_light: None,
+            aa_last: None,
         })
     }
 
@@ -375,6 +394,13 @@ impl Renderer {
                 "AO history",
                 self.res.ao_history.as_ref().map_or(0, AoHistory::bytes),
             ),
+            (
+                "AA history",
+                self.res
+                    .aa_history
+                    .as_ref()
+                    .map_or(0, crate::passes::aa::AaHistory::bytes),
+            ),
         ]
     }
 
@@ -387,6 +413,9 @@ impl Renderer {
         }
         self.prev_time = None;
         self.res.post.reset = true;
+        if let Some(h) = &mut self.res.aa_history {
+            h.invalidate();
+        }
     }
 
     /// E1 pre-warm: fetches every pipeline permutation a frame of this
@@ -517,7 +546,7 @@ impl Renderer {
         let errors = FrameErrors::default();
         let inputs = self
             .res
-            .inputs(settings, format, &errors)
+            .inputs(settings, format, self.frame_index, &errors)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
         Ok(frame::build(inputs, size, settings.view)
             .compile()?
@@ -542,6 +571,10 @@ impl Renderer {
             ViewBuffer::Ao(v) => self.res.passes.ao.prepare_view(&self.ctx, v, format)?,
             ViewBuffer::Shadow(v) => self.res.passes.shadows.prepare_view(&self.ctx, v, format)?,
             ViewBuffer::Final => {}
+        }
+        if settings.aa.temporal() && self.res.aa_history.as_ref().is_none_or(|h| h.size != size) {
+            let h = crate::passes::aa::AaHistory::new(&self.ctx.device, size, DISPLAY_FORMAT);
+            self.res.aa_history = Some(h);
         }
         if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
             self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
@@ -578,6 +611,27 @@ impl Renderer {
         Ok(format)
     }
 
+    /// Restarts the AA history on a mode change and uploads the temporal
+    /// passes' parameters for a frame sampled at `jitter`.
+    fn prepare_aa_history(&mut self, settings: &FrameSettings, jitter: [f32; 2]) {
+        if self.aa_last != Some(settings.aa) {
+            if let Some(h) = &mut self.res.aa_history {
+                h.invalidate();
+            }
+            self.aa_last = Some(settings.aa);
+        }
+        if let Some(h) = &self.res.aa_history {
+            let params = crate::passes::aa::AaParams::new(
+                jitter,
+                h.last_jitter,
+                h.frames,
+                (self.frame_index % 2) as u32,
+                &settings.aa_tuning,
+            );
+            self.res.passes.temporal.update(&self.ctx.queue, &params);
+        }
+    }
+
     /// Renders one frame from `camera` and reads the output back.
     pub fn render(
         &mut self,
@@ -603,6 +657,21 @@ impl Renderer {
         self.res.post.update(&self.ctx.queue, settings);
         let aspect = size.0 as f32 / size.1 as f32;
         let (view, proj) = (camera.view(), camera.projection(aspect));
+        // Projection jitter (A2, A3): the matrices carry it, so passes that
+        // reconstruct positions from depth stay exact; View.jitter.xy repeats
+        // it in clip units. Sample offset j (px, y down) = image shifted by -j.
+        // Debug views show the G-buffer as rasterised: no jitter there.
+        let jitter = match settings.view {
+            ViewBuffer::Final => settings.aa.jitter(self.frame_index),
+            _ => [0.0, 0.0],
+        };
+        let jitter_clip = Vec3::new(
+            -2.0 * jitter[0] / size.0 as f32,
+            2.0 * jitter[1] / size.1 as f32,
+            0.0,
+        );
+        let proj = Mat4::from_translation(jitter_clip) * proj;
+        self.prepare_aa_history(settings, jitter);
         let view_proj = proj * view;
         let prev = self.prev_view_proj.unwrap_or(view_proj);
         let prev_time = self.prev_time.unwrap_or(settings.time_s);
@@ -616,7 +685,8 @@ impl Renderer {
             self.frame_index,
             settings.exposure_ev,
         )
-        .with_times(settings.time_s, prev_time);
+        .with_times(settings.time_s, prev_time)
+        .with_jitter(jitter_clip.x, jitter_clip.y);
         self.res
             .scene
             .update_objects(&self.ctx.queue, settings.time_s, prev_time);
@@ -665,10 +735,11 @@ impl Renderer {
             res,
             pool,
             timer,
+            frame_index,
             ..
         } = self;
         let inputs = res
-            .inputs(settings, format, &errors)
+            .inputs(settings, format, *frame_index, &errors)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
         let output = inputs.output;
         let compiled = frame::build(inputs, size, settings.view).compile()?;
@@ -693,6 +764,14 @@ impl Renderer {
         }
         self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
+        if let Some(h) = self
+            .res
+            .aa_history
+            .as_mut()
+            .filter(|_| settings.aa.temporal())
+        {
+            h.advance(jitter);
+        }
         if let Some(h) = &mut self.res.ao_history {
             // Only the filter writes the history; any other mode leaves it stale.
             if settings.ao.mode == AoMode::HbaoStf {

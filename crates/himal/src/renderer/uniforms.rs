@@ -49,6 +49,13 @@ impl ViewUniform {
         }
     }
 
+    /// Sets this frame's projection jitter in clip units (the matrices already carry it).
+    pub fn with_jitter(mut self, x: f32, y: f32) -> Self {
+        self.jitter[0] = x;
+        self.jitter[1] = y;
+        self
+    }
+
     /// Sets the animation clock: `now` and the previous frame's time (s).
     pub fn with_times(mut self, now: f32, prev: f32) -> Self {
         self.time = [now, prev, 0.0, 0.0];

@@ -10,7 +10,8 @@ struct View {
     camera_position: vec4f,
     // width, height, 1/width, 1/height in pixels
     viewport: vec4f,
-    // xy: this frame's sub-pixel jitter in clip units; z: frame index; w: exposure EV bias
+    // xy: this frame's sub-pixel jitter in clip units, already inside view_proj,
+    // inv_view_proj and prev_view_proj (the previous frame's); z: frame index; w: exposure EV bias
     jitter: vec4f,
     // x: animation time now (s); y: animation time of the previous frame; zw: 0
     time: vec4f,

@@ -54,8 +54,9 @@ fn vs_main(in: VertexIn) -> VertexOut {
     }
     out.curr_clip = view.view_proj * world;
     out.prev_clip = view.prev_view_proj * prev_world;
-    // Jitter moves the raster only; motion vectors stay jitter-free.
-    out.clip = out.curr_clip + vec4f(view.jitter.xy * out.curr_clip.w, 0.0, 0.0);
+    // view_proj already carries this frame's jitter (and prev_view_proj the
+    // previous frame's): motion includes the jitter change (passes/aa removes it).
+    out.clip = out.curr_clip;
     out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
     out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w);
     out.color = in.color;

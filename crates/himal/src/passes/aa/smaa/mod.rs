@@ -1,0 +1,270 @@
+//! A1 SMAA 1x (Jimenez et al. 2012): `aa.smaa.edges` (luma, depth
+//! predicated), `aa.smaa.weights` (orthogonal search and area lookups with
+//! himal's own lookup textures, [`lut`]), `aa.smaa.blend` (neighbourhood
+//! blending). CPU twins in [`reference`].
+
+pub mod lut;
+pub mod reference;
+
+use crate::frame::FrameErrors;
+use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
+use crate::passes::common::{draw_fullscreen, target};
+
+/// Edge texture format (RG: left, top edge).
+pub const EDGES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
+/// Blending-weight texture format (RG: top edge, BA: left edge).
+pub const WEIGHTS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// What the SMAA chain reads.
+#[derive(Clone, Copy)]
+pub struct SmaaInputs {
+    /// Tone-mapped colour (sRGB texture: samples are linear).
+    pub color: TextureHandle,
+    /// Device depth for predication (reverse-Z).
+    pub depth: TextureHandle,
+    /// G-buffer tangent frame (quaternion, Rgb10a2) for normal predication.
+    pub normals: TextureHandle,
+}
+
+/// The three SMAA pipelines, lookup textures and samplers.
+pub struct SmaaPass {
+    edges_program: Program,
+    weights_program: Program,
+    blend_program: Program,
+    edges: wgpu::RenderPipeline,
+    /// By area-table subsample index (0 = 1x; 1, 2 = T2x frames).
+    weights: [wgpu::RenderPipeline; 3],
+    blend: wgpu::RenderPipeline,
+    area: wgpu::Texture,
+    search: wgpu::Texture,
+    linear: wgpu::Sampler,
+    point: wgpu::Sampler,
+}
+
+fn lut_texture(
+    ctx: &GpuContext,
+    label: &str,
+    size: (usize, usize),
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: size.0 as u32,
+                height: size.1 as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytes,
+    )
+}
+
+impl SmaaPass {
+    /// Builds the pipelines; `output_format` is the blend target's.
+    pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        let edges_program = Program::new(ctx, "passes/aa/smaa/edges.wgsl")?;
+        let weights_program = Program::new(ctx, "passes/aa/smaa/weights.wgsl")?;
+        let blend_program = Program::new(ctx, "passes/aa/smaa/blend.wgsl")?;
+        let t = [target(EDGES_FORMAT)];
+        let edges =
+            edges_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.edges", &t))?;
+        let t = [target(WEIGHTS_FORMAT)];
+        let weights_for = |index: u32| {
+            let mut spec = RenderSpec::fullscreen("aa.smaa.weights", &t);
+            let constants = [("SUBSAMPLE_H", index as f64), ("SUBSAMPLE_V", index as f64)];
+            spec.constants = &constants;
+            weights_program.render_pipeline(ctx, &spec)
+        };
+        let weights = [weights_for(0)?, weights_for(1)?, weights_for(2)?];
+        let t = [target(output_format)];
+        let blend =
+            blend_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.blend", &t))?;
+        let area = lut_texture(
+            ctx,
+            "aa.smaa.area",
+            lut::AREA_SIZE,
+            wgpu::TextureFormat::Rg8Unorm,
+            &lut::area_texture(),
+        );
+        let search = lut_texture(
+            ctx,
+            "aa.smaa.search",
+            lut::SEARCH_SIZE,
+            wgpu::TextureFormat::R8Unorm,
+            &lut::search_texture(),
+        );
+        let linear = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("aa.smaa.linear"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let point = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("aa.smaa.point"),
+            ..Default::default()
+        });
+        Ok(Self {
+            edges_program,
+            weights_program,
+            blend_program,
+            edges,
+            weights,
+            blend,
+            area,
+            search,
+            linear,
+            point,
+        })
+    }
+
+    /// `aa.smaa.edges` into `out` ([`EDGES_FORMAT`]); returns its new version.
+    pub fn add_edges<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        inputs: SmaaInputs,
+        out: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let mut pass = graph.add_pass("aa.smaa.edges");
+        pass.read(inputs.color, TextureAccess::Sampled);
+        pass.read(inputs.depth, TextureAccess::Sampled);
+        pass.read(inputs.normals, TextureAccess::Sampled);
+        let out = pass.write(out, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let bg = self.edges_program.bind(
+                ctx.device,
+                0,
+                &[
+                    (
+                        "color",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.color)),
+                    ),
+                    (
+                        "depth",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.depth)),
+                    ),
+                    (
+                        "gbuffer_frame",
+                        wgpu::BindingResource::TextureView(ctx.view(inputs.normals)),
+                    ),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let load = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
+                draw_fullscreen(ctx, &self.edges, &bg, ctx.view(out), load, None);
+            }
+        });
+        out
+    }
+
+    /// `aa.smaa.weights` into `out` ([`WEIGHTS_FORMAT`]) with area-table
+    /// `subsample` index (0 for 1x; T2x frames use 1 and 2); returns its new version.
+    pub fn add_weights<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        edges: TextureHandle,
+        out: TextureHandle,
+        subsample: u32,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let pipeline = &self.weights[(subsample as usize).min(2)];
+        let mut pass = graph.add_pass("aa.smaa.weights");
+        pass.read(edges, TextureAccess::Sampled);
+        let out = pass.write(out, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let area = self.area.create_view(&Default::default());
+            let search = self.search.create_view(&Default::default());
+            let bg = self.weights_program.bind(
+                ctx.device,
+                0,
+                &[
+                    (
+                        "edges_tex",
+                        wgpu::BindingResource::TextureView(ctx.view(edges)),
+                    ),
+                    ("area_tex", wgpu::BindingResource::TextureView(&area)),
+                    ("search_tex", wgpu::BindingResource::TextureView(&search)),
+                    (
+                        "linear_sampler",
+                        wgpu::BindingResource::Sampler(&self.linear),
+                    ),
+                    ("point_sampler", wgpu::BindingResource::Sampler(&self.point)),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let load = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
+                draw_fullscreen(ctx, pipeline, &bg, ctx.view(out), load, None);
+            }
+        });
+        out
+    }
+
+    /// `aa.smaa.blend` into `output`; returns its new version.
+    pub fn add_blend<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        color: TextureHandle,
+        weights: TextureHandle,
+        output: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let mut pass = graph.add_pass("aa.smaa.blend");
+        pass.read(color, TextureAccess::Sampled);
+        pass.read(weights, TextureAccess::Sampled);
+        let output = pass.write(output, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let bg = self.blend_program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("color", wgpu::BindingResource::TextureView(ctx.view(color))),
+                    (
+                        "weights_tex",
+                        wgpu::BindingResource::TextureView(ctx.view(weights)),
+                    ),
+                    (
+                        "linear_sampler",
+                        wgpu::BindingResource::Sampler(&self.linear),
+                    ),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let load = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+                draw_fullscreen(ctx, &self.blend, &bg, ctx.view(output), load, None);
+            }
+        });
+        output
+    }
+
+    /// The whole chain: edges → weights (area table `subsample`) → blend into `output`.
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        inputs: SmaaInputs,
+        size: (u32, u32),
+        subsample: u32,
+        output: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let (w, h) = size;
+        let edges = graph.create_texture("aa.smaa.edges", TextureDesc::new_2d(w, h, EDGES_FORMAT));
+        let edges = self.add_edges(graph, inputs, edges, errors);
+        let weights =
+            graph.create_texture("aa.smaa.weights", TextureDesc::new_2d(w, h, WEIGHTS_FORMAT));
+        let weights = self.add_weights(graph, edges, weights, subsample, errors);
+        self.add_blend(graph, inputs.color, weights, output, errors)
+    }
+}
