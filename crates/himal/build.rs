@@ -18,11 +18,17 @@ fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 fn main() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    // Read at run time: a build-script binary reused from another checkout
+    // must not embed that checkout's (possibly deleted) shaders.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into());
+    let src = Path::new(&manifest).join("src");
     println!("cargo:rerun-if-changed={}", src.display());
     let mut files = Vec::new();
     collect(&src, &mut files);
     files.sort();
+    if files.is_empty() {
+        panic!("no .wgsl files under {}", src.display());
+    }
     let mut table = String::from("pub static SOURCES: &[(&str, &str)] = &[\n");
     for f in &files {
         let rel = f

@@ -218,3 +218,112 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     eprintln!("M4 GPU vs CPU: max |error| {worst:.2e}");
     assert!(worst < 1e-5, "{worst}");
 }
+
+const PROBE_SCENE: &str = r#"
+[sun]
+time = "12:00"
+latitude = 45.0
+day_of_year = 172
+turbidity = 3.0
+
+[[material]]
+name = "ground"
+albedo_linear = [0.3, 0.35, 0.2]
+glossiness = 0.3
+reflectance = 0.04
+
+[[material]]
+name = "red"
+albedo_linear = [0.7, 0.1, 0.1]
+glossiness = 0.6
+reflectance = 0.04
+
+[[object]]
+name = "ground"
+primitive = "plane"
+material = "ground"
+size = [40, 40]
+
+[[object]]
+name = "box"
+primitive = "box"
+material = "red"
+size = [1, 2, 1]
+position = [3, 1, 0.5]
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+material = "red"
+radius = 0.8
+position = [-0.5, 0.8, -3]
+
+[[probe]]
+position = [0, 1.2, 0]
+
+[[camera]]
+name = "main"
+position = [0, 1.5, 6]
+target = [0, 1, 0]
+"#;
+
+#[test]
+fn relit_probe_faces_equal_the_lighting_pass_seen_from_the_probe() {
+    use himal::passes::envmap::probe::face_camera;
+    use himal::scene::Scene;
+    use himal::{FrameSettings, Renderer, ViewBuffer};
+    let scene =
+        Scene::from_toml_str(PROBE_SCENE, "probe.toml", std::path::Path::new(".")).expect("scene");
+    let new_renderer = || {
+        let ctx = GpuContext::new(&himal::gpu::GpuOptions::default()).expect("GPU");
+        Renderer::new(ctx, &scene).expect("renderer")
+    };
+    let size = 128u32;
+    let base = |w, h| {
+        let mut s = FrameSettings::new(w, h, scene.sun.clone());
+        s.shadow_resolution = 0;
+        s.aerial_extinction = 0.0;
+        s.ao.mode = himal::passes::ao::AoMode::Off;
+        s.environment_specular = false;
+        s
+    };
+    // Frame 1 captures the probe's G-buffer cube and relights it.
+    let mut r = new_renderer();
+    r.render(scene.camera("main").expect("camera"), &base(64, 64))
+        .expect("frame");
+    let probe = scene.probes[0];
+    let mut worst = 0.0f32;
+    let mut texels = 0usize;
+    // Side faces: the noon sun (and its disk, which the probe leaves out) is in +Y.
+    for face in [0usize, 1, 4, 5] {
+        let relit = read_rgb(r.context(), r.envmap().source(), 0, face as u32);
+        // The same lighting permutation, rendered directly from the probe.
+        let mut direct_renderer = new_renderer();
+        let mut s = base(size, size);
+        s.view = "lighting".parse::<ViewBuffer>().expect("view");
+        s.raw = true;
+        s.environment_probes = false;
+        let direct = direct_renderer
+            .render(&face_camera(probe, face), &s)
+            .expect("frame")
+            .image
+            .to_rgba_f32()
+            .expect("float image");
+        let n = size as usize;
+        for y in 0..n {
+            for x in 0..n {
+                // Cube faces are seen from inside: mirrored in x.
+                let d = direct[y * n + (n - 1 - x)];
+                let d = Vec3::new(d[0], d[1], d[2]);
+                let c = relit[y * n + x];
+                worst = worst.max(((c - d).abs() / d.max(Vec3::splat(1e-2))).max_element());
+                texels += 1;
+            }
+        }
+    }
+    eprintln!("relit probe vs direct lighting: {texels} texels, worst relative error {worst:.2e}");
+    assert_eq!(texels, 4 * 128 * 128);
+    // Same pipeline, same rasterisation, sky without a sun in view: measured
+    // 2026-11-22: 0 (bit-identical). Compared without the x mirror: 11.5.
+    assert!(worst < 1e-3, "{worst}");
+}
