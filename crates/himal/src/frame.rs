@@ -136,7 +136,10 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         errors,
     } = inputs;
     let mut g = FrameGraph::new();
-    let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, errors);
+    let mip_bias = aa.mode.temporal();
+    let gbuffer = passes
+        .gbuffer
+        .add(&mut g, size, view, scene, mip_bias, errors);
     let shadow_mask = passes
         .shadows
         .add(&mut g, size, gbuffer, view, scene, errors);
@@ -161,7 +164,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                 g.set_pass_prefix(Some(format!("envmap.probe{index}.face{face}")));
                 let view = &probes.probes[index].faces[face].view;
                 let stored = if capture {
-                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, errors);
+                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, false, errors);
                     probes.add_store(&mut g, index, face, fresh)
                 } else {
                     probes.import_face(&mut g, index, face)

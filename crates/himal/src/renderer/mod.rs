@@ -294,7 +294,7 @@ impl Renderer {
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
-        for key in GBufferKey::for_scene(&scene_gpu) {
+        for key in GBufferKey::for_scene(&scene_gpu, false) {
             passes.gbuffer.prepare(&ctx, key)?;
         }
         if !scene.probes.is_empty() {
@@ -432,6 +432,9 @@ impl Renderer {
         passes.bloom.prepare(ctx, BloomSettings::MAX_PASSES)?;
         for key in LightingKey::all() {
             passes.lighting.prepare(ctx, key)?;
+        }
+        for key in GBufferKey::for_scene(&self.res.scene, true) {
+            passes.gbuffer.prepare(ctx, key)?;
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {
@@ -585,6 +588,9 @@ impl Renderer {
             .prepare(&self.ctx, post_state::tonemap_key(settings))?;
         passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
         passes.lighting.prepare(&self.ctx, lighting_key(settings))?;
+        for key in GBufferKey::for_scene(&self.res.scene, settings.aa.temporal()) {
+            passes.gbuffer.prepare(&self.ctx, key)?;
+        }
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
         }

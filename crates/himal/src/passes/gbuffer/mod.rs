@@ -44,34 +44,44 @@ pub enum MaterialType {
     Textured,
 }
 
-/// A G-buffer permutation: material type x usage (double-sided).
+/// A G-buffer permutation: material type x usage (double-sided) x
+/// environment (texture mip bias under temporal anti-aliasing, A2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct GBufferKey {
     pub material: MaterialType,
     pub double_sided: bool,
+    /// Textured materials sample with mip bias -0.5.
+    pub mip_bias: bool,
 }
+
+/// Mip bias of textured materials under temporal anti-aliasing (A2).
+pub const TEMPORAL_AA_MIP_BIAS: f32 = -0.5;
 
 impl GBufferKey {
     pub const VERTEX: Self = Self {
         material: MaterialType::Vertex,
         double_sided: false,
+        mip_bias: false,
     };
     /// Cards are seen from both sides.
     pub const VEGETATION: Self = Self {
         material: MaterialType::Vegetation,
         double_sided: true,
+        mip_bias: false,
     };
 
-    pub const fn textured(double_sided: bool) -> Self {
+    pub const fn textured(double_sided: bool, mip_bias: bool) -> Self {
         Self {
             material: MaterialType::Textured,
             double_sided,
+            mip_bias,
         }
     }
 
     /// The permutations `scene` draws with (the per-vertex one always: it
-    /// also clears the targets when nothing else draws).
-    pub fn for_scene(scene: &SceneGpu) -> Vec<GBufferKey> {
+    /// also clears the targets when nothing else draws); `mip_bias`: under
+    /// temporal anti-aliasing.
+    pub fn for_scene(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
         let mut keys = vec![Self::VERTEX];
         if !scene.draws_vegetation.is_empty() {
             keys.push(Self::VEGETATION);
@@ -79,7 +89,7 @@ impl GBufferKey {
         if let Some(m) = &scene.materials {
             for (_, material) in &scene.draws_textured {
                 if let Some(binding) = m.materials.get(*material) {
-                    let key = Self::textured(binding.double_sided);
+                    let key = Self::textured(binding.double_sided, mip_bias);
                     if !keys.contains(&key) {
                         keys.push(key);
                     }
@@ -153,9 +163,17 @@ impl GBufferPass {
                 ctx,
                 &spec("gbuffer.vegetation", cull, &[("VEGETATION", 1.0)]),
             )?,
-            MaterialType::Textured => self
-                .textured
-                .render_pipeline(ctx, &spec("gbuffer.textured", cull, &[]))?,
+            MaterialType::Textured => {
+                let bias = if key.mip_bias {
+                    TEMPORAL_AA_MIP_BIAS
+                } else {
+                    0.0
+                };
+                self.textured.render_pipeline(
+                    ctx,
+                    &spec("gbuffer.textured", cull, &[("MIP_BIAS", f64::from(bias))]),
+                )?
+            }
         };
         self.pipelines.insert(key, pipeline);
         Ok(())
@@ -167,6 +185,7 @@ impl GBufferPass {
         size: (u32, u32),
         view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
+        mip_bias: bool,
         errors: &'a FrameErrors,
     ) -> GBuffer {
         let (w, h) = size;
@@ -254,7 +273,7 @@ impl GBufferPass {
                     else {
                         continue;
                     };
-                    let key = GBufferKey::textured(binding.double_sided);
+                    let key = GBufferKey::textured(binding.double_sided, mip_bias);
                     let Some(pipeline) = pipelines.get(&key) else {
                         errors.record::<()>(Err(GpuError::Other(format!(
                             "G-buffer permutation {key:?} was not prepared"

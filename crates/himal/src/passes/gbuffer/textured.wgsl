@@ -97,16 +97,21 @@ struct GBufferOut {
     @location(3) motion: vec2f,
 }
 
+// A2: -0.5 under temporal anti-aliasing (two jittered samples per pixel
+// over frames A and B sharpen what a full-rate mip would blur); an E1
+// permutation (GBufferKey::mip_bias).
+override MIP_BIAS: f32 = 0.0;
+
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
-    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
+    let base = textureSampleBias(base_color_texture, base_color_sampler, in.uv, MIP_BIAS);
     let alpha = material.base_color.a * base.a;
     // Every sample precedes the discards (uniform control flow for derivatives).
-    let ts = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
-    let at = textureSample(anisotropy_texture, anisotropy_sampler, in.uv).xyz;
-    let mr = textureSample(metal_rough_texture, metal_rough_sampler, in.uv);
-    let occlusion = textureSample(occlusion_texture, occlusion_sampler, in.uv).r;
-    let emissive = textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    let ts = textureSampleBias(normal_texture, normal_sampler, in.uv, MIP_BIAS).xyz * 2.0 - 1.0;
+    let at = textureSampleBias(anisotropy_texture, anisotropy_sampler, in.uv, MIP_BIAS).xyz;
+    let mr = textureSampleBias(metal_rough_texture, metal_rough_sampler, in.uv, MIP_BIAS);
+    let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, in.uv, MIP_BIAS).r;
+    let emissive = textureSampleBias(emissive_texture, emissive_sampler, in.uv, MIP_BIAS).rgb;
     if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
         discard;
     }
