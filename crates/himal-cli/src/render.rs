@@ -18,6 +18,13 @@ pub struct RenderArgs {
     /// A glTF model (.gltf or .glb) instead of --scene, framed by an automatic camera.
     #[arg(long, value_name = "FILE")]
     pub gltf: Option<String>,
+    /// An equirectangular HDR environment (.hdr or .exr) lighting the scene
+    /// instead of the physical sky (replaces the scene's `[environment]`).
+    #[arg(long, value_name = "FILE")]
+    pub env: Option<String>,
+    /// Radiance scale of --env.
+    #[arg(long, default_value_t = 1.0, value_name = "X")]
+    pub env_intensity: f32,
     /// Named camera of the scene (default: its first camera).
     #[arg(long)]
     pub camera: Option<String>,
@@ -263,7 +270,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
-    let scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
+    let mut scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
+    if let Some(env) = &args.env {
+        let mut desc = himal::scene::EnvironmentDesc::new(env);
+        desc.intensity = args.env_intensity;
+        scene.environment = Some(desc);
+    }
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut sun = scene.sun.clone();
     if let Some(t) = &args.time {

@@ -143,3 +143,22 @@ fn time_lapse_writes_a_day_sequence() {
     assert_ne!(frames[1].as_raw(), frames[2].as_raw());
     fails_with(&["render", "--time-lapse", "07:00-19:00"], "HH:MM..HH:MM");
 }
+
+#[test]
+fn env_lights_the_demo_with_an_hdr_image() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-env-{}", std::process::id()));
+    let p = dir.join("env.png").to_string_lossy().to_string();
+    let venice = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/assets/env/venice_sunset_1k.hdr"
+    );
+    let (ok, _, err) = himal(&[
+        "render", "--size", "48x27", "--camera", "village", "--env", venice, "--out", &p,
+    ]);
+    assert!(ok, "{err}");
+    assert!(image::open(&p).is_ok());
+    fails_with(
+        &["render", "--size", "8x8", "--env", "/nowhere/sky.hdr"],
+        "/nowhere/sky.hdr",
+    );
+}

@@ -1,6 +1,7 @@
 //! [`Renderer`]: owns the device, the scene on the GPU, every pass's
 //! pipelines and the state kept between frames; renders one frame per call.
 
+pub mod environment;
 pub mod post_state;
 pub mod scene_gpu;
 pub mod textures;
@@ -206,6 +207,8 @@ struct Resources {
     ao_history: Option<AoHistory>,
     ao_placeholder: wgpu::Texture,
     aa_history: Option<crate::passes::aa::AaHistory>,
+    /// An HDR environment instead of the physical sky (issue #8).
+    environment: Option<environment::EnvironmentGpu>,
 }
 
 impl Resources {
@@ -232,7 +235,7 @@ impl Resources {
                 (_, Some(h)) => Some((&settings.ao, h)),
             },
             ao_placeholder: &self.ao_placeholder,
-            lighting_key: lighting_key(settings),
+            lighting_key: lighting_key(settings, self.environment.is_some()),
             sky_no_disk: &self.sky_no_disk_buffer,
             probe: self
                 .active_probe
@@ -248,10 +251,11 @@ impl Resources {
 }
 
 /// The lighting permutation a frame with `settings` draws with.
-fn lighting_key(settings: &FrameSettings) -> LightingKey {
+/// (Aerial perspective fades toward the Preetham sky: none under an HDR environment.)
+fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
     LightingKey {
         shadows: settings.shadow_resolution > 0,
-        fog: settings.aerial_extinction > 0.0,
+        fog: settings.aerial_extinction > 0.0 && !environment,
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
     }
@@ -300,6 +304,16 @@ impl Renderer {
         if !scene.probes.is_empty() {
             passes.lighting.prepare(&ctx, LightingKey::RELIGHT)?;
         }
+        let environment = match &scene.environment {
+            Some(desc) => {
+                let env = environment::EnvironmentGpu::new(&ctx, desc, &mut passes.envmap)?;
+                passes
+                    .sky
+                    .set_environment(&ctx, &env.view, &env.sampler, env.rotation)?;
+                Some(env)
+            }
+            None => None,
+        };
         let view_buffer =
             uniform_buffer(&ctx, "view", &bytemuck::Zeroable::zeroed() as &ViewUniform);
         let lighting_buffer = uniform_buffer(
@@ -361,6 +375,7 @@ impl Renderer {
                 ao_history: None,
                 ao_placeholder,
                 aa_history: None,
+                environment,
             },
             pool: TexturePool::new(),
             timer,
@@ -587,7 +602,8 @@ impl Renderer {
             .tonemap
             .prepare(&self.ctx, post_state::tonemap_key(settings))?;
         passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
-        passes.lighting.prepare(&self.ctx, lighting_key(settings))?;
+        let key = lighting_key(settings, self.res.environment.is_some());
+        passes.lighting.prepare(&self.ctx, key)?;
         for key in GBufferKey::for_scene(&self.res.scene, settings.aa.temporal()) {
             passes.gbuffer.prepare(&self.ctx, key)?;
         }
@@ -648,7 +664,7 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun);
-        let probe = if settings.environment_probes {
+        let probe = if settings.environment_probes && self.res.environment.is_none() {
             self.res.passes.probes.nearest(camera.position)
         } else {
             None
@@ -706,10 +722,21 @@ impl Renderer {
         let Some((_, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
+        let (sun_illuminance, sky_irradiance) = match &self.res.environment {
+            Some(env) => (
+                if env.sun {
+                    light.sun_illuminance
+                } else {
+                    glam::Vec3::ZERO
+                },
+                Sh9Gpu::from(&env.irradiance_sh),
+            ),
+            None => (light.sun_illuminance, Sh9Gpu::from(&light.irradiance_sh)),
+        };
         let lighting = LightingUniform::new(
             light.sun_direction,
-            light.sun_illuminance,
-            Sh9Gpu::from(&light.irradiance_sh),
+            sun_illuminance,
+            sky_irradiance,
             Vec4::new(
                 settings.aerial_extinction,
                 if settings.aerial_extinction > 0.0 {

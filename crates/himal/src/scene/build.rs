@@ -135,6 +135,20 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         .map(|p| ck.finite3(&p.position, "position"))
         .collect::<Result<Vec<_>>>()?;
     let lights = super::lights::build_lights(&ck, &file.light)?;
+    let environment = match &file.environment {
+        Some(e) => {
+            let mut desc = super::EnvironmentDesc::new(base_dir.join(e.file.get_ref()));
+            if let Some(i) = &e.intensity {
+                desc.intensity = ck.range(i, "intensity", 0.0, 1e6)?;
+            }
+            if let Some(r) = &e.rotation {
+                desc.rotation_deg = ck.range(r, "rotation", -360.0, 360.0)?;
+            }
+            desc.sun = e.sun.unwrap_or(false);
+            Some(desc)
+        }
+        None => None,
+    };
     let mut world = World {
         ck: &ck,
         base_dir,
@@ -158,6 +172,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         bounds,
         pbr: Default::default(),
         probes,
+        environment,
     })
 }
 

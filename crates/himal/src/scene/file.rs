@@ -22,6 +22,17 @@ pub(crate) struct FileScene {
     pub light: Vec<FileLight>,
     #[serde(default)]
     pub probe: Vec<FileProbe>,
+    pub environment: Option<FileEnvironment>,
+}
+
+/// `[environment]`: an equirectangular HDR image instead of the physical sky.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileEnvironment {
+    pub file: Spanned<String>,
+    pub intensity: Option<Spanned<f32>>,
+    pub rotation: Option<Spanned<f32>>,
+    pub sun: Option<bool>,
 }
 
 /// An environment probe (L3): where a G-buffer cube is captured.

@@ -100,6 +100,7 @@
 mod build;
 mod build_vegetation;
 mod camera;
+mod environment;
 mod error;
 mod file;
 pub mod gltf;
@@ -117,6 +118,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 pub use camera::{Camera, DEFAULT_NEAR};
+pub use environment::{EnvironmentDesc, EnvironmentImage};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
 pub use lights::{LightDesc, LightKind};
@@ -415,6 +417,8 @@ pub struct Scene {
     pub pbr: gltf::PbrSet,
     /// Environment probe positions (L3: G-buffer cubes relit with the sky).
     pub probes: Vec<Vec3>,
+    /// An HDR environment lighting the scene instead of the physical sky.
+    pub environment: Option<EnvironmentDesc>,
 }
 
 /// Text of the demo world, embedded so the renderer runs from anywhere.
@@ -465,6 +469,7 @@ impl Scene {
             pbr: asset.pbr,
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
             probes: Vec::new(),
+            environment: None,
         })
     }
 

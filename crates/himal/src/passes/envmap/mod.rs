@@ -59,6 +59,8 @@ pub struct EnvMapPass {
     pub sampler: wgpu::Sampler,
     /// Capture and filter in the next frame (the sky changed).
     pub dirty: bool,
+    /// The source came from an HDR environment: never captured from the sky.
+    pub fixed_source: bool,
 }
 
 fn layer_view(
@@ -178,6 +180,7 @@ impl EnvMapPass {
                 ..Default::default()
             }),
             dirty: true,
+            fixed_source: false,
         };
         pass.compute_dfg(ctx)?;
         Ok(pass)
@@ -284,7 +287,7 @@ impl EnvMapPass {
         sky: &'a wgpu::Buffer,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
-        if self.dirty {
+        if self.dirty && !self.fixed_source {
             self.add_steps(graph, Some(sky), errors)
         } else {
             graph.import_texture("envmap.filtered", &self.filtered)

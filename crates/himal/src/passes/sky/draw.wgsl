@@ -6,6 +6,13 @@
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> sky: SkyParams;
+// An HDR environment (equirectangular) drawn instead of the sky (issue #8);
+// twin: scene/environment.rs `EnvironmentImage::uv`.
+@group(0) @binding(2) var environment: texture_2d<f32>;
+@group(0) @binding(3) var environment_sampler: sampler;
+
+override ENVIRONMENT: bool = false;
+override ENV_ROTATION: f32 = 0.0;
 
 struct VertexOut {
     // invariant: the depth test Equal 0 must see exactly the written value
@@ -22,6 +29,12 @@ fn vs_main(@builtin(vertex_index) i: u32) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let dir = view_ray(view, in.clip.xy * view.viewport.zw);
+    if (ENVIRONMENT) {
+        let phi = atan2(dir.x, -dir.z) + ENV_ROTATION;
+        let u = fract(phi / 6.28318530718 + 0.5);
+        let v = acos(clamp(dir.y, -1.0, 1.0)) / 3.14159265359;
+        return vec4f(textureSampleLevel(environment, environment_sampler, vec2f(u, v), 0.0).rgb, 1.0);
+    }
     let c = preetham_sky_radiance(sky, dir) + sun_disk_radiance(sky, dir);
     return vec4f(c, 1.0);
 }
