@@ -7,6 +7,7 @@ mod bench;
 mod bench_ao;
 mod prewarm;
 mod render;
+mod view;
 
 use std::path::PathBuf;
 
@@ -28,6 +29,10 @@ struct Cli {
 enum Command {
     /// Render a scene to PNG (sRGB) or EXR (linear float).
     Render(render::RenderArgs),
+    /// Open a window on a scene (X11): fly camera, time of day, technique
+    /// toggles, debug views, screenshots; takes the render options (--frames N
+    /// > 1: render N frames, write the last to --out and exit).
+    View(render::RenderArgs),
     /// Render a fixed camera path and print GPU time per pass.
     Bench(bench::BenchArgs),
     /// Compile every pipeline permutation the renderer can use and write the pipeline cache.
@@ -140,6 +145,7 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Render(a) => render::run(&a),
+        Command::View(a) => view::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::Prewarm(a) => prewarm::run(&a),
         Command::Info(a) => info(&a),

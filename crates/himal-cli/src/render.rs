@@ -10,7 +10,7 @@ use himal::{FrameSettings, Renderer, ViewBuffer};
 
 use crate::GpuArgs;
 
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
     /// Scene file (TOML), or `demo` for the built-in demo world.
     #[arg(long, default_value = "demo", value_name = "FILE|demo")]
@@ -263,7 +263,11 @@ fn sequence_path(out: &Path, index: u32) -> PathBuf {
     out.with_file_name(format!("{stem}_{index:04}.{ext}"))
 }
 
-pub fn run(args: &RenderArgs) -> Result<()> {
+/// The scene (with --gltf / --env applied), its camera and the frame settings
+/// the options ask for (shared with `himal view`).
+pub fn setup(
+    args: &RenderArgs,
+) -> Result<(himal::scene::Scene, himal::scene::Camera, FrameSettings)> {
     let (width, height) = parse_size(&args.size)?;
     let view: ViewBuffer = args.view.parse()?;
     let kind = ImageKind::from_path(&args.out)?;
@@ -281,17 +285,23 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(t) = &args.time {
         sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
     }
-    let time_lapse = args
-        .time_lapse
-        .as_deref()
-        .map(parse_time_lapse)
-        .transpose()?;
     let mut settings = FrameSettings::new(width, height, sun);
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
     args.post.apply(&mut settings)?;
     args.shadows.apply(&mut settings)?;
     settings.ao = args.ao.settings()?;
+    Ok((scene, camera, settings))
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let (scene, camera, mut settings) = setup(args)?;
+    let (width, height) = (settings.width, settings.height);
+    let time_lapse = args
+        .time_lapse
+        .as_deref()
+        .map(parse_time_lapse)
+        .transpose()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
