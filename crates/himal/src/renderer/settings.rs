@@ -1,0 +1,155 @@
+//! What a frame is asked for: [`FrameSettings`], the buffer it shows
+//! ([`ViewBuffer`]) and the output formats.
+
+use crate::Error;
+use crate::passes::ao::{AoSettings, AoView};
+use crate::passes::debug::DebugView;
+use crate::passes::post::{AdaptationSettings, BloomSettings};
+use crate::passes::shadows::{ShadowSettings, ShadowView};
+use crate::scene::SunDesc;
+
+/// Format of the displayable output (PNG).
+pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Format of raw float output (EXR of a debug view).
+pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// Sun cascade edge (S1): four 2048² cascades hold as many texels as the
+/// single 4096² map they replaced (docs/techniques/S1.md).
+pub const DEFAULT_SHADOW_RESOLUTION: u32 = 2048;
+
+/// The buffer a frame shows (`--view`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum ViewBuffer {
+    #[default]
+    Final,
+    Debug(DebugView),
+    /// AO buffers (`ao`, `ao-raw`, `stability-mask`).
+    Ao(AoView),
+    /// Shadow buffers (`shadow-mask`, `cascades`).
+    Shadow(ShadowView),
+}
+
+impl ViewBuffer {
+    pub const NAMES: [&'static str; 18] = [
+        "final",
+        "albedo",
+        "normal",
+        "tangent",
+        "glossiness",
+        "reflectance",
+        "metallic",
+        "anisotropy",
+        "depth",
+        "motion",
+        "lighting",
+        "ao",
+        "ao-raw",
+        "stability-mask",
+        "luminance",
+        "bloom",
+        "shadow-mask",
+        "cascades",
+    ];
+}
+
+impl std::str::FromStr for ViewBuffer {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        use DebugView as D;
+        Ok(match s {
+            "final" => ViewBuffer::Final,
+            "albedo" => ViewBuffer::Debug(D::Albedo),
+            "normal" => ViewBuffer::Debug(D::Normal),
+            "tangent" => ViewBuffer::Debug(D::Tangent),
+            "glossiness" => ViewBuffer::Debug(D::Glossiness),
+            "reflectance" => ViewBuffer::Debug(D::Reflectance),
+            "metallic" => ViewBuffer::Debug(D::Metallic),
+            "anisotropy" => ViewBuffer::Debug(D::Anisotropy),
+            "depth" => ViewBuffer::Debug(D::Depth),
+            "motion" => ViewBuffer::Debug(D::Motion),
+            "lighting" => ViewBuffer::Debug(D::Lighting),
+            "ao" => ViewBuffer::Ao(AoView::Ao),
+            "ao-raw" => ViewBuffer::Ao(AoView::Raw),
+            "stability-mask" => ViewBuffer::Ao(AoView::Stability),
+            "luminance" => ViewBuffer::Debug(D::Luminance),
+            "bloom" => ViewBuffer::Debug(D::Bloom),
+            "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
+            "cascades" => ViewBuffer::Shadow(ShadowView::Cascades),
+            other => {
+                return Err(Error::InvalidSettings(format!(
+                    "unknown view \"{other}\" (known: {})",
+                    ViewBuffer::NAMES.join(", ")
+                )));
+            }
+        })
+    }
+}
+
+/// Everything one frame needs besides the camera.
+#[derive(Clone, Debug)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub view: ViewBuffer,
+    /// Raw float values (for EXR) instead of a displayable image.
+    pub raw: bool,
+    pub sun: SunDesc,
+    /// Exposure bias in EV on top of the auto exposure.
+    pub exposure_ev: f32,
+    /// H3 light adaptation; off = expose each frame for its own log-average.
+    pub adaptation: AdaptationSettings,
+    /// Reinhard white point (scaled luminance mapped to white); `None` = L/(1+L).
+    pub white_point: Option<f32>,
+    /// H2 Kawase bloom.
+    pub bloom: BloomSettings,
+    /// Aerial perspective extinction per metre (0 = off).
+    pub aerial_extinction: f32,
+    /// Sun cascade edge in texels; 0 = shadows off.
+    pub shadow_resolution: u32,
+    /// Shadow mode, split, static map, hero (S1-S4).
+    pub shadows: ShadowSettings,
+    /// Screen-space AO (TECHNIQUES O1-O3).
+    pub ao: AoSettings,
+    /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
+    /// along the reflection vector.
+    pub environment_specular: bool,
+    /// L3: ambient specular from the relit G-buffer cube of the probe
+    /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.
+    pub environment_probes: bool,
+    /// Re-capture and re-filter the environment cube every frame (bench rows;
+    /// otherwise only when the sky changes).
+    pub envmap_every_frame: bool,
+    /// Anti-aliasing after tone mapping (TECHNIQUES A1-A4).
+    pub aa: crate::passes::aa::AaMode,
+    /// Tuning of the temporal anti-aliasing passes.
+    pub aa_tuning: crate::passes::aa::TemporalTuning,
+    /// Animation clock in seconds (moving objects, vegetation sway); set by
+    /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
+    pub time_s: f32,
+}
+
+impl FrameSettings {
+    pub fn new(width: u32, height: u32, sun: SunDesc) -> Self {
+        Self {
+            width,
+            height,
+            view: ViewBuffer::Final,
+            raw: false,
+            sun,
+            exposure_ev: 0.0,
+            adaptation: AdaptationSettings::default(),
+            white_point: None,
+            bloom: BloomSettings::default(),
+            aerial_extinction: 2.5e-4,
+            shadow_resolution: DEFAULT_SHADOW_RESOLUTION,
+            shadows: ShadowSettings::default(),
+            ao: AoSettings::default(),
+            aa: crate::passes::aa::AaMode::None,
+            aa_tuning: Default::default(),
+            time_s: 0.0,
+            environment_specular: true,
+            environment_probes: true,
+            envmap_every_frame: false,
+        }
+    }
+}
