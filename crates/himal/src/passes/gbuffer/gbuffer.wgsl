@@ -7,6 +7,7 @@
 // VEGETATION (override): the alpha-tested, swaying, double-sided pipeline
 // (docs/techniques/vegetation.md); false keeps the opaque path free of discard.
 // Source: McAuley, "Rendering the World of Far Cry 4", GDC 2015, Materials + Appendix A.
+#import gbuffer_io
 #import view
 #import tangent_frame
 #import scene
@@ -15,16 +16,6 @@
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 
 override VEGETATION: bool = false;
-
-struct VertexIn {
-    @location(0) position: vec3f,
-    @location(1) normal: vec3f,
-    @location(2) tangent: vec4f,
-    @location(3) uv: vec2f,
-    @location(4) color: vec4f,
-    @location(5) surface: vec4f,
-    @builtin(instance_index) object: u32,
-}
 
 struct VertexOut {
     @builtin(position) clip: vec4f,
@@ -39,7 +30,7 @@ struct VertexOut {
 }
 
 @vertex
-fn vs_main(in: VertexIn) -> VertexOut {
+fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[in.object];
     var world = o.model * vec4f(in.position, 1.0);
     var prev_world = o.prev_model * vec4f(in.position, 1.0);
@@ -54,21 +45,13 @@ fn vs_main(in: VertexIn) -> VertexOut {
     }
     out.curr_clip = view.view_proj * world;
     out.prev_clip = view.prev_view_proj * prev_world;
-    // view_proj already carries this frame's jitter (and prev_view_proj the
-    // previous frame's): motion includes the jitter change (passes/aa removes it).
+    // view_proj already carries the frame's jitter (the AA contract).
     out.clip = out.curr_clip;
     out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
     out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w);
     out.color = in.color;
     out.surface = in.surface;
     return out;
-}
-
-struct GBufferOut {
-    @location(0) albedo: vec4f,
-    @location(1) frame: vec4f,
-    @location(2) material: vec4f,
-    @location(3) motion: vec2f,
 }
 
 @fragment
@@ -92,9 +75,6 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     out.albedo = in.color;
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     out.material = clamp(in.surface, vec4f(0.0), vec4f(1.0));
-    let curr = in.curr_clip.xy / in.curr_clip.w;
-    let prev = in.prev_clip.xy / in.prev_clip.w;
-    // NDC y up -> uv y down
-    out.motion = (prev - curr) * vec2f(0.5, -0.5);
+    out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     return out;
 }

@@ -5,6 +5,7 @@
 // Alpha: MASK discards below the cut-off; BLEND uses an ordered 4x4 dither
 // (deferred fallback: no forward pass yet). Emissive is bound but not drawn
 // (no emissive G-buffer target yet).
+#import gbuffer_io
 #import view
 #import tangent_frame
 #import scene
@@ -35,16 +36,6 @@ struct MaterialGpu {
 @group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
 @group(1) @binding(12) var anisotropy_sampler: sampler;
 
-struct VertexIn {
-    @location(0) position: vec3f,
-    @location(1) normal: vec3f,
-    @location(2) tangent: vec4f,
-    @location(3) uv: vec2f,
-    @location(4) color: vec4f,
-    @location(5) surface: vec4f,
-    @builtin(instance_index) object: u32,
-}
-
 struct VertexOut {
     @builtin(position) clip: vec4f,
     @location(0) normal: vec3f,
@@ -57,7 +48,7 @@ struct VertexOut {
 }
 
 @vertex
-fn vs_main(in: VertexIn) -> VertexOut {
+fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[in.object];
     let world = o.model * vec4f(in.position, 1.0);
     let prev_world = o.prev_model * vec4f(in.position, 1.0);
@@ -65,7 +56,8 @@ fn vs_main(in: VertexIn) -> VertexOut {
     out.uv = in.uv;
     out.curr_clip = view.view_proj * world;
     out.prev_clip = view.prev_view_proj * prev_world;
-    out.clip = out.curr_clip + vec4f(view.jitter.xy * out.curr_clip.w, 0.0, 0.0);
+    // view_proj already carries the frame's jitter (the AA contract).
+    out.clip = out.curr_clip;
     out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
     // A mirroring model matrix flips handedness: fold its sign into w.
     let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
@@ -88,13 +80,6 @@ fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
     let s = saturate(strength);
     let alpha_t = a + (1.0 - a) * s * s;
     return saturate((1.0 - a / alpha_t) / 0.9);
-}
-
-struct GBufferOut {
-    @location(0) albedo: vec4f,
-    @location(1) frame: vec4f,
-    @location(2) material: vec4f,
-    @location(3) motion: vec2f,
 }
 
 // A2: -0.5 under temporal anti-aliasing (two jittered samples per pixel
@@ -147,9 +132,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     out.albedo = vec4f(in.color.rgb * base.rgb, ao);
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     out.material = vec4f(1.0 - roughness, in.surface.y, metallic, anisotropy_from_khr(strength, roughness * roughness));
-    let curr = in.curr_clip.xy / in.curr_clip.w;
-    let prev = in.prev_clip.xy / in.prev_clip.w;
-    out.motion = (prev - curr) * vec2f(0.5, -0.5);
+    out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     // Emissive is sampled so its binding stays in the layout (see header).
     out.albedo.a = out.albedo.a + 0.0 * emissive.r * material.emissive.r;
     return out;
