@@ -5,7 +5,7 @@
 //! day changes, mirrored into the source cube and filtered like the sky
 //! (L4). The probe nearest the camera is used.
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
 use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
@@ -262,9 +262,4 @@ impl ProbeSet {
         });
         source
     }
-}
-
-/// View-projection of probe face `face` (tests).
-pub fn face_view_projection(position: Vec3, face: usize) -> Mat4 {
-    face_camera(position, face).view_projection(1.0)
 }
