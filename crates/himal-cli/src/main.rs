@@ -32,7 +32,7 @@ enum Command {
     /// Open a window on a scene (X11): fly camera, time of day, technique
     /// toggles, debug views, screenshots; takes the render options (--frames N
     /// > 1: render N frames, write the last to --out and exit).
-    View(render::RenderArgs),
+    View(view::ViewArgs),
     /// Render a fixed camera path and print GPU time per pass.
     Bench(bench::BenchArgs),
     /// Compile every pipeline permutation the renderer can use and write the pipeline cache.

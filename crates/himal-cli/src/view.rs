@@ -1,17 +1,20 @@
 //! `himal view`: an interactive window on a scene (X11). The frame is
-//! rendered by the same `Renderer` as `himal render` and presented through
-//! the CPU (softbuffer): simple and portable, at the cost of a read-back per
-//! frame. Keys are listed in [`HELP`]; the title shows the frame rate and the
-//! costliest passes.
+//! rendered by the same `Renderer` as `himal render` and presented through a
+//! wgpu swapchain (`himal::present`: no read-back), or through the CPU
+//! (softbuffer) where the adapter cannot present to the window. A HUD with
+//! the state and per-pass GPU times is blended over the frame. Keys are
+//! listed in [`HELP`].
 
 use std::num::NonZeroU32;
-use std::rc::Rc;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
 use glam::{Quat, Vec3};
 use himal::passes::aa::AaMode;
 use himal::passes::ao::AoMode;
+use himal::present::{Hud, Overlay, Presenter};
 use himal::scene::Camera;
 use himal::{FrameSettings, Renderer, ViewBuffer};
 use winit::application::ApplicationHandler;
@@ -24,10 +27,41 @@ use crate::render::RenderArgs;
 
 pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, \
-P screenshot, Esc quit";
+H HUD, P screenshot, Esc quit";
 
-/// The window's CPU-presented surface.
-type WindowSurface = softbuffer::Surface<Rc<Window>, Rc<Window>>;
+#[derive(Args, Clone, Debug)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// How frames reach the window: a wgpu swapchain (`gpu`), a CPU copy
+    /// (`cpu`), or the swapchain where the adapter supports the window (`auto`).
+    #[arg(long, value_enum, default_value_t = PresentMode::Auto)]
+    pub present: PresentMode,
+    /// Start with the HUD (state and per-pass GPU times) hidden.
+    #[arg(long)]
+    pub no_hud: bool,
+    /// With --frames N: also write the last image the window showed (frame
+    /// and HUD, read back from the swapchain or the CPU buffer) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub window_out: Option<std::path::PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PresentMode {
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+/// Where frames go: a swapchain, or a CPU buffer (softbuffer).
+enum Presentation {
+    Gpu {
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+        presenter: Box<Presenter>,
+    },
+    Cpu(softbuffer::Surface<Arc<Window>, Arc<Window>>),
+}
 
 /// Movement keys held down.
 #[derive(Default)]
@@ -44,7 +78,10 @@ struct Viewer {
     renderer: Renderer,
     camera: Camera,
     settings: FrameSettings,
-    window: Option<(Rc<Window>, WindowSurface)>,
+    present: PresentMode,
+    window_out: Option<std::path::PathBuf>,
+    window: Option<(Arc<Window>, Presentation)>,
+    hud: bool,
     held: Held,
     last: Instant,
     frames: u32,
@@ -96,6 +133,7 @@ impl Viewer {
             }
             KeyCode::Digit5 => s.environment_specular = !s.environment_specular,
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
+            KeyCode::KeyH => self.hud = !self.hud,
             _ => {}
         }
     }
@@ -123,9 +161,55 @@ impl Viewer {
         c.up = Vec3::Y;
     }
 
+    /// The HUD's text: state, then the GPU time of every pass in frame order.
+    fn hud_text(&self, settings: &FrameSettings, timings: &[himal::graph::PassTiming]) -> Hud {
+        let s = settings;
+        let on = |b: bool| if b { "on" } else { "off" };
+        let total: f64 = timings.iter().map(|t| t.gpu_ms).sum();
+        let mut lines = vec![
+            format!(
+                "himal {:5.1} fps  {}x{}  {:02}:{:02}  GPU {total:.2} ms",
+                self.fps,
+                s.width,
+                s.height,
+                s.sun.time_hours as u32,
+                (s.sun.time_hours.fract() * 60.0) as u32
+            ),
+            format!(
+                "[1] AO {}  [2] bloom {}  [3] shadows {}",
+                on(s.ao.mode != AoMode::Off),
+                on(s.bloom.enabled),
+                on(s.shadow_resolution > 0)
+            ),
+            format!(
+                "[4] AA {}  [5] env specular {}  [V] {}",
+                s.aa.name(),
+                on(s.environment_specular),
+                view_name(s.view)
+            ),
+        ];
+        if timings.is_empty() {
+            lines.push("no GPU timestamps on this adapter".into());
+        }
+        // One row per pass group (the id before the first '.'), in frame order:
+        // a full list of steps does not fit a small window.
+        let mut groups: Vec<(String, f64)> = Vec::new();
+        for t in timings {
+            let group = t.id.split('.').next().unwrap_or(&t.id);
+            match groups.iter_mut().find(|(g, _)| g == group) {
+                Some((_, ms)) => *ms += t.gpu_ms,
+                None => groups.push((group.to_string(), t.gpu_ms)),
+            }
+        }
+        Hud {
+            lines,
+            timings: groups,
+        }
+    }
+
     /// Renders a frame, presents it, and updates the title.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let Some((window, surface)) = &mut self.window else {
+        let Some((window, _)) = &self.window else {
             return Ok(());
         };
         let size = window.inner_size();
@@ -133,50 +217,108 @@ impl Viewer {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f32().min(0.25);
         self.last = now;
-        self.fps = 0.9 * self.fps + 0.1 / dt.max(1e-3);
+        let rate = 1.0 / dt.max(1e-3);
+        self.fps = if self.fps > 0.0 {
+            0.9 * self.fps + 0.1 * rate
+        } else {
+            rate
+        };
         self.clock += dt;
         let mut settings = self.settings.clone();
         settings.width = w;
         settings.height = h;
         settings.raw = false;
         settings.time_s = self.clock;
-        let frame = self.renderer.render(&self.camera, &settings)?;
-        let rgba = frame.image.to_rgba_f32()?;
-        surface
-            .resize(
-                NonZeroU32::new(w).context("zero width")?,
-                NonZeroU32::new(h).context("zero height")?,
-            )
-            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
-        let mut buffer = surface
-            .buffer_mut()
-            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
-        let byte = |c: f32| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
-        for (dst, p) in buffer.iter_mut().zip(&rgba) {
-            *dst = (byte(p[0]) << 16) | (byte(p[1]) << 8) | byte(p[2]);
+        let drawn = self.renderer.draw(&self.camera, &settings)?;
+        let overlay = self
+            .hud
+            .then(|| Overlay::hud(&self.hud_text(&settings, &drawn.timings)));
+        let overlay = overlay.as_ref().map(|o| (o, [8, 8]));
+        let frame = self
+            .renderer
+            .output(&settings)
+            .context("the renderer wrote no output")?;
+        let last = self.args.frames > 1 && self.frames + 1 >= self.args.frames;
+        let window_out = self.window_out.as_ref().filter(|_| last);
+        let Some((window, presentation)) = &mut self.window else {
+            return Ok(());
+        };
+        match presentation {
+            Presentation::Gpu {
+                surface,
+                config,
+                presenter,
+            } => {
+                let ctx = self.renderer.context();
+                if (config.width, config.height) != (w, h) {
+                    (config.width, config.height) = (w, h);
+                    surface.configure(&ctx.device, config);
+                }
+                let texture = match surface.get_current_texture() {
+                    wgpu::CurrentSurfaceTexture::Success(t)
+                    | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+                    wgpu::CurrentSurfaceTexture::Timeout
+                    | wgpu::CurrentSurfaceTexture::Occluded => return Ok(()),
+                    wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                        surface.configure(&ctx.device, config);
+                        return Ok(());
+                    }
+                    wgpu::CurrentSurfaceTexture::Validation => {
+                        anyhow::bail!("window surface: validation error acquiring a frame")
+                    }
+                };
+                let view = texture.texture.create_view(&Default::default());
+                presenter.present(ctx, frame, overlay, &view, config.format)?;
+                if let Some(path) = window_out {
+                    let shown = himal::gpu::read_texture(ctx, &texture.texture, 0, 0)?;
+                    himal::image_io::save(path, &shown)?;
+                    println!("wrote {} (the window)", path.display());
+                }
+                ctx.queue.present(texture);
+            }
+            Presentation::Cpu(surface) => {
+                let image = himal::gpu::read_texture(self.renderer.context(), frame, 0, 0)?;
+                let mut rgba: Vec<[u8; 4]> = bytemuck_rgba(&image.bytes);
+                if let Some((o, origin)) = overlay {
+                    rgba = himal::present::reference::compose(&rgba, w, o, origin);
+                }
+                if let Some(path) = window_out {
+                    let shown = himal::gpu::TextureData {
+                        width: w,
+                        height: h,
+                        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+                        bytes: rgba.iter().flatten().copied().collect(),
+                    };
+                    himal::image_io::save(path, &shown)?;
+                    println!("wrote {} (the window)", path.display());
+                }
+                surface
+                    .resize(
+                        NonZeroU32::new(w).context("zero width")?,
+                        NonZeroU32::new(h).context("zero height")?,
+                    )
+                    .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+                let mut buffer = surface
+                    .buffer_mut()
+                    .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+                for (dst, p) in buffer.iter_mut().zip(&rgba) {
+                    *dst = (u32::from(p[0]) << 16) | (u32::from(p[1]) << 8) | u32::from(p[2]);
+                }
+                buffer
+                    .present()
+                    .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+            }
         }
-        buffer
-            .present()
-            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
-        let mut passes = frame.timings.clone();
-        passes.sort_by(|a, b| b.gpu_ms.total_cmp(&a.gpu_ms));
-        let top: Vec<String> = passes
-            .iter()
-            .take(4)
-            .map(|t| format!("{} {:.1}", t.id, t.gpu_ms))
-            .collect();
-        let total: f64 = frame.timings.iter().map(|t| t.gpu_ms).sum();
         window.set_title(&format!(
-            "himal {:.1} fps | {:02}:{:02} | GPU {total:.1} ms: {}",
+            "himal {:.1} fps | {:02}:{:02}",
             self.fps,
             settings.sun.time_hours as u32,
             (settings.sun.time_hours.fract() * 60.0) as u32,
-            top.join(", ")
         ));
         self.frames += 1;
-        let last = self.args.frames > 1 && self.frames >= self.args.frames;
         if self.screenshot || last {
-            himal::image_io::save(&self.args.out, &frame.image)?;
+            let image = himal::gpu::read_texture(self.renderer.context(), frame, 0, 0)?;
+            himal::image_io::save(&self.args.out, &image)?;
             println!("wrote {} ({w}x{h})", self.args.out.display());
             self.screenshot = false;
         }
@@ -185,6 +327,110 @@ impl Viewer {
         }
         Ok(())
     }
+
+    /// The swapchain for `window` when the adapter can present to it.
+    fn gpu_presentation(&self, window: &Arc<Window>) -> Result<Presentation> {
+        let ctx = self.renderer.context();
+        let surface = ctx
+            .instance
+            .create_surface(window.clone())
+            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+        let caps = surface.get_capabilities(&ctx.adapter);
+        // 8-bit formats only: the presenter writes display-encoded values.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| {
+                matches!(
+                    f,
+                    wgpu::TextureFormat::Bgra8UnormSrgb
+                        | wgpu::TextureFormat::Rgba8UnormSrgb
+                        | wgpu::TextureFormat::Bgra8Unorm
+                        | wgpu::TextureFormat::Rgba8Unorm
+                )
+            })
+            .with_context(|| {
+                format!(
+                    "adapter {} cannot present to this window (formats {:?})",
+                    ctx.info.name, caps.formats
+                )
+            })?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            // COPY_SRC where offered: --window-out reads the swapchain image back.
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | (caps.usages & wgpu::TextureUsages::COPY_SRC),
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: wgpu::CompositeAlphaMode::Auto,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            view_formats: vec![],
+        };
+        surface.configure(&ctx.device, &config);
+        ctx.check("surface configure")?;
+        println!("presenting through a wgpu swapchain ({format:?})");
+        Ok(Presentation::Gpu {
+            surface,
+            config,
+            presenter: Box::new(Presenter::new(ctx)?),
+        })
+    }
+
+    fn cpu_presentation(window: &Arc<Window>) -> Result<Presentation> {
+        let context = softbuffer::Context::new(window.clone())
+            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+        let surface = softbuffer::Surface::new(&context, window.clone())
+            .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
+        println!("presenting through the CPU (softbuffer)");
+        Ok(Presentation::Cpu(surface))
+    }
+
+    fn open(&self, event_loop: &ActiveEventLoop) -> Result<(Arc<Window>, Presentation)> {
+        let attributes = Window::default_attributes()
+            .with_title("himal")
+            .with_inner_size(winit::dpi::PhysicalSize::new(
+                self.settings.width,
+                self.settings.height,
+            ));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| anyhow::anyhow!("cannot open a window: {e}"))?,
+        );
+        let presentation = match self.present {
+            PresentMode::Cpu => Self::cpu_presentation(&window)?,
+            PresentMode::Gpu => self.gpu_presentation(&window)?,
+            PresentMode::Auto => match self.gpu_presentation(&window) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("note: {e:#}; falling back to CPU presentation");
+                    Self::cpu_presentation(&window)?
+                }
+            },
+        };
+        Ok((window, presentation))
+    }
+}
+
+/// The `--view` name of `v`.
+fn view_name(v: ViewBuffer) -> &'static str {
+    ViewBuffer::NAMES
+        .iter()
+        .find(|n| n.parse::<ViewBuffer>().ok() == Some(v))
+        .copied()
+        .unwrap_or("?")
+}
+
+/// RGBA8 texels from a tightly packed byte buffer.
+fn bytemuck_rgba(bytes: &[u8]) -> Vec<[u8; 4]> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect()
 }
 
 impl ApplicationHandler for Viewer {
@@ -192,23 +438,7 @@ impl ApplicationHandler for Viewer {
         if self.window.is_some() {
             return;
         }
-        let attributes = Window::default_attributes()
-            .with_title("himal")
-            .with_inner_size(winit::dpi::PhysicalSize::new(
-                self.settings.width,
-                self.settings.height,
-            ));
-        let made = event_loop
-            .create_window(attributes)
-            .map_err(|e| anyhow::anyhow!("cannot open a window: {e}"))
-            .and_then(|w| {
-                let w = Rc::new(w);
-                let context = softbuffer::Context::new(w.clone())
-                    .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
-                let surface = softbuffer::Surface::new(&context, w.clone())
-                    .map_err(|e| anyhow::anyhow!("window surface: {e}"))?;
-                Ok((w, surface))
-            });
+        let made = self.open(event_loop);
         match made {
             Ok(window) => {
                 window.0.request_redraw();
@@ -279,7 +509,8 @@ impl ApplicationHandler for Viewer {
 
 /// Opens the window; `--frames N` (N > 1) renders N frames, writes the last
 /// to `--out` and exits (automated runs, e.g. under Xvfb).
-pub fn run(args: &RenderArgs) -> Result<()> {
+pub fn run(view: &ViewArgs) -> Result<()> {
+    let args = &view.render;
     let (scene, camera, settings) = crate::render::setup(args)?;
     let renderer = Renderer::new(args.gpu.context()?, &scene)?;
     let event_loop = EventLoop::new().map_err(|e| {
@@ -292,7 +523,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         renderer,
         camera,
         settings,
+        present: view.present,
+        window_out: view.window_out.clone(),
         window: None,
+        hud: !view.no_hud,
         held: Held::default(),
         last: Instant::now(),
         frames: 0,

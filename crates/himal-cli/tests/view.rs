@@ -3,30 +3,85 @@
 
 use std::process::Command;
 
-#[test]
-fn viewer_renders_frames_under_xvfb_and_saves_a_screenshot() {
-    let dir = std::env::temp_dir().join(format!("himal-view-{}", std::process::id()));
-    let shot = dir.join("view.png");
-    let cache = dir.join("cache");
+/// Runs `himal view` under Xvfb for 4 frames; returns stdout, the screenshot
+/// (`--out`, the clean frame) and what the window showed (`--window-out`).
+fn run_viewer(present: &str, size: (u32, u32)) -> (String, image::RgbImage, image::RgbImage) {
+    let dir = std::env::temp_dir().join(format!("himal-view-{present}-{}", std::process::id()));
+    let (shot, window) = (dir.join("view.png"), dir.join("window.png"));
     let out = Command::new("xvfb-run")
-        .args(["-a", env!("CARGO_BIN_EXE_himal"), "view"])
         .args([
-            "--size", "96x54", "--camera", "village", "--frames", "4", "--out",
+            "-a",
+            env!("CARGO_BIN_EXE_himal"),
+            "view",
+            "--present",
+            present,
         ])
+        .args(["--size", &format!("{}x{}", size.0, size.1)])
+        .args(["--camera", "village", "--frames", "4", "--out"])
         .arg(&shot)
-        .env("HIMAL_CACHE_DIR", &cache)
+        .arg("--window-out")
+        .arg(&window)
+        .env("HIMAL_CACHE_DIR", dir.join("cache"))
         .output()
         .expect("xvfb-run (apt-get install xvfb; ./run test installs it)");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "himal view failed:\n{stderr}");
-    let img = image::open(&shot).expect("the screenshot").to_rgb8();
-    assert_eq!(img.dimensions(), (96, 54));
+    assert!(
+        out.status.success(),
+        "himal view --present {present} failed:\n{stderr}"
+    );
+    let open = |p: &std::path::Path| image::open(p).expect("an image").to_rgb8();
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        open(&shot),
+        open(&window),
+    )
+}
+
+/// The window shows the frame, with the HUD panel darkening its top-left.
+fn check_window(frame: &image::RgbImage, window: &image::RgbImage) {
+    assert_eq!(frame.dimensions(), window.dimensions());
+    let (w, h) = frame.dimensions();
     // A rendered village, not a blank window: sky above, ground below.
-    let (top, bottom) = (img.get_pixel(48, 2), img.get_pixel(48, 52));
+    let (top, bottom) = (frame.get_pixel(w / 2, 2), frame.get_pixel(w / 2, h - 2));
     assert!(
         top[2] > top[1] && bottom[1] > bottom[2],
         "{top:?} {bottom:?}"
     );
+    // Bottom-right corner (below the HUD's ~120 px): the window is the frame itself
+    // (swapchain path measured exact, the CPU path is the twin).
+    let worst = (w * 3 / 4..w)
+        .flat_map(|x| (h * 3 / 4..h).map(move |y| (x, y)))
+        .map(|(x, y)| {
+            let (a, b) = (frame.get_pixel(x, y), window.get_pixel(x, y));
+            (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0);
+    assert!(
+        worst <= 1,
+        "window differs from the frame outside the HUD: {worst}/255"
+    );
+    // Inside the HUD panel (left of the text, 10 px in): darker than the frame.
+    let (f, s) = (frame.get_pixel(9, 30), window.get_pixel(9, 30));
+    let luma = |p: &image::Rgb<u8>| u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2]);
+    assert!(
+        luma(s) < luma(f) / 2 + 10,
+        "no HUD panel: frame {f:?}, window {s:?}"
+    );
+}
+
+#[test]
+fn viewer_presents_through_a_swapchain_with_the_hud_under_xvfb() {
+    let (stdout, frame, window) = run_viewer("gpu", (320, 180));
+    assert!(stdout.contains("wgpu swapchain"), "{stdout}");
+    check_window(&frame, &window);
+}
+
+#[test]
+fn viewer_presents_through_the_cpu_when_asked() {
+    let (stdout, frame, window) = run_viewer("cpu", (320, 180));
+    assert!(stdout.contains("softbuffer"), "{stdout}");
+    check_window(&frame, &window);
 }
 
 #[test]

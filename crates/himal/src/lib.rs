@@ -20,11 +20,12 @@ pub mod graph;
 pub mod image_io;
 pub mod math;
 pub mod passes;
+pub mod present;
 pub mod renderer;
 pub mod scene;
 pub mod shader;
 
-pub use renderer::{FrameSettings, RenderedFrame, Renderer, ViewBuffer};
+pub use renderer::{DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer};
 
 /// Every error the library returns; each names what failed and where.
 #[derive(thiserror::Error, Debug)]

@@ -24,8 +24,11 @@ impl TextureData {
         let n = (self.width * self.height) as usize;
         let b = &self.bytes;
         let out = match self.format {
-            F::Rgba8Unorm | F::Rgba8UnormSrgb | F::Bgra8Unorm | F::Bgra8UnormSrgb => (0..n)
+            F::Rgba8Unorm | F::Rgba8UnormSrgb => (0..n)
                 .map(|i| std::array::from_fn(|c| b[i * 4 + c] as f32 / 255.0))
+                .collect(),
+            F::Bgra8Unorm | F::Bgra8UnormSrgb => (0..n)
+                .map(|i| std::array::from_fn(|c| b[i * 4 + [2, 1, 0, 3][c]] as f32 / 255.0))
                 .collect(),
             F::Rgba16Float => (0..n)
                 .map(|i| {

@@ -46,6 +46,15 @@ pub struct RenderedFrame {
     pub shadows: ShadowStats,
 }
 
+/// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
+/// presents it without a read-back).
+pub struct DrawnFrame {
+    /// GPU time per pass (empty where the adapter has no timestamps).
+    pub timings: Vec<PassTiming>,
+    /// Shadow draw calls and what the shadow passes rendered.
+    pub shadows: ShadowStats,
+}
+
 /// GPU resources the frame graph borrows (everything but the pool and timer,
 /// which execution borrows mutably).
 struct Resources {
@@ -483,8 +492,15 @@ impl Renderer {
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
                     format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::COPY_SRC
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    // himal::present reads the display-encoded bytes as they are
+                    view_formats: if format.is_srgb() {
+                        &[wgpu::TextureFormat::Rgba8Unorm]
+                    } else {
+                        &[]
+                    },
                 })
             });
         Ok(format)
@@ -517,6 +533,29 @@ impl Renderer {
         camera: &Camera,
         settings: &FrameSettings,
     ) -> Result<RenderedFrame, Error> {
+        let DrawnFrame { timings, shadows } = self.draw(camera, settings)?;
+        let output = self
+            .output(settings)
+            .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
+        Ok(RenderedFrame {
+            image: read_texture(&self.ctx, output, 0, 0)?,
+            timings,
+            shadows,
+        })
+    }
+
+    /// The texture the last [`Renderer::draw`] with these settings' size and
+    /// output format wrote (display frames: `Rgba8UnormSrgb`).
+    pub fn output(&self, settings: &FrameSettings) -> Option<&wgpu::Texture> {
+        let format = Self::output_format(settings);
+        self.res
+            .outputs
+            .get(&(settings.width, settings.height, format))
+    }
+
+    /// Renders one frame from `camera` into [`Renderer::output`] and waits for
+    /// the GPU timings; the image stays on the GPU.
+    pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
         Self::validate(settings)?;
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
@@ -631,7 +670,6 @@ impl Renderer {
         let inputs = res
             .inputs(settings, format, *frame_index, &errors)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
-        let output = inputs.output;
         let compiled = frame::build(inputs, size, settings.view).compile()?;
         let commands = compiled.execute(&ctx.device, pool, timer.as_mut())?;
         if let Some(e) = errors.take_first() {
@@ -643,7 +681,6 @@ impl Renderer {
             Some(t) => t.read_timings(&ctx.device)?,
             None => Vec::new(),
         };
-        let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
@@ -670,8 +707,7 @@ impl Renderer {
                 h.invalidate();
             }
         }
-        Ok(RenderedFrame {
-            image,
+        Ok(DrawnFrame {
             timings,
             shadows: shadow_stats,
         })
