@@ -22,8 +22,8 @@ use crate::graph::FrameGraph;
 use crate::passes::aa::{AaFrame, AaHistory, AaMode, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
 use crate::passes::debug::DebugPass;
-use crate::passes::envmap::EnvMapPass;
 use crate::passes::envmap::probe::ProbeSet;
+use crate::passes::envmap::{EnvMapPass, EnvViewPass};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
@@ -67,6 +67,7 @@ pub struct Passes {
     pub gbuffer: GBufferPass,
     pub ao: AoPass,
     pub envmap: EnvMapPass,
+    pub env_view: EnvViewPass,
     pub probes: ProbeSet,
     pub lighting: LightingPass,
     pub sky: SkyPass,
@@ -291,6 +292,17 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                 out
             }
         },
+        ViewBuffer::Env(v) => passes.env_view.add(
+            &mut g,
+            v,
+            gbuffer,
+            env,
+            &passes.envmap,
+            post_inputs,
+            out,
+            view,
+            errors,
+        ),
         ViewBuffer::Debug(v) => {
             passes
                 .debug

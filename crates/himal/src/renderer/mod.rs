@@ -15,13 +15,13 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::Error;
 use crate::frame::{self, FrameErrors, FrameInputs, Passes};
 use crate::gpu::pipeline::uniform_buffer;
-use crate::gpu::{GpuContext, TextureData, read_texture};
+use crate::gpu::{GpuContext, GpuError, TextureData, read_texture};
 use crate::graph::{PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
 use crate::passes::ao::{AoHistory, AoMode, AoPass, AoUniform};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
-use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass};
+use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass, EnvViewPass};
 use crate::passes::gbuffer::{GBufferKey, GBufferPass};
 use crate::passes::lighting::{LightingKey, LightingPass};
 use crate::passes::post::{
@@ -44,6 +44,22 @@ pub struct RenderedFrame {
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
+}
+
+/// Fetches the pipeline that draws `view` into `format` (none for `Final`).
+fn prepare_view(
+    ctx: &GpuContext,
+    passes: &mut Passes,
+    view: ViewBuffer,
+    format: wgpu::TextureFormat,
+) -> Result<(), GpuError> {
+    match view {
+        ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format),
+        ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format),
+        ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format),
+        ViewBuffer::Env(v) => passes.env_view.prepare(ctx, v, format),
+        ViewBuffer::Final => Ok(()),
+    }
 }
 
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
@@ -152,6 +168,7 @@ impl Renderer {
             gbuffer: GBufferPass::new(&ctx)?,
             ao: AoPass::new(&ctx)?,
             envmap: EnvMapPass::new(&ctx, ENVMAP_SIZE)?,
+            env_view: EnvViewPass::new(&ctx)?,
             probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
@@ -319,12 +336,7 @@ impl Renderer {
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {
-                match name.parse()? {
-                    ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format)?,
-                    ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format)?,
-                    ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format)?,
-                    ViewBuffer::Final => {}
-                }
+                prepare_view(ctx, passes, name.parse()?, format)?;
             }
         }
         Ok(())
@@ -439,9 +451,8 @@ impl Renderer {
 
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Debug(_) | ViewBuffer::Ao(_) | ViewBuffer::Shadow(_) if settings.raw => {
-                RAW_FORMAT
-            }
+            ViewBuffer::Final => DISPLAY_FORMAT,
+            _ if settings.raw => RAW_FORMAT,
             _ => DISPLAY_FORMAT,
         }
     }
@@ -450,12 +461,7 @@ impl Renderer {
     fn prepare_output(&mut self, settings: &FrameSettings) -> Result<wgpu::TextureFormat, Error> {
         let size = (settings.width, settings.height);
         let format = Self::output_format(settings);
-        match settings.view {
-            ViewBuffer::Debug(v) => self.res.passes.debug.prepare(&self.ctx, v, format)?,
-            ViewBuffer::Ao(v) => self.res.passes.ao.prepare_view(&self.ctx, v, format)?,
-            ViewBuffer::Shadow(v) => self.res.passes.shadows.prepare_view(&self.ctx, v, format)?,
-            ViewBuffer::Final => {}
-        }
+        prepare_view(&self.ctx, &mut self.res.passes, settings.view, format)?;
         if settings.aa.temporal() && self.res.aa_history.as_ref().is_none_or(|h| h.size != size) {
             let h = crate::passes::aa::AaHistory::new(&self.ctx.device, size, DISPLAY_FORMAT);
             self.res.aa_history = Some(h);

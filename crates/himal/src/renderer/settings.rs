@@ -4,6 +4,7 @@
 use crate::Error;
 use crate::passes::ao::{AoSettings, AoView};
 use crate::passes::debug::DebugView;
+use crate::passes::envmap::EnvView;
 use crate::passes::post::{AdaptationSettings, BloomSettings};
 use crate::passes::shadows::{ShadowSettings, ShadowView};
 use crate::scene::SunDesc;
@@ -27,10 +28,12 @@ pub enum ViewBuffer {
     Ao(AoView),
     /// Shadow buffers (`shadow-mask`, `cascades`).
     Shadow(ShadowView),
+    /// What the ambient specular reads from the environment cube (`env-probe`, `env-mirror`).
+    Env(EnvView),
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 18] = [
+    pub const NAMES: [&'static str; 20] = [
         "final",
         "albedo",
         "normal",
@@ -49,6 +52,8 @@ impl ViewBuffer {
         "bloom",
         "shadow-mask",
         "cascades",
+        "env-probe",
+        "env-mirror",
     ];
 }
 
@@ -75,6 +80,8 @@ impl std::str::FromStr for ViewBuffer {
             "bloom" => ViewBuffer::Debug(D::Bloom),
             "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
             "cascades" => ViewBuffer::Shadow(ShadowView::Cascades),
+            "env-probe" => ViewBuffer::Env(EnvView::Probe),
+            "env-mirror" => ViewBuffer::Env(EnvView::Mirror),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",

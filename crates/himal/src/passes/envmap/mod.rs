@@ -7,6 +7,9 @@
 
 pub mod probe;
 pub mod reference;
+mod view;
+
+pub use view::{EnvView, EnvViewPass};
 
 use crate::frame::FrameErrors;
 use wgpu::util::DeviceExt;
