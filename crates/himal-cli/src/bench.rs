@@ -35,6 +35,10 @@ pub struct BenchArgs {
     /// when the sky changes), to time `envmap.*`.
     #[arg(long)]
     pub envmap_every_frame: bool,
+    /// Time the environment map's relighting, mips and filter by wall clock
+    /// (static vs re-captured vs relit cube, interleaved) and print the ratios.
+    #[arg(long)]
+    pub compare_envmap: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -55,7 +59,7 @@ pub fn group(pass: &str) -> &'static str {
     }
 }
 
-fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
     }
@@ -82,6 +86,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     settings.ao = args.ao.settings()?;
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
+    }
+    if args.compare_envmap {
+        return crate::bench_envmap::run(&args.gpu, &scene, &camera, &settings, args.frames);
     }
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs

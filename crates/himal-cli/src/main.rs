@@ -5,6 +5,7 @@ mod aa_patterns;
 mod ao;
 mod bench;
 mod bench_ao;
+mod bench_envmap;
 mod prewarm;
 mod render;
 mod view;

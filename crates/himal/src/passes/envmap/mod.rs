@@ -99,6 +99,12 @@ fn cube_texture(device: &wgpu::Device, label: &str, size: u32, mips: u32) -> wgp
     })
 }
 
+/// One workgroup per 8x8 texels (`WORKGROUP`) of a `size`² face, six faces.
+fn dispatch_faces(cp: &mut wgpu::ComputePass<'_>, size: u32) {
+    let n = size.div_ceil(WORKGROUP);
+    cp.dispatch_workgroups(n, n, 6);
+}
+
 /// Number of mips of a full chain for `size`.
 pub fn full_mip_count(size: u32) -> u32 {
     32 - size.max(1).leading_zeros()
@@ -328,12 +334,18 @@ impl EnvMapPass {
         source: TextureHandle,
         errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let filtered = graph.import_texture("envmap.filtered", &self.filtered);
+        let source = self.add_mips(graph, source, errors);
+        self.add_filter(graph, source, errors)
+    }
+
+    /// `envmap.mips`: the box-filtered chain of the source cube below level 0.
+    fn add_mips<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        source: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
         let size = self.size;
-        let faces = |cp: &mut wgpu::ComputePass<'_>, s: u32| {
-            let n = s.div_ceil(WORKGROUP);
-            cp.dispatch_workgroups(n, n, 6);
-        };
         let mut pass = graph.add_pass("envmap.mips");
         pass.read(source, TextureAccess::Sampled);
         let source = pass.write(source, TextureAccess::StorageWrite);
@@ -355,9 +367,21 @@ impl EnvMapPass {
                 let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
                 cp.set_pipeline(&self.downsample);
                 cp.set_bind_group(0, &bg, &[]);
-                faces(&mut cp, (size >> mip).max(1));
+                dispatch_faces(&mut cp, (size >> mip).max(1));
             }
         });
+        source
+    }
+
+    /// `envmap.filter`: GGX filtered importance sampling of each mip (mip 0 copied).
+    fn add_filter<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        source: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let filtered = graph.import_texture("envmap.filtered", &self.filtered);
+        let size = self.size;
         let mut pass = graph.add_pass("envmap.filter");
         pass.read(source, TextureAccess::Sampled);
         let filtered = pass.write(filtered, TextureAccess::StorageWrite);
@@ -391,10 +415,52 @@ impl EnvMapPass {
                 let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
                 cp.set_pipeline(if mip == 0 { &self.copy } else { &self.filter });
                 cp.set_bind_group(0, &bg, &[]);
-                faces(&mut cp, (size >> mip).max(1));
+                dispatch_faces(&mut cp, (size >> mip).max(1));
             }
         });
         filtered
+    }
+
+    /// Wall-clock milliseconds (median of `repeats`) of the box mips and of
+    /// the filter on the current source cube, each submitted alone and
+    /// waited for. For cost ratios where encoder timestamps do not bracket
+    /// compute work (lavapipe reads about 0.03 ms for both).
+    pub fn time_mips_and_filter(
+        &self,
+        ctx: &GpuContext,
+        repeats: u32,
+    ) -> Result<(f64, f64), crate::Error> {
+        let mut pool = crate::graph::TexturePool::new();
+        let mut run = |filter: bool| -> Result<f64, crate::Error> {
+            let errors = FrameErrors::default();
+            let mut graph = FrameGraph::new();
+            let source = self.import_source(&mut graph);
+            let out = if filter {
+                self.add_filter(&mut graph, source, &errors)
+            } else {
+                self.add_mips(&mut graph, source, &errors)
+            };
+            graph.mark_output(out);
+            let commands = graph.compile()?.execute(&ctx.device, &mut pool, None)?;
+            if let Some(e) = errors.take_first() {
+                return Err(e.into());
+            }
+            ctx.wait("envmap timing")?;
+            let start = std::time::Instant::now();
+            ctx.queue.submit([commands]);
+            ctx.wait("envmap timing")?;
+            Ok(start.elapsed().as_secs_f64() * 1e3)
+        };
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let (mut mips, mut filter) = (Vec::new(), Vec::new());
+        for _ in 0..repeats.max(1) {
+            mips.push(run(false)?);
+            filter.push(run(true)?);
+        }
+        Ok((median(mips), median(filter)))
     }
 
     fn add_capture<'a>(
