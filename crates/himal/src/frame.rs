@@ -12,6 +12,9 @@
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
+//! With `--aa-buffers`: `aa.taa_motion` right after `gbuffer` (its stabilised
+//! motion replaces the G-buffer's for every reader) and `aa.taa_ao` after
+//! `ao.blur_y[_stf]` (its AO is what lighting reads).
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
 

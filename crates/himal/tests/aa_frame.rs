@@ -61,6 +61,28 @@ fn converged(r: &mut Renderer, camera: &Camera, s: &FrameSettings) -> Vec<[f32; 
     img
 }
 
+/// docs/images/A1-crops.png: the 56x56 pixels at (8, 20) of each image, 4x
+/// nearest zoom, side by side with 4-pixel white gaps.
+fn crop_strip(images: &[Vec<[f32; 3]>]) -> image::RgbImage {
+    const CROP: u32 = 56;
+    const ZOOM: u32 = 4;
+    const GAP: u32 = 4;
+    let panel = CROP * ZOOM;
+    let n = images.len() as u32;
+    let mut out =
+        image::RgbImage::from_pixel(n * panel + (n - 1) * GAP, panel, image::Rgb([255; 3]));
+    for (k, img) in images.iter().enumerate() {
+        for y in 0..panel {
+            for x in 0..panel {
+                let p = img[((20 + y / ZOOM) * N + 8 + x / ZOOM) as usize];
+                let rgb = p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8);
+                out.put_pixel(k as u32 * (panel + GAP) + x, y, image::Rgb(rgb));
+            }
+        }
+    }
+    out
+}
+
 #[test]
 fn edge_error_is_ordered_none_smaa_hraa() {
     let (scene, camera) = load();
@@ -81,6 +103,8 @@ fn edge_error_is_ordered_none_smaa_hraa() {
         *t = t.map(linear_to_srgb);
     }
     let mut errors = Vec::new();
+    // none, smaa, hraa, reference: the crops of docs/images/A1-crops.png.
+    let mut crops = Vec::new();
     for mode in [
         AaMode::None,
         AaMode::Smaa,
@@ -93,6 +117,15 @@ fn edge_error_is_ordered_none_smaa_hraa() {
         let e = rmse(&img, &reference);
         println!("edges: {:9} RMSE {e:.4}", mode.name());
         errors.push((mode, e));
+        if matches!(mode, AaMode::None | AaMode::Smaa | AaMode::Hraa) {
+            crops.push(img);
+        }
+    }
+    crops.push(reference.clone());
+    if let Some(dir) = std::env::var_os("HIMAL_PLOT_DIR") {
+        let path = std::path::Path::new(&dir).join("A1-crops.png");
+        crop_strip(&crops).save(&path).expect("write A1-crops.png");
+        eprintln!("wrote {}", path.display());
     }
     let e = |m: AaMode| {
         errors
