@@ -453,7 +453,7 @@ fn diagonal_scene(x: f32, y: f32) -> bool {
 }
 
 #[test]
-fn diagonal_weights_match_the_cpu_twin_and_lower_the_error() {
+fn diagonal_weights_match_the_cpu_twin() {
     const N: usize = 64;
     const SS: usize = 16;
     let mut aliased = Vec::with_capacity(N * N);
