@@ -108,6 +108,10 @@ pub struct PostArgs {
         value_name = "none|smaa|smaa-t2x|tfq|taa|hraa"
     )]
     pub aa: String,
+    /// A3 TAA on other buffers: the AO result and/or the motion vectors
+    /// (comma-separated; bench rows aa.taa_ao, aa.taa_motion).
+    #[arg(long, default_value = "none", value_name = "none|ao|motion|ao,motion")]
+    pub aa_buffers: String,
 }
 
 impl PostArgs {
@@ -115,6 +119,8 @@ impl PostArgs {
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
         settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
             .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
+        settings.aa_buffers = himal::passes::aa::AaBuffers::parse(&self.aa_buffers)
+            .map_err(|e| anyhow::anyhow!("--aa-buffers {}: {e}", self.aa_buffers))?;
         match self.exposure.as_str() {
             "auto" => {
                 settings.adaptation.enabled = true;

@@ -12,6 +12,9 @@
 //!          └──────────────────────────────────────────────────────────────────────────> debug.view | ao.view ──> output (--view)
 //! ```
 //! (`post.adapt` feeds the exposure of the bloom bright pass and of the tone map.)
+//! With `--aa-buffers`: `aa.taa_motion` right after `gbuffer` (its stabilised
+//! motion replaces the G-buffer's for every reader) and `aa.taa_ao` after
+//! `ao.blur_y[_stf]` (its AO is what lighting reads).
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
 
@@ -19,12 +22,14 @@ use std::cell::RefCell;
 
 use crate::gpu::GpuError;
 use crate::graph::FrameGraph;
-use crate::passes::aa::{AaFrame, AaHistory, AaMode, SmaaPass, TemporalPass};
-use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings};
+use crate::passes::aa::{
+    AaBuffers, AaFrame, AaHistory, AaMode, BufferHistory, BufferTaaPass, SmaaPass, TemporalPass,
+};
+use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings, AoTargets};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
-use crate::passes::gbuffer::GBufferPass;
+use crate::passes::gbuffer::{GBuffer, GBufferPass};
 use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
     AdaptPass, BloomInputs, BloomPass, LuminanceBuffers, LuminancePass, PostFrame, PostInputs,
@@ -77,6 +82,8 @@ pub struct Passes {
     pub tonemap: TonemapPass,
     pub smaa: SmaaPass,
     pub temporal: TemporalPass,
+    /// A3 TAA on the AO and the motion vectors (`--aa-buffers`).
+    pub aa_buffers: BufferTaaPass,
     pub debug: DebugPass,
 }
 
@@ -114,6 +121,8 @@ pub struct FrameAa<'a> {
     pub mode: AaMode,
     pub subsample: u32,
     pub history: Option<&'a AaHistory>,
+    /// Buffers with their own TAA and its history (`None`: none).
+    pub buffers: Option<(AaBuffers, &'a BufferHistory)>,
 }
 
 /// Builds the frame graph; a debug `shown` view replaces tone mapping.
@@ -144,6 +153,21 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     let shadow_mask = passes
         .shadows
         .add(&mut g, size, gbuffer, view, scene, errors);
+    // A3 on other buffers: the stabilised motion replaces the G-buffer's for
+    // every later reader (AO TAA, resolve, `--view motion`).
+    let stable_motion = match aa.buffers {
+        Some((b, h)) if b.motion => Some(passes.aa_buffers.add_motion(
+            &mut g,
+            gbuffer.motion,
+            h,
+            errors,
+        )),
+        _ => None,
+    };
+    let gbuffer = GBuffer {
+        motion: stable_motion.unwrap_or(gbuffer.motion),
+        ..gbuffer
+    };
     let ao_targets = ao.map(|(settings, history)| {
         let inputs = AoInputs {
             settings,
@@ -151,7 +175,18 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             depth: gbuffer.depth,
             history,
         };
-        passes.ao.add(&mut g, size, inputs, errors)
+        let t = passes.ao.add(&mut g, size, inputs, errors);
+        match aa.buffers {
+            Some((b, h)) if b.ao => {
+                let jitter_free = stable_motion.is_some();
+                let ao =
+                    passes
+                        .aa_buffers
+                        .add_ao(&mut g, t.ao, gbuffer.motion, jitter_free, h, errors);
+                AoTargets { ao, ..t }
+            }
+            _ => t,
+        }
     });
     let env = match probe {
         Some((index, capture)) if passes.envmap.dirty => {
@@ -264,6 +299,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                 depth: gbuffer.depth,
                 normals: gbuffer.frame,
                 motion: gbuffer.motion,
+                motion_jitter_free: stable_motion.is_some(),
             };
             let tonemap = |g: &mut FrameGraph<'a>, target| {
                 passes

@@ -49,14 +49,30 @@ fn orthogonal_area_tables_match_the_reference() {
 }
 
 #[test]
-fn diagonal_half_is_left_empty() {
-    // himal runs SMAA without diagonal detection; the reference's diagonal
-    // half is not zero, ours is (documented in A1.md).
+fn diagonal_area_tables_match_the_reference() {
     let ours = area_texture();
+    let theirs = reference("AreaTex.raw");
     let (w, h) = AREA_SIZE;
-    let nonzero = (0..h)
-        .flat_map(|y| (80..w).map(move |x| (y * w + x) * 2))
-        .filter(|&i| ours[i] != 0 || ours[i + 1] != 0)
-        .count();
-    assert_eq!(nonzero, 0);
+    let (mut max, mut sum, mut n, mut differ) = (0u8, 0u64, 0u64, 0u64);
+    for y in 0..h {
+        for x in 80..w {
+            for c in 0..2 {
+                let i = (y * w + x) * 2 + c;
+                let d = ours[i].abs_diff(theirs[i]);
+                max = max.max(d);
+                sum += d as u64;
+                differ += (d > 0) as u64;
+                n += 1;
+            }
+        }
+    }
+    let mean = sum as f64 / n as f64;
+    println!(
+        "diagonal area: max |diff| {max}, mean {mean:.4} (of 255), {differ} of {n} values differ"
+    );
+    // Measured 2026-11-22: max 1, mean 0.34 (of 255), 30351 of 89600 values
+    // differ: the reference truncates (int(255 a)), himal rounds like the
+    // orthogonal half; truncating instead leaves 20 values 1 apart (mean 0.0002).
+    assert!(max <= 1, "max difference {max}");
+    assert!(mean < 0.5, "mean difference {mean}");
 }

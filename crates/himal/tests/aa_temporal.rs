@@ -177,7 +177,7 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let mn = g.import_texture("mn", &t_mn);
     let (resolved, mn) = pass.add_resolve(
         &mut g,
-        ResolveMode::FlipQuad,
+        (ResolveMode::FlipQuad, false),
         c,
         (p1, p2),
         m,

@@ -89,6 +89,8 @@ struct Resources {
     ao_history: Option<AoHistory>,
     ao_placeholder: wgpu::Texture,
     aa_history: Option<crate::passes::aa::AaHistory>,
+    /// History of the TAA on the AO and motion buffers (`--aa-buffers`).
+    aa_buffer_history: Option<crate::passes::aa::BufferHistory>,
     /// An HDR environment instead of the physical sky (issue #8).
     environment: Option<environment::EnvironmentGpu>,
 }
@@ -126,6 +128,11 @@ impl Resources {
                 mode: settings.aa,
                 subsample: settings.aa.smaa_subsample(frame_index),
                 history: self.aa_history.as_ref().filter(|_| settings.aa.temporal()),
+                buffers: self
+                    .aa_buffer_history
+                    .as_ref()
+                    .filter(|_| settings.aa_buffers.any())
+                    .map(|h| (settings.aa_buffers, h)),
             },
             errors,
         })
@@ -149,6 +156,9 @@ pub struct Renderer {
     pool: TexturePool,
     timer: Option<PassTimer>,
     prev_view_proj: Option<Mat4>,
+    /// Sample offset (px) inside `prev_view_proj`: passes that reproject
+    /// with the matrices take it out (jitter-free motion).
+    prev_jitter: [f32; 2],
     /// Animation time of the previous frame (`None`: first frame or after a cut).
     prev_time: Option<f32>,
     frame_index: u64,
@@ -178,6 +188,7 @@ impl Renderer {
             tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
             smaa: crate::passes::aa::SmaaPass::new(&ctx, DISPLAY_FORMAT)?,
             temporal: crate::passes::aa::TemporalPass::new(&ctx, DISPLAY_FORMAT)?,
+            aa_buffers: crate::passes::aa::BufferTaaPass::new(&ctx)?,
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
@@ -258,11 +269,13 @@ impl Renderer {
                 ao_history: None,
                 ao_placeholder,
                 aa_history: None,
+                aa_buffer_history: None,
                 environment,
             },
             pool: TexturePool::new(),
             timer,
             prev_view_proj: None,
+            prev_jitter: [0.0, 0.0],
             prev_time: None,
             frame_index: 0,
             sky_light: None,
@@ -299,6 +312,13 @@ impl Renderer {
                     .as_ref()
                     .map_or(0, crate::passes::aa::AaHistory::bytes),
             ),
+            (
+                "AA buffer history",
+                self.res
+                    .aa_buffer_history
+                    .as_ref()
+                    .map_or(0, crate::passes::aa::BufferHistory::bytes),
+            ),
         ]
     }
 
@@ -312,6 +332,9 @@ impl Renderer {
         self.prev_time = None;
         self.res.post.reset = true;
         if let Some(h) = &mut self.res.aa_history {
+            h.invalidate();
+        }
+        if let Some(h) = &mut self.res.aa_buffer_history {
             h.invalidate();
         }
     }
@@ -466,6 +489,16 @@ impl Renderer {
             let h = crate::passes::aa::AaHistory::new(&self.ctx.device, size, DISPLAY_FORMAT);
             self.res.aa_history = Some(h);
         }
+        if settings.aa_buffers.any()
+            && self
+                .res
+                .aa_buffer_history
+                .as_ref()
+                .is_none_or(|h| h.size != size)
+        {
+            let h = crate::passes::aa::BufferHistory::new(&self.ctx.device, size);
+            self.res.aa_buffer_history = Some(h);
+        }
         if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
             self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
         }
@@ -584,9 +617,14 @@ impl Renderer {
         // Projection jitter (A2, A3): the matrices carry it, so passes that
         // reconstruct positions from depth stay exact; View.jitter.xy repeats
         // it in clip units. Sample offset j (px, y down) = image shifted by -j.
-        // Debug views show the G-buffer as rasterised: no jitter there.
+        // Debug views show the G-buffer as rasterised: no jitter there; the
+        // AO views show the AO that lighting gets, jittered like the frame,
+        // and the motion view the stabilised motion of `--aa-buffers motion`.
+        let stable_motion_view = settings.aa_buffers.motion
+            && settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Motion);
         let jitter = match settings.view {
-            ViewBuffer::Final => settings.aa.jitter(self.frame_index),
+            ViewBuffer::Final | ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
+            _ if stable_motion_view => settings.aa.jitter(self.frame_index),
             _ => [0.0, 0.0],
         };
         let jitter_clip = Vec3::new(
@@ -617,10 +655,20 @@ impl Renderer {
         self.ctx
             .queue
             .write_buffer(&self.res.view_buffer, 0, bytemuck::bytes_of(&uniform));
+        let prev_jitter = if self.prev_view_proj.is_some() {
+            self.prev_jitter
+        } else {
+            jitter
+        };
         self.res.passes.ao.update(
             &self.ctx.queue,
-            &AoUniform::new(&settings.ao, proj, camera.near, size),
+            &AoUniform::new(&settings.ao, proj, camera.near, size).with_jitter(jitter, prev_jitter),
         );
+        if let Some(h) = &self.res.aa_buffer_history {
+            let (queue, tuning) = (&self.ctx.queue, &settings.aa_tuning);
+            let buffers = &self.res.passes.aa_buffers;
+            buffers.update(queue, jitter, prev_jitter, h, tuning);
+        }
         let Some((_, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
@@ -688,6 +736,7 @@ impl Renderer {
             None => Vec::new(),
         };
         self.prev_view_proj = Some(view_proj);
+        self.prev_jitter = jitter;
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
         if self.res.passes.envmap.dirty
@@ -704,6 +753,9 @@ impl Renderer {
             .filter(|_| settings.aa.temporal())
         {
             h.advance(jitter);
+        }
+        if let Some(h) = &mut self.res.aa_buffer_history {
+            h.advance(settings.aa_buffers);
         }
         if let Some(h) = &mut self.res.ao_history {
             // Only the filter writes the history; any other mode leaves it stale.

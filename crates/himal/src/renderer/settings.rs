@@ -130,6 +130,8 @@ pub struct FrameSettings {
     pub aa: crate::passes::aa::AaMode,
     /// Tuning of the temporal anti-aliasing passes.
     pub aa_tuning: crate::passes::aa::TemporalTuning,
+    /// A3 TAA on the AO and the motion vectors (`--aa-buffers`).
+    pub aa_buffers: crate::passes::aa::AaBuffers,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -153,6 +155,7 @@ impl FrameSettings {
             ao: AoSettings::default(),
             aa: crate::passes::aa::AaMode::None,
             aa_tuning: Default::default(),
+            aa_buffers: Default::default(),
             time_s: 0.0,
             environment_specular: true,
             environment_probes: true,

@@ -17,6 +17,8 @@ struct AoParams {
     blur: vec4f,
     // x: epsilon, y: N_max, z: L (m), w: 1 = selective (filter only unstable pixels)
     stf: vec4f,
+    // xy: this frame's sample offset (px, y down), zw: the previous frame's (both inside the view matrices)
+    jitter: vec4f,
 }
 
 // Linear depth stored for pixels without geometry (fits Rg16Float).

@@ -7,8 +7,9 @@ pub mod settings;
 pub mod smaa;
 pub mod temporal;
 
-pub use settings::AaMode;
+pub use settings::{AaBuffers, AaMode};
 pub use smaa::{SmaaInputs, SmaaPass};
+pub use temporal::buffers::{BufferHistory, BufferTaaPass};
 pub use temporal::{AaHistory, AaParams, TemporalPass, TemporalTuning};
 
 use crate::frame::FrameErrors;
@@ -29,6 +30,8 @@ pub struct AaFrame<'a> {
     /// G-buffer tangent frame (normal predication of SMAA).
     pub normals: TextureHandle,
     pub motion: TextureHandle,
+    /// `motion` is `aa.taa_motion`'s stabilised jitter-free motion.
+    pub motion_jitter_free: bool,
 }
 
 /// Adds tone mapping (`tonemap` writes into the target it is given) and the
@@ -100,7 +103,7 @@ pub fn add_chain<'a>(
     let t = aa.temporal;
     let (resolved, motion) = t.add_resolve(
         g,
-        mode,
+        (mode, aa.motion_jitter_free),
         raw,
         previous,
         aa.motion,

@@ -106,6 +106,41 @@ impl AaMode {
     }
 }
 
+/// Buffers other than the final colour that get their own TAA (A3,
+/// `--aa-buffers`): the AO result and the motion vectors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct AaBuffers {
+    /// `aa.taa_ao`: exponential history of the AO after the STF.
+    pub ao: bool,
+    /// `aa.taa_motion`: stabilised jitter-free motion, read by the AO TAA
+    /// and the resolve instead of the G-buffer motion.
+    pub motion: bool,
+}
+
+impl AaBuffers {
+    /// `none`, or a comma-separated list of `ao` and `motion`.
+    pub fn parse(list: &str) -> Result<Self, String> {
+        let mut b = Self::default();
+        for name in list.split(',').map(str::trim) {
+            match name {
+                "none" | "" => {}
+                "ao" => b.ao = true,
+                "motion" => b.motion = true,
+                other => {
+                    return Err(format!(
+                        "unknown buffer \"{other}\" (known: none, ao, motion)"
+                    ));
+                }
+            }
+        }
+        Ok(b)
+    }
+
+    pub fn any(self) -> bool {
+        self.ao || self.motion
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,5 +155,13 @@ mod tests {
         assert_ne!(AaMode::Tfq.jitter(0), AaMode::Tfq.jitter(1));
         let j = AaMode::Taa.jitter(0);
         assert!((j[0] - 0.0).abs() < 1e-6 && (j[1] - (1.0 / 3.0 - 0.5)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn buffers_parse() {
+        assert_eq!(AaBuffers::parse("none"), Ok(AaBuffers::default()));
+        let both = AaBuffers::parse("ao,motion").expect("list");
+        assert!(both.ao && both.motion);
+        assert!(AaBuffers::parse("bloom").is_err());
     }
 }

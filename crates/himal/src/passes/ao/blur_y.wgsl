@@ -1,6 +1,7 @@
 // ao.blur_y / ao.blur_y_stf: vertical cross-bilateral blur (TECHNIQUES O3) with the
 // selective temporal filter merged in (O2, STF = true), as in the talk:
-//   w_i = ViewDepth(View_(i-1), P_i), w_(i-1) = Z_(i-1)(uv_(i-1)) (clamp to border, Z = 0)
+//   w_i = ViewDepth(View_(i-1), P_i), w_(i-1) = Z_(i-1)(uv_(i-1)) (clamp to border, Z = 0),
+//   uv_(i-1) without the jitter change between the frames
 //   if |1 - w_i / w_(i-1)| < eps and the pixel is unstable (or the filter is not selective):
 //       AO_i = (N_(i-1) AO_(i-1) + AO_i) / (N_(i-1) + 1),  N_i = min(N_(i-1) + 1, N_max)
 //   else N_i = 1
@@ -37,7 +38,10 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let p = world_from_depth(view, (frag.xy) * view.viewport.zw, d);
         let prev_clip = view.prev_view_proj * vec4f(p, 1.0);
         let w_i = prev_clip.w;
-        let prev_uv = vec2f(0.5, -0.5) * prev_clip.xy / prev_clip.w + 0.5;
+        // Both matrices carry their frame's jitter: remove its change so a static
+        // surface reprojects onto itself (jitter-free motion, as passes/aa).
+        let prev_uv = vec2f(0.5, -0.5) * prev_clip.xy / prev_clip.w + 0.5
+            + (params.jitter.zw - params.jitter.xy) * params.full_size.zw;
         let prev_px = vec2i(floor(prev_uv * params.full_size.xy));
         let inside = all(prev_px >= vec2i(0)) && all(prev_px < vec2i(params.full_size.xy)) && w_i > 0.0;
         var w_prev = 0.0;

@@ -27,7 +27,8 @@ fn texel_position(q: vec2i) -> vec3f {
     let qc = clamp(q, vec2i(0), vec2i(params.ao_size.xy) - 1);
     let full = qc * i32(params.hbao_steps.z);
     let z = ao_linear_depth(params, textureLoad(depth, full, 0));
-    let uv = (vec2f(full) + 0.5) * params.full_size.zw;
+    // The pixel centre sampled the scene at the jittered position (sample offset j).
+    let uv = (vec2f(full) + 0.5 + params.jitter.xy) * params.full_size.zw;
     return ao_view_position(params, uv, z);
 }
 

@@ -89,7 +89,8 @@ fn texel_position(p: &AoUniform, depth: &Image<f32>, q: IVec2) -> Vec3 {
     let ao_size = v4(p.ao_size).xy().as_ivec2();
     let full = q.clamp(IVec2::ZERO, ao_size - 1) * p.hbao_steps[2] as i32;
     let z = linear_depth(p, depth.get(full));
-    let uv = (full.as_vec2() + 0.5) * v4(p.full_size).zw();
+    let jitter = Vec2::new(p.jitter[0], p.jitter[1]);
+    let uv = (full.as_vec2() + 0.5 + jitter) * v4(p.full_size).zw();
     view_position(p, uv, z)
 }
 
@@ -281,7 +282,10 @@ pub fn temporal_filter(
             let world = world.xyz() / world.w;
             let prev_clip = view.prev_view_proj * world.extend(1.0);
             let w_i = prev_clip.w;
-            let prev_uv = Vec2::new(0.5, -0.5) * prev_clip.xy() / prev_clip.w + 0.5;
+            let prev_uv = Vec2::new(0.5, -0.5) * prev_clip.xy() / prev_clip.w
+                + 0.5
+                + (Vec2::new(p.jitter[2], p.jitter[3]) - Vec2::new(p.jitter[0], p.jitter[1]))
+                    * full.zw();
             let prev_px = (prev_uv * full.xy()).floor().as_ivec2();
             let inside = prev_px.cmpge(IVec2::ZERO).all()
                 && prev_px.cmplt(full.xy().as_ivec2()).all()

@@ -134,6 +134,9 @@ pub struct AoUniform {
     pub hbao_steps: [f32; 4],
     pub blur: [f32; 4],
     pub stf: [f32; 4],
+    /// xy this frame's sample offset (px, y down), zw the previous frame's:
+    /// the view matrices carry them, the STF's reprojection takes them out.
+    pub jitter: [f32; 4],
 }
 
 impl AoUniform {
@@ -175,7 +178,14 @@ impl AoUniform {
                 s.continuity,
                 if s.selective { 1.0 } else { 0.0 },
             ],
+            jitter: [0.0; 4],
         }
+    }
+
+    /// With the projection jitter of this and the previous frame (px, y down).
+    pub fn with_jitter(mut self, jitter: [f32; 2], prev_jitter: [f32; 2]) -> Self {
+        self.jitter = [jitter[0], jitter[1], prev_jitter[0], prev_jitter[1]];
+        self
     }
 }
 

@@ -11,8 +11,14 @@
 //! fit); seven such 80x80 tables stacked in y for the subsample offsets of
 //! SMAA T2x/S2x/4x. Symmetric U shapes (patterns 3 and 12) are softened for
 //! short lines (`smooth_area`, lines under 32 pixels).
-//! The diagonal half (x ≥ 80) stays zero: himal's SMAA runs without
-//! diagonal detection (the reference's MEDIUM preset).
+//! The diagonal half (x ≥ 80) has 4x4 blocks of 20x20 texels, block
+//! `(e1, e2)` (crossing edges 0..3 at each end, two bits each), texel
+//! `(left, right)` in plain diagonal steps; five 80x80 tables in y for the
+//! diagonal subsample offsets (rows 400..560 stay zero). The area of a
+//! diagonal line is the coverage of the pixel and of its opposite by the
+//! half-plane left of the line, point-sampled 30x30 over the closed pixel
+//! square as in the reference generator; line ends whose shape is unknown
+//! (L or U) average both readings.
 //!
 //! **Search texture** (64x16 R8): the last step of a horizontal search
 //! fetches two edge texels bilinearly at an offset (−0.25, −0.125), which
@@ -30,6 +36,39 @@ pub const AREA_MAX_DISTANCE: usize = 16;
 pub const SUBSAMPLE_OFFSETS_ORTHO: [f64; 7] = [0.0, -0.25, 0.25, -0.125, 0.125, -0.375, 0.375];
 /// Lines shorter than this get the softened U-shape areas.
 const SMOOTH_MAX_DISTANCE: f64 = 32.0;
+
+/// Texels per diagonal pattern block (diagonal steps 0..19).
+pub const AREA_MAX_DISTANCE_DIAG: usize = 20;
+/// Subsample offsets of the diagonal tables (index 0 = SMAA 1x).
+pub const SUBSAMPLE_OFFSETS_DIAG: [(f64, f64); 5] = [
+    (0.0, 0.0),
+    (0.25, -0.25),
+    (-0.25, 0.25),
+    (0.125, -0.125),
+    (-0.125, 0.125),
+];
+/// Point samples per pixel side for the diagonal coverage.
+const SAMPLES_DIAG: usize = 30;
+
+/// Crossing-edge codes `(e1, e2)` of the 16 diagonal patterns.
+const EDGES_DIAG: [(usize, usize); 16] = [
+    (0, 0),
+    (1, 0),
+    (0, 2),
+    (1, 2),
+    (2, 0),
+    (3, 0),
+    (2, 2),
+    (3, 2),
+    (0, 1),
+    (1, 1),
+    (0, 3),
+    (1, 3),
+    (2, 1),
+    (3, 1),
+    (2, 3),
+    (3, 3),
+];
 
 /// Crossing-edge codes `(e1, e2)` of the 16 orthogonal patterns.
 const EDGES_ORTHO: [(usize, usize); 16] = [
@@ -135,7 +174,84 @@ pub fn area_ortho(pattern: usize, left: f64, right: f64, offset: f64) -> Area {
     }
 }
 
-/// The area texture, RG8 row-major (`AREA_SIZE`), orthogonal half filled.
+/// Fraction of the unit pixel at `p` (lower corner) on the positive side of
+/// the line `p1 → p2`: `dy (x − xm) − dx (y − ym) > 0` about the midpoint,
+/// point-sampled on a closed 30x30 grid; a degenerate line covers everything.
+fn coverage_diag(p1: (f64, f64), p2: (f64, f64), p: (f64, f64)) -> f64 {
+    if p1 == p2 {
+        return 1.0;
+    }
+    let (xm, ym) = ((p1.0 + p2.0) / 2.0, (p1.1 + p2.1) / 2.0);
+    let (dx, dy) = (p2.0 - p1.0, p2.1 - p1.1);
+    let step = 1.0 / (SAMPLES_DIAG - 1) as f64;
+    let mut inside = 0usize;
+    for i in 0..SAMPLES_DIAG {
+        for j in 0..SAMPLES_DIAG {
+            let (x, y) = (p.0 + i as f64 * step, p.1 + j as f64 * step);
+            if dy * (x - xm) - dx * (y - ym) > 0.0 {
+                inside += 1;
+            }
+        }
+    }
+    inside as f64 / (SAMPLES_DIAG * SAMPLES_DIAG) as f64
+}
+
+/// Areas of the pixel `left` steps down the diagonal and of its opposite
+/// under the line `p1 → p2`; the ends with crossing edges move by `offset`.
+fn area_diag_line(
+    pattern: usize,
+    p1: (f64, f64),
+    p2: (f64, f64),
+    left: f64,
+    offset: (f64, f64),
+) -> Area {
+    let (e1, e2) = EDGES_DIAG[pattern];
+    let shift = |p: (f64, f64), crossing: usize| {
+        if crossing > 0 {
+            (p.0 + offset.0, p.1 + offset.1)
+        } else {
+            p
+        }
+    };
+    let (p1, p2) = (shift(p1, e1), shift(p2, e2));
+    [
+        1.0 - coverage_diag(p1, p2, (1.0 + left, left)),
+        coverage_diag(p1, p2, (1.0 + left, 1.0 + left)),
+    ]
+}
+
+/// Area for diagonal `pattern` (0..16) at diagonal distances `left`, `right`
+/// with subsample `offset`. A line starts at (1, 1) (no crossing edge: ends
+/// on a diagonal step), (1, 0) (a vertical crossing edge) or (0, 0), and ends
+/// `d = left + right + 1` steps further at (1, 1), (1, 0) or (0, 0) + (d, d);
+/// where the reading is ambiguous the two are averaged.
+pub fn area_diag(pattern: usize, left: f64, right: f64, offset: (f64, f64)) -> Area {
+    let d = left + right + 1.0;
+    let line =
+        |a: (f64, f64), b: (f64, f64)| area_diag_line(pattern, a, (b.0 + d, b.1 + d), left, offset);
+    let mean = |x: Area, y: Area| [(x[0] + y[0]) / 2.0, (x[1] + y[1]) / 2.0];
+    let (p00, p10, p11) = ((0.0, 0.0), (1.0, 0.0), (1.0, 1.0));
+    match pattern {
+        0 => mean(line(p11, p11), line(p10, p10)),
+        1 => mean(line(p10, p00), line(p10, p10)),
+        2 => mean(line(p00, p10), line(p10, p10)),
+        3 => line(p10, p10),
+        4 => mean(line(p11, p00), line(p11, p10)),
+        5 => mean(line(p11, p00), line(p10, p10)),
+        6 => line(p11, p10),
+        7 => mean(line(p11, p10), line(p10, p10)),
+        8 => mean(line(p00, p11), line(p10, p11)),
+        9 => line(p10, p11),
+        10 => mean(line(p00, p11), line(p10, p10)),
+        11 => mean(line(p10, p11), line(p10, p10)),
+        12 => line(p11, p11),
+        13 => mean(line(p11, p11), line(p10, p11)),
+        14 => mean(line(p11, p11), line(p11, p10)),
+        _ => mean(line(p11, p11), line(p10, p10)),
+    }
+}
+
+/// The area texture, RG8 row-major (`AREA_SIZE`), both halves.
 pub fn area_texture() -> Vec<u8> {
     let (w, h) = AREA_SIZE;
     let mut tex = vec![0u8; w * h * 2];
@@ -147,6 +263,20 @@ pub fn area_texture() -> Vec<u8> {
                     let (left, right) = ((x * x) as f64, (y * y) as f64);
                     let a = area_ortho(pattern, left, right, offset);
                     let (tx, ty) = (n * e1 + x, 5 * n * k + n * e2 + y);
+                    let i = (ty * w + tx) * 2;
+                    tex[i] = (a[0] * 255.0).round().clamp(0.0, 255.0) as u8;
+                    tex[i + 1] = (a[1] * 255.0).round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+    }
+    let n = AREA_MAX_DISTANCE_DIAG;
+    for (k, &offset) in SUBSAMPLE_OFFSETS_DIAG.iter().enumerate() {
+        for (pattern, &(e1, e2)) in EDGES_DIAG.iter().enumerate() {
+            for y in 0..n {
+                for x in 0..n {
+                    let a = area_diag(pattern, x as f64, y as f64, offset);
+                    let (tx, ty) = (w / 2 + n * e1 + x, 4 * n * k + n * e2 + y);
                     let i = (ty * w + tx) * 2;
                     tex[i] = (a[0] * 255.0).round().clamp(0.0, 255.0) as u8;
                     tex[i + 1] = (a[1] * 255.0).round().clamp(0.0, 255.0) as u8;

@@ -1,7 +1,7 @@
 //! A1 SMAA 1x (Jimenez et al. 2012): `aa.smaa.edges` (luma, depth
-//! predicated), `aa.smaa.weights` (orthogonal search and area lookups with
-//! himal's own lookup textures, [`lut`]), `aa.smaa.blend` (neighbourhood
-//! blending). CPU twins in [`reference`].
+//! predicated), `aa.smaa.weights` (diagonal and orthogonal searches, corner
+//! detection, area lookups with himal's own lookup textures, [`lut`]),
+//! `aa.smaa.blend` (neighbourhood blending). CPU twins in [`reference`].
 
 pub mod lut;
 pub mod reference;
@@ -82,9 +82,18 @@ impl SmaaPass {
         let edges =
             edges_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.edges", &t))?;
         let t = [target(WEIGHTS_FORMAT)];
+        let w = reference::WeightSettings::default();
         let weights_for = |index: u32| {
             let mut spec = RenderSpec::fullscreen("aa.smaa.weights", &t);
-            let constants = [("SUBSAMPLE_H", index as f64), ("SUBSAMPLE_V", index as f64)];
+            // SMAA T2x's subsample indices: (i, i, i, 0).
+            let constants = [
+                ("SUBSAMPLE_H", index as f64),
+                ("SUBSAMPLE_V", index as f64),
+                ("SUBSAMPLE_DIAG", index as f64),
+                ("MAX_SEARCH_STEPS", w.max_search_steps as f64),
+                ("MAX_SEARCH_STEPS_DIAG", w.max_search_steps_diag as f64),
+                ("CORNER_ROUNDING", w.corner_rounding as f64),
+            ];
             spec.constants = &constants;
             weights_program.render_pipeline(ctx, &spec)
         };

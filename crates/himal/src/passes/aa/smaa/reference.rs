@@ -219,16 +219,182 @@ fn area(luts: &Luts, sqrt_d: [f32; 2], e1: f32, e2: f32, subsample: f32) -> [f32
     luts.area.sample(u, v)
 }
 
-/// Twin of `weights.wgsl` (SMAA 1x when both subsample indices are 0).
-pub fn blending_weights(
+/// The switches of `weights.wgsl` (its override constants).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WeightSettings {
+    /// Orthogonal search steps (2 pixels each) each way.
+    pub max_search_steps: f32,
+    /// Diagonal search steps each way; 0 turns diagonal detection off.
+    pub max_search_steps_diag: f32,
+    /// Percent of a corner's blending kept; 100 turns corner detection off.
+    pub corner_rounding: f32,
+    /// Area tables: horizontal, vertical, first diagonal (0 for SMAA 1x).
+    pub subsample: [f32; 3],
+}
+
+impl Default for WeightSettings {
+    /// What `aa.smaa.weights` runs: the reference's HIGH preset with 8
+    /// orthogonal steps (diagonals 8, corner rounding 25).
+    fn default() -> Self {
+        Self {
+            max_search_steps: 8.0,
+            max_search_steps_diag: 8.0,
+            corner_rounding: 25.0,
+            subsample: [0.0; 3],
+        }
+    }
+}
+
+/// `smaa_decode_diag_bilinear` on (red, green).
+fn decode_diag(e: [f32; 2]) -> [f32; 2] {
+    [(e[0] * (5.0 * e[0] - 3.75).abs()).round(), e[1].round()]
+}
+
+/// `smaa_search_diag`: (steps, mean of the last fetch); `end` the last edges.
+fn search_diag(
+    edges: &Plane<2>,
+    tc: [f32; 2],
+    dir: [f32; 2],
+    rt: [f32; 4],
+    decode: bool,
+    max_steps: f32,
+    end: &mut [f32; 2],
+) -> [f32; 2] {
+    let mut coord = [tc[0], tc[1], -1.0, 1.0];
+    if decode {
+        coord[0] += 0.25 * rt[0];
+    }
+    while coord[2] < max_steps - 1.0 && coord[3] > 0.9 {
+        coord[0] += rt[0] * dir[0];
+        coord[1] += rt[1] * dir[1];
+        coord[2] += 1.0;
+        let mut f = edges.sample(coord[0], coord[1]);
+        if decode {
+            f = decode_diag(f);
+        }
+        *end = f;
+        coord[3] = 0.5 * (f[0] + f[1]);
+    }
+    [coord[2], coord[3]]
+}
+
+fn area_diag(luts: &Luts, dist: [f32; 2], e: [f32; 2], subsample: f32) -> [f32; 2] {
+    let (aw, ah) = (lut::AREA_SIZE.0 as f32, lut::AREA_SIZE.1 as f32);
+    let n = lut::AREA_MAX_DISTANCE_DIAG as f32;
+    let u = (n * e[0] + dist[0] + 0.5) / aw + 0.5;
+    let v = (n * e[1] + dist[1] + 0.5) / ah + subsample / 7.0;
+    luts.area.sample(u, v)
+}
+
+/// `smaa_diag_weights`.
+fn diag_weights(
     edges: &Plane<2>,
     luts: &Luts,
-    max_search_steps: f32,
-    subsample: [f32; 2],
-) -> Plane<4> {
+    tc: [f32; 2],
+    e: [f32; 2],
+    rt: [f32; 4],
+    s: &WeightSettings,
+) -> [f32; 2] {
+    let at = |u: f32, v: f32| edges.sample(u, v);
+    let steps = s.max_search_steps_diag;
+    let mut weights = [0.0f32; 2];
+    let mut end = [0.0f32; 2];
+    let mut d = [0.0f32; 4];
+    if e[0] > 0.0 {
+        let r = search_diag(edges, tc, [-1.0, 1.0], rt, false, steps, &mut end);
+        d[0] = r[0] + if end[1] > 0.9 { 1.0 } else { 0.0 };
+        d[2] = r[1];
+    }
+    let r = search_diag(edges, tc, [1.0, -1.0], rt, false, steps, &mut end);
+    (d[1], d[3]) = (r[0], r[1]);
+    let crossing = |c: [f32; 4], d: [f32; 4]| {
+        let cc = [2.0 * c[0] + c[1], 2.0 * c[2] + c[3]];
+        [
+            if d[2] >= 0.9 { 0.0 } else { cc[0] },
+            if d[3] >= 0.9 { 0.0 } else { cc[1] },
+        ]
+    };
+    if d[0] + d[1] > 2.0 {
+        let a = [tc[0] + (-d[0] + 0.25) * rt[0], tc[1] + d[0] * rt[1]];
+        let b = [tc[0] + d[1] * rt[0], tc[1] + (-d[1] - 0.25) * rt[1]];
+        let ea = decode_diag(at(a[0] - rt[0], a[1]));
+        let eb = decode_diag(at(b[0] + rt[0], b[1]));
+        // c.yxwz = decode(c.xyzw)
+        let c = [ea[1], ea[0], eb[1], eb[0]];
+        let w = area_diag(luts, [d[0], d[1]], crossing(c, d), s.subsample[2]);
+        weights = [weights[0] + w[0], weights[1] + w[1]];
+    }
+    let r = search_diag(edges, tc, [-1.0, -1.0], rt, true, steps, &mut end);
+    d = [r[0], 0.0, r[1], 0.0];
+    if at(tc[0] + rt[0], tc[1])[0] > 0.0 {
+        let r = search_diag(edges, tc, [1.0, 1.0], rt, true, steps, &mut end);
+        d[1] = r[0] + if end[1] > 0.9 { 1.0 } else { 0.0 };
+        d[3] = r[1];
+    }
+    if d[0] + d[1] > 2.0 {
+        let a = [tc[0] - d[0] * rt[0], tc[1] - d[0] * rt[1]];
+        let b = [tc[0] + d[1] * rt[0], tc[1] + d[1] * rt[1]];
+        let eb = at(b[0] + rt[0], b[1]);
+        let c = [
+            at(a[0] - rt[0], a[1])[1],
+            at(a[0], a[1] - rt[1])[0],
+            eb[1],
+            eb[0],
+        ];
+        let w = area_diag(luts, [d[0], d[1]], crossing(c, d), 0.0);
+        weights = [weights[0] + w[1], weights[1] + w[0]];
+    }
+    weights
+}
+
+/// `smaa_corner`: `d` the pixels to the two ends of the line.
+fn corner(
+    edges: &Plane<2>,
+    weights: [f32; 2],
+    tc: [f32; 2],
+    d: [f32; 2],
+    horizontal: bool,
+    rt: [f32; 4],
+    rounding_percent: f32,
+) -> [f32; 2] {
+    if rounding_percent >= 100.0 {
+        return weights;
+    }
+    let step = |edge: f32, x: f32| if x >= edge { 1.0 } else { 0.0 };
+    let lr = [step(d[0], d[1]), step(d[1], d[0])];
+    let k = (1.0 - rounding_percent / 100.0) / (lr[0] + lr[1]);
+    let rounding = [k * lr[0], k * lr[1]];
+    let at = |p: [f32; 2], o: [f32; 2], c: usize| {
+        edges.sample(p[0] + o[0] * rt[0], p[1] + o[1] * rt[1])[c]
+    };
+    let mut factor = [1.0f32, 1.0];
+    if horizontal {
+        let a = [tc[0] - d[0] * rt[0], tc[1]];
+        let b = [tc[0] + d[1] * rt[0], tc[1]];
+        factor[0] -= rounding[0] * at(a, [0.0, 1.0], 0);
+        factor[0] -= rounding[1] * at(b, [1.0, 1.0], 0);
+        factor[1] -= rounding[0] * at(a, [0.0, -2.0], 0);
+        factor[1] -= rounding[1] * at(b, [1.0, -2.0], 0);
+    } else {
+        let a = [tc[0], tc[1] - d[0] * rt[1]];
+        let b = [tc[0], tc[1] + d[1] * rt[1]];
+        factor[0] -= rounding[0] * at(a, [1.0, 0.0], 1);
+        factor[0] -= rounding[1] * at(b, [1.0, 1.0], 1);
+        factor[1] -= rounding[0] * at(a, [-2.0, 0.0], 1);
+        factor[1] -= rounding[1] * at(b, [-2.0, 1.0], 1);
+    }
+    [
+        weights[0] * factor[0].clamp(0.0, 1.0),
+        weights[1] * factor[1].clamp(0.0, 1.0),
+    ]
+}
+
+/// Twin of `weights.wgsl`.
+pub fn blending_weights(edges: &Plane<2>, luts: &Luts, s: &WeightSettings) -> Plane<4> {
     let (w, h) = (edges.width as f32, edges.height as f32);
     let rt = [1.0 / w, 1.0 / h, w, h];
     let at = |u: f32, v: f32| edges.sample(u, v);
+    let subsample = s.subsample;
     let mut out = Plane::new(edges.width, edges.height);
     for y in 0..edges.height {
         for x in 0..edges.width {
@@ -246,10 +412,17 @@ pub fn blending_weights(
                 tc[0] - 0.125 * rt[0],
                 tc[1] + 1.25 * rt[1],
             ];
-            let steps = max_search_steps as i32;
-            let e = edges.load(x as i64, y as i64);
+            let steps = s.max_search_steps as i32;
+            let mut e = edges.load(x as i64, y as i64);
             let mut weights = [0.0f32; 4];
-            if e[1] > 0.0 {
+            let mut diag = [0.0f32; 2];
+            if e[1] > 0.0 && s.max_search_steps_diag > 0.0 {
+                diag = diag_weights(edges, luts, tc, e, rt, s);
+            }
+            if diag[0] + diag[1] > 0.0 {
+                weights = [diag[0], diag[1], 0.0, 0.0];
+                e[0] = 0.0;
+            } else if e[1] > 0.0 {
                 // Left.
                 let (mut u, mut ee) = (off0[0], [0.0, 1.0]);
                 for _ in 0..steps {
@@ -277,6 +450,7 @@ pub fn blending_weights(
                     (rt[2] * right - frag[0]).round().abs(),
                 ];
                 let a = area(luts, [d[0].sqrt(), d[1].sqrt()], e1, e2, subsample[0]);
+                let a = corner(edges, a, tc, d, true, rt, s.corner_rounding);
                 weights[0] = a[0];
                 weights[1] = a[1];
             }
@@ -312,6 +486,7 @@ pub fn blending_weights(
                     (rt[3] * down - frag[1]).round().abs(),
                 ];
                 let a = area(luts, [d[0].sqrt(), d[1].sqrt()], e1, e2, subsample[1]);
+                let a = corner(edges, a, tc, d, false, rt, s.corner_rounding);
                 weights[2] = a[0];
                 weights[3] = a[1];
             }

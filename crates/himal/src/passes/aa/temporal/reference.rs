@@ -1,5 +1,6 @@
-//! CPU twins of `resolve.wgsl`, `taa.wgsl` and `unsharp.wgsl` (linear RGB
-//! planes; textures are read with clamp-to-edge like the GPU).
+//! CPU twins of `resolve.wgsl`, `taa.wgsl`, `unsharp.wgsl`, `taa_ao.wgsl` and
+//! `taa_motion.wgsl` (planes of linear RGB, AO or motion; textures are read
+//! with clamp-to-edge like the GPU).
 
 use super::{AaParams, ResolveMode};
 use crate::passes::aa::smaa::reference::{Plane, linear_to_srgb};
@@ -166,6 +167,113 @@ pub fn unsharp(p: &AaParams, input: &Plane<4>) -> Plane<4> {
                 out.texels[i][k] = (c[k] + s * (c[k] - blur[k])).max(0.0);
             }
             out.texels[i][3] = 1.0;
+        }
+    }
+    out
+}
+
+/// Shared by the buffer TAAs: the new-frame weight, 1 without usable history.
+fn buffer_alpha(p: &AaParams, contrast: f32, motion_ok: bool, inside: bool) -> f32 {
+    if p.state[0] < 1.0 || !motion_ok || !inside {
+        return 1.0;
+    }
+    let k = (contrast * p.tuning[3]).clamp(0.0, 1.0);
+    p.state[2] + (p.state[3] - p.state[2]) * k
+}
+
+fn inside_uv(uv: [f32; 2]) -> bool {
+    uv.iter().all(|&v| (0.0..=1.0).contains(&v))
+}
+
+/// Twin of `aa.taa_ao`: `ao` is (AO, Z, N, _), `history` (AO, m0, _);
+/// `motion` is jitter-free when `jitter_free_motion`, else the G-buffer's.
+/// Returns (AO output, next history).
+pub fn taa_ao(
+    p: &AaParams,
+    ao: &Plane<4>,
+    history: &Plane<4>,
+    motion: &Plane<2>,
+    jitter_free_motion: bool,
+) -> (Plane<4>, Plane<4>) {
+    let (w, h) = (ao.width, ao.height);
+    let size = [w as f32, h as f32];
+    let (mut out, mut next) = (Plane::new(w, h), Plane::new(w, h));
+    for y in 0..h as i64 {
+        for x in 0..w as i64 {
+            let c = ao.load(x, y);
+            let (mut lo, mut hi) = (c[0], c[0]);
+            for j in -1..=1 {
+                for i in -1..=1 {
+                    let s = ao.load(x + i, y + j)[0];
+                    lo = lo.min(s);
+                    hi = hi.max(s);
+                }
+            }
+            let raw = motion.load(x, y);
+            let m = if jitter_free_motion {
+                raw
+            } else {
+                jitter_free(p, raw, size)
+            };
+            let uv = [
+                (x as f32 + 0.5) / size[0] + m[0],
+                (y as f32 + 0.5) / size[1] + m[1],
+            ];
+            let qx = ((uv[0] * size[0]).floor() as i64).clamp(0, w as i64 - 1);
+            let qy = ((uv[1] * size[1]).floor() as i64).clamp(0, h as i64 - 1);
+            let hq = history.load(qx, qy);
+            let dm = [(m[0] - hq[1]) * size[0], (m[1] - hq[2]) * size[1]];
+            let motion_ok = (dm[0] * dm[0] + dm[1] * dm[1]).sqrt() < p.tuning[0];
+            let alpha = buffer_alpha(p, hi - lo, motion_ok, inside_uv(uv));
+            let t = p.tuning[1];
+            let hs = history.sample(uv[0], uv[1])[0].clamp(lo - t, hi + t);
+            let r = hs + (c[0] - hs) * alpha;
+            let i = y as usize * w + x as usize;
+            out.texels[i] = [r, c[1], c[2], 1.0];
+            next.texels[i] = [r, m[0], m[1], 1.0];
+        }
+    }
+    (out, next)
+}
+
+/// Twin of `aa.taa_motion`: the stabilised jitter-free motion from the
+/// G-buffer `motion` and the previous stabilised `history`.
+pub fn taa_motion(p: &AaParams, motion: &Plane<2>, history: &Plane<2>) -> Plane<2> {
+    let (w, h) = (motion.width, motion.height);
+    let size = [w as f32, h as f32];
+    let mut out = Plane::new(w, h);
+    for y in 0..h as i64 {
+        for x in 0..w as i64 {
+            let m = jitter_free(p, motion.load(x, y), size);
+            let (mut lo, mut hi) = (m, m);
+            for j in -1..=1 {
+                for i in -1..=1 {
+                    let s = jitter_free(p, motion.load(x + i, y + j), size);
+                    for k in 0..2 {
+                        lo[k] = lo[k].min(s[k]);
+                        hi[k] = hi[k].max(s[k]);
+                    }
+                }
+            }
+            let uv = [
+                (x as f32 + 0.5) / size[0] + m[0],
+                (y as f32 + 0.5) / size[1] + m[1],
+            ];
+            let qx = ((uv[0] * size[0]).floor() as i64).clamp(0, w as i64 - 1);
+            let qy = ((uv[1] * size[1]).floor() as i64).clamp(0, h as i64 - 1);
+            let m_prev = history.load(qx, qy);
+            let dm = [(m[0] - m_prev[0]) * size[0], (m[1] - m_prev[1]) * size[1]];
+            let motion_ok = (dm[0] * dm[0] + dm[1] * dm[1]).sqrt() < p.tuning[0];
+            let spread = [(hi[0] - lo[0]) * size[0], (hi[1] - lo[1]) * size[1]];
+            let spread = (spread[0] * spread[0] + spread[1] * spread[1]).sqrt();
+            let alpha = buffer_alpha(p, spread, motion_ok, inside_uv(uv));
+            let hs = history.sample(uv[0], uv[1]);
+            let i = y as usize * w + x as usize;
+            for k in 0..2 {
+                let t = p.tuning[1] / size[k];
+                let hc = hs[k].clamp(lo[k] - t, hi[k] + t);
+                out.texels[i][k] = hc + (m[k] - hc) * alpha;
+            }
         }
     }
     out

@@ -17,6 +17,8 @@
 #import aa
 
 override MODE: u32 = 2u;
+// The motion input is aa.taa_motion's stabilised jitter-free motion.
+override JITTER_FREE_MOTION: bool = false;
 
 @group(0) @binding(0) var<uniform> params: AaParams;
 @group(0) @binding(1) var current: texture_2d<f32>;
@@ -47,7 +49,10 @@ fn aa_load_motion(t: texture_2d<f32>, p: vec2i) -> vec2f {
 fn fs_main(@builtin(position) frag: vec4f) -> ResolveOut {
     let p = vec2i(frag.xy);
     let size = vec2f(textureDimensions(current));
-    let m = aa_jitter_free_motion(params, textureLoad(motion, p, 0).xy, size);
+    var m = textureLoad(motion, p, 0).xy;
+    if (!JITTER_FREE_MOTION) {
+        m = aa_jitter_free_motion(params, m, size);
+    }
     var out: ResolveOut;
     out.motion = m;
     let c = aa_load(current, p);
