@@ -44,6 +44,8 @@ pub struct RenderedFrame {
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
+    /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
+    pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
 }
 
 /// GPU resources the frame graph borrows (everything but the pool and timer,
@@ -115,6 +117,7 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         fog: settings.aerial_extinction > 0.0 && !environment,
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
+        sky_occlusion: settings.sky_occlusion,
     }
 }
 
@@ -146,6 +149,7 @@ impl Renderer {
             probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
+            skyocc: crate::passes::skyocc::SkyOccPass::new(&ctx, scene)?,
             luminance: LuminancePass::new(&ctx)?,
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
@@ -244,6 +248,11 @@ impl Renderer {
         })
     }
 
+    /// The sky occlusion pass (L2), for tests and tools.
+    pub fn sky_occlusion(&self) -> &crate::passes::skyocc::SkyOccPass {
+        &self.res.passes.skyocc
+    }
+
     /// The environment cube and DFG table (L4), for tests and tools.
     pub fn envmap(&self) -> &EnvMapPass {
         &self.res.passes.envmap
@@ -314,6 +323,7 @@ impl Renderer {
                     ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format)?,
                     ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format)?,
                     ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format)?,
+                    ViewBuffer::SkyOcc(v) => passes.skyocc.prepare_view(ctx, v, format)?,
                     ViewBuffer::Final => {}
                 }
             }
@@ -430,7 +440,12 @@ impl Renderer {
 
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Debug(_) | ViewBuffer::Ao(_) | ViewBuffer::Shadow(_) if settings.raw => {
+            ViewBuffer::Debug(_)
+            | ViewBuffer::Ao(_)
+            | ViewBuffer::Shadow(_)
+            | ViewBuffer::SkyOcc(_)
+                if settings.raw =>
+            {
                 RAW_FORMAT
             }
             _ => DISPLAY_FORMAT,
@@ -445,6 +460,7 @@ impl Renderer {
             ViewBuffer::Debug(v) => self.res.passes.debug.prepare(&self.ctx, v, format)?,
             ViewBuffer::Ao(v) => self.res.passes.ao.prepare_view(&self.ctx, v, format)?,
             ViewBuffer::Shadow(v) => self.res.passes.shadows.prepare_view(&self.ctx, v, format)?,
+            ViewBuffer::SkyOcc(v) => self.res.passes.skyocc.prepare_view(&self.ctx, v, format)?,
             ViewBuffer::Final => {}
         }
         if settings.aa.temporal() && self.res.aa_history.as_ref().is_none_or(|h| h.size != size) {
@@ -618,6 +634,12 @@ impl Renderer {
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
+        let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+        let skyocc_stats =
+            self.res
+                .passes
+                .skyocc
+                .update(&self.ctx, &self.res.scene, camera, aspect, skyocc_on);
 
         let errors = FrameErrors::default();
         let Self {
@@ -674,6 +696,7 @@ impl Renderer {
             image,
             timings,
             shadows: shadow_stats,
+            sky_occlusion: skyocc_stats,
         })
     }
 }

@@ -6,6 +6,7 @@ use crate::passes::ao::{AoSettings, AoView};
 use crate::passes::debug::DebugView;
 use crate::passes::post::{AdaptationSettings, BloomSettings};
 use crate::passes::shadows::{ShadowSettings, ShadowView};
+use crate::passes::skyocc::SkyOccView;
 use crate::scene::SunDesc;
 
 /// Format of the displayable output (PNG).
@@ -27,10 +28,12 @@ pub enum ViewBuffer {
     Ao(AoView),
     /// Shadow buffers (`shadow-mask`, `cascades`).
     Shadow(ShadowView),
+    /// Sky occlusion (L2: `sky-visibility`, `bent-normal`).
+    SkyOcc(SkyOccView),
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 18] = [
+    pub const NAMES: [&'static str; 20] = [
         "final",
         "albedo",
         "normal",
@@ -49,6 +52,8 @@ impl ViewBuffer {
         "bloom",
         "shadow-mask",
         "cascades",
+        "sky-visibility",
+        "bent-normal",
     ];
 }
 
@@ -75,6 +80,8 @@ impl std::str::FromStr for ViewBuffer {
             "bloom" => ViewBuffer::Debug(D::Bloom),
             "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
             "cascades" => ViewBuffer::Shadow(ShadowView::Cascades),
+            "sky-visibility" => ViewBuffer::SkyOcc(SkyOccView::Visibility),
+            "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -113,6 +120,9 @@ pub struct FrameSettings {
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
     /// along the reflection vector.
     pub environment_specular: bool,
+    /// L2 height-field sky occlusion (sky light and ambient specular times
+    /// the SH2 visibility along the bent normal).
+    pub sky_occlusion: bool,
     /// L3: ambient specular from the relit G-buffer cube of the probe
     /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.
     pub environment_probes: bool,
@@ -148,6 +158,7 @@ impl FrameSettings {
             aa_tuning: Default::default(),
             time_s: 0.0,
             environment_specular: true,
+            sky_occlusion: false,
             environment_probes: true,
             envmap_every_frame: false,
         }
