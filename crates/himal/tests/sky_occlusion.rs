@@ -140,7 +140,8 @@ fn blur_and_visibility_match_cpu_twin() {
     );
     // Same f32 arithmetic, same order: measured blur max 0 m on 2026-11-22; threshold 1e-4.
     assert!(blur_err < 1e-4, "blur {blur_err}");
-    assert!(height_err < 1e-4, "heights {height_err}");
+    // The fade height sums 32 texels (GPU fma / order): measured 3.2e-4 m on 2026-11-22; threshold 2e-3.
+    assert!(height_err < 2e-3, "heights {height_err}");
     // fp16 storage (~1e-3) plus rare samples flipped by rounding at a
     // texel edge (one sample = 1/32 of the cap). Measured on 2026-11-22: mean 6.8e-4, worst 0.001, 0 texels > 0.01.
     assert!(sum / n < 3e-3, "SH mean error {}", sum / n);

@@ -13,8 +13,8 @@ const SKYOCC_SECTOR_SIZE: f32 = 64.0;
 const SKYOCC_SECTOR_TEXELS: i32 = 256;
 const SKYOCC_TABLE_SIZE: i32 = 32;
 // The lookup point moves this far (m) along the normal, off walls onto the
-// ground texel in front of them.
-const SKYOCC_NORMAL_OFFSET: f32 = 0.5;
+// ground in front of them, beyond the demo's 0.6 m eaves.
+const SKYOCC_NORMAL_OFFSET: f32 = 0.75;
 
 // Zonal cap of half angle A about the axis: (L0, axial L1), as in the talk.
 fn sh2_spherical_cap(cos_a: f32) -> vec2f {
@@ -37,6 +37,12 @@ fn sh2_open_sky() -> vec4f {
     return sh2_from_visibility(1.0, vec3f(0.0, 1.0, 0.0));
 }
 
+// Unoccluded: the whole sphere (cos A = -1): visibility 1 along every
+// normal, no bending. "Fully visible" of the fade and of absent sectors.
+fn sh2_unoccluded() -> vec4f {
+    return vec4f(2.0 * SKYOCC_CAP_C0, 0.0, 0.0, 0.0);
+}
+
 fn sh2_primary_direction(sh: vec4f) -> vec3f {
     let d = vec3f(sh.w, sh.y, sh.z);
     if (dot(d, d) > 0.0) {
@@ -56,14 +62,14 @@ fn sh2_visibility_cosine(sh: vec4f, n: vec3f) -> f32 {
     return clamp(v, 0.0, 1.0);
 }
 
-// Full occlusion at the surface height, none at the blurred height.
+// Full occlusion at the surface height, none at the fade (blurred) height.
 fn sky_occlusion_fade(sh: vec4f, y: f32, h_surface: f32, h_blurred: f32) -> vec4f {
     let t = saturate((y - h_surface) / max(h_blurred - h_surface, 0.1));
-    return mix(sh, sh2_open_sky(), t);
+    return mix(sh, sh2_unoccluded(), t);
 }
 
 // SH2 visibility at world point p with normal n: sector table -> pool layer,
-// bilinear SH, nearest heights, faded; open sky where no sector is resident.
+// bilinear SH, nearest heights, faded; unoccluded where no sector is resident.
 fn sky_occlusion_lookup(
     table: texture_2d<i32>,
     vis: texture_2d_array<f32>,
@@ -77,7 +83,7 @@ fn sky_occlusion_lookup(
     let slot = ((sector % SKYOCC_TABLE_SIZE) + SKYOCC_TABLE_SIZE) % SKYOCC_TABLE_SIZE;
     let entry = textureLoad(table, slot, 0);
     if (entry.w == 0 || entry.x != sector.x || entry.y != sector.y) {
-        return sh2_open_sky();
+        return sh2_unoccluded();
     }
     let local = xz / SKYOCC_SECTOR_SIZE - vec2f(sector);
     let sh = textureSampleLevel(vis, bilinear, local, entry.z, 0.0);

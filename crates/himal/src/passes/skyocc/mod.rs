@@ -82,7 +82,7 @@ pub struct SkyOccBindings<'a> {
 #[derive(Clone, Debug)]
 pub struct SectorReadback {
     pub sh: Vec<Vec4>,
-    /// (surface, blurred) heights.
+    /// (surface, fade) heights.
     pub heights: Vec<Vec2>,
     /// The blurred rendered image ([`RENDER_TEXELS`]²).
     pub blurred: Vec<f32>,
@@ -124,6 +124,7 @@ impl SkyOccPass {
             ("MARGIN", MARGIN_TEXELS as f64),
             ("TEXEL", TEXEL_SIZE as f64),
             ("ORIGIN_LIFT", reference::ORIGIN_LIFT as f64),
+            ("FADE_RADIUS", reference::FADE_RADIUS as f64),
         ];
         let visibility = vis_program.compute_pipeline(ctx, "cs_main", &constants)?;
         let casters = crate::passes::shadows::casters::Casters::from_scene(scene);

@@ -39,6 +39,8 @@ pub const RENDER_TEXELS: usize = SECTOR_TEXELS + 2 * MARGIN_TEXELS;
 /// The texel's own point is lifted this much (m) so that flat ground does
 /// not occlude itself through float rounding.
 pub const ORIGIN_LIFT: f32 = 0.05;
+/// Radius (m) of the disk the fade height averages the blurred field over.
+pub const FADE_RADIUS: f32 = 2.0;
 
 /// `SH2SphericalCap` constants (talk, SKY OCCLUSION): the projection of a
 /// cap of half angle A around the axis onto Y00 and the axial Y1:
@@ -159,7 +161,9 @@ pub fn hemisphere_from_disk(q: Vec2) -> Vec3 {
 }
 
 /// Twin of `visibility.wgsl` at texel (x, y) of the rendered images: the
-/// fraction of visible samples and the sum of their (unit) directions.
+/// fraction of visible samples, the sum of their (unit) directions and the
+/// fade height (the blurred field averaged at the disk points scaled to
+/// [`FADE_RADIUS`]).
 /// A sample direction d is visible when the ray from the texel's point p
 /// (raw height + [`ORIGIN_LIFT`]) stays above the blurred height field at
 /// p + d R k / [`MARCH_STEPS`], k = 1..steps (nearest texel).
@@ -169,7 +173,7 @@ pub fn visibility_at(
     disk: &[Vec2],
     x: usize,
     y: usize,
-) -> (f32, Vec3) {
+) -> (f32, Vec3, f32) {
     let t = raw.texel;
     let p = Vec3::new(
         raw.origin.x + (x as f32 + 0.5) * t,
@@ -178,9 +182,11 @@ pub fn visibility_at(
     );
     let angle = std::f32::consts::TAU * interleaved_gradient_noise(x as f32, y as f32);
     let (s, c) = angle.sin_cos();
-    let (mut count, mut sum) = (0u32, Vec3::ZERO);
+    let (mut count, mut sum, mut h_fade) = (0u32, Vec3::ZERO, 0.0f32);
     for d in disk {
         let q = Vec2::new(c * d.x - s * d.y, s * d.x + c * d.y);
+        let f = Vec2::new(p.x, p.z) + q * FADE_RADIUS;
+        h_fade += blurred.at_world(f.x, f.y);
         let dir = hemisphere_from_disk(q);
         let visible = (1..=MARCH_STEPS).all(|k| {
             let a = p + dir * (SAMPLE_RADIUS * k as f32 / MARCH_STEPS as f32);
@@ -191,7 +197,8 @@ pub fn visibility_at(
             sum += dir;
         }
     }
-    (count as f32 / disk.len().max(1) as f32, sum)
+    let n = disk.len().max(1) as f32;
+    (count as f32 / n, sum, h_fade / n)
 }
 
 /// `SH2SphericalCap(cosA)`, zonal part: (L0, axial L1).
@@ -214,6 +221,15 @@ pub fn sh2_from_visibility(f: f32, sum: Vec3) -> Vec4 {
 /// The SH2 of an unoccluded point: the upper hemisphere (f = 1) around +Y.
 pub fn sh2_open_sky() -> Vec4 {
     sh2_from_visibility(1.0, Vec3::Y)
+}
+
+/// Unoccluded: the whole sphere (cos A = −1, L0 = 2 C0, L1 = 0): the
+/// cosine visibility is 1 along every normal and nothing bends. Used as
+/// "fully visible" by the fade and where no sector is resident (a vertical
+/// wall is not darkened to the hemisphere's 0.5: the sky SH already lacks
+/// the lower half).
+pub fn sh2_unoccluded() -> Vec4 {
+    Vec4::new(2.0 * SH_CAP_C0, 0.0, 0.0, 0.0)
 }
 
 /// `SH2GetPrimaryDirection`: the L1 vector, normalised.
@@ -239,13 +255,13 @@ pub fn sh2_visibility_cosine(sh: Vec4, n: Vec3) -> f32 {
 
 /// Fade to visible with height above the terrain (talk): full occlusion at
 /// the surface height the visibility was computed for, none at the blurred
-/// height; the SH blends linearly toward [`sh2_open_sky`].
+/// (fade) height; the SH blends linearly toward [`sh2_unoccluded`].
 pub fn fade_to_visible(sh: Vec4, y: f32, h_surface: f32, h_blurred: f32) -> Vec4 {
     let t = ((y - h_surface) / (h_blurred - h_surface).max(0.1)).clamp(0.0, 1.0);
-    sh.lerp(sh2_open_sky(), t)
+    sh.lerp(sh2_unoccluded(), t)
 }
 
-/// One sector's output texel: SH2 visibility and (surface, blurred) heights.
+/// One sector's output texel: SH2 visibility and (surface, fade) heights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectorTexel {
     pub sh: Vec4,
@@ -261,11 +277,10 @@ pub fn sector_visibility(raw: &HeightImage, disk: &[Vec2]) -> (HeightImage, Vec<
     let mut out = Vec::with_capacity(inner * inner);
     for y in m..m + inner {
         for x in m..m + inner {
-            let (f, sum) = visibility_at(raw, &blurred, disk, x, y);
-            let i = y * raw.size + x;
+            let (f, sum, h_fade) = visibility_at(raw, &blurred, disk, x, y);
             out.push(SectorTexel {
                 sh: sh2_from_visibility(f, sum),
-                heights: Vec2::new(raw.h[i], blurred.h[i]),
+                heights: Vec2::new(raw.h[y * raw.size + x], h_fade),
             });
         }
     }
@@ -325,6 +340,12 @@ mod tests {
         // A closed point: no visibility, the normal bends fully toward the mean.
         let closed = sh2_from_visibility(0.0, Vec3::X);
         assert_eq!(sh2_visibility_cosine(closed, Vec3::Y), 0.0);
+        // Unoccluded: 1 along any normal, no bending.
+        for n in [Vec3::Y, Vec3::X, Vec3::new(0.0, -0.6, 0.8)] {
+            let v = sh2_visibility_cosine(sh2_unoccluded(), n);
+            assert!((v - 1.0).abs() < 1e-5, "{n}: {v}");
+            assert!(bent_normal_from_sh_visibility(n, sh2_unoccluded()).distance(n) < 1e-5);
+        }
     }
 
     #[test]
@@ -360,7 +381,8 @@ mod tests {
         let raw = HeightImage::from_fn(n, TEXEL_SIZE, Vec2::ZERO, |_, _| 3.0);
         let blurred = blur(&raw);
         let disk = poisson_disk(SAMPLES);
-        let (f, sum) = visibility_at(&raw, &blurred, &disk, n / 2, n / 2);
+        let (f, sum, h_fade) = visibility_at(&raw, &blurred, &disk, n / 2, n / 2);
+        assert_eq!(h_fade, 3.0);
         assert_eq!(f, 1.0);
         // Mean of uniform hemisphere directions is about +Y.
         assert!(sum.normalize().y > 0.95, "{sum}");

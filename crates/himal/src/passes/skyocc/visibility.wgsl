@@ -5,7 +5,9 @@
 // ray from the texel's point (raw height + ORIGIN_LIFT) stays above the
 // blurred height at STEPS points up to RADIUS metres. Visible fraction f and
 // the sum of visible directions become an SH2 cap (shaders/sky_occlusion.wgsl),
-// stored with (raw, blurred) heights in the sector's pool layer.
+// stored with (raw, fade) heights in the sector's pool layer; the fade height
+// is the blurred field averaged over the disk scaled to FADE_RADIUS (a wide
+// blur, as the talk's blurred map; the sampled field stays sharp).
 // Twin: passes/skyocc/reference.rs `visibility_at`, `sector_visibility`.
 #import sky_occlusion
 
@@ -14,6 +16,7 @@ override STEPS: u32 = 8u;
 override MARGIN: i32 = 36;
 override TEXEL: f32 = 0.25;
 override ORIGIN_LIFT: f32 = 0.05;
+override FADE_RADIUS: f32 = 2.0;
 
 struct SectorJob {
     // xy: world x, z of the rendered image's corner (texel (0, 0) min)
@@ -49,6 +52,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let c = cos(angle);
     var count = 0u;
     var sum = vec3f(0.0);
+    var h_fade = 0.0;
     let n = arrayLength(&disk);
     for (var k = 0u; k < n; k = k + 1u) {
         let dk = disk[k];
@@ -56,6 +60,8 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         let r2 = min(dot(q, q), 1.0);
         let lift = sqrt(max(2.0 - r2, 0.0));
         let dir = vec3f(q.x * lift, 1.0 - r2, q.y * lift);
+        let tf = clamp(vec2i(floor((p.xz + q * FADE_RADIUS - origin) / TEXEL)), vec2i(0), size - 1);
+        h_fade += textureLoad(blurred_load, tf, layer, 0).x;
         var visible = true;
         for (var i = 1u; i <= STEPS; i = i + 1u) {
             let a = p + dir * (RADIUS * f32(i) / f32(STEPS));
@@ -71,8 +77,8 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         }
     }
     let f = f32(count) / f32(max(n, 1u));
-    let h_blurred = textureLoad(blurred_load, x, layer, 0).x;
+    h_fade /= f32(max(n, 1u));
     let out_layer = i32(job.layer.x);
     textureStore(vis_out, u, out_layer, sh2_from_visibility(f, sum));
-    textureStore(heights_out, u, out_layer, vec4f(h_raw, h_blurred, 0.0, 1.0));
+    textureStore(heights_out, u, out_layer, vec4f(h_raw, h_fade, 0.0, 1.0));
 }
