@@ -121,7 +121,9 @@ pub struct FrameSettings {
     /// along the reflection vector.
     pub environment_specular: bool,
     /// L2 height-field sky occlusion (sky light and ambient specular times
-    /// the SH2 visibility along the bent normal).
+    /// the SH2 visibility along the bent normal). Off by default in the
+    /// library (the L3 relighting test compares against unoccluded lighting);
+    /// the CLI turns it on.
     pub sky_occlusion: bool,
     /// L3: ambient specular from the relit G-buffer cube of the probe
     /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.

@@ -147,7 +147,7 @@ pub fn poisson_disk(n: usize) -> Vec<Vec2> {
 
 /// Interleaved gradient noise (Jimenez 2014) in [0, 1): the per-texel disk rotation.
 pub fn interleaved_gradient_noise(x: f32, y: f32) -> f32 {
-    (52.982_918_9 * (0.067_110_56 * x + 0.005_837_15 * y).fract()).fract()
+    (52.982_918 * (0.067_110_56 * x + 0.005_837_15 * y).fract()).fract()
 }
 
 /// Direction of disk point `q` (|q| <= 1) on the upper hemisphere by the

@@ -46,7 +46,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let h_raw = textureLoad(raw_load, x, layer, 0).x;
     let origin = job.origin.xy;
     let p = vec3f(origin.x + (f32(x.x) + 0.5) * TEXEL, h_raw + ORIGIN_LIFT, origin.y + (f32(x.y) + 0.5) * TEXEL);
-    let noise = fract(52.9829189 * fract(0.06711056 * f32(x.x) + 0.00583715 * f32(x.y)));
+    let noise = fract(52.982918 * fract(0.06711056 * f32(x.x) + 0.00583715 * f32(x.y)));
     let angle = 6.28318530718 * noise;
     let s = sin(angle);
     let c = cos(angle);
