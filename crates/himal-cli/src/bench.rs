@@ -35,6 +35,10 @@ pub struct BenchArgs {
     /// when the sky changes), to time `envmap.*`.
     #[arg(long)]
     pub envmap_every_frame: bool,
+    /// Re-render every wanted sky occlusion sector each frame (normally only
+    /// when one becomes visible), to time `skyocc.*` (L2).
+    #[arg(long)]
+    pub skyocc_every_frame: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -79,6 +83,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     args.shadows.apply(&mut settings)?;
     args.post.apply(&mut settings)?;
     settings.envmap_every_frame = args.envmap_every_frame;
+    settings.sky_occlusion_every_frame = args.skyocc_every_frame;
     settings.ao = args.ao.settings()?;
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);

@@ -635,6 +635,9 @@ impl Renderer {
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
         let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+        if settings.sky_occlusion_every_frame {
+            self.res.passes.skyocc.invalidate();
+        }
         let skyocc_stats =
             self.res
                 .passes

@@ -125,6 +125,9 @@ pub struct FrameSettings {
     /// library (the L3 relighting test compares against unoccluded lighting);
     /// the CLI turns it on.
     pub sky_occlusion: bool,
+    /// Forget the sky occlusion sectors each frame so the wanted ones are
+    /// re-rendered (bench rows `skyocc.*`).
+    pub sky_occlusion_every_frame: bool,
     /// L3: ambient specular from the relit G-buffer cube of the probe
     /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.
     pub environment_probes: bool,
@@ -161,6 +164,7 @@ impl FrameSettings {
             time_s: 0.0,
             environment_specular: true,
             sky_occlusion: false,
+            sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,
         }
