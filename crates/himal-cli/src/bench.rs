@@ -39,6 +39,10 @@ pub struct BenchArgs {
     /// (static vs re-captured vs relit cube, interleaved) and print the ratios.
     #[arg(long)]
     pub compare_envmap: bool,
+    /// Re-render every wanted sky occlusion sector each frame (normally only
+    /// when one becomes visible), to time `skyocc.*` (L2).
+    #[arg(long)]
+    pub skyocc_every_frame: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -51,7 +55,7 @@ pub fn group(pass: &str) -> &'static str {
     match pass.split('.').next().unwrap_or("") {
         "shadows" => "shadows",
         "gbuffer" => "G-buffer",
-        "lighting" | "sky" | "ao" | "envmap" => "lighting",
+        "lighting" | "sky" | "skyocc" | "ao" | "envmap" => "lighting",
         "blended" => "blended",
         "post" => "post",
         "aa" => "anti-aliasing",
@@ -83,6 +87,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     args.shadows.apply(&mut settings)?;
     args.post.apply(&mut settings)?;
     settings.envmap_every_frame = args.envmap_every_frame;
+    settings.sky_occlusion_every_frame = args.skyocc_every_frame;
     settings.ao = args.ao.settings()?;
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
@@ -97,6 +102,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut wall = Vec::new();
     // Shadow draw calls per measured frame (S2: the static map saves them).
     let mut shadow_draws: Vec<u32> = Vec::new();
+    // L2 sky occlusion sectors rendered per measured frame.
+    let mut sectors: Vec<u32> = Vec::new();
     for i in 0..args.frames {
         // A fixed path: a slow dolly, the same for every run.
         let mut cam = camera.clone();
@@ -105,6 +112,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let frame = renderer.render(&cam, &settings)?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);
         shadow_draws.push(frame.shadows.draws);
+        sectors.push(frame.sky_occlusion.rendered);
         for t in frame.timings {
             if !order.contains(&t.id) {
                 order.push(t.id.clone());
@@ -210,6 +218,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     println!("shadow draw calls per frame: mean {draws_mean:.1}, max {draws_max}");
+    println!(
+        "sky occlusion sectors rendered per frame: mean {:.2}, max {}",
+        sectors.iter().sum::<u32>() as f64 / sectors.len().max(1) as f64,
+        sectors.iter().copied().max().unwrap_or(0)
+    );
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
     println!("pipeline cache (whole run, E1): {cache}");
     println!("memory:");

@@ -101,6 +101,9 @@ pub struct PostArgs {
     /// camera (scenes with `[[probe]]`); off: the sky cube.
     #[arg(long, default_value = "on", value_name = "on|off")]
     pub env_probes: String,
+    /// L2 height-field sky occlusion (SH2 visibility, bent normals).
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub sky_occlusion: String,
     /// Anti-aliasing after tone mapping; hraa = SMAA + temporal FLIPQUAD + TAA + unsharp.
     #[arg(
         long,
@@ -162,6 +165,11 @@ impl PostArgs {
             "on" => true,
             "off" => false,
             other => bail!("--env-probes {other}: expected on or off"),
+        };
+        settings.sky_occlusion = match self.sky_occlusion.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--sky-occlusion {other}: expected on or off"),
         };
         Ok(())
     }

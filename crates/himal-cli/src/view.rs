@@ -26,7 +26,7 @@ use winit::window::{Window, WindowId};
 use crate::render::RenderArgs;
 
 pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
-T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, \
+T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
 H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
@@ -132,6 +132,7 @@ impl Viewer {
                 }
             }
             KeyCode::Digit5 => s.environment_specular = !s.environment_specular,
+            KeyCode::Digit6 => s.sky_occlusion = !s.sky_occlusion,
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
             _ => {}

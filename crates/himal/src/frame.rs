@@ -37,6 +37,7 @@ use crate::passes::post::{
 };
 use crate::passes::shadows::ShadowPass;
 use crate::passes::sky::SkyPass;
+use crate::passes::skyocc::SkyOccPass;
 use crate::renderer::ViewBuffer;
 use crate::renderer::scene_gpu::SceneGpu;
 
@@ -76,6 +77,7 @@ pub struct Passes {
     pub probes: ProbeSet,
     pub lighting: LightingPass,
     pub sky: SkyPass,
+    pub skyocc: SkyOccPass,
     pub luminance: LuminancePass,
     pub adapt: AdaptPass,
     pub bloom: BloomPass,
@@ -188,6 +190,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             _ => t,
         }
     });
+    // L2: new sectors' height fields and SH2 visibility (side effect: the pool).
+    let skyocc = passes.skyocc.add(&mut g, scene, errors);
     let env = match probe {
         Some((index, capture)) if passes.envmap.dirty => {
             // L3: relight the probe's G-buffer cube face by face with the
@@ -214,6 +218,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                     lights: &passes.shadows.local_lights,
                     envmap: &passes.envmap,
                     env: env_before,
+                    skyocc: &passes.skyocc,
+                    skyocc_frame: skyocc,
                     key: LightingKey::RELIGHT,
                 };
                 let hdr = passes.lighting.add(&mut g, size, stored, relight, errors);
@@ -249,6 +255,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         lights: &passes.shadows.local_lights,
         envmap: &passes.envmap,
         env,
+        skyocc: &passes.skyocc,
+        skyocc_frame: skyocc,
         key: lighting_key,
     };
     let hdr = passes
@@ -339,6 +347,9 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             view,
             errors,
         ),
+        ViewBuffer::SkyOcc(v) => passes
+            .skyocc
+            .add_view(&mut g, v, skyocc, gbuffer, view, out, errors),
         ViewBuffer::Debug(v) => {
             passes
                 .debug

@@ -11,3 +11,4 @@ pub mod lighting;
 pub mod post;
 pub mod shadows;
 pub mod sky;
+pub mod skyocc;

@@ -44,6 +44,8 @@ pub struct RenderedFrame {
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
+    /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
+    pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
 }
 
 /// Fetches the pipeline that draws `view` into `format` (none for `Final`).
@@ -58,6 +60,7 @@ fn prepare_view(
         ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format),
         ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format),
         ViewBuffer::Env(v) => passes.env_view.prepare(ctx, v, format),
+        ViewBuffer::SkyOcc(v) => passes.skyocc.prepare_view(ctx, v, format),
         ViewBuffer::Final => Ok(()),
     }
 }
@@ -69,6 +72,8 @@ pub struct DrawnFrame {
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
+    /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
+    pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
 }
 
 /// GPU resources the frame graph borrows (everything but the pool and timer,
@@ -147,6 +152,7 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         fog: settings.aerial_extinction > 0.0 && !environment,
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
+        sky_occlusion: settings.sky_occlusion,
     }
 }
 
@@ -182,6 +188,7 @@ impl Renderer {
             probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
+            skyocc: crate::passes::skyocc::SkyOccPass::new(&ctx, scene)?,
             luminance: LuminancePass::new(&ctx)?,
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
@@ -281,6 +288,11 @@ impl Renderer {
             sky_light: None,
             aa_last: None,
         })
+    }
+
+    /// The sky occlusion pass (L2), for tests and tools.
+    pub fn sky_occlusion(&self) -> &crate::passes::skyocc::SkyOccPass {
+        &self.res.passes.skyocc
     }
 
     /// The environment cube and DFG table (L4), for tests and tools.
@@ -572,7 +584,11 @@ impl Renderer {
         camera: &Camera,
         settings: &FrameSettings,
     ) -> Result<RenderedFrame, Error> {
-        let DrawnFrame { timings, shadows } = self.draw(camera, settings)?;
+        let DrawnFrame {
+            timings,
+            shadows,
+            sky_occlusion,
+        } = self.draw(camera, settings)?;
         let output = self
             .output(settings)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
@@ -580,6 +596,7 @@ impl Renderer {
             image: read_texture(&self.ctx, output, 0, 0)?,
             timings,
             shadows,
+            sky_occlusion,
         })
     }
 
@@ -711,6 +728,15 @@ impl Renderer {
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
+        let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+        if settings.sky_occlusion_every_frame {
+            self.res.passes.skyocc.invalidate();
+        }
+        let skyocc_stats =
+            self.res
+                .passes
+                .skyocc
+                .update(&self.ctx, &self.res.scene, camera, aspect, skyocc_on);
 
         let errors = FrameErrors::default();
         let Self {
@@ -768,6 +794,7 @@ impl Renderer {
         Ok(DrawnFrame {
             timings,
             shadows: shadow_stats,
+            sky_occlusion: skyocc_stats,
         })
     }
 }

@@ -7,6 +7,7 @@ use crate::passes::debug::DebugView;
 use crate::passes::envmap::EnvView;
 use crate::passes::post::{AdaptationSettings, BloomSettings};
 use crate::passes::shadows::{ShadowSettings, ShadowView};
+use crate::passes::skyocc::SkyOccView;
 use crate::scene::SunDesc;
 
 /// Format of the displayable output (PNG).
@@ -30,10 +31,12 @@ pub enum ViewBuffer {
     Shadow(ShadowView),
     /// What the ambient specular reads from the environment cube (`env-probe`, `env-mirror`).
     Env(EnvView),
+    /// Sky occlusion (L2: `sky-visibility`, `bent-normal`).
+    SkyOcc(SkyOccView),
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 20] = [
+    pub const NAMES: [&'static str; 22] = [
         "final",
         "albedo",
         "normal",
@@ -54,6 +57,8 @@ impl ViewBuffer {
         "cascades",
         "env-probe",
         "env-mirror",
+        "sky-visibility",
+        "bent-normal",
     ];
 }
 
@@ -82,6 +87,8 @@ impl std::str::FromStr for ViewBuffer {
             "cascades" => ViewBuffer::Shadow(ShadowView::Cascades),
             "env-probe" => ViewBuffer::Env(EnvView::Probe),
             "env-mirror" => ViewBuffer::Env(EnvView::Mirror),
+            "sky-visibility" => ViewBuffer::SkyOcc(SkyOccView::Visibility),
+            "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -120,6 +127,14 @@ pub struct FrameSettings {
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
     /// along the reflection vector.
     pub environment_specular: bool,
+    /// L2 height-field sky occlusion (sky light and ambient specular times
+    /// the SH2 visibility along the bent normal). Off by default in the
+    /// library (the L3 relighting test compares against unoccluded lighting);
+    /// the CLI turns it on.
+    pub sky_occlusion: bool,
+    /// Forget the sky occlusion sectors each frame so the wanted ones are
+    /// re-rendered (bench rows `skyocc.*`).
+    pub sky_occlusion_every_frame: bool,
     /// L3: ambient specular from the relit G-buffer cube of the probe
     /// nearest the camera (scenes with `[[probe]]`); off: the sky cube.
     pub environment_probes: bool,
@@ -158,6 +173,8 @@ impl FrameSettings {
             aa_buffers: Default::default(),
             time_s: 0.0,
             environment_specular: true,
+            sky_occlusion: false,
+            sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,
         }

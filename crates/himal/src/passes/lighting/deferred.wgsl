@@ -10,7 +10,11 @@
 // Aerial perspective: exponential extinction toward the sky colour along the view ray.
 // Bindings: view, lighting (uniform Lighting), sky (uniform SkyParams), G-buffer, depth,
 // shadow_mask, ao, lights (screen-space AO in .x, passes/ao; 1x1 white when off).
-// CPU twin: passes/lighting/reference.rs (`shade`).
+// Sky occlusion (L2, SKY_OCCLUSION): SH2 visibility of the pixel's sector
+// (passes/skyocc, shaders/sky_occlusion.wgsl), faded with height above the
+// terrain; sky SH irradiance along the bent normal times the cosine-convolved
+// SH2 visibility along it; the same visibility scales ambient specular.
+// CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`).
 #import view
 #import brdf
 #import tangent_frame
@@ -18,6 +22,7 @@
 #import sky
 #import shadow
 #import envmap
+#import sky_occlusion
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -35,6 +40,7 @@ override SHADOWS: bool = true;
 override FOG: bool = true;
 override SSAO: bool = true;
 override ENV_SPECULAR: bool = true;
+override SKY_OCCLUSION: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> lighting: Lighting;
@@ -49,6 +55,10 @@ override ENV_SPECULAR: bool = true;
 @group(0) @binding(10) var env_specular: texture_cube<f32>;
 @group(0) @binding(11) var env_sampler: sampler;
 @group(0) @binding(12) var dfg_lut: texture_2d<f32>;
+@group(0) @binding(13) var skyocc_table: texture_2d<i32>;
+@group(0) @binding(14) var skyocc_vis: texture_2d_array<f32>;
+@group(0) @binding(15) var skyocc_heights_load: texture_2d_array<f32>;
+@group(0) @binding(16) var skyocc_sampler: sampler;
 
 // Reflected radiance of the local lights at p (mask: the shadow mask texel).
 fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f) -> vec3f {
@@ -76,11 +86,18 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
 
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
-fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32) -> vec3f {
+// `sky_vis`: SH2 sky visibility (open sky when SKY_OCCLUSION is off).
+fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f) -> vec3f {
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
-    let e_n = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
+    var ao = ao_in;
+    var n_sky = n;
+    if (SKY_OCCLUSION) {
+        n_sky = bent_normal_from_sh_visibility(n, sky_vis);
+        ao *= sh2_visibility_cosine(sky_vis, n_sky);
+    }
+    let e_n = max(sh9_eval(lighting.sky_irradiance, n_sky), vec3f(0.0));
     let roughness = perceptual_roughness_from_glossiness(glossiness);
     if (ENV_SPECULAR) {
         // Radiance (kcd/m^2 = klux/sr): no 1/pi, unlike the irradiance terms.
@@ -127,7 +144,11 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (SSAO) {
         ssao = textureLoad(ao, min(px, vec2i(textureDimensions(ao)) - 1), 0).x;
     }
-    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, mask.r);
+    var sky_vis = vec4f(0.0);
+    if (SKY_OCCLUSION) {
+        sky_vis = sky_occlusion_lookup(skyocc_table, skyocc_vis, skyocc_heights_load, skyocc_sampler, p, tbn[2]);
+    }
+    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, mask.r, sky_vis);
     c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);

@@ -1,7 +1,8 @@
 //! Deferred lighting (TECHNIQUES M1, M2, L1 foundation): sun with the
 //! anisotropic GGX BRDF, SH9 sky irradiance, split-sum ambient specular,
 //! aerial perspective. CPU twin: [`reference::shade`]. Permutations (E1):
-//! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`, `ENV_SPECULAR`).
+//! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`, `ENV_SPECULAR`,
+//! `SKY_OCCLUSION`: L2 height-field sky visibility from `passes/skyocc`).
 
 pub mod reference;
 
@@ -14,6 +15,7 @@ use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::{draw_fullscreen, target};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::skyocc::{SkyOccFrame, SkyOccPass};
 
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
@@ -30,6 +32,8 @@ pub struct LightingKey {
     /// Ambient specular from the filtered environment cube and the DFG
     /// table (L4, M4); off: SH along the reflection vector and the fitted DFG.
     pub env_specular: bool,
+    /// L2 sky occlusion: SH2 visibility and bent normal from the sector pool.
+    pub sky_occlusion: bool,
 }
 
 impl Default for LightingKey {
@@ -39,6 +43,7 @@ impl Default for LightingKey {
             fog: true,
             ssao: true,
             env_specular: true,
+            sky_occlusion: false,
         }
     }
 }
@@ -50,25 +55,28 @@ impl LightingKey {
         fog: false,
         ssao: false,
         env_specular: false,
+        sky_occlusion: false,
     };
 
     /// Every permutation (for pre-warming).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..16u32).map(|bits| LightingKey {
+        (0..32u32).map(|bits| LightingKey {
             shadows: bits & 1 != 0,
             fog: bits & 2 != 0,
             ssao: bits & 4 != 0,
             env_specular: bits & 8 != 0,
+            sky_occlusion: bits & 16 != 0,
         })
     }
 
-    fn constants(self) -> [(&'static str, f64); 4] {
+    fn constants(self) -> [(&'static str, f64); 5] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
             ("FOG", b(self.fog)),
             ("SSAO", b(self.ssao)),
             ("ENV_SPECULAR", b(self.env_specular)),
+            ("SKY_OCCLUSION", b(self.sky_occlusion)),
         ]
     }
 }
@@ -88,6 +96,10 @@ pub struct LightingInputs<'a> {
     /// after this frame's filtering, if any.
     pub envmap: &'a EnvMapPass,
     pub env: TextureHandle,
+    /// Sky occlusion pool (L2): handles order the read after this frame's
+    /// sector updates; bound whatever the permutation.
+    pub skyocc: &'a SkyOccPass,
+    pub skyocc_frame: SkyOccFrame,
     /// The permutation to draw with (prepared beforehand).
     pub key: LightingKey,
 }
@@ -140,6 +152,8 @@ impl LightingPass {
             inputs.shadow_mask,
             inputs.ao,
             inputs.env,
+            inputs.skyocc_frame.vis,
+            inputs.skyocc_frame.heights,
         ] {
             pass.read(t, TextureAccess::Sampled);
         }
@@ -153,6 +167,7 @@ impl LightingPass {
                 ))));
                 return;
             };
+            let sky = inputs.skyocc.bindings();
             let bind_group = self.program.bind(
                 ctx.device,
                 0,
@@ -196,6 +211,19 @@ impl LightingPass {
                     (
                         "dfg_lut",
                         wgpu::BindingResource::TextureView(&inputs.envmap.dfg_view),
+                    ),
+                    (
+                        "skyocc_table",
+                        wgpu::BindingResource::TextureView(sky.table),
+                    ),
+                    ("skyocc_vis", wgpu::BindingResource::TextureView(sky.vis)),
+                    (
+                        "skyocc_heights_load",
+                        wgpu::BindingResource::TextureView(sky.heights),
+                    ),
+                    (
+                        "skyocc_sampler",
+                        wgpu::BindingResource::Sampler(sky.sampler),
                     ),
                 ],
             );

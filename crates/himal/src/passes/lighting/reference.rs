@@ -64,11 +64,38 @@ pub fn shade(
     light: &LightingParams,
     sun_visibility: f32,
 ) -> Vec3 {
+    shade_sky_occluded(m, ao, t, b, n, v, light, sun_visibility, None)
+}
+
+/// [`shade`] with the `SKY_OCCLUSION` permutation (L2): `sky_vis` is the
+/// pixel's faded SH2 visibility (`passes/skyocc/reference.rs`); the sky
+/// irradiance is taken along the bent normal and, with ambient specular,
+/// scaled by the cosine-convolved visibility along it.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_sky_occluded(
+    m: &Material,
+    ao: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    light: &LightingParams,
+    sun_visibility: f32,
+    sky_vis: Option<glam::Vec4>,
+) -> Vec3 {
+    use crate::passes::skyocc::reference::{bent_normal_from_sh_visibility, sh2_visibility_cosine};
     let s = surface_from_material(m);
     let l = light.sun_direction;
     let mut c = brdf_cos(&s, t, b, n, v, l) * light.sun_illuminance * sun_visibility;
     let n_o_v = n.dot(v).max(1e-4);
-    let e_n = light.sky_irradiance.eval(n).max(Vec3::ZERO);
+    let (ao, n_sky) = match sky_vis {
+        Some(sh) => {
+            let bent = bent_normal_from_sh_visibility(n, sh);
+            (ao * sh2_visibility_cosine(sh, bent), bent)
+        }
+        None => (ao, n),
+    };
+    let e_n = light.sky_irradiance.eval(n_sky).max(Vec3::ZERO);
     let roughness = perceptual_roughness_from_glossiness(m.glossiness);
     if let Some(env) = &light.environment {
         let n_r = m4_reflection_normal(n, b, v, m.anisotropy);

@@ -1,0 +1,34 @@
+// skyocc.heightfield: top-down orthographic render of one sector (plus its
+// apron) of the scene's opaque geometry (TECHNIQUES L2). The depth test keeps
+// the highest surface (depth 0 at the top of the scene); the colour target
+// stores its world height (R32Float, cleared to the bottom of the scene).
+// Vegetation is not drawn (swaying cards would flicker the sky occlusion).
+// Bindings: sector (uniform SectorView), objects (as gbuffer).
+
+#import scene
+
+struct SectorView {
+    view_proj: mat4x4f,
+}
+
+@group(0) @binding(0) var<uniform> sector: SectorView;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+
+struct HeightOut {
+    @builtin(position) clip: vec4f,
+    @location(0) height: f32,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> HeightOut {
+    let world = objects[object].model * vec4f(position, 1.0);
+    var out: HeightOut;
+    out.clip = sector.view_proj * world;
+    out.height = world.y;
+    return out;
+}
+
+@fragment
+fn fs_main(in: HeightOut) -> @location(0) vec4f {
+    return vec4f(in.height, 0.0, 0.0, 1.0);
+}

@@ -1,0 +1,536 @@
+//! Height-field sky occlusion (TECHNIQUES L2; Far Cry 4 talk, SKY OCCLUSION).
+//!
+//! When a 64x64 m sector comes within [`RANGE`] of the camera and into the
+//! frustum, `skyocc.heightfield` renders the scene's opaque geometry top-down
+//! (orthographic, 25 cm per texel, with an apron of [`MARGIN_TEXELS`]),
+//! `skyocc.blur` blurs it (binomial, sigma 25 cm) and `skyocc.visibility`
+//! turns it into an SH2 visibility per texel (rotated Poisson disk, cap
+//! rotated to the mean visible direction) plus (surface, blurred) heights,
+//! stored in a fixed pool of texture-array layers with LRU eviction
+//! ([`pool`]). Lighting looks the sector up in a 32x32 table
+//! (`shaders/sky_occlusion.wgsl`). CPU twin: [`reference`]. Docs:
+//! `docs/techniques/L2.md`.
+
+pub mod pool;
+pub mod reference;
+mod resources;
+mod tools;
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec2, Vec4};
+
+use crate::frame::FrameErrors;
+use crate::gpu::pipeline::Program;
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::gbuffer::GBuffer;
+use crate::renderer::scene_gpu::{Draw, SceneGpu};
+use crate::scene::{Aabb, Camera, Scene};
+use pool::{Sector, SectorPool, visible_sectors};
+pub use reference::{MARGIN_TEXELS, RENDER_TEXELS, SECTOR_TEXELS, TEXEL_SIZE};
+use resources::{Intermediates, PoolTextures, SectorViewGpu};
+
+/// Sectors whose nearest point is within this distance (m) of the camera are wanted.
+pub const RANGE: f32 = 160.0;
+/// Most sectors rendered in one frame (the rest follow in later frames).
+pub const MAX_SECTORS_PER_FRAME: usize = 16;
+/// Pool layers (resident sectors): 32 x 1 MB.
+pub const POOL_LAYERS: u32 = 32;
+
+/// The debug views (`--view sky-visibility`, `--view bent-normal`); `id` is `VIEW`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SkyOccView {
+    Visibility = 1,
+    BentNormal = 2,
+}
+
+/// What the sky occlusion did this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SkyOccStats {
+    /// Sectors in range and view.
+    pub wanted: u32,
+    /// Sectors rendered this frame (height field, blur, visibility).
+    pub rendered: u32,
+    /// Sectors resident in the pool.
+    pub resident: u32,
+}
+
+/// One sector rendered this frame.
+#[derive(Clone, Debug)]
+struct Job {
+    draws: Vec<Draw>,
+}
+
+/// The pool textures lighting reads, as graph handles (ordering after this
+/// frame's sector updates).
+#[derive(Clone, Copy, Debug)]
+pub struct SkyOccFrame {
+    pub vis: TextureHandle,
+    pub heights: TextureHandle,
+}
+
+/// The lighting bindings of the pool (views owned by the pass).
+pub struct SkyOccBindings<'a> {
+    pub table: &'a wgpu::TextureView,
+    pub vis: &'a wgpu::TextureView,
+    pub heights: &'a wgpu::TextureView,
+    pub sampler: &'a wgpu::Sampler,
+}
+
+/// One sector's results read back (tests): row-major [`SECTOR_TEXELS`]².
+#[derive(Clone, Debug)]
+pub struct SectorReadback {
+    pub sh: Vec<Vec4>,
+    /// (surface, fade) heights.
+    pub heights: Vec<Vec2>,
+    /// The blurred rendered image ([`RENDER_TEXELS`]²).
+    pub blurred: Vec<f32>,
+}
+
+pub struct SkyOccPass {
+    height_program: Program,
+    height_pipeline: wgpu::RenderPipeline,
+    blur_program: Program,
+    blur: [wgpu::ComputePipeline; 2],
+    vis_program: Program,
+    visibility: wgpu::ComputePipeline,
+    view_program: Program,
+    views: HashMap<(SkyOccView, wgpu::TextureFormat), wgpu::RenderPipeline>,
+    pool: SectorPool,
+    textures: PoolTextures,
+    work: Option<Intermediates>,
+    disk: wgpu::Buffer,
+    /// Object bounds over all time (draw culling per sector) and the scene's heights.
+    bounds: Vec<Aabb>,
+    heights: (f32, f32),
+    jobs: Vec<Job>,
+    pub stats: SkyOccStats,
+}
+
+impl SkyOccPass {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let height_program = Program::new(ctx, "passes/skyocc/heightfield.wgsl")?;
+        let height_pipeline = resources::height_pipeline(ctx, &height_program)?;
+        let blur_program = Program::new(ctx, "passes/skyocc/blur.wgsl")?;
+        let blur = [
+            blur_program.compute_pipeline(ctx, "cs_main", &[("AXIS", 0.0)])?,
+            blur_program.compute_pipeline(ctx, "cs_main", &[("AXIS", 1.0)])?,
+        ];
+        let vis_program = Program::new(ctx, "passes/skyocc/visibility.wgsl")?;
+        let constants = [
+            ("RADIUS", reference::SAMPLE_RADIUS as f64),
+            ("STEPS", reference::MARCH_STEPS as f64),
+            ("MARGIN", MARGIN_TEXELS as f64),
+            ("TEXEL", TEXEL_SIZE as f64),
+            ("ORIGIN_LIFT", reference::ORIGIN_LIFT as f64),
+            ("FADE_RADIUS", reference::FADE_RADIUS as f64),
+        ];
+        let visibility = vis_program.compute_pipeline(ctx, "cs_main", &constants)?;
+        let casters = crate::passes::shadows::casters::Casters::from_scene(scene);
+        let heights = if casters.scene.is_empty() {
+            (-1.0, 1.0)
+        } else {
+            (casters.scene.min.y - 1.0, casters.scene.max.y + 1.0)
+        };
+        Ok(Self {
+            height_program,
+            height_pipeline,
+            blur_program,
+            blur,
+            vis_program,
+            visibility,
+            view_program: Program::new(ctx, "passes/skyocc/view.wgsl")?,
+            views: HashMap::new(),
+            pool: SectorPool::new(POOL_LAYERS as usize),
+            textures: PoolTextures::new(ctx, 1, 1),
+            work: None,
+            disk: resources::disk_buffer(ctx),
+            bounds: casters.bounds,
+            heights,
+            jobs: Vec::new(),
+            stats: SkyOccStats::default(),
+        })
+    }
+
+    /// Builds the pipeline of a debug view.
+    pub fn prepare_view(
+        &mut self,
+        ctx: &GpuContext,
+        view: SkyOccView,
+        format: wgpu::TextureFormat,
+    ) -> Result<(), GpuError> {
+        if !self.views.contains_key(&(view, format)) {
+            let p = view_pipeline(ctx, &self.view_program, "skyocc.view", view as u32, format)?;
+            self.views.insert((view, format), p);
+        }
+        Ok(())
+    }
+
+    /// Orthographic top-down projection of the rendered image at `origin`:
+    /// clip x from world x, clip y = 1 at the image's min z (row 0), depth 0
+    /// at the top of the scene and 1 at its bottom.
+    fn sector_view_proj(&self, origin: Vec2) -> Mat4 {
+        let w = RENDER_TEXELS as f32 * TEXEL_SIZE;
+        let (bottom, top) = self.heights;
+        let d = top - bottom;
+        Mat4::from_cols(
+            Vec4::new(2.0 / w, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, -1.0 / d, 0.0),
+            Vec4::new(0.0, -2.0 / w, 0.0, 0.0),
+            Vec4::new(
+                -1.0 - 2.0 * origin.x / w,
+                1.0 + 2.0 * origin.y / w,
+                top / d,
+                1.0,
+            ),
+        )
+    }
+
+    /// Origin (world x, z of texel (0, 0)) of a sector's rendered image.
+    pub fn render_origin(sector: Sector) -> Vec2 {
+        sector.as_vec2() * reference::SECTOR_SIZE - MARGIN_TEXELS as f32 * TEXEL_SIZE
+    }
+
+    /// Plans this frame: the sectors in range and view, the pool's LRU
+    /// update, the jobs of up to [`MAX_SECTORS_PER_FRAME`] new sectors; and
+    /// uploads their views, the job list and the sector table. `enabled`
+    /// false: nothing is rendered (the lighting permutation reads nothing).
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        camera: &Camera,
+        aspect: f32,
+        enabled: bool,
+    ) -> SkyOccStats {
+        self.jobs.clear();
+        if !enabled {
+            self.stats = SkyOccStats::default();
+            return self.stats;
+        }
+        let wanted = visible_sectors(
+            camera.position,
+            camera.view_projection(aspect),
+            RANGE,
+            self.heights,
+        );
+        let planned = self.pool.plan(&wanted, MAX_SECTORS_PER_FRAME);
+        self.plan_jobs(ctx, scene, &planned, &wanted);
+        self.stats = SkyOccStats {
+            wanted: wanted.len() as u32,
+            rendered: self.jobs.len() as u32,
+            resident: self.pool.resident().count() as u32,
+        };
+        self.stats
+    }
+
+    fn plan_jobs(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        planned: &[(Sector, u32)],
+        wanted: &[Sector],
+    ) {
+        if self.textures.layers < POOL_LAYERS {
+            self.textures = PoolTextures::new(ctx, POOL_LAYERS, SECTOR_TEXELS as u32);
+        }
+        if self.work.is_none() {
+            self.work = Some(Intermediates::new(ctx, MAX_SECTORS_PER_FRAME as u32));
+        }
+        let Some(work) = &self.work else { return };
+        let w = RENDER_TEXELS as f32 * TEXEL_SIZE;
+        let mut gpu_jobs = Vec::new();
+        let mut jobs = Vec::new();
+        for (i, &(sector, layer)) in planned.iter().enumerate() {
+            let origin = Self::render_origin(sector);
+            let inside = |d: &&Draw| {
+                self.bounds.get(d.object as usize).is_some_and(|b| {
+                    b.max.x >= origin.x
+                        && b.min.x <= origin.x + w
+                        && b.max.z >= origin.y
+                        && b.min.z <= origin.y + w
+                })
+            };
+            let draws: Vec<Draw> = scene
+                .draws_opaque
+                .iter()
+                .chain(scene.draws_textured.iter().map(|(d, _)| d))
+                .filter(inside)
+                .cloned()
+                .collect();
+            let view_proj = self.sector_view_proj(origin);
+            ctx.queue.write_buffer(
+                &work.views[i],
+                0,
+                bytemuck::bytes_of(&SectorViewGpu {
+                    view_proj: view_proj.to_cols_array_2d(),
+                }),
+            );
+            gpu_jobs.push(resources::JobGpu {
+                origin: [origin.x, origin.y, 0.0, 0.0],
+                layer: [layer, 0, 0, 0],
+            });
+            jobs.push(Job { draws });
+        }
+        self.jobs = jobs;
+        if !gpu_jobs.is_empty() {
+            ctx.queue
+                .write_buffer(&work.jobs, 0, bytemuck::cast_slice(&gpu_jobs));
+        }
+        let table = pool::sector_table(&self.pool, wanted);
+        self.textures.write_table(ctx, &table);
+    }
+
+    /// The lighting and view bindings of the pool.
+    pub fn bindings(&self) -> SkyOccBindings<'_> {
+        SkyOccBindings {
+            table: &self.textures.table_view,
+            vis: &self.textures.vis_view,
+            heights: &self.textures.heights_view,
+            sampler: &self.textures.sampler,
+        }
+    }
+
+    /// Adds this frame's sector updates (none when nothing is planned) and
+    /// returns the pool textures lighting reads.
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        scene: &'a SceneGpu,
+        errors: &'a FrameErrors,
+    ) -> SkyOccFrame {
+        let mut vis = graph.import_texture("skyocc.vis", &self.textures.vis);
+        let mut heights = graph.import_texture("skyocc.heights", &self.textures.heights);
+        let Some(work) = self.work.as_ref().filter(|_| !self.jobs.is_empty()) else {
+            return SkyOccFrame { vis, heights };
+        };
+        let raw = graph.import_texture("skyocc.raw", &work.raw);
+        let blurred = graph.import_texture("skyocc.blurred", &work.blurred);
+        let mut pass = graph.add_pass("skyocc.heightfield");
+        let raw = pass.write(raw, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            self.record_heightfields(ctx.encoder, ctx.device, scene, work, errors);
+        });
+        let mut pass = graph.add_pass("skyocc.blur");
+        pass.read(raw, TextureAccess::Sampled);
+        let blurred = pass.write(blurred, TextureAccess::StorageWrite);
+        pass.execute(move |ctx| {
+            errors.record(self.record_blur(ctx.encoder, ctx.device, work, self.jobs.len() as u32));
+        });
+        let mut pass = graph.add_pass("skyocc.visibility");
+        pass.side_effect();
+        pass.read(raw, TextureAccess::Sampled);
+        pass.read(blurred, TextureAccess::Sampled);
+        vis = pass.write(vis, TextureAccess::StorageWrite);
+        heights = pass.write(heights, TextureAccess::StorageWrite);
+        pass.execute(move |ctx| {
+            let n = self.jobs.len() as u32;
+            errors.record(self.record_visibility(ctx.encoder, ctx.device, work, n));
+        });
+        SkyOccFrame { vis, heights }
+    }
+
+    /// One render pass per job into layer i of the raw height image.
+    fn record_heightfields(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        device: &wgpu::Device,
+        scene: &SceneGpu,
+        work: &Intermediates,
+        errors: &FrameErrors,
+    ) {
+        let (bottom, _) = self.heights;
+        for (i, job) in self.jobs.iter().enumerate() {
+            let bg = self.height_program.bind(
+                device,
+                0,
+                &[
+                    ("sector", work.views[i].as_entire_binding()),
+                    ("objects", scene.objects.as_entire_binding()),
+                ],
+            );
+            let Some(bg) = errors.record(bg) else { return };
+            let color = resources::layer_view(&work.raw, i as u32);
+            let depth = resources::layer_view(&work.depth, i as u32);
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("skyocc.heightfield"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: bottom as f64,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if job.draws.is_empty() {
+                continue;
+            }
+            rp.set_pipeline(&self.height_pipeline);
+            rp.set_bind_group(0, &bg, &[]);
+            scene.bind_geometry(&mut rp);
+            SceneGpu::draw_list(&mut rp, &job.draws);
+        }
+    }
+
+    /// Blur along x (raw -> scratch), then y (scratch -> blurred), `n` layers.
+    fn record_blur(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        device: &wgpu::Device,
+        work: &Intermediates,
+        n: u32,
+    ) -> Result<(), GpuError> {
+        let groups = (RENDER_TEXELS as u32).div_ceil(8);
+        for (axis, (src, dst)) in [(&work.raw, &work.scratch), (&work.scratch, &work.blurred)]
+            .into_iter()
+            .enumerate()
+        {
+            let bg = self.blur_program.bind(
+                device,
+                0,
+                &[
+                    (
+                        "src_load",
+                        wgpu::BindingResource::TextureView(&resources::array_view(src)),
+                    ),
+                    (
+                        "dst",
+                        wgpu::BindingResource::TextureView(&resources::array_view(dst)),
+                    ),
+                ],
+            )?;
+            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("skyocc.blur"),
+                timestamp_writes: None,
+            });
+            cp.set_pipeline(&self.blur[axis]);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(groups, groups, n);
+        }
+        Ok(())
+    }
+
+    fn record_visibility(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        device: &wgpu::Device,
+        work: &Intermediates,
+        n: u32,
+    ) -> Result<(), GpuError> {
+        let tv = |t: &wgpu::Texture| resources::array_view(t);
+        let (raw, blurred) = (tv(&work.raw), tv(&work.blurred));
+        let (vis, heights) = (tv(&self.textures.vis), tv(&self.textures.heights));
+        let bg = self.vis_program.bind(
+            device,
+            0,
+            &[
+                ("raw_load", wgpu::BindingResource::TextureView(&raw)),
+                ("blurred_load", wgpu::BindingResource::TextureView(&blurred)),
+                ("disk", self.disk.as_entire_binding()),
+                ("jobs", work.jobs.as_entire_binding()),
+                ("vis_out", wgpu::BindingResource::TextureView(&vis)),
+                ("heights_out", wgpu::BindingResource::TextureView(&heights)),
+            ],
+        )?;
+        let groups = (SECTOR_TEXELS as u32).div_ceil(8);
+        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("skyocc.visibility"),
+            timestamp_writes: None,
+        });
+        cp.set_pipeline(&self.visibility);
+        cp.set_bind_group(0, &bg, &[]);
+        cp.dispatch_workgroups(groups, groups, n);
+        Ok(())
+    }
+
+    /// The debug view of the sky visibility or the bent normal into `output`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_view<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        kind: SkyOccView,
+        frame: SkyOccFrame,
+        gbuffer: GBuffer,
+        view: &'a wgpu::Buffer,
+        output: TextureHandle,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let format = graph.texture_desc(output).map(|d| d.format);
+        let pipeline = format.and_then(|f| self.views.get(&(kind, f)));
+        let mut pass = graph.add_pass("skyocc.view");
+        for t in [gbuffer.frame, gbuffer.depth, frame.vis, frame.heights] {
+            pass.read(t, TextureAccess::Sampled);
+        }
+        let output = pass.write(output, TextureAccess::ColorAttachment);
+        pass.execute(move |ctx| {
+            let Some(pipeline) = pipeline else {
+                errors.record::<()>(Err(GpuError::Other(format!(
+                    "sky occlusion view {kind:?} was not prepared"
+                ))));
+                return;
+            };
+            let b = self.bindings();
+            let tv = wgpu::BindingResource::TextureView;
+            let bg = self.view_program.bind(
+                ctx.device,
+                0,
+                &[
+                    ("view", view.as_entire_binding()),
+                    ("gbuffer_frame", tv(ctx.view(gbuffer.frame))),
+                    ("depth", tv(ctx.view(gbuffer.depth))),
+                    ("skyocc_table", tv(b.table)),
+                    ("skyocc_vis", tv(b.vis)),
+                    ("skyocc_heights_load", tv(b.heights)),
+                    ("skyocc_sampler", wgpu::BindingResource::Sampler(b.sampler)),
+                ],
+            );
+            if let Some(bg) = errors.record(bg) {
+                let target = ctx.view(output);
+                draw_fullscreen(
+                    ctx,
+                    pipeline,
+                    &bg,
+                    target,
+                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    None,
+                );
+            }
+        });
+        output
+    }
+
+    /// Forgets resident sectors (the scene's geometry changed).
+    pub fn invalidate(&mut self) {
+        self.pool.clear();
+    }
+
+    /// The sectors a camera wants (in range and view), nearest first.
+    pub fn wanted(&self, camera: &Camera, aspect: f32) -> Vec<Sector> {
+        visible_sectors(
+            camera.position,
+            camera.view_projection(aspect),
+            RANGE,
+            self.heights,
+        )
+    }
+}

@@ -1,0 +1,84 @@
+// skyocc.visibility: per texel of each new sector, SSAO-style sampling of the
+// blurred height field with a per-texel rotated Poisson disk (TECHNIQUES L2).
+// Disk point q maps to the hemisphere direction d = (q.x s, 1 - |q|^2, q.y s),
+// s = sqrt(2 - |q|^2) (equal area: uniform directions). d is visible when the
+// ray from the texel's point (raw height + ORIGIN_LIFT) stays above the
+// blurred height at STEPS points up to RADIUS metres. Visible fraction f and
+// the sum of visible directions become an SH2 cap (shaders/sky_occlusion.wgsl),
+// stored with (raw, fade) heights in the sector's pool layer; the fade height
+// is the blurred field averaged over the disk scaled to FADE_RADIUS (a wide
+// blur, as the talk's blurred map; the sampled field stays sharp).
+// Twin: passes/skyocc/reference.rs `visibility_at`, `sector_visibility`.
+#import sky_occlusion
+
+override RADIUS: f32 = 8.0;
+override STEPS: u32 = 8u;
+override MARGIN: i32 = 36;
+override TEXEL: f32 = 0.25;
+override ORIGIN_LIFT: f32 = 0.05;
+override FADE_RADIUS: f32 = 2.0;
+
+struct SectorJob {
+    // xy: world x, z of the rendered image's corner (texel (0, 0) min)
+    origin: vec4f,
+    // x: pool layer written
+    layer: vec4u,
+}
+
+@group(0) @binding(0) var raw_load: texture_2d_array<f32>;
+@group(0) @binding(1) var blurred_load: texture_2d_array<f32>;
+@group(0) @binding(2) var<storage, read> disk: array<vec2f>;
+@group(0) @binding(3) var<storage, read> jobs: array<SectorJob>;
+@group(0) @binding(4) var vis_out: texture_storage_2d_array<rgba16float, write>;
+@group(0) @binding(5) var heights_out: texture_storage_2d_array<rg32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_main(@builtin(global_invocation_id) id: vec3u) {
+    let inner = vec2i(textureDimensions(vis_out));
+    let u = vec2i(id.xy);
+    if (u.x >= inner.x || u.y >= inner.y) {
+        return;
+    }
+    let job = jobs[id.z];
+    let size = vec2i(textureDimensions(raw_load));
+    let layer = i32(id.z);
+    let x = u + vec2i(MARGIN);
+    let h_raw = textureLoad(raw_load, x, layer, 0).x;
+    let origin = job.origin.xy;
+    let p = vec3f(origin.x + (f32(x.x) + 0.5) * TEXEL, h_raw + ORIGIN_LIFT, origin.y + (f32(x.y) + 0.5) * TEXEL);
+    let noise = fract(52.982918 * fract(0.06711056 * f32(x.x) + 0.00583715 * f32(x.y)));
+    let angle = 6.28318530718 * noise;
+    let s = sin(angle);
+    let c = cos(angle);
+    var count = 0u;
+    var sum = vec3f(0.0);
+    var h_fade = 0.0;
+    let n = arrayLength(&disk);
+    for (var k = 0u; k < n; k = k + 1u) {
+        let dk = disk[k];
+        let q = vec2f(c * dk.x - s * dk.y, s * dk.x + c * dk.y);
+        let r2 = min(dot(q, q), 1.0);
+        let lift = sqrt(max(2.0 - r2, 0.0));
+        let dir = vec3f(q.x * lift, 1.0 - r2, q.y * lift);
+        let tf = clamp(vec2i(floor((p.xz + q * FADE_RADIUS - origin) / TEXEL)), vec2i(0), size - 1);
+        h_fade += textureLoad(blurred_load, tf, layer, 0).x;
+        var visible = true;
+        for (var i = 1u; i <= STEPS; i = i + 1u) {
+            let a = p + dir * (RADIUS * f32(i) / f32(STEPS));
+            let t = clamp(vec2i(floor((a.xz - origin) / TEXEL)), vec2i(0), size - 1);
+            if (textureLoad(blurred_load, t, layer, 0).x > a.y) {
+                visible = false;
+                break;
+            }
+        }
+        if (visible) {
+            count += 1u;
+            sum += dir;
+        }
+    }
+    let f = f32(count) / f32(max(n, 1u));
+    h_fade /= f32(max(n, 1u));
+    let out_layer = i32(job.layer.x);
+    textureStore(vis_out, u, out_layer, sh2_from_visibility(f, sum));
+    textureStore(heights_out, u, out_layer, vec4f(h_raw, h_fade, 0.0, 1.0));
+}

@@ -1,0 +1,372 @@
+//! Height-field sky occlusion (TECHNIQUES L2): the GPU passes against their
+//! CPU twin (`passes/skyocc/reference.rs`), the visibility against rays
+//! marched over the analytic height field of a canyon and a wall, and the
+//! lighting's `SKY_OCCLUSION` permutation against `shade_sky_occluded`.
+
+mod common;
+
+use std::path::Path;
+
+use common::{lighting_params, pixel_ray, renderer};
+use glam::{IVec2, Vec2, Vec3, Vec4};
+use himal::gpu::testing::shared_context;
+use himal::passes::lighting::reference::shade_sky_occluded;
+use himal::passes::skyocc::reference::{
+    self as twin, HeightImage, RENDER_TEXELS, SECTOR_SIZE, SECTOR_TEXELS, TEXEL_SIZE,
+};
+use himal::passes::skyocc::{SectorReadback, SkyOccPass};
+use himal::renderer::scene_gpu::SceneGpu;
+use himal::scene::Scene;
+use himal::{FrameSettings, ViewBuffer};
+
+/// Ground at 0; a canyon 6 m wide between two 5 m plateaus (x 10..20 and
+/// 26..36); a 1 m thick, 4 m high wall at x 46..47; all from z 8 to 56,
+/// inside sector (0, 0).
+const CANYON_AND_WALL: &str = r#"
+[sun]
+time = "10:00"
+
+[[material]]
+name = "grey"
+albedo_linear = [0.5, 0.5, 0.5]
+glossiness = 0.4
+reflectance = 0.04
+metallic = 0.0
+anisotropy = 0.0
+ao = 1.0
+
+[[object]]
+name = "ground"
+primitive = "plane"
+material = "grey"
+size = [200.0, 200.0]
+position = [32.0, 0.0, 32.0]
+
+[[object]]
+name = "plateau_west"
+primitive = "box"
+material = "grey"
+size = [10.0, 5.0, 48.0]
+position = [15.0, 2.5, 32.0]
+
+[[object]]
+name = "plateau_east"
+primitive = "box"
+material = "grey"
+size = [10.0, 5.0, 48.0]
+position = [31.0, 2.5, 32.0]
+
+[[object]]
+name = "wall"
+primitive = "box"
+material = "grey"
+size = [1.0, 4.0, 48.0]
+position = [46.5, 2.0, 32.0]
+
+[[camera]]
+name = "main"
+position = [54.0, 6.0, 44.0]
+target = [40.0, 0.0, 30.0]
+fov_y = 60.0
+"#;
+
+/// The analytic height of [`CANYON_AND_WALL`].
+fn canyon_height(x: f32, z: f32) -> f32 {
+    if !(8.0..=56.0).contains(&z) {
+        return 0.0;
+    }
+    if (10.0..=20.0).contains(&x) || (26.0..=36.0).contains(&x) {
+        5.0
+    } else if (46.0..=47.0).contains(&x) {
+        4.0
+    } else {
+        0.0
+    }
+}
+
+fn scene() -> Scene {
+    Scene::from_toml_str(CANYON_AND_WALL, "canyon.toml", Path::new(".")).expect("scene")
+}
+
+/// A bumpy raw height image with a pit, a wall and a slope (twin inputs).
+fn synthetic_raw(origin: Vec2) -> HeightImage {
+    HeightImage::from_fn(RENDER_TEXELS, TEXEL_SIZE, origin, |x, z| {
+        let (lx, lz) = (x - origin.x, z - origin.y);
+        let mut h = 0.05 * lx + 0.3 * (lx * 0.7).sin() * (lz * 0.45).cos();
+        if (30.0..31.0).contains(&lx) && lz > 20.0 {
+            h += 6.0;
+        }
+        if (50.0..60.0).contains(&lx) && (40.0..50.0).contains(&lz) {
+            h -= 4.0;
+        }
+        h
+    })
+}
+
+#[test]
+fn blur_and_visibility_match_cpu_twin() {
+    let ctx = shared_context().expect("GPU");
+    let scene = scene();
+    let mut pass = SkyOccPass::new(ctx, &scene).expect("pass");
+    let raw = synthetic_raw(Vec2::new(-9.0, 3.0));
+    let gpu = pass
+        .run_kernels(ctx, std::slice::from_ref(&raw))
+        .expect("kernels");
+    let disk = twin::poisson_disk(twin::SAMPLES);
+    let (blurred, cpu) = twin::sector_visibility(&raw, &disk);
+    let blur_err = gpu[0]
+        .blurred
+        .iter()
+        .zip(&blurred.h)
+        .map(|(g, c)| (g - c).abs())
+        .fold(0.0f32, f32::max);
+    let (mut sum, mut worst, mut differing) = (0.0f32, 0.0f32, 0usize);
+    let mut height_err = 0.0f32;
+    for (g, c) in gpu[0].sh.iter().zip(&cpu) {
+        let e = (*g - c.sh).abs().max_element();
+        sum += e;
+        worst = worst.max(e);
+        if e > 0.01 {
+            differing += 1;
+        }
+    }
+    for (g, c) in gpu[0].heights.iter().zip(&cpu) {
+        height_err = height_err.max((*g - c.heights).abs().max_element());
+    }
+    let n = cpu.len() as f32;
+    eprintln!(
+        "skyocc twin: blur max {blur_err:.2e} m; SH mean {:.2e}, worst {worst:.3}, {differing} of {n} texels > 0.01; heights max {height_err:.2e}",
+        sum / n
+    );
+    // Same f32 arithmetic, same order: measured blur max 0 m on 2026-11-22; threshold 1e-4.
+    assert!(blur_err < 1e-4, "blur {blur_err}");
+    // The fade height sums 32 texels (GPU fma / order): measured 3.2e-4 m on 2026-11-22; threshold 2e-3.
+    assert!(height_err < 2e-3, "heights {height_err}");
+    // fp16 storage (~1e-3) plus rare samples flipped by rounding at a
+    // texel edge (one sample = 1/32 of the cap). Measured on 2026-11-22: mean 6.8e-4, worst 0.001, 0 texels > 0.01.
+    assert!(sum / n < 3e-3, "SH mean error {}", sum / n);
+    assert!((differing as f32) < 0.02 * n, "{differing} texels differ");
+}
+
+/// GPU sector (0, 0) of the canyon scene through the whole pipeline.
+fn canyon_sector() -> SectorReadback {
+    let ctx = shared_context().expect("GPU");
+    let scene = scene();
+    let gpu_scene = SceneGpu::upload(ctx, &scene).expect("upload");
+    let mut pass = SkyOccPass::new(ctx, &scene).expect("pass");
+    let mut out = pass
+        .render_sectors(ctx, &gpu_scene, &[IVec2::new(0, 0)])
+        .expect("render");
+    out.remove(0)
+}
+
+#[test]
+fn sky_visibility_matches_ray_traced_height_field() {
+    let sector = canyon_sector();
+    // Rendered heights: the analytic field, texel for texel.
+    let mut wrong = 0;
+    for j in 0..SECTOR_TEXELS {
+        for i in 0..SECTOR_TEXELS {
+            let (x, z) = ((i as f32 + 0.5) * TEXEL_SIZE, (j as f32 + 0.5) * TEXEL_SIZE);
+            let h = sector.heights[j * SECTOR_TEXELS + i].x;
+            if (h - canyon_height(x, z)).abs() > 1e-3 {
+                wrong += 1;
+            }
+        }
+    }
+    // Box edges fall on texel edges; measured 0 wrong texels on 2026-11-22.
+    assert!(
+        wrong == 0,
+        "{wrong} height texels differ from the analytic field"
+    );
+    // Ground texels of the canyon floor and both sides of the wall, every
+    // 4th texel along x and 16th along z, in the middle of the structures.
+    let mut rows = Vec::new();
+    for (name, x0, x1) in [("canyon", 20.0, 26.0), ("wall", 38.0, 56.0)] {
+        let (mut frac_err, mut cos_err, mut n) = (0.0f32, 0.0f32, 0);
+        for j in (96..160).step_by(16) {
+            for i in (0..SECTOR_TEXELS).step_by(2) {
+                let (x, z) = ((i as f32 + 0.5) * TEXEL_SIZE, (j as f32 + 0.5) * TEXEL_SIZE);
+                if x < x0 || x > x1 || canyon_height(x, z) != 0.0 {
+                    continue;
+                }
+                let sh = sector.sh[j * SECTOR_TEXELS + i];
+                let p = Vec3::new(x, twin::ORIGIN_LIFT, z);
+                let f_ref = twin::ray_traced_visibility(&canyon_height, p, 1024, false, 60.0);
+                let c_ref = twin::ray_traced_visibility(&canyon_height, p, 1024, true, 60.0);
+                // The stored fraction: L0 = C0 (1 - cos A) = C0 f.
+                let f = sh.x / twin::SH_CAP_C0;
+                let c = twin::sh2_visibility_cosine(sh, Vec3::Y);
+                frac_err += (f - f_ref).abs();
+                cos_err += (c - c_ref).abs();
+                n += 1;
+            }
+        }
+        rows.push((name, frac_err / n as f32, cos_err / n as f32, n));
+    }
+    for (name, f, c, n) in &rows {
+        eprintln!(
+            "skyocc vs ray traced, {name}: {n} texels, MAE fraction {f:.4}, MAE cosine-weighted along +Y {c:.4}"
+        );
+    }
+    for (name, f, c, n) in rows {
+        assert!(n >= 40, "{name}: {n} texels");
+        // Issue threshold 0.1. Measured on 2026-11-22 (fraction / cosine):
+        // canyon 0.049 / 0.039 (48 texels), wall 0.082 / 0.033 (136 texels).
+        assert!(f <= 0.1, "{name}: fraction MAE {f}");
+        assert!(c <= 0.1, "{name}: cosine MAE {c}");
+    }
+}
+
+/// Bilinear sample of a sector's SH at local coordinates in [0, 1)², clamped
+/// like the GPU sampler (twin of `textureSampleLevel` in `sky_occlusion_lookup`).
+fn sample_sh(sector: &SectorReadback, local: Vec2) -> Vec4 {
+    let n = SECTOR_TEXELS as i32;
+    let p = local * n as f32 - 0.5;
+    let p0 = p.floor();
+    let f = p - p0;
+    let at = |x: i32, y: i32| sector.sh[(y.clamp(0, n - 1) * n + x.clamp(0, n - 1)) as usize];
+    let (x, y) = (p0.x as i32, p0.y as i32);
+    let top = at(x, y).lerp(at(x + 1, y), f.x);
+    let bottom = at(x, y + 1).lerp(at(x + 1, y + 1), f.x);
+    top.lerp(bottom, f.y)
+}
+
+#[test]
+fn lighting_with_sky_occlusion_matches_cpu_twin() {
+    let scene = scene();
+    let camera = scene.camera("main").expect("camera").clone();
+    let (w, h) = (96u32, 64u32);
+    let mut r = renderer(&scene);
+    let mut s = FrameSettings::new(w, h, scene.sun.clone());
+    s.view = ViewBuffer::Debug(himal::passes::debug::DebugView::Lighting);
+    s.raw = true;
+    s.sky_occlusion = true;
+    s.shadow_resolution = 0;
+    s.ao.mode = himal::passes::ao::AoMode::Off;
+    s.aerial_extinction = 0.0;
+    s.environment_specular = false;
+    let gpu = r.render(&camera, &s).expect("frame");
+    assert_eq!(gpu.sky_occlusion.rendered, gpu.sky_occlusion.wanted);
+    let img = gpu.image.to_rgba_f32().expect("f32");
+    s.sky_occlusion = false;
+    let open = r
+        .render(&camera, &s)
+        .expect("frame")
+        .image
+        .to_rgba_f32()
+        .expect("f32");
+    let ctx = r.context();
+    let sector = r
+        .sky_occlusion()
+        .read_sector(ctx, IVec2::new(0, 0))
+        .expect("read")
+        .expect("sector (0, 0) resident");
+    let light = lighting_params(&scene);
+    // The G-buffer stores albedo in 8-bit sRGB and material parameters in 8 bits.
+    let q8 = |v: f32| (v * 255.0).round() / 255.0;
+    let q8_srgb = |v: f32| {
+        let s = if v <= 0.0031308 {
+            v * 12.92
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        let s = (s * 255.0).round() / 255.0;
+        if s <= 0.04045 {
+            s / 12.92
+        } else {
+            ((s + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let material = himal::math::brdf::Material {
+        albedo: Vec3::splat(q8_srgb(0.5)),
+        glossiness: q8(0.4),
+        reflectance: q8(0.04),
+        metallic: 0.0,
+        anisotropy: 0.0,
+    };
+    let (mut sum, mut worst, mut n, mut darker) = (0.0f32, 0.0f32, 0, 0);
+    let (mut worst_open, mut worst_ratio) = (0.0f32, 0.0f32);
+    for y in 0..h {
+        for x in 0..w {
+            // Ground pixels (plane y = 0) inside sector (0, 0), away from the boxes.
+            let dir = pixel_ray(&camera, (w, h), x, y);
+            if dir.y > -0.05 {
+                continue;
+            }
+            let p = camera.position + dir * (-camera.position.y / dir.y);
+            let l = Vec2::new(p.x, p.z) / SECTOR_SIZE;
+            if !(0.02..0.98).contains(&l.x) || !(0.02..0.98).contains(&l.y) {
+                continue;
+            }
+            // Skip pixels near a box's foot or whose ray meets a box first.
+            let t_hit = -camera.position.y / dir.y;
+            let blocked = (0..(t_hit * 10.0) as usize).any(|k| {
+                let a = camera.position + dir * (k as f32 * 0.1);
+                canyon_height(a.x, a.z) > a.y
+            });
+            let near_box = [-0.5f32, 0.0, 0.5]
+                .iter()
+                .any(|d| canyon_height(p.x + d, p.z) > 0.0);
+            if blocked || near_box {
+                continue;
+            }
+            let t = (Vec2::new(p.x, p.z) / TEXEL_SIZE).floor();
+            let hv = sector.heights[(t.y as usize) * SECTOR_TEXELS + t.x as usize];
+            let sh = twin::fade_to_visible(sample_sh(&sector, l), p.y, hv.x, hv.y);
+            let cpu = shade_sky_occluded(
+                &material,
+                1.0,
+                Vec3::X,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                -dir,
+                &light,
+                1.0,
+                Some(sh),
+            );
+            let g = img[(y * w + x) as usize];
+            let g = Vec3::new(g[0], g[1], g[2]);
+            let rel = ((g - cpu).abs() / cpu.max(Vec3::splat(1e-3))).max_element();
+            sum += rel;
+            worst = worst.max(rel);
+            n += 1;
+            let o = open[(y * w + x) as usize];
+            let cpu_open = shade_sky_occluded(
+                &material,
+                1.0,
+                Vec3::X,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                -dir,
+                &light,
+                1.0,
+                None,
+            );
+            let o = Vec3::new(o[0], o[1], o[2]);
+            worst_open = worst_open.max(((o - cpu_open).abs() / cpu_open).max_element());
+            // The occluded/open ratio cancels what both permutations share.
+            let ratio = ((g / o - cpu / cpu_open).abs()).max_element();
+            worst_ratio = worst_ratio.max(ratio);
+            if g.x < o[0] * 0.98 {
+                darker += 1;
+            }
+        }
+    }
+    let mean = sum / n.max(1) as f32;
+    eprintln!(
+        "lighting with sky occlusion vs CPU: {n} pixels, mean relative {mean:.5}, worst {worst:.5}; {darker} darker than without; without: worst {worst_open:.5}; ratio occluded/open worst {worst_ratio:.5}"
+    );
+    assert!(n > 1000, "{n} pixels");
+    assert!(
+        darker > n / 20,
+        "sky occlusion must darken some ground: {darker} of {n}"
+    );
+    // The base twin (no sky occlusion) is off by the same ~1.4% on this
+    // plane (measured worst 0.0138 without, 0.0139 with, mean 0.0134 with,
+    // on 2026-11-22), so the sky occlusion adds nothing measurable; the ratio
+    // occluded/open isolates it: measured worst 0.00093 (fp16 HDR and SH); threshold 0.01.
+    assert!(mean < 0.02, "mean {mean}");
+    assert!(worst < 0.03, "worst {worst}");
+    assert!(worst_ratio < 0.01, "ratio worst {worst_ratio}");
+}
