@@ -23,6 +23,7 @@
 #import shadow
 #import envmap
 #import sky_occlusion
+#import color
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -91,12 +92,13 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: 
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
-    var ao = ao_in;
     var n_sky = n;
+    var sky_visibility = 1.0;
     if (SKY_OCCLUSION) {
         n_sky = bent_normal_from_sh_visibility(n, sky_vis);
-        ao *= sh2_visibility_cosine(sky_vis, n_sky);
+        sky_visibility = sh2_visibility_cosine(sky_vis, n_sky);
     }
+    let ao = ao_in * sky_visibility;
     let e_n = max(sh9_eval(lighting.sky_irradiance, n_sky), vec3f(0.0));
     let roughness = perceptual_roughness_from_glossiness(glossiness);
     if (ENV_SPECULAR) {
@@ -105,7 +107,14 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: 
         let lod = roughness * f32(textureNumLevels(env_specular) - 1u);
         let prefiltered = textureSampleLevel(env_specular, env_sampler, r, lod).rgb;
         let ab = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v, roughness), 0.0).xy;
-        c += prefiltered * (s.f0 * ab.x + ab.y) * ao;
+        // L3: the cube was lit by the open sky; scale it by the luminance (not
+        // the colour) of this pixel's sky ambient over the open sky's along n.
+        var ratio = 1.0;
+        if (SKY_OCCLUSION) {
+            let e_open = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
+            ratio = saturate(luminance(e_n) * sky_visibility / max(luminance(e_open), 1e-9));
+        }
+        c += prefiltered * (s.f0 * ab.x + ab.y) * (ao_in * ratio);
     } else {
         let e_r = max(sh9_eval(lighting.sky_irradiance, reflect(-v, n)), vec3f(0.0));
         c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao / PI);

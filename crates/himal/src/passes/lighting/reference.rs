@@ -74,7 +74,7 @@ pub fn shade(
 #[allow(clippy::too_many_arguments)]
 pub fn shade_sky_occluded(
     m: &Material,
-    ao: f32,
+    ao_in: f32,
     t: Vec3,
     b: Vec3,
     n: Vec3,
@@ -91,9 +91,9 @@ pub fn shade_sky_occluded(
     let (ao, n_sky) = match sky_vis {
         Some(sh) => {
             let bent = bent_normal_from_sh_visibility(n, sh);
-            (ao * sh2_visibility_cosine(sh, bent), bent)
+            (ao_in * sh2_visibility_cosine(sh, bent), bent)
         }
-        None => (ao, n),
+        None => (ao_in, n),
     };
     let e_n = light.sky_irradiance.eval(n_sky).max(Vec3::ZERO);
     let roughness = perceptual_roughness_from_glossiness(m.glossiness);
@@ -102,7 +102,9 @@ pub fn shade_sky_occluded(
         let r = (2.0 * n_r.dot(v)) * n_r - v;
         let lod = roughness * (env.filtered.len() - 1) as f32;
         let ab = env.dfg_at(n_o_v, roughness);
-        c += sample_lod(&env.filtered, r, lod) * (s.f0 * ab.x + Vec3::splat(ab.y)) * ao;
+        let ratio = ambient_luminance_ratio(&light.sky_irradiance, n, sky_vis);
+        c +=
+            sample_lod(&env.filtered, r, lod) * (s.f0 * ab.x + Vec3::splat(ab.y)) * (ao_in * ratio);
     } else {
         let r = (2.0 * n.dot(v)) * n - v;
         let e_r = light.sky_irradiance.eval(r).max(Vec3::ZERO);
@@ -110,6 +112,26 @@ pub fn shade_sky_occluded(
     }
     c += s.diffuse_albedo * e_n * (ao / std::f32::consts::PI);
     c
+}
+
+/// L3 normalisation of the environment cube, which was lit by the open sky:
+/// luminance (not colour) of the pixel's sky ambient — SH irradiance along
+/// the bent normal times the SH2 visibility — over the open sky's along `n`,
+/// clamped to [0, 1]. 1 without sky occlusion.
+pub fn ambient_luminance_ratio(
+    sky: &crate::math::sh::Sh9Rgb,
+    n: Vec3,
+    sky_vis: Option<glam::Vec4>,
+) -> f32 {
+    use crate::passes::post::reference::luminance;
+    use crate::passes::skyocc::reference::{bent_normal_from_sh_visibility, sh2_visibility_cosine};
+    let Some(sh) = sky_vis else {
+        return 1.0;
+    };
+    let bent = bent_normal_from_sh_visibility(n, sh);
+    let e_n = sky.eval(bent).max(Vec3::ZERO) * sh2_visibility_cosine(sh, bent);
+    let e_open = sky.eval(n).max(Vec3::ZERO);
+    (luminance(e_n) / luminance(e_open).max(1e-9)).clamp(0.0, 1.0)
 }
 
 /// `local_light_falloff`: windowed inverse square, 1/d² · (1 − (d/range)⁴)².
