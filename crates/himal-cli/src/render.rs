@@ -108,11 +108,15 @@ pub struct PostArgs {
         value_name = "none|smaa|smaa-t2x|tfq|taa|hraa"
     )]
     pub aa: String,
+    /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
+    #[arg(long, default_value = "bruneton", value_name = "preetham|bruneton")]
+    pub sky: String,
 }
 
 impl PostArgs {
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        settings.sky_model = self.sky.parse()?;
         settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
             .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
         match self.exposure.as_str() {

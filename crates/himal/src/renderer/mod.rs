@@ -28,7 +28,7 @@ use crate::passes::post::{
     AdaptPass, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass, TonemapPass,
 };
 use crate::passes::shadows::{ShadowPass, ShadowStats};
-use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
+use crate::passes::sky::{SkyGpuParams, SkyLight, SkyModel, SkyPass};
 use crate::scene::{Camera, Scene, SunDesc};
 use post_state::PostState;
 use scene_gpu::SceneGpu;
@@ -127,7 +127,9 @@ pub struct Renderer {
     /// Animation time of the previous frame (`None`: first frame or after a cut).
     prev_time: Option<f32>,
     frame_index: u64,
-    sky_light: Option<(SunKey, SkyLight)>,
+    sky_light: Option<(SunKey, SkyModel, SkyLight)>,
+    /// GPU times of the sky tables / SH projection run before the next frame (L1).
+    sky_timings: Vec<PassTiming>,
     /// Anti-aliasing mode of the previous frame (a change restarts the history).
     aa_last: Option<crate::passes::aa::AaMode>,
 }
@@ -240,6 +242,7 @@ impl Renderer {
             prev_time: None,
             frame_index: 0,
             sky_light: None,
+            sky_timings: Vec::new(),
             aa_last: None,
         })
     }
@@ -367,22 +370,53 @@ impl Renderer {
         post_state::validate(settings)
     }
 
-    fn update_sky(&mut self, sun: &SunDesc) {
+    fn update_sky(&mut self, sun: &SunDesc, model: SkyModel) -> Result<(), Error> {
         let key = SunKey(
             sun.time_hours,
             sun.latitude_deg,
             sun.day_of_year,
             sun.turbidity,
         );
-        if self.sky_light.as_ref().is_some_and(|(k, _)| *k == key) {
-            return;
+        let sky_pass = &mut self.res.passes.sky;
+        sky_pass.model = model;
+        if self
+            .sky_light
+            .as_ref()
+            .is_some_and(|(k, m, _)| *k == key && *m == model)
+        {
+            return Ok(());
         }
-        let light = SkyLight::new(
+        let mut light = SkyLight::new(
             sun.time_hours,
             sun.latitude_deg,
             sun.day_of_year,
             sun.turbidity,
         );
+        // L1: Bruneton tables once per renderer, their sky SH per time of day.
+        if model == SkyModel::Bruneton && self.res.environment.is_none() {
+            if sky_pass.bruneton().is_none() {
+                let config = crate::passes::sky::bruneton::AtmosphereConfig::earth(
+                    crate::passes::sky::bruneton::TableSizes::DEFAULT,
+                );
+                let (tables, timings) = crate::passes::sky::bruneton::BrunetonTables::compute_with(
+                    &self.ctx,
+                    config,
+                    self.timer.as_mut(),
+                )?;
+                self.sky_timings.extend(timings);
+                sky_pass.set_bruneton(&self.ctx, tables)?;
+            }
+            if let Some(b) = sky_pass.bruneton() {
+                let (sh, timings) = b.sh.project(
+                    &self.ctx,
+                    &b.tables,
+                    light.sun_direction,
+                    self.timer.as_mut(),
+                )?;
+                self.sky_timings.extend(timings);
+                light.irradiance_sh = sh.radiance_to_irradiance_coeffs();
+            }
+        }
         let params = light.sky.gpu_params();
         self.ctx
             .queue
@@ -394,8 +428,30 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&no_disk),
         );
-        self.sky_light = Some((key, light));
+        self.sky_light = Some((key, model, light));
         self.res.passes.envmap.dirty = true;
+        Ok(())
+    }
+
+    /// L1: draws and lights the Bruneton sky from `tables` (made on this
+    /// renderer's context) instead of computing the default tables on first use.
+    pub fn set_bruneton_tables(
+        &mut self,
+        tables: crate::passes::sky::bruneton::BrunetonTables,
+    ) -> Result<(), Error> {
+        self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
+        self.sky_light = None;
+        Ok(())
+    }
+
+    /// The Bruneton tables once computed or set (L1).
+    pub fn bruneton_tables(&self) -> Option<&crate::passes::sky::bruneton::BrunetonTables> {
+        self.res.passes.sky.bruneton().map(|b| &b.tables)
+    }
+
+    /// The sky light of the last frame (L1): sun and sky SH, for tests and tools.
+    pub fn sky_light(&self) -> Option<&SkyLight> {
+        self.sky_light.as_ref().map(|(_, _, l)| l)
     }
 
     /// The compiled pass list for these settings (`himal render --graph`).
@@ -404,8 +460,8 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         // Plan the shadow passes as a frame would (from a camera at the origin).
-        self.update_sky(&settings.sun);
-        if let Some((_, light)) = &self.sky_light {
+        self.update_sky(&settings.sun, settings.sky_model)?;
+        if let Some((_, _, light)) = &self.sky_light {
             let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
             self.res.passes.shadows.update(
                 &self.ctx,
@@ -520,7 +576,7 @@ impl Renderer {
         Self::validate(settings)?;
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
-        self.update_sky(&settings.sun);
+        self.update_sky(&settings.sun, settings.sky_model)?;
         let probe = if settings.environment_probes && self.res.environment.is_none() {
             self.res.passes.probes.nearest(camera.position)
         } else {
@@ -576,7 +632,7 @@ impl Renderer {
             &self.ctx.queue,
             &AoUniform::new(&settings.ao, proj, camera.near, size),
         );
-        let Some((_, light)) = &self.sky_light else {
+        let Some((_, _, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
         let (sun_illuminance, sky_irradiance) = match &self.res.environment {
@@ -626,6 +682,7 @@ impl Renderer {
             pool,
             timer,
             frame_index,
+            sky_timings,
             ..
         } = self;
         let inputs = res
@@ -639,10 +696,10 @@ impl Renderer {
         }
         ctx.queue.submit([commands]);
         ctx.check("frame")?;
-        let timings = match timer.as_mut() {
-            Some(t) => t.read_timings(&ctx.device)?,
-            None => Vec::new(),
-        };
+        let mut timings = std::mem::take(sky_timings);
+        if let Some(t) = timer.as_mut() {
+            timings.extend(t.read_timings(&ctx.device)?);
+        }
         let image = read_texture(ctx, output, 0, 0)?;
         self.prev_view_proj = Some(view_proj);
         self.prev_time = Some(settings.time_s);

@@ -123,6 +123,8 @@ pub struct FrameSettings {
     pub aa: crate::passes::aa::AaMode,
     /// Tuning of the temporal anti-aliasing passes.
     pub aa_tuning: crate::passes::aa::TemporalTuning,
+    /// L1 sky: Preetham (default, the goldens' sky) or Bruneton tables.
+    pub sky_model: crate::passes::sky::SkyModel,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -150,6 +152,7 @@ impl FrameSettings {
             environment_specular: true,
             environment_probes: true,
             envmap_every_frame: false,
+            sky_model: Default::default(),
         }
     }
 }
