@@ -307,6 +307,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(parse_time_lapse)
         .transpose()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    renderer.set_sky_table_cache(args.gpu.cache_dir());
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
         return Ok(());

@@ -302,3 +302,36 @@ fn sky_pass_and_capture_match_the_cpu_lookup() {
     // f16 cube texels: measured 8e-4 on 2026-11-22; threshold 5e-3.
     assert!(worst_cube < 5e-3, "{worst_cube}");
 }
+
+#[test]
+fn table_cache_round_trips_and_rejects_stale_files() {
+    let ctx = shared_context().expect("GPU");
+    let dir = std::env::temp_dir().join(format!("himal-sky-cache-{}", std::process::id()));
+    let path = himal::passes::sky::bruneton::cache_file(&dir, &test_config());
+    tables().save(ctx, &path).expect("save");
+    let loaded = BrunetonTables::load(ctx, test_config(), &path).expect("load");
+    for (a, b) in [
+        (&tables().transmittance, &loaded.transmittance),
+        (&tables().scattering, &loaded.scattering),
+        (&tables().single_mie, &loaded.single_mie),
+        (&tables().irradiance, &loaded.irradiance),
+    ] {
+        let (a, b) = (
+            reference::CpuTable::read(ctx, a).expect("a"),
+            reference::CpuTable::read(ctx, b).expect("b"),
+        );
+        assert!(a.texels == b.texels, "cached table differs");
+    }
+    let mut other = test_config();
+    other.mie_g = 0.7;
+    let e = BrunetonTables::load(ctx, other, &path)
+        .err()
+        .expect("stale file accepted");
+    assert!(e.to_string().contains("stale"), "{e}");
+    std::fs::write(&path, b"HIMALSKY").expect("truncate");
+    let e = BrunetonTables::load(ctx, test_config(), &path)
+        .err()
+        .expect("truncated file accepted");
+    assert!(e.to_string().contains("himal-sky"), "names the file: {e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

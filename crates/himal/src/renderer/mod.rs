@@ -130,6 +130,8 @@ pub struct Renderer {
     sky_light: Option<(SunKey, SkyModel, SkyLight)>,
     /// GPU times of the sky tables / SH projection run before the next frame (L1).
     sky_timings: Vec<PassTiming>,
+    /// Directory of the Bruneton table cache file (`None`: compute each run).
+    sky_table_cache: Option<std::path::PathBuf>,
     /// Anti-aliasing mode of the previous frame (a change restarts the history).
     aa_last: Option<crate::passes::aa::AaMode>,
 }
@@ -243,6 +245,7 @@ impl Renderer {
             frame_index: 0,
             sky_light: None,
             sky_timings: Vec::new(),
+            sky_table_cache: None,
             aa_last: None,
         })
     }
@@ -398,11 +401,13 @@ impl Renderer {
                 let config = crate::passes::sky::bruneton::AtmosphereConfig::earth(
                     crate::passes::sky::bruneton::TableSizes::DEFAULT,
                 );
-                let (tables, timings) = crate::passes::sky::bruneton::BrunetonTables::compute_with(
-                    &self.ctx,
-                    config,
-                    self.timer.as_mut(),
-                )?;
+                let (tables, timings) =
+                    crate::passes::sky::bruneton::BrunetonTables::load_or_compute(
+                        &self.ctx,
+                        config,
+                        self.sky_table_cache.as_deref(),
+                        self.timer.as_mut(),
+                    )?;
                 self.sky_timings.extend(timings);
                 sky_pass.set_bruneton(&self.ctx, tables)?;
             }
@@ -442,6 +447,12 @@ impl Renderer {
         self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
         self.sky_light = None;
         Ok(())
+    }
+
+    /// L1: loads / stores the Bruneton tables in `dir` (e.g. the pipeline
+    /// cache directory) instead of computing them in every process.
+    pub fn set_sky_table_cache(&mut self, dir: Option<std::path::PathBuf>) {
+        self.sky_table_cache = dir;
     }
 
     /// The Bruneton tables once computed or set (L1).

@@ -7,6 +7,7 @@
 //! `shaders/atmosphere.wgsl`, `passes/sky/bruneton/*.wgsl`; CPU twin:
 //! [`reference`]. See `docs/techniques/L1.md`.
 
+mod cache;
 pub mod reference;
 mod sh;
 
@@ -18,6 +19,7 @@ use crate::graph::{FrameGraph, PassTimer, PassTiming, TexturePool};
 use crate::passes::sky::reference::GROUND_ALBEDO;
 use crate::passes::sky::sun::{SUN_ANGULAR_RADIUS_DEG, SUN_ILLUMINANCE_KLUX};
 
+pub use cache::cache_file;
 pub use sh::{SKY_SH_SAMPLES, SkyShProjector};
 
 /// Format of every table: filterable, storage-writable; f16 keeps ~3
@@ -208,7 +210,7 @@ fn table_texture(ctx: &GpuContext, label: &str, size: (u32, u32, u32), d3: bool)
     table_texture_format(ctx, label, size, d3, TABLE_FORMAT)
 }
 
-fn table_texture_format(
+pub(crate) fn table_texture_format(
     ctx: &GpuContext,
     label: &str,
     size: (u32, u32, u32),
@@ -232,8 +234,22 @@ fn table_texture_format(
         format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
+    })
+}
+
+/// Linear, clamp-to-edge sampler of the f16 tables.
+pub(crate) fn table_sampler(ctx: &GpuContext) -> wgpu::Sampler {
+    ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("sky.tables"),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        address_mode_w: wgpu::AddressMode::ClampToEdge,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
     })
 }
 
@@ -296,15 +312,7 @@ impl BrunetonTables {
             table_texture(ctx, "sky.scattering.a", s_size, true),
             table_texture(ctx, "sky.scattering.b", s_size, true),
         ];
-        let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("sky.tables"),
-            address_mode_u: wgpu::AddressMode::ClampToEdge,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            address_mode_w: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let sampler = table_sampler(ctx);
         let v_t = view(&transmittance);
         let v_de = view(&delta_irradiance);
         let v_e = [view(&irradiance[0]), view(&irradiance[1])];
