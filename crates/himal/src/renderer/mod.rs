@@ -380,8 +380,7 @@ impl Renderer {
             sun.day_of_year,
             sun.turbidity,
         );
-        let sky_pass = &mut self.res.passes.sky;
-        sky_pass.model = model;
+        self.res.passes.sky.model = model;
         if self
             .sky_light
             .as_ref()
@@ -397,21 +396,8 @@ impl Renderer {
         );
         // L1: Bruneton tables once per renderer, their sky SH per time of day.
         if model == SkyModel::Bruneton && self.res.environment.is_none() {
-            if sky_pass.bruneton().is_none() {
-                let config = crate::passes::sky::bruneton::AtmosphereConfig::earth(
-                    crate::passes::sky::bruneton::TableSizes::DEFAULT,
-                );
-                let (tables, timings) =
-                    crate::passes::sky::bruneton::BrunetonTables::load_or_compute(
-                        &self.ctx,
-                        config,
-                        self.sky_table_cache.as_deref(),
-                        self.timer.as_mut(),
-                    )?;
-                self.sky_timings.extend(timings);
-                sky_pass.set_bruneton(&self.ctx, tables)?;
-            }
-            if let Some(b) = sky_pass.bruneton() {
+            self.prepare_bruneton()?;
+            if let Some(b) = self.res.passes.sky.bruneton() {
                 let (sh, timings) = b.sh.project(
                     &self.ctx,
                     &b.tables,
@@ -453,6 +439,25 @@ impl Renderer {
     /// cache directory) instead of computing them in every process.
     pub fn set_sky_table_cache(&mut self, dir: Option<std::path::PathBuf>) {
         self.sky_table_cache = dir;
+    }
+
+    /// L1: loads (from the table cache) or computes the Bruneton tables once
+    /// and creates the sky pass's Bruneton pipelines (`himal prewarm`; the
+    /// first Bruneton frame does it otherwise).
+    pub fn prepare_bruneton(&mut self) -> Result<(), Error> {
+        use crate::passes::sky::bruneton::{AtmosphereConfig, BrunetonTables, TableSizes};
+        if self.res.passes.sky.bruneton().is_some() {
+            return Ok(());
+        }
+        let (tables, timings) = BrunetonTables::load_or_compute(
+            &self.ctx,
+            AtmosphereConfig::earth(TableSizes::DEFAULT),
+            self.sky_table_cache.as_deref(),
+            self.timer.as_mut(),
+        )?;
+        self.sky_timings.extend(timings);
+        self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
+        Ok(())
     }
 
     /// The Bruneton tables once computed or set (L1).
