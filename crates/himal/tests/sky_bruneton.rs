@@ -335,3 +335,24 @@ fn table_cache_round_trips_and_rejects_stale_files() {
     assert!(e.to_string().contains("himal-sky"), "names the file: {e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn moon_lights_the_night_only() {
+    use himal::passes::sky::bruneton::{MOON_ILLUMINANCE_KLUX, moon_light};
+    assert_eq!(moon_light(sun_at(10.0)), None);
+    let (dir, e) = moon_light(sun_at(-30.0)).expect("moon at night");
+    assert!(
+        (dir + sun_at(-30.0)).length() < 1e-6,
+        "opposite the sun: {dir}"
+    );
+    assert!(
+        (e - MOON_ILLUMINANCE_KLUX).abs().max_element() < 1e-9,
+        "{e}"
+    );
+    // Fades in continuously below the horizon.
+    let (_, dusk) = moon_light(sun_at(-0.5)).expect("dusk");
+    assert!(
+        dusk.max_element() < 0.02 * MOON_ILLUMINANCE_KLUX.max_element(),
+        "{dusk}"
+    );
+}

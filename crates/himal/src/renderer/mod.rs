@@ -407,6 +407,11 @@ impl Renderer {
                 self.sky_timings.extend(timings);
                 light.irradiance_sh = sh.radiance_to_irradiance_coeffs();
             }
+            // Night: the moon takes the sun's place as the directional light.
+            if let Some((dir, e)) = crate::passes::sky::bruneton::moon_light(light.sun_direction) {
+                light.sun_direction = dir;
+                light.sun_illuminance = e;
+            }
         }
         let params = light.sky.gpu_params();
         self.ctx

@@ -107,6 +107,25 @@ pub struct AtmosphereConfig {
 /// Night sky floor: 1e-3 kcd/m^2 (1 cd/m^2: bright moonlit sky) with a cool
 /// (blue) tint, ~1e-3 of the noon sky's zenith; it keeps night dark but not black.
 pub const NIGHT_SKY_RADIANCE: Vec3 = Vec3::new(0.5e-3, 0.7e-3, 1.2e-3);
+/// Moonlight at night (Bruneton sky only): a full moon opposite the sun,
+/// cool, 0.01 klux: not the real 0.25 lux but scaled to the night floor as
+/// the sun is to the day sky (moon : floor irradiance ~ 4.5 : 1), so that
+/// night reads as moonlit with shadows rather than flat.
+pub const MOON_ILLUMINANCE_KLUX: Vec3 = Vec3::new(0.008, 0.009, 0.010);
+/// The moon fades in while the sun sinks from 0 to this many degrees below.
+pub const MOON_FADE_DEG: f32 = 6.0;
+
+/// The moon as the directional light (direction towards it, illuminance
+/// klux) for a sun towards `sun`; `None` while the sun is up.
+pub fn moon_light(sun: Vec3) -> Option<(Vec3, Vec3)> {
+    let sun = sun.try_normalize()?;
+    if sun.y >= 0.0 {
+        return None;
+    }
+    let t = (-sun.y / MOON_FADE_DEG.to_radians().sin()).clamp(0.0, 1.0);
+    Some((-sun, MOON_ILLUMINANCE_KLUX * (t * t * (3.0 - 2.0 * t))))
+}
+
 /// Below the horizon the sky blends into the ground fill over -dir.y in [0, this].
 pub const GROUND_BLEND_Y: f32 = 0.1;
 
