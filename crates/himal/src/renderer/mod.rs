@@ -394,23 +394,12 @@ impl Renderer {
             sun.day_of_year,
             sun.turbidity,
         );
-        // L1: Bruneton tables once per renderer, their sky SH per time of day.
+        // L1: Bruneton tables once per renderer, their sky SH (and the moon) per time of day.
         if model == SkyModel::Bruneton && self.res.environment.is_none() {
             self.prepare_bruneton()?;
             if let Some(b) = self.res.passes.sky.bruneton() {
-                let (sh, timings) = b.sh.project(
-                    &self.ctx,
-                    &b.tables,
-                    light.sun_direction,
-                    self.timer.as_mut(),
-                )?;
-                self.sky_timings.extend(timings);
-                light.irradiance_sh = sh.radiance_to_irradiance_coeffs();
-            }
-            // Night: the moon takes the sun's place as the directional light.
-            if let Some((dir, e)) = crate::passes::sky::bruneton::moon_light(light.sun_direction) {
-                light.sun_direction = dir;
-                light.sun_illuminance = e;
+                let t = b.update_light(&self.ctx, &mut light, self.timer.as_mut())?;
+                self.sky_timings.extend(t);
             }
         }
         let params = light.sky.gpu_params();
@@ -450,18 +439,9 @@ impl Renderer {
     /// and creates the sky pass's Bruneton pipelines (`himal prewarm`; the
     /// first Bruneton frame does it otherwise).
     pub fn prepare_bruneton(&mut self) -> Result<(), Error> {
-        use crate::passes::sky::bruneton::{AtmosphereConfig, BrunetonTables, TableSizes};
-        if self.res.passes.sky.bruneton().is_some() {
-            return Ok(());
-        }
-        let (tables, timings) = BrunetonTables::load_or_compute(
-            &self.ctx,
-            AtmosphereConfig::earth(TableSizes::DEFAULT),
-            self.sky_table_cache.as_deref(),
-            self.timer.as_mut(),
-        )?;
-        self.sky_timings.extend(timings);
-        self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
+        let cache = self.sky_table_cache.as_deref();
+        let t = (self.res.passes.sky).prepare_bruneton(&self.ctx, cache, self.timer.as_mut())?;
+        self.sky_timings.extend(t);
         Ok(())
     }
 

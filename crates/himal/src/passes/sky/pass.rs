@@ -9,14 +9,15 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{PassTimer, PassTiming};
 use crate::passes::common::{DepthTest, draw_fullscreen, target};
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
-use crate::passes::sky::SkyModel;
 use crate::passes::sky::bruneton::{
-    AtmosphereGpuParams, BrunetonTables, SkyShProjector, TABLE_FORMAT, TRANSMITTANCE_FORMAT,
-    TableViews,
+    AtmosphereConfig, AtmosphereGpuParams, BrunetonTables, SkyShProjector, TABLE_FORMAT,
+    TRANSMITTANCE_FORMAT, TableSizes, TableViews, moon_light,
 };
+use crate::passes::sky::{SkyLight, SkyModel};
 
 /// The Bruneton tables and what draws from them.
 pub struct BrunetonSky {
@@ -27,6 +28,28 @@ pub struct BrunetonSky {
     capture: wgpu::ComputePipeline,
     /// GPU SH projection of the table sky (`sky.sh`).
     pub sh: SkyShProjector,
+}
+
+impl BrunetonSky {
+    /// L1 sky light from the tables: the GPU-projected SH3 sky irradiance
+    /// replaces `light`'s, and at night the moon takes the sun's place as
+    /// the directional light. Returns the projection's timings (`sky.sh`).
+    pub fn update_light(
+        &self,
+        ctx: &GpuContext,
+        light: &mut SkyLight,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        let (sh, timings) = self
+            .sh
+            .project(ctx, &self.tables, light.sun_direction, timer)?;
+        light.irradiance_sh = sh.radiance_to_irradiance_coeffs();
+        if let Some((dir, e)) = moon_light(light.sun_direction) {
+            light.sun_direction = dir;
+            light.sun_illuminance = e;
+        }
+        Ok(timings)
+    }
 }
 
 /// 1x1 tables bound while the Preetham sky is drawn.
@@ -160,6 +183,23 @@ impl SkyPass {
             sh: SkyShProjector::new(ctx)?,
         });
         Ok(())
+    }
+
+    /// L1: loads (cache file in `cache_dir`) or computes the Bruneton tables
+    /// once and creates their pipelines; returns the computation's timings.
+    pub fn prepare_bruneton(
+        &mut self,
+        ctx: &GpuContext,
+        cache_dir: Option<&std::path::Path>,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        if self.bruneton.is_some() {
+            return Ok(Vec::new());
+        }
+        let config = AtmosphereConfig::earth(TableSizes::DEFAULT);
+        let (tables, timings) = BrunetonTables::load_or_compute(ctx, config, cache_dir, timer)?;
+        self.set_bruneton(ctx, tables)?;
+        Ok(timings)
     }
 
     pub fn bruneton(&self) -> Option<&BrunetonSky> {
