@@ -22,9 +22,9 @@ use crate::passes::sky::sun::{SUN_ANGULAR_RADIUS_DEG, SUN_ILLUMINANCE_KLUX};
 pub use cache::cache_file;
 pub use sh::{SKY_SH_SAMPLES, SkyShProjector};
 
-/// Format of every table: filterable, storage-writable; f16 keeps ~3
-/// significant digits, enough for the 1% transmittance test (tables hold
-/// values per unit solar irradiance, all O(1e-6..1)).
+/// Format of the irradiance and scattering tables: filterable,
+/// storage-writable; f16 keeps ~3 significant digits (values per unit solar
+/// irradiance, O(1e-4..1) where visible).
 pub const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The transmittance table is f32: grazing rays reach T ~ 1e-5, where f16
