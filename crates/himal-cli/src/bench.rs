@@ -96,7 +96,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         return crate::bench_envmap::run(&args.gpu, &scene, &camera, &settings, args.frames);
     }
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
-    renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
+    let warm_up = renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
+    // L1: the Bruneton tables (once) and the sky SH (per time of day) ran
+    // before the warm-up frame: reported apart from the per-frame rows.
+    for t in warm_up.timings.iter().filter(|t| t.id.starts_with("sky.")) {
+        println!("one-off {:<32} {:8.3} ms", t.id, t.gpu_ms);
+    }
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut wall = Vec::new();

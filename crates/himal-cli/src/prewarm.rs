@@ -28,6 +28,9 @@ pub fn run(args: &PrewarmArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
     renderer.prewarm()?;
+    // L1: the Bruneton tables (cache file beside the pipelines) and pipelines.
+    renderer.set_sky_table_cache(Some(dir.clone()));
+    renderer.prepare_bruneton()?;
     let ctx = renderer.context();
     let stats = ctx.pipelines.stats();
     let path = ctx.save_pipeline_cache()?;

@@ -115,11 +115,15 @@ pub struct PostArgs {
     /// (comma-separated; bench rows aa.taa_ao, aa.taa_motion).
     #[arg(long, default_value = "none", value_name = "none|ao|motion|ao,motion")]
     pub aa_buffers: String,
+    /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
+    #[arg(long, default_value = "bruneton", value_name = "preetham|bruneton")]
+    pub sky: String,
 }
 
 impl PostArgs {
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
+        settings.sky_model = self.sky.parse()?;
         settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
             .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
         settings.aa_buffers = himal::passes::aa::AaBuffers::parse(&self.aa_buffers)
@@ -317,6 +321,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(parse_time_lapse)
         .transpose()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    renderer.set_sky_table_cache(args.gpu.cache_dir());
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
         return Ok(());

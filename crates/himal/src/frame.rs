@@ -238,6 +238,15 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             g.set_pass_prefix(None);
             passes.envmap.add_mips_and_filter(&mut g, source, errors)
         }
+        // L1: the Bruneton sky is captured by the sky pass from its tables.
+        _ if passes.envmap.dirty && !passes.envmap.fixed_source && passes.sky.draws_bruneton() => {
+            let source = passes.envmap.import_source(&mut g);
+            let target = passes.envmap.source_level0();
+            let source = passes
+                .sky
+                .add_capture(&mut g, source, target, sky_no_disk, errors);
+            passes.envmap.add_mips_and_filter(&mut g, source, errors)
+        }
         _ => passes.envmap.add(&mut g, sky_no_disk, errors),
     };
     let lighting_inputs = LightingInputs {

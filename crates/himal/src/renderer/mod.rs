@@ -28,7 +28,7 @@ use crate::passes::post::{
     AdaptPass, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass, TonemapPass,
 };
 use crate::passes::shadows::{ShadowPass, ShadowStats};
-use crate::passes::sky::{SkyGpuParams, SkyLight, SkyPass};
+use crate::passes::sky::{SkyGpuParams, SkyLight, SkyModel, SkyPass};
 use crate::scene::{Camera, Scene, SunDesc};
 use post_state::PostState;
 use scene_gpu::SceneGpu;
@@ -168,7 +168,11 @@ pub struct Renderer {
     /// Animation time of the previous frame (`None`: first frame or after a cut).
     prev_time: Option<f32>,
     frame_index: u64,
-    sky_light: Option<(SunKey, SkyLight)>,
+    sky_light: Option<(SunKey, SkyModel, SkyLight)>,
+    /// GPU times of the sky tables / SH projection run before the next frame (L1).
+    sky_timings: Vec<PassTiming>,
+    /// Directory of the Bruneton table cache file (`None`: compute each run).
+    sky_table_cache: Option<std::path::PathBuf>,
     /// Anti-aliasing mode of the previous frame (a change restarts the history).
     aa_last: Option<crate::passes::aa::AaMode>,
 }
@@ -286,6 +290,8 @@ impl Renderer {
             prev_time: None,
             frame_index: 0,
             sky_light: None,
+            sky_timings: Vec::new(),
+            sky_table_cache: None,
             aa_last: None,
         })
     }
@@ -423,22 +429,35 @@ impl Renderer {
         post_state::validate(settings)
     }
 
-    fn update_sky(&mut self, sun: &SunDesc) {
+    fn update_sky(&mut self, sun: &SunDesc, model: SkyModel) -> Result<(), Error> {
         let key = SunKey(
             sun.time_hours,
             sun.latitude_deg,
             sun.day_of_year,
             sun.turbidity,
         );
-        if self.sky_light.as_ref().is_some_and(|(k, _)| *k == key) {
-            return;
+        self.res.passes.sky.model = model;
+        if self
+            .sky_light
+            .as_ref()
+            .is_some_and(|(k, m, _)| *k == key && *m == model)
+        {
+            return Ok(());
         }
-        let light = SkyLight::new(
+        let mut light = SkyLight::new(
             sun.time_hours,
             sun.latitude_deg,
             sun.day_of_year,
             sun.turbidity,
         );
+        // L1: Bruneton tables once per renderer, their sky SH (and the moon) per time of day.
+        if model == SkyModel::Bruneton && self.res.environment.is_none() {
+            self.prepare_bruneton()?;
+            if let Some(b) = self.res.passes.sky.bruneton() {
+                let t = b.update_light(&self.ctx, &mut light, self.timer.as_mut())?;
+                self.sky_timings.extend(t);
+            }
+        }
         let params = light.sky.gpu_params();
         self.ctx
             .queue
@@ -450,8 +469,46 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&no_disk),
         );
-        self.sky_light = Some((key, light));
+        self.sky_light = Some((key, model, light));
         self.res.passes.envmap.dirty = true;
+        Ok(())
+    }
+
+    /// L1: draws and lights the Bruneton sky from `tables` (made on this
+    /// renderer's context) instead of computing the default tables on first use.
+    pub fn set_bruneton_tables(
+        &mut self,
+        tables: crate::passes::sky::bruneton::BrunetonTables,
+    ) -> Result<(), Error> {
+        self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
+        self.sky_light = None;
+        Ok(())
+    }
+
+    /// L1: loads / stores the Bruneton tables in `dir` (e.g. the pipeline
+    /// cache directory) instead of computing them in every process.
+    pub fn set_sky_table_cache(&mut self, dir: Option<std::path::PathBuf>) {
+        self.sky_table_cache = dir;
+    }
+
+    /// L1: loads (from the table cache) or computes the Bruneton tables once
+    /// and creates the sky pass's Bruneton pipelines (`himal prewarm`; the
+    /// first Bruneton frame does it otherwise).
+    pub fn prepare_bruneton(&mut self) -> Result<(), Error> {
+        let cache = self.sky_table_cache.as_deref();
+        let t = (self.res.passes.sky).prepare_bruneton(&self.ctx, cache, self.timer.as_mut())?;
+        self.sky_timings.extend(t);
+        Ok(())
+    }
+
+    /// The Bruneton tables once computed or set (L1).
+    pub fn bruneton_tables(&self) -> Option<&crate::passes::sky::bruneton::BrunetonTables> {
+        self.res.passes.sky.bruneton().map(|b| &b.tables)
+    }
+
+    /// The sky light of the last frame (L1): sun and sky SH, for tests and tools.
+    pub fn sky_light(&self) -> Option<&SkyLight> {
+        self.sky_light.as_ref().map(|(_, _, l)| l)
     }
 
     /// The compiled pass list for these settings (`himal render --graph`).
@@ -460,8 +517,8 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         // Plan the shadow passes as a frame would (from a camera at the origin).
-        self.update_sky(&settings.sun);
-        if let Some((_, light)) = &self.sky_light {
+        self.update_sky(&settings.sun, settings.sky_model)?;
+        if let Some((_, _, light)) = &self.sky_light {
             let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
             self.res.passes.shadows.update(
                 &self.ctx,
@@ -615,7 +672,7 @@ impl Renderer {
         Self::validate(settings)?;
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
-        self.update_sky(&settings.sun);
+        self.update_sky(&settings.sun, settings.sky_model)?;
         let probe = if settings.environment_probes && self.res.environment.is_none() {
             self.res.passes.probes.nearest(camera.position)
         } else {
@@ -686,7 +743,7 @@ impl Renderer {
             let buffers = &self.res.passes.aa_buffers;
             buffers.update(queue, jitter, prev_jitter, h, tuning);
         }
-        let Some((_, light)) = &self.sky_light else {
+        let Some((_, _, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
         let (sun_illuminance, sky_irradiance) = match &self.res.environment {
@@ -745,6 +802,7 @@ impl Renderer {
             pool,
             timer,
             frame_index,
+            sky_timings,
             ..
         } = self;
         let inputs = res
@@ -757,10 +815,10 @@ impl Renderer {
         }
         ctx.queue.submit([commands]);
         ctx.check("frame")?;
-        let timings = match timer.as_mut() {
-            Some(t) => t.read_timings(&ctx.device)?,
-            None => Vec::new(),
-        };
+        let mut timings = std::mem::take(sky_timings);
+        if let Some(t) = timer.as_mut() {
+            timings.extend(t.read_timings(&ctx.device)?);
+        }
         self.prev_view_proj = Some(view_proj);
         self.prev_jitter = jitter;
         self.prev_time = Some(settings.time_s);

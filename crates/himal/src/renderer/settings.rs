@@ -147,6 +147,8 @@ pub struct FrameSettings {
     pub aa_tuning: crate::passes::aa::TemporalTuning,
     /// A3 TAA on the AO and the motion vectors (`--aa-buffers`).
     pub aa_buffers: crate::passes::aa::AaBuffers,
+    /// L1 sky: Preetham (default, the goldens' sky) or Bruneton tables.
+    pub sky_model: crate::passes::sky::SkyModel,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -177,6 +179,7 @@ impl FrameSettings {
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,
+            sky_model: Default::default(),
         }
     }
 }

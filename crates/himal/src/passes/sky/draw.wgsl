@@ -1,8 +1,10 @@
-// sky: Preetham sky radiance and the sun disk where no geometry was drawn
-// (depth test Equal against the cleared reverse-Z value 0). TECHNIQUES L1 (foundation).
-// Bindings: view, sky (uniform SkyParams). CPU twin: passes/sky/preetham.rs.
+// sky: sky radiance and the sun disk where no geometry was drawn (depth test
+// Equal against the cleared reverse-Z value 0). TECHNIQUES L1. SKY_MODEL 0:
+// Preetham (twin passes/sky/preetham.rs); 1: Bruneton tables (twin
+// passes/sky/bruneton/reference.rs); the sun disk is Preetham's in both.
 #import view
 #import sky
+#import atmosphere
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> sky: SkyParams;
@@ -11,7 +13,17 @@
 @group(0) @binding(2) var environment: texture_2d<f32>;
 @group(0) @binding(3) var environment_sampler: sampler;
 
+// Bruneton tables (1x1 placeholders while SKY_MODEL = 0).
+@group(0) @binding(4) var<uniform> atmosphere: AtmosphereParams;
+@group(0) @binding(5) var transmittance_load: texture_2d<f32>;
+@group(0) @binding(6) var scattering: texture_3d<f32>;
+@group(0) @binding(7) var single_mie: texture_3d<f32>;
+@group(0) @binding(8) var irradiance: texture_2d<f32>;
+@group(0) @binding(9) var table_sampler: sampler;
+
 override ENVIRONMENT: bool = false;
+// 0: Preetham, 1: Bruneton (SkyModel).
+override SKY_MODEL: u32 = 0u;
 override ENV_ROTATION: f32 = 0.0;
 
 struct VertexOut {
@@ -35,6 +47,12 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
         let v = acos(clamp(dir.y, -1.0, 1.0)) / 3.14159265359;
         return vec4f(textureSampleLevel(environment, environment_sampler, vec2f(u, v), 0.0).rgb, 1.0);
     }
-    let c = preetham_sky_radiance(sky, dir) + sun_disk_radiance(sky, dir);
+    var c = sun_disk_radiance(sky, dir);
+    if (SKY_MODEL == 1u) {
+        c += bruneton_sky_radiance(atmosphere, transmittance_load, scattering, single_mie, irradiance,
+            table_sampler, dir, sky.sun_direction.xyz);
+    } else {
+        c += preetham_sky_radiance(sky, dir);
+    }
     return vec4f(c, 1.0);
 }

@@ -1,14 +1,104 @@
-//! Sky pass (TECHNIQUES L1 foundation): Preetham radiance and the sun disk
-//! drawn where the G-buffer left depth at its cleared value (reverse-Z 0).
-//! Shader: `passes/sky/draw.wgsl`; CPU twin: `passes/sky/preetham.rs`.
+//! Sky pass (TECHNIQUES L1): Preetham or Bruneton radiance and the sun disk
+//! drawn where the G-buffer left depth at its cleared value (reverse-Z 0);
+//! with the Bruneton model also the capture of the sky into the environment
+//! cube (`sky.capture`). Shaders: `passes/sky/draw.wgsl`,
+//! `passes/sky/bruneton/capture.wgsl`; CPU twins: `passes/sky/preetham.rs`,
+//! `passes/sky/bruneton/reference.rs`.
 
 use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{PassTimer, PassTiming};
 use crate::passes::common::{DepthTest, draw_fullscreen, target};
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
+use crate::passes::sky::bruneton::{
+    AtmosphereConfig, AtmosphereGpuParams, BrunetonTables, SkyShProjector, TABLE_FORMAT,
+    TRANSMITTANCE_FORMAT, TableSizes, TableViews, moon_light,
+};
+use crate::passes::sky::{SkyLight, SkyModel};
+
+/// The Bruneton tables and what draws from them.
+pub struct BrunetonSky {
+    pub tables: BrunetonTables,
+    views: TableViews,
+    pipeline: wgpu::RenderPipeline,
+    capture_program: Program,
+    capture: wgpu::ComputePipeline,
+    /// GPU SH projection of the table sky (`sky.sh`).
+    pub sh: SkyShProjector,
+}
+
+impl BrunetonSky {
+    /// L1 sky light from the tables: the GPU-projected SH3 sky irradiance
+    /// replaces `light`'s, and at night the moon takes the sun's place as
+    /// the directional light. Returns the projection's timings (`sky.sh`).
+    pub fn update_light(
+        &self,
+        ctx: &GpuContext,
+        light: &mut SkyLight,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        let (sh, timings) = self
+            .sh
+            .project(ctx, &self.tables, light.sun_direction, timer)?;
+        light.irradiance_sh = sh.radiance_to_irradiance_coeffs();
+        if let Some((dir, e)) = moon_light(light.sun_direction) {
+            light.sun_direction = dir;
+            light.sun_illuminance = e;
+        }
+        Ok(timings)
+    }
+}
+
+/// 1x1 tables bound while the Preetham sky is drawn.
+struct TablePlaceholders {
+    params: wgpu::Buffer,
+    views: TableViews,
+    sampler: wgpu::Sampler,
+}
+
+impl TablePlaceholders {
+    fn new(ctx: &GpuContext) -> Self {
+        let texture = |d3: bool, format: wgpu::TextureFormat| {
+            ctx.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("sky.tables.off"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: if d3 {
+                        wgpu::TextureDimension::D3
+                    } else {
+                        wgpu::TextureDimension::D2
+                    },
+                    format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        TablePlaceholders {
+            params: crate::gpu::pipeline::uniform_buffer(
+                ctx,
+                "sky.atmosphere.off",
+                &<AtmosphereGpuParams as bytemuck::Zeroable>::zeroed(),
+            ),
+            views: TableViews {
+                transmittance: texture(false, TRANSMITTANCE_FORMAT),
+                scattering: texture(true, TABLE_FORMAT),
+                single_mie: texture(true, TABLE_FORMAT),
+                irradiance: texture(false, TABLE_FORMAT),
+            },
+            sampler: ctx.device.create_sampler(&Default::default()),
+        }
+    }
+}
 
 pub struct SkyPass {
     program: Program,
@@ -18,6 +108,21 @@ pub struct SkyPass {
     environment: Option<(wgpu::RenderPipeline, wgpu::TextureView, wgpu::Sampler)>,
     /// 1x1 image bound while the Preetham sky is drawn.
     placeholder: (wgpu::TextureView, wgpu::Sampler),
+    tables_off: TablePlaceholders,
+    bruneton: Option<BrunetonSky>,
+    /// The model drawn (Bruneton needs [`SkyPass::set_bruneton`] first).
+    pub model: SkyModel,
+}
+
+fn sky_depth_test() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        // the triangle sits at depth 0: passes only where nothing was drawn
+        depth_compare: Some(wgpu::CompareFunction::Equal),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
 }
 
 impl SkyPass {
@@ -25,14 +130,7 @@ impl SkyPass {
         let program = Program::new(ctx, "passes/sky/draw.wgsl")?;
         let targets = [target(HDR_FORMAT)];
         let mut spec = RenderSpec::fullscreen("sky", &targets);
-        spec.depth_stencil = Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            // the triangle sits at depth 0: passes only where nothing was drawn
-            depth_compare: Some(wgpu::CompareFunction::Equal),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
+        spec.depth_stencil = Some(sky_depth_test());
         let pipeline = program.render_pipeline(ctx, &spec)?;
         let placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("sky.environment.off"),
@@ -56,7 +154,95 @@ impl SkyPass {
                 placeholder.create_view(&Default::default()),
                 ctx.device.create_sampler(&Default::default()),
             ),
+            tables_off: TablePlaceholders::new(ctx),
+            bruneton: None,
+            model: SkyModel::Preetham,
         })
+    }
+
+    /// Draws from `tables` whenever [`SkyPass::model`] is Bruneton.
+    pub fn set_bruneton(
+        &mut self,
+        ctx: &GpuContext,
+        tables: BrunetonTables,
+    ) -> Result<(), GpuError> {
+        let targets = [target(HDR_FORMAT)];
+        let mut spec = RenderSpec::fullscreen("sky.bruneton", &targets);
+        spec.depth_stencil = Some(sky_depth_test());
+        let constants = [("SKY_MODEL", 1.0)];
+        spec.constants = &constants;
+        let pipeline = self.program.render_pipeline(ctx, &spec)?;
+        let capture_program = Program::new(ctx, "passes/sky/bruneton/capture.wgsl")?;
+        let capture = capture_program.compute_pipeline(ctx, "cs_capture_bruneton", &[])?;
+        self.bruneton = Some(BrunetonSky {
+            views: tables.views(),
+            tables,
+            pipeline,
+            capture_program,
+            capture,
+            sh: SkyShProjector::new(ctx)?,
+        });
+        Ok(())
+    }
+
+    /// L1: loads (cache file in `cache_dir`) or computes the Bruneton tables
+    /// once and creates their pipelines; returns the computation's timings.
+    pub fn prepare_bruneton(
+        &mut self,
+        ctx: &GpuContext,
+        cache_dir: Option<&std::path::Path>,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<Vec<PassTiming>, GpuError> {
+        if self.bruneton.is_some() {
+            return Ok(Vec::new());
+        }
+        let config = AtmosphereConfig::earth(TableSizes::DEFAULT);
+        let (tables, timings) = BrunetonTables::load_or_compute(ctx, config, cache_dir, timer)?;
+        self.set_bruneton(ctx, tables)?;
+        Ok(timings)
+    }
+
+    pub fn bruneton(&self) -> Option<&BrunetonSky> {
+        self.bruneton.as_ref()
+    }
+
+    /// The Bruneton sky is drawn (model Bruneton, tables present, no HDR environment).
+    pub fn draws_bruneton(&self) -> bool {
+        self.model == SkyModel::Bruneton && self.bruneton.is_some() && self.environment.is_none()
+    }
+
+    /// `sky.capture`: the Bruneton sky (from `sky`'s sun direction) into
+    /// `target`, mip 0 of the environment source cube behind `source`.
+    /// Call only when [`SkyPass::draws_bruneton`].
+    pub fn add_capture<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        source: TextureHandle,
+        target: &'a wgpu::TextureView,
+        sky: &'a wgpu::Buffer,
+        errors: &'a FrameErrors,
+    ) -> TextureHandle {
+        let mut pass = graph.add_pass("sky.capture");
+        let source = pass.write(source, TextureAccess::StorageWrite);
+        let size = graph_size(target);
+        pass.execute(move |ctx| {
+            let Some(b) = &self.bruneton else {
+                return;
+            };
+            let mut entries = b
+                .views
+                .bindings(&b.tables.params, &b.tables.sampler)
+                .to_vec();
+            entries.push(("sky", sky.as_entire_binding()));
+            entries.push(("out_texture", wgpu::BindingResource::TextureView(target)));
+            if let Some(bg) = errors.record(b.capture_program.bind(ctx.device, 0, &entries)) {
+                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(&b.capture);
+                cp.set_bind_group(0, &bg, &[]);
+                cp.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6);
+            }
+        });
+        source
     }
 
     /// Draws `image` (equirectangular, turned by `rotation` radians about +Y)
@@ -70,13 +256,7 @@ impl SkyPass {
     ) -> Result<(), GpuError> {
         let targets = [target(HDR_FORMAT)];
         let mut spec = RenderSpec::fullscreen("sky.environment", &targets);
-        spec.depth_stencil = Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::Equal),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
+        spec.depth_stencil = Some(sky_depth_test());
         let constants = [("ENVIRONMENT", 1.0), ("ENV_ROTATION", f64::from(rotation))];
         spec.constants = &constants;
         let pipeline = self.program.render_pipeline(ctx, &spec)?;
@@ -101,19 +281,25 @@ impl SkyPass {
                 Some((p, i, s)) => (p, i, s),
                 None => (&self.pipeline, &self.placeholder.0, &self.placeholder.1),
             };
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("sky", sky.as_entire_binding()),
-                    ("environment", wgpu::BindingResource::TextureView(image)),
-                    (
-                        "environment_sampler",
-                        wgpu::BindingResource::Sampler(sampler),
-                    ),
-                ],
-            );
+            let off = &self.tables_off;
+            let (pipeline, tables) = match &self.bruneton {
+                Some(b) if self.draws_bruneton() => (
+                    &b.pipeline,
+                    b.views.bindings(&b.tables.params, &b.tables.sampler),
+                ),
+                _ => (pipeline, off.views.bindings(&off.params, &off.sampler)),
+            };
+            let mut entries = vec![
+                ("view", view.as_entire_binding()),
+                ("sky", sky.as_entire_binding()),
+                ("environment", wgpu::BindingResource::TextureView(image)),
+                (
+                    "environment_sampler",
+                    wgpu::BindingResource::Sampler(sampler),
+                ),
+            ];
+            entries.extend(tables);
+            let bind_group = self.program.bind(ctx.device, 0, &entries);
             if let Some(bg) = errors.record(bind_group) {
                 let (target, depth) = (ctx.view(hdr), ctx.view(depth));
                 draw_fullscreen(
@@ -128,4 +314,9 @@ impl SkyPass {
         });
         hdr
     }
+}
+
+/// Edge of a cube-face view's texture (the capture target is square).
+fn graph_size(target: &wgpu::TextureView) -> u32 {
+    target.texture().width()
 }

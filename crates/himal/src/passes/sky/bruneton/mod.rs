@@ -1,0 +1,571 @@
+//! L1: Bruneton & Neyret 2008 precomputed atmospheric scattering, structured
+//! like Bruneton's 2017 reference implementation (transmittance, direct and
+//! indirect irradiance, single Rayleigh + Mie and multiple scattering orders
+//! 2..=4 in a 4D table packed into a 3D texture). Computed on the GPU once per
+//! renderer; the sky pass draws from the tables (`SkyModel::Bruneton`) and
+//! [`SkyShProjector`] turns them into the SH3 sky light. Shaders:
+//! `shaders/atmosphere.wgsl`, `passes/sky/bruneton/*.wgsl`; CPU twin:
+//! [`reference`]. See `docs/techniques/L1.md`.
+
+mod cache;
+pub mod reference;
+mod sh;
+
+use glam::Vec3;
+
+use crate::gpu::pipeline::{Program, uniform_buffer};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, PassTimer, PassTiming, TexturePool};
+use crate::passes::sky::reference::GROUND_ALBEDO;
+use crate::passes::sky::sun::{SUN_ANGULAR_RADIUS_DEG, SUN_ILLUMINANCE_KLUX};
+
+pub use cache::cache_file;
+pub use sh::{SKY_SH_SAMPLES, SkyShProjector};
+
+/// Format of the irradiance and scattering tables: filterable,
+/// storage-writable; f16 keeps ~3 significant digits (values per unit solar
+/// irradiance, O(1e-4..1) where visible).
+pub const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The transmittance table is f32: grazing rays reach T ~ 1e-5, where f16
+/// loses the ratios T(r, mu) / T(r_d, mu_d) that single scattering takes
+/// (measured 7% off at the ground's horizon). Filtered by hand (`_load`).
+pub const TRANSMITTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// Table resolutions. The 4D scattering table (r, mu, mu_s, nu) is packed as
+/// a 3D texture of (nu * mu_s) x mu x r.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableSizes {
+    pub transmittance: (u32, u32),
+    pub irradiance: (u32, u32),
+    pub r: u32,
+    pub mu: u32,
+    pub mu_s: u32,
+    pub nu: u32,
+    /// Scattering-density quadrature: n polar x 2n azimuthal directions.
+    pub density_samples: u32,
+}
+
+impl TableSizes {
+    /// Bruneton 2017's sizes except r 32 -> 16 and mu 128 -> 64 (256x64x16
+    /// scattering texels) and an 8 x 16 density quadrature (reference 16 x 32):
+    /// the full sizes take minutes on a software rasteriser; the sky
+    /// radiance changes by the amounts measured in docs/techniques/L1.md.
+    pub const DEFAULT: TableSizes = TableSizes {
+        transmittance: (256, 64),
+        irradiance: (64, 16),
+        r: 16,
+        mu: 64,
+        mu_s: 32,
+        nu: 8,
+        density_samples: 8,
+    };
+    /// Small scattering tables for tests (fast on lavapipe); the 2D tables
+    /// at full size (cheap, and a coarse transmittance table misses the
+    /// ground horizon by several percent).
+    pub const TEST: TableSizes = TableSizes {
+        transmittance: (256, 64),
+        irradiance: (64, 16),
+        r: 8,
+        mu: 32,
+        mu_s: 16,
+        nu: 4,
+        density_samples: 6,
+    };
+
+    /// Size of the 3D scattering texture.
+    pub fn scattering_extent(&self) -> (u32, u32, u32) {
+        (self.nu * self.mu_s, self.mu, self.r)
+    }
+}
+
+/// Earth's atmosphere (Bruneton 2017 demo values) in km and 1/km, RGB at
+/// 680, 550, 440 nm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AtmosphereConfig {
+    pub bottom_radius_km: f32,
+    pub top_radius_km: f32,
+    pub rayleigh_scattering: Vec3,
+    pub rayleigh_scale_height_km: f32,
+    pub mie_scattering: Vec3,
+    pub mie_extinction: Vec3,
+    pub mie_scale_height_km: f32,
+    pub mie_g: f32,
+    /// Ozone absorption at peak density; tent profile 0 at 10 and 40 km, 1 at 25 km.
+    pub absorption_extinction: Vec3,
+    pub ground_albedo: Vec3,
+    pub sun_angular_radius: f32,
+    /// Lowest sun cosine the tables cover (102 degrees: twilight).
+    pub mu_s_min: f32,
+    /// Altitude of the viewer the sky is drawn for (km above the ground sphere).
+    pub view_altitude_km: f32,
+    /// Night floor added to the sky radiance (kcd/m^2, linear RGB).
+    pub night_radiance: Vec3,
+    pub sizes: TableSizes,
+}
+
+/// Night sky floor: 1e-3 kcd/m^2 (1 cd/m^2: bright moonlit sky) with a cool
+/// (blue) tint, ~1e-3 of the noon sky's zenith; it keeps night dark but not black.
+pub const NIGHT_SKY_RADIANCE: Vec3 = Vec3::new(0.5e-3, 0.7e-3, 1.2e-3);
+/// Moonlight at night (Bruneton sky only): a full moon opposite the sun,
+/// cool, 0.01 klux: not the real 0.25 lux but scaled to the night floor as
+/// the sun is to the day sky (moon : floor irradiance ~ 4.5 : 1), so that
+/// night reads as moonlit with shadows rather than flat.
+pub const MOON_ILLUMINANCE_KLUX: Vec3 = Vec3::new(0.008, 0.009, 0.010);
+/// The moon fades in while the sun sinks from 0 to this many degrees below.
+pub const MOON_FADE_DEG: f32 = 6.0;
+
+/// The moon as the directional light (direction towards it, illuminance
+/// klux) for a sun towards `sun`; `None` while the sun is up.
+pub fn moon_light(sun: Vec3) -> Option<(Vec3, Vec3)> {
+    let sun = sun.try_normalize()?;
+    if sun.y >= 0.0 {
+        return None;
+    }
+    let t = (-sun.y / MOON_FADE_DEG.to_radians().sin()).clamp(0.0, 1.0);
+    Some((-sun, MOON_ILLUMINANCE_KLUX * (t * t * (3.0 - 2.0 * t))))
+}
+
+/// Below the horizon the sky blends into the ground fill over -dir.y in [0, this].
+pub const GROUND_BLEND_Y: f32 = 0.1;
+
+impl AtmosphereConfig {
+    pub fn earth(sizes: TableSizes) -> Self {
+        let mie_scattering = Vec3::splat(3.996e-3);
+        AtmosphereConfig {
+            bottom_radius_km: 6360.0,
+            top_radius_km: 6420.0,
+            rayleigh_scattering: Vec3::new(5.802e-3, 13.558e-3, 33.1e-3),
+            rayleigh_scale_height_km: 8.0,
+            mie_scattering,
+            mie_extinction: mie_scattering / 0.9,
+            mie_scale_height_km: 1.2,
+            mie_g: 0.8,
+            absorption_extinction: Vec3::new(0.650e-3, 1.881e-3, 0.085e-3),
+            ground_albedo: GROUND_ALBEDO,
+            sun_angular_radius: SUN_ANGULAR_RADIUS_DEG.to_radians(),
+            mu_s_min: 102f32.to_radians().cos(),
+            view_altitude_km: 0.2,
+            night_radiance: NIGHT_SKY_RADIANCE,
+            sizes,
+        }
+    }
+
+    pub fn gpu_params(&self) -> AtmosphereGpuParams {
+        let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
+        let s = &self.sizes;
+        AtmosphereGpuParams {
+            shape: [
+                self.bottom_radius_km,
+                self.top_radius_km,
+                self.mie_g,
+                self.mu_s_min,
+            ],
+            rayleigh_scattering: v4(
+                self.rayleigh_scattering,
+                -1.0 / self.rayleigh_scale_height_km,
+            ),
+            mie_scattering: v4(self.mie_scattering, -1.0 / self.mie_scale_height_km),
+            mie_extinction: v4(self.mie_extinction, OZONE_LAYER_WIDTH_KM),
+            absorption_extinction: v4(self.absorption_extinction, self.sun_angular_radius),
+            ozone_density: OZONE_TENT,
+            ground_albedo: v4(self.ground_albedo, SUN_ILLUMINANCE_KLUX),
+            solar_irradiance: v4(Vec3::ONE, self.view_altitude_km),
+            sizes_2d: [
+                s.transmittance.0 as f32,
+                s.transmittance.1 as f32,
+                s.irradiance.0 as f32,
+                s.irradiance.1 as f32,
+            ],
+            sizes_4d: [s.r as f32, s.mu as f32, s.mu_s as f32, s.nu as f32],
+            night_radiance: v4(self.night_radiance, GROUND_BLEND_Y),
+        }
+    }
+}
+
+/// Ozone tent (Bruneton 2017): density = 1/15 h - 2/3 below 25 km, -1/15 h + 8/3 above.
+pub const OZONE_LAYER_WIDTH_KM: f32 = 25.0;
+pub const OZONE_TENT: [f32; 4] = [1.0 / 15.0, -2.0 / 3.0, -1.0 / 15.0, 8.0 / 3.0];
+
+/// Uniform twin of `AtmosphereParams` in `shaders/atmosphere.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct AtmosphereGpuParams {
+    pub shape: [f32; 4],
+    pub rayleigh_scattering: [f32; 4],
+    pub mie_scattering: [f32; 4],
+    pub mie_extinction: [f32; 4],
+    pub absorption_extinction: [f32; 4],
+    pub ozone_density: [f32; 4],
+    pub ground_albedo: [f32; 4],
+    pub solar_irradiance: [f32; 4],
+    pub sizes_2d: [f32; 4],
+    pub sizes_4d: [f32; 4],
+    pub night_radiance: [f32; 4],
+}
+
+/// Highest scattering order summed into the tables (Bruneton 2017: 4).
+pub const MAX_SCATTERING_ORDER: u32 = 4;
+
+/// The precomputed tables (GPU) and the parameters they were made with.
+pub struct BrunetonTables {
+    pub config: AtmosphereConfig,
+    /// `AtmosphereGpuParams` uniform.
+    pub params: wgpu::Buffer,
+    /// T(r, mu) to the top of the atmosphere.
+    pub transmittance: wgpu::Texture,
+    /// Sky (indirect) irradiance of orders 1..MAX-1 on a horizontal surface.
+    pub irradiance: wgpu::Texture,
+    /// Single Rayleigh + multiple scattering / Rayleigh phase.
+    pub scattering: wgpu::Texture,
+    /// Single Rayleigh and single Mie scattering (no phase function).
+    pub single_rayleigh: wgpu::Texture,
+    pub single_mie: wgpu::Texture,
+    /// Linear clamp-to-edge sampler of every table.
+    pub sampler: wgpu::Sampler,
+}
+
+fn table_texture(ctx: &GpuContext, label: &str, size: (u32, u32, u32), d3: bool) -> wgpu::Texture {
+    table_texture_format(ctx, label, size, d3, TABLE_FORMAT)
+}
+
+pub(crate) fn table_texture_format(
+    ctx: &GpuContext,
+    label: &str,
+    size: (u32, u32, u32),
+    d3: bool,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: size.2,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: if d3 {
+            wgpu::TextureDimension::D3
+        } else {
+            wgpu::TextureDimension::D2
+        },
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
+/// Linear, clamp-to-edge sampler of the f16 tables.
+pub(crate) fn table_sampler(ctx: &GpuContext) -> wgpu::Sampler {
+    ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("sky.tables"),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        address_mode_w: wgpu::AddressMode::ClampToEdge,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    })
+}
+
+fn view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&Default::default())
+}
+
+fn tex(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::TextureView(v)
+}
+
+fn graph_error(e: impl std::fmt::Display) -> GpuError {
+    GpuError::Other(format!("sky.tables: {e}"))
+}
+
+/// One compute step: program, pipeline, bind group and dispatch size.
+struct Step {
+    id: String,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    groups: [u32; 3],
+}
+
+impl BrunetonTables {
+    /// Earth tables at [`TableSizes::DEFAULT`].
+    pub fn compute(ctx: &GpuContext) -> Result<Self, GpuError> {
+        Ok(Self::compute_with(ctx, AtmosphereConfig::earth(TableSizes::DEFAULT), None)?.0)
+    }
+
+    /// Computes the tables for `config`; with a `timer`, also the GPU time of
+    /// each step (rows `sky.tables.*`).
+    pub fn compute_with(
+        ctx: &GpuContext,
+        config: AtmosphereConfig,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<(Self, Vec<PassTiming>), GpuError> {
+        let s = config.sizes;
+        let params = uniform_buffer(ctx, "sky.atmosphere", &config.gpu_params());
+        let t_size = (s.transmittance.0, s.transmittance.1, 1);
+        let e_size = (s.irradiance.0, s.irradiance.1, 1);
+        let s_size = s.scattering_extent();
+        let transmittance = table_texture_format(
+            ctx,
+            "sky.transmittance",
+            t_size,
+            false,
+            TRANSMITTANCE_FORMAT,
+        );
+        let delta_irradiance = table_texture(ctx, "sky.delta_irradiance", e_size, false);
+        // Ping-pong sums; freshly created textures are zero (order 1 has no irradiance).
+        let irradiance = [
+            table_texture(ctx, "sky.irradiance.a", e_size, false),
+            table_texture(ctx, "sky.irradiance.b", e_size, false),
+        ];
+        let single_rayleigh = table_texture(ctx, "sky.single_rayleigh", s_size, true);
+        let single_mie = table_texture(ctx, "sky.single_mie", s_size, true);
+        let density = table_texture(ctx, "sky.density", s_size, true);
+        let delta_multiple = table_texture(ctx, "sky.delta_multiple", s_size, true);
+        let scattering = [
+            table_texture(ctx, "sky.scattering.a", s_size, true),
+            table_texture(ctx, "sky.scattering.b", s_size, true),
+        ];
+        let sampler = table_sampler(ctx);
+        let v_t = view(&transmittance);
+        let v_de = view(&delta_irradiance);
+        let v_e = [view(&irradiance[0]), view(&irradiance[1])];
+        let v_sr = view(&single_rayleigh);
+        let v_sm = view(&single_mie);
+        let v_j = view(&density);
+        let v_dm = view(&delta_multiple);
+        let v_s = [view(&scattering[0]), view(&scattering[1])];
+        let ub = params.as_entire_binding();
+        let smp = wgpu::BindingResource::Sampler(&sampler);
+        let g2 = |size: (u32, u32, u32)| [size.0.div_ceil(8), size.1.div_ceil(8), 1];
+        let g3 = [s_size.0.div_ceil(8), s_size.1.div_ceil(8), s_size.2];
+        let program = |name: &str| Program::new(ctx, &format!("passes/sky/bruneton/{name}.wgsl"));
+
+        let mut steps = Vec::new();
+        let p = program("transmittance")?;
+        steps.push(Step {
+            id: "sky.tables.transmittance".into(),
+            pipeline: p.compute_pipeline(ctx, "cs_transmittance", &[])?,
+            bind_group: p.bind_group(
+                ctx,
+                0,
+                &[("atmosphere", ub.clone()), ("out_transmittance", tex(&v_t))],
+            )?,
+            groups: g2(t_size),
+        });
+        let p = program("direct_irradiance")?;
+        steps.push(Step {
+            id: "sky.tables.direct_irradiance".into(),
+            pipeline: p.compute_pipeline(ctx, "cs_direct_irradiance", &[])?,
+            bind_group: p.bind_group(
+                ctx,
+                0,
+                &[
+                    ("atmosphere", ub.clone()),
+                    ("transmittance_load", tex(&v_t)),
+                    ("table_sampler", smp.clone()),
+                    ("out_delta_irradiance", tex(&v_de)),
+                ],
+            )?,
+            groups: g2(e_size),
+        });
+        let p = program("single_scattering")?;
+        steps.push(Step {
+            id: "sky.tables.single".into(),
+            pipeline: p.compute_pipeline(ctx, "cs_single_scattering", &[])?,
+            bind_group: p.bind_group(
+                ctx,
+                0,
+                &[
+                    ("atmosphere", ub.clone()),
+                    ("transmittance_load", tex(&v_t)),
+                    ("table_sampler", smp.clone()),
+                    ("out_rayleigh", tex(&v_sr)),
+                    ("out_mie", tex(&v_sm)),
+                ],
+            )?,
+            groups: g3,
+        });
+        let p_density = program("scattering_density")?;
+        let p_irradiance = program("indirect_irradiance")?;
+        let p_multiple = program("multiple_scattering")?;
+        // Scattering sum: order 1 is the single Rayleigh table itself, then
+        // a -> b -> a; irradiance sum: a (zero) -> b -> a -> b.
+        let mut scattering_prev: &wgpu::TextureView = &v_sr;
+        let mut scattering_out = 0usize;
+        let mut irradiance_prev = 0usize;
+        for order in 2..=MAX_SCATTERING_ORDER {
+            let density_constants = [
+                ("SCATTERING_ORDER", f64::from(order)),
+                ("DENSITY_SAMPLES", f64::from(s.density_samples)),
+            ];
+            steps.push(Step {
+                id: format!("sky.tables.density{order}"),
+                pipeline: p_density.compute_pipeline(
+                    ctx,
+                    "cs_scattering_density",
+                    &density_constants,
+                )?,
+                bind_group: p_density.bind_group(
+                    ctx,
+                    0,
+                    &[
+                        ("atmosphere", ub.clone()),
+                        ("transmittance_load", tex(&v_t)),
+                        ("single_rayleigh", tex(&v_sr)),
+                        ("single_mie", tex(&v_sm)),
+                        ("multiple", tex(&v_dm)),
+                        ("delta_irradiance", tex(&v_de)),
+                        ("table_sampler", smp.clone()),
+                        ("out_density", tex(&v_j)),
+                    ],
+                )?,
+                groups: g3,
+            });
+            let irradiance_constants = [("SCATTERING_ORDER", f64::from(order - 1))];
+            steps.push(Step {
+                id: format!("sky.tables.irradiance{}", order - 1),
+                pipeline: p_irradiance.compute_pipeline(
+                    ctx,
+                    "cs_indirect_irradiance",
+                    &irradiance_constants,
+                )?,
+                bind_group: p_irradiance.bind_group(
+                    ctx,
+                    0,
+                    &[
+                        ("atmosphere", ub.clone()),
+                        ("single_rayleigh", tex(&v_sr)),
+                        ("single_mie", tex(&v_sm)),
+                        ("multiple", tex(&v_dm)),
+                        ("previous_irradiance_load", tex(&v_e[irradiance_prev])),
+                        ("table_sampler", smp.clone()),
+                        ("out_delta_irradiance", tex(&v_de)),
+                        ("out_irradiance", tex(&v_e[1 - irradiance_prev])),
+                    ],
+                )?,
+                groups: g2(e_size),
+            });
+            irradiance_prev = 1 - irradiance_prev;
+            steps.push(Step {
+                id: format!("sky.tables.multiple{order}"),
+                pipeline: p_multiple.compute_pipeline(ctx, "cs_multiple_scattering", &[])?,
+                bind_group: p_multiple.bind_group(
+                    ctx,
+                    0,
+                    &[
+                        ("atmosphere", ub.clone()),
+                        ("transmittance_load", tex(&v_t)),
+                        ("density", tex(&v_j)),
+                        ("previous_scattering_load", tex(scattering_prev)),
+                        ("table_sampler", smp.clone()),
+                        ("out_delta_multiple", tex(&v_dm)),
+                        ("out_scattering", tex(&v_s[scattering_out])),
+                    ],
+                )?,
+                groups: g3,
+            });
+            scattering_prev = &v_s[scattering_out];
+            scattering_out = 1 - scattering_out;
+        }
+        let final_scattering = 1 - scattering_out;
+        let final_irradiance = irradiance_prev;
+
+        let timings = run_steps(ctx, &steps, timer)?;
+        let [s0, s1] = scattering;
+        let [e0, e1] = irradiance;
+        Ok((
+            BrunetonTables {
+                config,
+                params,
+                transmittance,
+                irradiance: if final_irradiance == 0 { e0 } else { e1 },
+                scattering: if final_scattering == 0 { s0 } else { s1 },
+                single_rayleigh,
+                single_mie,
+                sampler,
+            },
+            timings,
+        ))
+    }
+
+    /// Views of (transmittance, scattering, single Mie, irradiance) for binding.
+    pub fn views(&self) -> TableViews {
+        TableViews {
+            transmittance: view(&self.transmittance),
+            scattering: view(&self.scattering),
+            single_mie: view(&self.single_mie),
+            irradiance: view(&self.irradiance),
+        }
+    }
+}
+
+/// Texture views of the tables the sky is drawn from.
+pub struct TableViews {
+    pub transmittance: wgpu::TextureView,
+    pub scattering: wgpu::TextureView,
+    pub single_mie: wgpu::TextureView,
+    pub irradiance: wgpu::TextureView,
+}
+
+impl TableViews {
+    /// Bindings named as in `atmosphere.wgsl` users (`draw.wgsl`, `sky_sh.wgsl`, `capture.wgsl`).
+    pub fn bindings<'a>(
+        &'a self,
+        params: &'a wgpu::Buffer,
+        sampler: &'a wgpu::Sampler,
+    ) -> [(&'static str, wgpu::BindingResource<'a>); 6] {
+        [
+            ("atmosphere", params.as_entire_binding()),
+            ("transmittance_load", tex(&self.transmittance)),
+            ("scattering", tex(&self.scattering)),
+            ("single_mie", tex(&self.single_mie)),
+            ("irradiance", tex(&self.irradiance)),
+            ("table_sampler", wgpu::BindingResource::Sampler(sampler)),
+        ]
+    }
+}
+
+/// Runs `steps` as side-effect passes of one graph (timed with `timer`).
+fn run_steps(
+    ctx: &GpuContext,
+    steps: &[Step],
+    timer: Option<&mut PassTimer>,
+) -> Result<Vec<PassTiming>, GpuError> {
+    let mut graph = FrameGraph::new();
+    for step in steps {
+        let mut pass = graph.add_pass(&step.id);
+        pass.side_effect();
+        pass.execute(move |pc| {
+            let mut cp = pc.encoder.begin_compute_pass(&Default::default());
+            cp.set_pipeline(&step.pipeline);
+            cp.set_bind_group(0, &step.bind_group, &[]);
+            cp.dispatch_workgroups(step.groups[0], step.groups[1], step.groups[2]);
+        });
+    }
+    run_graph(ctx, graph, timer, "sky.tables")
+}
+
+/// Compiles, records (timed with `timer`), submits and checks `graph`.
+pub(crate) fn run_graph(
+    ctx: &GpuContext,
+    graph: FrameGraph<'_>,
+    mut timer: Option<&mut PassTimer>,
+    context: &str,
+) -> Result<Vec<PassTiming>, GpuError> {
+    let compiled = graph.compile().map_err(graph_error)?;
+    let commands = compiled
+        .execute(&ctx.device, &mut TexturePool::new(), timer.as_deref_mut())
+        .map_err(graph_error)?;
+    ctx.queue.submit([commands]);
+    ctx.check(context)?;
+    match timer {
+        Some(t) => t.read_timings(&ctx.device).map_err(graph_error),
+        None => Ok(Vec::new()),
+    }
+}
