@@ -10,6 +10,7 @@
 //! (`tangents.rs`). Every problem is an error naming the file.
 
 mod material;
+pub(crate) mod placement;
 mod tangents;
 
 use std::path::{Path, PathBuf};
