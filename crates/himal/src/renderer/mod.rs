@@ -146,6 +146,7 @@ impl Renderer {
             probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
+            forward: crate::passes::forward::ForwardPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
@@ -155,6 +156,7 @@ impl Renderer {
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        passes.forward.prepare(&ctx, &scene_gpu)?;
         for key in GBufferKey::for_scene(&scene_gpu, false) {
             passes.gbuffer.prepare(&ctx, key)?;
         }
@@ -619,6 +621,11 @@ impl Renderer {
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
 
+        // Alpha BLEND objects draw far to near from this camera.
+        self.res
+            .passes
+            .forward
+            .sort(&self.res.scene, camera.position);
         let errors = FrameErrors::default();
         let Self {
             ctx,
