@@ -137,3 +137,68 @@ fn optional_missing_gltf_is_skipped() {
         .unwrap_or_else(|e| panic!("{e}"));
     assert!(s.objects.is_empty() && s.pbr.materials.is_empty());
 }
+
+#[test]
+fn rest_on_puts_the_model_on_its_support() {
+    let text = r#"
+[[material]]
+name = "stone"
+albedo = [0.5, 0.5, 0.5]
+
+[[object]]
+name = "plinth"
+primitive = "box"
+material = "stone"
+size = [2, 1, 2]
+position = [0, 3, 0]
+
+[[gltf]]
+file = "gltf/DamagedHelmet/glTF/DamagedHelmet.gltf"
+translation = [0, 0.25, 0]
+scale = 0.5
+rest_on = "plinth"
+"#;
+    let s = scene(text).unwrap_or_else(|e| panic!("{e}"));
+    let bottom = s.objects[1..]
+        .iter()
+        .map(|o| s.meshes[o.mesh].bounds.transform(&o.transform).min.y)
+        .fold(f32::INFINITY, f32::min);
+    // plinth top 3.5, plus translation.y 0.25
+    assert!((bottom - 3.75).abs() < 1e-4, "bottom {bottom}");
+    let e = scene(&text.replace("rest_on = \"plinth\"", "rest_on = \"nothing\""))
+        .err()
+        .unwrap_or_default();
+    assert!(
+        e.contains("placed.toml:17:") && e.contains("\"nothing\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_demo_world_shows_the_helmet() {
+    let s = Scene::demo().unwrap_or_else(|e| panic!("{e}"));
+    let helmet: Vec<_> = s
+        .objects
+        .iter()
+        .filter(|o| o.name.starts_with("helmet/"))
+        .collect();
+    let plinth = s
+        .objects
+        .iter()
+        .find(|o| o.name == "helmet_plinth")
+        .expect("plinth");
+    let top = s.meshes[plinth.mesh]
+        .bounds
+        .transform(&plinth.transform)
+        .max
+        .y;
+    let b = s.meshes[helmet[0].mesh]
+        .bounds
+        .transform(&helmet[0].transform);
+    eprintln!("helmet bounds {b:?}, plinth top {top}");
+    assert_eq!(helmet.len(), 1);
+    assert!((b.min.y - top).abs() < 1e-3, "{} vs {top}", b.min.y);
+    let camera = s.camera("helmet").expect("helmet camera");
+    let to_helmet = (b.center() - camera.position).normalize();
+    assert!(to_helmet.dot(camera.forward) > 0.99);
+}

@@ -159,7 +159,8 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
     let mut objects = Placer::place_all(&mut world, &file.object)?;
     let mut meshes = world.meshes;
     let mut lights = lights;
-    let placed = super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes)?;
+    let placed =
+        super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes, &objects)?;
     objects.extend(placed.objects);
     lights.extend(placed.lights);
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {

@@ -36,6 +36,8 @@ pub(crate) struct FileGltf {
     pub translation: Option<Spanned<[f32; 3]>>,
     pub rotation: Option<Spanned<GltfRotation>>,
     pub scale: Option<Spanned<Scale>>,
+    /// Put the model's lowest point on top of an earlier object (plus translation.y).
+    pub rest_on: Option<Spanned<String>>,
     /// Skip (with a warning) when the file does not exist.
     pub optional: Option<bool>,
 }

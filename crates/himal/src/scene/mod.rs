@@ -96,8 +96,9 @@
 //! `file` (relative to the scene file), `name` (prefix of its object names,
 //! default `gltfN`), `translation` (default origin), `rotation` (degrees about
 //! +Y, e.g. `30`, or a quaternion `[x, y, z, w]`), `scale` (number or
-//! `[x, y, z]`), `optional = true` (skip with a warning when the file is
-//! missing). The model's own node transforms apply first; its
+//! `[x, y, z]`), `rest_on` (put the model's lowest point on top of an earlier
+//! object, plus `translation.y`), `optional = true` (skip with a warning when
+//! the file is missing). The model's own node transforms apply first; its
 //! KHR_lights_punctual point and spot lights join `[[light]]`s; its cameras
 //! are not imported. Errors point at `file` and name the glTF problem.
 //!

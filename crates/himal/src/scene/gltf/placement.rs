@@ -62,6 +62,7 @@ pub(crate) fn place_all(
     base_dir: &Path,
     entries: &[FileGltf],
     meshes: &mut Vec<Mesh>,
+    placed_objects: &[Object],
 ) -> Result<Placed, SceneError> {
     let mut out = Placed::default();
     for (k, g) in entries.iter().enumerate() {
@@ -74,13 +75,28 @@ pub(crate) fn place_all(
             );
             continue;
         }
-        let transform = entry_transform(ck, g)?;
+        let mut transform = entry_transform(ck, g)?;
         let asset = super::load(&path).map_err(|e| {
             ck.err(
                 &g.file.span(),
                 format!("glTF \"{}\": {e}", g.file.get_ref()),
             )
         })?;
+        if let Some(support) = &g.rest_on {
+            let name = support.get_ref();
+            let Some(o) = placed_objects.iter().find(|o| &o.name == name) else {
+                return Err(ck.err(
+                    &support.span(),
+                    format!("rest_on: no earlier object \"{name}\""),
+                ));
+            };
+            let top = meshes[o.mesh].bounds.transform(&o.transform).max.y;
+            let bottom = asset.bounds.transform(&transform).min.y;
+            // The lowest point goes to the support's top plus translation.y
+            // (already in `transform`, so in `bottom`).
+            let lift = top + transform.w_axis.y - bottom;
+            transform = Mat4::from_translation(Vec3::Y * lift) * transform;
+        }
         let prefix = g
             .name
             .as_ref()
