@@ -576,6 +576,17 @@ fn primitive(
         }
         None => {}
     }
+    // himal's vertex contract: a unit tangent orthogonal to the normal
+    // (MikkTSpace and files need not give one; the shader re-orthogonalises
+    // per pixel all the same, so the shading does not change).
+    for v in &mut vertices {
+        let n = Vec3::from(v.normal);
+        let t = Vec3::from_slice(&v.tangent[..3]);
+        let t = (t - n * n.dot(t))
+            .try_normalize()
+            .unwrap_or_else(|| n.any_orthonormal_vector());
+        v.tangent[..3].copy_from_slice(&t.to_array());
+    }
     let bounds = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
     Ok(Mesh {
         name,
