@@ -4,7 +4,7 @@
 //! envmap.capture | envmap.probeN.* ─> envmap.mips ─> envmap.filter ──────────────┐ (when the sky changed)
 //! shadows.cascade0..3, shadows.static, shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
-//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─┬─> post.luminance ─> post.adapt ─┐
+//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
 //!          │        (--aa: post.tonemap ─> [aa.smaa.edges ─> .weights ─> .blend] ─> [aa.resolve ─> aa.taa ─> aa.unsharp] ─> output,
@@ -29,6 +29,7 @@ use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings, AoTargets};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
+use crate::passes::forward::{ForwardInputs, ForwardPass};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};
 use crate::passes::lighting::{LightingInputs, LightingKey, LightingPass};
 use crate::passes::post::{
@@ -78,6 +79,7 @@ pub struct Passes {
     pub lighting: LightingPass,
     pub sky: SkyPass,
     pub skyocc: SkyOccPass,
+    pub forward: ForwardPass,
     pub luminance: LuminancePass,
     pub adapt: AdaptPass,
     pub bloom: BloomPass,
@@ -274,6 +276,17 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     let hdr = passes
         .sky
         .add(&mut g, hdr, gbuffer.depth, view, sky, errors);
+    // glTF emission and alpha BLEND surfaces (passes/forward).
+    let forward = ForwardInputs {
+        view,
+        lighting,
+        scene,
+        envmap: &passes.envmap,
+        env,
+    };
+    let hdr = passes
+        .forward
+        .add(&mut g, hdr, gbuffer.depth, forward, errors);
     let measured = passes.luminance.add(&mut g, hdr, size, luminance, errors);
     let exposure = if post.adaptation {
         let adapted = passes.adapt.add(

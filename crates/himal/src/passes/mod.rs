@@ -6,6 +6,7 @@ pub mod ao;
 pub mod common;
 pub mod debug;
 pub mod envmap;
+pub mod forward;
 pub mod gbuffer;
 pub mod lighting;
 pub mod post;

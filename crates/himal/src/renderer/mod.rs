@@ -193,6 +193,7 @@ impl Renderer {
             lighting: LightingPass::new(&ctx)?,
             sky: SkyPass::new(&ctx)?,
             skyocc: crate::passes::skyocc::SkyOccPass::new(&ctx, scene)?,
+            forward: crate::passes::forward::ForwardPass::new(&ctx)?,
             luminance: LuminancePass::new(&ctx)?,
             adapt: AdaptPass::new(&ctx)?,
             bloom: BloomPass::new(&ctx)?,
@@ -203,6 +204,7 @@ impl Renderer {
             debug: DebugPass::new(&ctx)?,
         };
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        passes.forward.prepare(&ctx, &scene_gpu)?;
         for key in GBufferKey::for_scene(&scene_gpu, false) {
             passes.gbuffer.prepare(&ctx, key)?;
         }
@@ -795,6 +797,11 @@ impl Renderer {
                 .skyocc
                 .update(&self.ctx, &self.res.scene, camera, aspect, skyocc_on);
 
+        // Alpha BLEND objects draw far to near from this camera.
+        self.res
+            .passes
+            .forward
+            .sort(&self.res.scene, camera.position);
         let errors = FrameErrors::default();
         let Self {
             ctx,

@@ -53,6 +53,12 @@ pub struct SceneGpu {
     pub draws_vegetation: Vec<Draw>,
     /// glTF objects with their material index (the textured G-buffer path).
     pub draws_textured: Vec<(Draw, usize)>,
+    /// glTF alpha BLEND objects with their material and world bounds'
+    /// centre (drawn by `forward.blend`, back to front; not in the G-buffer).
+    pub draws_blend: Vec<(Draw, usize, glam::Vec3)>,
+    /// Opaque / mask glTF objects whose material emits (`forward.emissive`);
+    /// each is in `draws_textured` too.
+    pub draws_emissive: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
     pub materials: Option<super::textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
@@ -90,7 +96,8 @@ impl SceneGpu {
         }
         let mut objects = Vec::with_capacity(scene.objects.len());
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
-        let mut draws_textured = Vec::new();
+        let (mut draws_textured, mut draws_blend, mut draws_emissive) =
+            (Vec::new(), Vec::new(), Vec::new());
         let mut animated = Vec::new();
         let mut triangles = 0u64;
         for (i, object) in scene.objects.iter().enumerate() {
@@ -114,7 +121,20 @@ impl SceneGpu {
                 object: i as u32,
             };
             match (scene.pbr.material_of(object.mesh), object.foliage) {
-                (Some(material), _) => draws_textured.push((draw, material)),
+                (Some(material), _) => {
+                    let m = scene.pbr.materials.get(material);
+                    if m.is_some_and(|m| m.alpha_mode == crate::scene::gltf::AlphaMode::Blend) {
+                        let bounds = scene.meshes[object.mesh]
+                            .bounds
+                            .transform(&object.transform);
+                        draws_blend.push((draw, material, bounds.center()));
+                    } else {
+                        if m.is_some_and(|m| m.emissive.max_element() > 0.0) {
+                            draws_emissive.push((draw.clone(), material));
+                        }
+                        draws_textured.push((draw, material));
+                    }
+                }
                 (None, Some(_)) => draws_vegetation.push(draw),
                 (None, None) => draws_opaque.push(draw),
             }
@@ -166,6 +186,8 @@ impl SceneGpu {
                 draws_opaque,
                 draws_vegetation,
                 draws_textured,
+                draws_blend,
+                draws_emissive,
                 materials,
                 animated,
                 triangles,

@@ -3,7 +3,8 @@
 //! linear), full mip chains generated on the GPU (`mipmap.wgsl`), one
 //! sampler per distinct glTF sampler, 1x1 defaults for absent slots, and a
 //! uniform of factors per material (twin of `MaterialGpu` in
-//! `passes/gbuffer/textured.wgsl`).
+//! `passes/gbuffer/textured.wgsl`). CPU twin of the mip generation:
+//! [`next_mip_reference`].
 
 use std::collections::HashMap;
 
@@ -251,8 +252,10 @@ impl MaterialTextures {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format,
+            // COPY_SRC: the mip twin test reads levels back.
             usage: wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
@@ -321,4 +324,60 @@ impl MaterialTextures {
         self.textures.push(texture);
         Ok(self.views.len() - 1)
     }
+}
+
+fn srgb_decode(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn srgb_encode(c: f32) -> f32 {
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// CPU twin of `mipmap.wgsl`: the level after a `width` x `height` RGBA8
+/// level. Texel (x, y) is the bilinear tap at the source's texel coordinate
+/// (2x + 1, 2y + 1), i.e. the mean of texels 2x, 2x + 1 (clamped to the
+/// edge) by 2y, 2y + 1; an odd last row / column is dropped, as the shader
+/// does. `srgb`: colour is decoded before the mean and encoded after it
+/// (alpha stays linear), like an `Rgba8UnormSrgb` view. Rounded to 8 bits.
+pub fn next_mip_reference(
+    width: u32,
+    height: u32,
+    rgba8: &[u8],
+    srgb: bool,
+) -> (u32, u32, Vec<u8>) {
+    let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+    let texel = |x: u32, y: u32, c: usize| {
+        let v =
+            rgba8[((y.min(height - 1) * width + x.min(width - 1)) * 4) as usize + c] as f32 / 255.0;
+        if srgb && c < 3 { srgb_decode(v) } else { v }
+    };
+    let mut out = Vec::with_capacity((w * h * 4) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            for c in 0..4 {
+                let (x0, y0) = (2 * x, 2 * y);
+                let mean = 0.25
+                    * (texel(x0, y0, c)
+                        + texel(x0 + 1, y0, c)
+                        + texel(x0, y0 + 1, c)
+                        + texel(x0 + 1, y0 + 1, c));
+                let v = if srgb && c < 3 {
+                    srgb_encode(mean)
+                } else {
+                    mean
+                };
+                out.push((v.clamp(0.0, 1.0) * 255.0).round() as u8);
+            }
+        }
+    }
+    (w, h, out)
 }

@@ -156,8 +156,13 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         meshes: Vec::new(),
         mesh_keys: HashMap::new(),
     };
-    let objects = Placer::place_all(&mut world, &file.object)?;
-    let meshes = world.meshes;
+    let mut objects = Placer::place_all(&mut world, &file.object)?;
+    let mut meshes = world.meshes;
+    let mut lights = lights;
+    let placed =
+        super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes, &objects)?;
+    objects.extend(placed.objects);
+    lights.extend(placed.lights);
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
         b.union(&o.swept_bounds(&meshes[o.mesh].bounds))
     });
@@ -170,7 +175,7 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         sun,
         lights,
         bounds,
-        pbr: Default::default(),
+        pbr: placed.pbr,
         probes,
         environment,
     })

@@ -23,6 +23,31 @@ pub(crate) struct FileScene {
     #[serde(default)]
     pub probe: Vec<FileProbe>,
     pub environment: Option<FileEnvironment>,
+    #[serde(default)]
+    pub gltf: Vec<FileGltf>,
+}
+
+/// `[[gltf]]`: a glTF model placed in the scene (`scene/gltf/placement.rs`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileGltf {
+    pub file: Spanned<String>,
+    pub name: Option<Spanned<String>>,
+    pub translation: Option<Spanned<[f32; 3]>>,
+    pub rotation: Option<Spanned<GltfRotation>>,
+    pub scale: Option<Spanned<Scale>>,
+    /// Put the model's lowest point on top of an earlier object (plus translation.y).
+    pub rest_on: Option<Spanned<String>>,
+    /// Skip (with a warning) when the file does not exist.
+    pub optional: Option<bool>,
+}
+
+/// `rotation = 30` (degrees about +Y) or `rotation = [x, y, z, w]` (unit quaternion).
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(crate) enum GltfRotation {
+    Yaw(f32),
+    Quaternion([f32; 4]),
 }
 
 /// `[environment]`: an equirectangular HDR image instead of the physical sky.

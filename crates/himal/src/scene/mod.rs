@@ -92,6 +92,16 @@
 //! Snapped `grass` instead puts every clump's root on the ground below it
 //! (plus `position.y`); unsnapped grass stands on its local y = 0.
 //!
+//! `[[gltf]]`: a glTF 2.0 model (`.gltf` or `.glb`, see [`gltf`]) placed in the world:
+//! `file` (relative to the scene file), `name` (prefix of its object names,
+//! default `gltfN`), `translation` (default origin), `rotation` (degrees about
+//! +Y, e.g. `30`, or a quaternion `[x, y, z, w]`), `scale` (number or
+//! `[x, y, z]`), `rest_on` (put the model's lowest point on top of an earlier
+//! object, plus `translation.y`), `optional = true` (skip with a warning when
+//! the file is missing). The model's own node transforms apply first; its
+//! KHR_lights_punctual point and spot lights join `[[light]]`s; its cameras
+//! are not imported. Errors point at `file` and name the glTF problem.
+//!
 //! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
 //! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).
 //!

@@ -2,9 +2,9 @@
 // as gbuffer.wgsl (docs/gltf.md). Vertices carry the factors (colour = base
 // colour factor * COLOR_0, surface = glossiness, F0 0.04, metallic,
 // anisotropy strength); group 1 holds the material's textures and uniform.
-// Alpha: MASK discards below the cut-off; BLEND uses an ordered 4x4 dither
-// (deferred fallback: no forward pass yet). Emissive is bound but not drawn
-// (no emissive G-buffer target yet).
+// Alpha: MASK discards below the cut-off; BLEND materials are not drawn here
+// but by passes/forward (forward.blend), which also adds the emission
+// (forward.emissive, depth Equal: the clip position is @invariant in both).
 #import gbuffer_io
 #import view
 #import tangent_frame
@@ -37,7 +37,7 @@ struct MaterialGpu {
 @group(1) @binding(12) var anisotropy_sampler: sampler;
 
 struct VertexOut {
-    @builtin(position) clip: vec4f,
+    @builtin(position) @invariant clip: vec4f,
     @location(0) normal: vec3f,
     @location(1) tangent: vec4f,
     @location(2) color: vec4f,
@@ -67,12 +67,6 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     return out;
 }
 
-// Ordered 4x4 Bayer threshold in (0, 1) for screen-door transparency.
-fn gltf_dither_threshold(p: vec2u) -> f32 {
-    var bayer = array<f32, 16>(0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0, 3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
-    return (bayer[(p.y % 4u) * 4u + (p.x % 4u)] + 0.5) / 16.0;
-}
-
 // KHR_materials_anisotropy strength s at GGX alpha -> himal anisotropy with
 // the same alpha_t / alpha_b ratio (CPU twin: scene::gltf::anisotropy_from_khr).
 fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
@@ -98,9 +92,6 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, in.uv, MIP_BIAS).r;
     let emissive = textureSampleBias(emissive_texture, emissive_sampler, in.uv, MIP_BIAS).rgb;
     if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
-        discard;
-    }
-    if (material.alpha.x > 1.5 && alpha < gltf_dither_threshold(vec2u(in.clip.xy))) {
         discard;
     }
     var n = normalize(in.normal);
@@ -133,7 +124,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     out.material = vec4f(1.0 - roughness, in.surface.y, metallic, anisotropy_from_khr(strength, roughness * roughness));
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
-    // Emissive is sampled so its binding stays in the layout (see header).
+    // Emissive is sampled so its binding stays in the reflected layout (the
+    // material bind group is shared with passes/forward, which draws it).
     out.albedo.a = out.albedo.a + 0.0 * emissive.r * material.emissive.r;
     return out;
 }

@@ -10,6 +10,7 @@
 //! (`tangents.rs`). Every problem is an error naming the file.
 
 mod material;
+pub(crate) mod placement;
 mod tangents;
 
 use std::path::{Path, PathBuf};
@@ -223,6 +224,28 @@ fn check_accessors(
     Ok(())
 }
 
+/// Every primitive's POSITION names an existing accessor.
+fn check_position_accessors(cx: &GltfContext, root: &gltf::json::Root) -> Result<(), SceneError> {
+    use gltf::json::mesh::Semantic;
+    use gltf::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(a) = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions))
+                && a.value() >= root.accessors.len()
+            {
+                return Err(cx.invalid(format!(
+                    "mesh {m} primitive {p}: POSITION accessor {} does not exist ({} accessors)",
+                    a.value(),
+                    root.accessors.len()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Loads a .gltf (with its .bin and images) or a .glb file.
 pub fn load(path: &Path) -> Result<GltfAsset, SceneError> {
     let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
@@ -237,10 +260,15 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
     let cx = GltfContext {
         path: path.to_path_buf(),
     };
-    let gltf::Gltf {
-        document: doc,
-        blob,
-    } = gltf::Gltf::from_slice(bytes).map_err(|e| cx.invalid(format!("not valid glTF: {e}")))?;
+    let invalid = |e: gltf::Error| cx.invalid(format!("not valid glTF: {e}"));
+    // Parsed first, validated after our own index check: the gltf crate's
+    // validation indexes the POSITION accessor unchecked (a panic found by
+    // tests/gltf_fuzz.rs).
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    let root = document.into_json();
+    check_position_accessors(&cx, &root)?;
+    let doc = gltf::Document::from_json(root).map_err(invalid)?;
     let mut blob = blob;
     let mut buffers = Vec::new();
     for b in doc.buffers() {
@@ -547,6 +575,17 @@ fn primitive(
             (vertices, indices) = tangents::generate(&vertices, &indices);
         }
         None => {}
+    }
+    // himal's vertex contract: a unit tangent orthogonal to the normal
+    // (MikkTSpace and files need not give one; the shader re-orthogonalises
+    // per pixel all the same, so the shading does not change).
+    for v in &mut vertices {
+        let n = Vec3::from(v.normal);
+        let t = Vec3::from_slice(&v.tangent[..3]);
+        let t = (t - n * n.dot(t))
+            .try_normalize()
+            .unwrap_or_else(|| n.any_orthonormal_vector());
+        v.tangent[..3].copy_from_slice(&t.to_array());
     }
     let bounds = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
     Ok(Mesh {

@@ -1,0 +1,142 @@
+// forward: glTF surfaces drawn after lighting and sky into the HDR target
+// (issue #8, docs/gltf.md).
+// - fs_blend (`forward.blend`): alpha BLEND materials, back to front per
+//   object, premultiplied alpha over the HDR (One, OneMinusSrcAlpha), depth
+//   test against the G-buffer depth without writing it. Lit by the sun
+//   (unshadowed), the sky SH and the filtered environment cube
+//   (shaders/forward.wgsl, CPU twin passes/forward/reference.rs).
+// - fs_emissive (`forward.emissive`): emissive factor x texture of opaque and
+//   mask materials added (One, One) where the G-buffer kept this surface
+//   (depth Equal; the clip position is @invariant here and in textured.wgsl).
+// Material sampling follows passes/gbuffer/textured.wgsl.
+#import gbuffer_io
+#import view
+#import tangent_frame
+#import scene
+#import brdf
+#import sh
+#import envmap
+#import forward
+
+struct Lighting {
+    sun_direction: vec4f,
+    sun_illuminance: vec4f,
+    sky_irradiance: Sh9,
+    fog: vec4f,
+}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+@group(0) @binding(2) var<uniform> lighting: Lighting;
+@group(0) @binding(3) var env_specular: texture_cube<f32>;
+@group(0) @binding(4) var env_sampler: sampler;
+@group(0) @binding(5) var dfg_lut: texture_2d<f32>;
+
+struct MaterialGpu {
+    base_color: vec4f,
+    emissive: vec4f,
+    params: vec4f,
+    alpha: vec4f,
+}
+
+@group(1) @binding(0) var<uniform> material: MaterialGpu;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var base_color_sampler: sampler;
+@group(1) @binding(3) var metal_rough_texture: texture_2d<f32>;
+@group(1) @binding(4) var metal_rough_sampler: sampler;
+@group(1) @binding(5) var normal_texture: texture_2d<f32>;
+@group(1) @binding(6) var normal_sampler: sampler;
+@group(1) @binding(7) var occlusion_texture: texture_2d<f32>;
+@group(1) @binding(8) var occlusion_sampler: sampler;
+@group(1) @binding(9) var emissive_texture: texture_2d<f32>;
+@group(1) @binding(10) var emissive_sampler: sampler;
+@group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
+@group(1) @binding(12) var anisotropy_sampler: sampler;
+
+struct VertexOut {
+    // invariant: the emissive pass's depth test Equal must see the G-buffer's value
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) normal: vec3f,
+    @location(1) tangent: vec4f,
+    @location(2) color: vec4f,
+    @location(3) surface: vec4f,
+    @location(4) world: vec3f,
+    @location(6) uv: vec2f,
+}
+
+@vertex
+fn vs_main(in: GBufferVertexIn) -> VertexOut {
+    let o = objects[in.object];
+    let world = o.model * vec4f(in.position, 1.0);
+    var out: VertexOut;
+    out.uv = in.uv;
+    // The same expression as textured.wgsl (view_proj carries the jitter).
+    out.clip = view.view_proj * world;
+    out.world = world.xyz;
+    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
+    let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
+    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w * sign(det));
+    out.color = in.color;
+    out.surface = in.surface;
+    return out;
+}
+
+fn forward_anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
+    let a = max(alpha, 0.002);
+    let s = saturate(strength);
+    let alpha_t = a + (1.0 - a) * s * s;
+    return saturate((1.0 - a / alpha_t) / 0.9);
+}
+
+@fragment
+fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
+    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
+    let alpha = material.base_color.a * base.a;
+    let ts = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
+    let at = textureSample(anisotropy_texture, anisotropy_sampler, in.uv).xyz;
+    let mr = textureSample(metal_rough_texture, metal_rough_sampler, in.uv);
+    let occlusion = textureSample(occlusion_texture, occlusion_sampler, in.uv).r;
+    let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    var n = normalize(in.normal);
+    var tangent = in.tangent;
+    if (!front) {
+        n = -n;
+        tangent.w = -tangent.w;
+    }
+    let scaled = normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4)));
+    let n_mapped = apply_normal_map(n, tangent, scaled);
+    let c = cos(material.params.w);
+    let s = sin(material.params.w);
+    let d0 = at.xy * 2.0 - 1.0;
+    let d = vec2f(c * d0.x - s * d0.y, s * d0.x + c * d0.y);
+    let f = shading_frame(n_mapped, tangent);
+    let w = select(1.0, -1.0, tangent.w < 0.0);
+    let tbn = shading_frame(n_mapped, vec4f(f[0] * d.x + f[1] * (w * d.y), 1.0));
+
+    let roughness = saturate((1.0 - in.surface.x) * mr.g);
+    let metallic = saturate(in.surface.z * mr.b);
+    let ao = 1.0 + material.params.y * (occlusion - 1.0);
+    let anisotropy = forward_anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
+    let surf = surface_from_material(in.color.rgb * base.rgb, 1.0 - roughness, in.surface.y, metallic, anisotropy);
+    let v = normalize(view.camera_position.xyz - in.world);
+    let n_o_v = max(dot(tbn[2], v), 1e-4);
+    let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, anisotropy));
+    let lod = roughness * f32(textureNumLevels(env_specular) - 1u);
+    let prefiltered = textureSampleLevel(env_specular, env_sampler, r, lod).rgb;
+    let ab = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v, roughness), 0.0).xy;
+    return forward_shade_premultiplied(surf, tbn[0], tbn[1], tbn[2], v,
+        lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
+        prefiltered, ab, ao, emissive, alpha);
+}
+
+@fragment
+fn fs_emissive(in: VertexOut) -> @location(0) vec4f {
+    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
+    let e = textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    // MASK: the G-buffer discarded these texels; a surface behind at the
+    // same depth must not glow.
+    if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {
+        discard;
+    }
+    return vec4f(material.emissive.rgb * e, 0.0);
+}

@@ -1,0 +1,204 @@
+//! Scene files that place glTF models (`[[gltf]]`, scene/gltf/placement.rs).
+
+use std::path::Path;
+
+use glam::{Quat, Vec3};
+use himal::scene::Scene;
+
+const ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/assets");
+
+fn scene(text: &str) -> Result<Scene, String> {
+    Scene::from_toml_str(text, "placed.toml", Path::new(ASSETS)).map_err(|e| e.to_string())
+}
+
+const TWO_MODELS: &str = r#"
+[[material]]
+name = "stone"
+albedo = [0.5, 0.5, 0.5]
+
+[[object]]
+name = "plinth"
+primitive = "box"
+material = "stone"
+size = [2, 1, 2]
+
+[[gltf]]
+file = "gltf/DamagedHelmet/glTF/DamagedHelmet.gltf"
+name = "helmet"
+translation = [10, 2, -3]
+rotation = 90
+scale = 2
+
+[[gltf]]
+file = "gltf/TextureSettingsTest/glTF/TextureSettingsTest.gltf"
+rotation = [0, 0, 0, 1]
+"#;
+
+#[test]
+fn gltf_entries_are_placed_and_renumbered() {
+    let s = scene(TWO_MODELS).unwrap_or_else(|e| panic!("{e}"));
+    // 1 plinth + 1 helmet node + 10 TextureSettingsTest nodes (counts of gltf_load.rs).
+    assert_eq!(s.objects.len(), 12);
+    let helmet = s
+        .objects
+        .iter()
+        .find(|o| o.name.starts_with("helmet/"))
+        .expect("helmet object");
+    let alone = himal::scene::gltf::load(
+        &Path::new(ASSETS).join("gltf/DamagedHelmet/glTF/DamagedHelmet.gltf"),
+    )
+    .expect("helmet");
+    let expected = glam::Mat4::from_scale_rotation_translation(
+        Vec3::splat(2.0),
+        Quat::from_rotation_y(90f32.to_radians()),
+        Vec3::new(10.0, 2.0, -3.0),
+    ) * alone.objects[0].transform;
+    assert!(
+        helmet.transform.abs_diff_eq(expected, 1e-5),
+        "{:?}",
+        helmet.transform
+    );
+    assert!(s.objects.iter().any(|o| o.name.starts_with("gltf1/")));
+    // Materials 0 (helmet) + 10; textures 5 + 9; images 5 + 3.
+    assert_eq!(
+        (
+            s.pbr.materials.len(),
+            s.pbr.textures.len(),
+            s.pbr.images.len()
+        ),
+        (11, 14, 8)
+    );
+    // Every textured mesh exists, every material's textures and images resolve,
+    // and the second model's textures point at its own images.
+    for (mesh, mat) in &s.pbr.mesh_material {
+        assert!(*mesh < s.meshes.len() && *mat < s.pbr.materials.len());
+    }
+    assert_eq!(
+        s.pbr.material_of(s.objects[0].mesh),
+        None,
+        "plinth untextured"
+    );
+    let second: Vec<_> = s.pbr.materials[1..]
+        .iter()
+        .filter_map(|m| m.base_color_texture)
+        .collect();
+    assert!(!second.is_empty());
+    for t in second {
+        assert!(t.texture >= 5, "texture {} not shifted", t.texture);
+        assert!(s.pbr.textures[t.texture].image >= 5);
+    }
+    assert!(s.bounds.contains_point(Vec3::new(10.0, 2.0, -3.0), 0.0));
+}
+
+#[test]
+fn bad_gltf_entries_name_the_line_and_the_problem() {
+    let cases = [
+        (
+            "[[gltf]]\nfile = \"gltf/missing.gltf\"\n",
+            "placed.toml:2:",
+            "missing.gltf",
+        ),
+        (
+            "[[gltf]]\nfile = \"gltf/DamagedHelmet/glTF/DamagedHelmet.gltf\"\nrotation = [0, 0, 0, 0]\n",
+            "placed.toml:3:",
+            "non-zero quaternion",
+        ),
+        (
+            "[[gltf]]\nfile = \"gltf/DamagedHelmet/glTF/DamagedHelmet.gltf\"\nscale = -1\n",
+            "placed.toml:3:",
+            "must be positive",
+        ),
+        (
+            "[[gltf]]\nfile = \"gltf/DamagedHelmet/glTF/DamagedHelmet.gltf\"\nspin = 3\n",
+            "placed.toml:3:",
+            "spin",
+        ),
+        // A file that exists but is not glTF: the loader's message comes through.
+        (
+            "[[gltf]]\nfile = \"README.md\"\n",
+            "placed.toml:2:",
+            "not valid glTF",
+        ),
+    ];
+    for (text, place, problem) in cases {
+        let e = scene(text)
+            .err()
+            .unwrap_or_else(|| panic!("accepted:\n{text}"));
+        assert!(
+            e.contains(place) && e.contains(problem),
+            "{e}\n(wanted {place} and {problem})"
+        );
+    }
+}
+
+#[test]
+fn optional_missing_gltf_is_skipped() {
+    let s = scene("[[gltf]]\nfile = \"gltf/missing.gltf\"\noptional = true\n")
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.objects.is_empty() && s.pbr.materials.is_empty());
+}
+
+#[test]
+fn rest_on_puts_the_model_on_its_support() {
+    let text = r#"
+[[material]]
+name = "stone"
+albedo = [0.5, 0.5, 0.5]
+
+[[object]]
+name = "plinth"
+primitive = "box"
+material = "stone"
+size = [2, 1, 2]
+position = [0, 3, 0]
+
+[[gltf]]
+file = "gltf/DamagedHelmet/glTF/DamagedHelmet.gltf"
+translation = [0, 0.25, 0]
+scale = 0.5
+rest_on = "plinth"
+"#;
+    let s = scene(text).unwrap_or_else(|e| panic!("{e}"));
+    let bottom = s.objects[1..]
+        .iter()
+        .map(|o| s.meshes[o.mesh].bounds.transform(&o.transform).min.y)
+        .fold(f32::INFINITY, f32::min);
+    // plinth top 3.5, plus translation.y 0.25
+    assert!((bottom - 3.75).abs() < 1e-4, "bottom {bottom}");
+    let e = scene(&text.replace("rest_on = \"plinth\"", "rest_on = \"nothing\""))
+        .err()
+        .unwrap_or_default();
+    assert!(
+        e.contains("placed.toml:17:") && e.contains("\"nothing\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_demo_world_shows_the_helmet() {
+    let s = Scene::demo().unwrap_or_else(|e| panic!("{e}"));
+    let helmet: Vec<_> = s
+        .objects
+        .iter()
+        .filter(|o| o.name.starts_with("helmet/"))
+        .collect();
+    let plinth = s
+        .objects
+        .iter()
+        .find(|o| o.name == "helmet_plinth")
+        .expect("plinth");
+    let top = s.meshes[plinth.mesh]
+        .bounds
+        .transform(&plinth.transform)
+        .max
+        .y;
+    let b = s.meshes[helmet[0].mesh]
+        .bounds
+        .transform(&helmet[0].transform);
+    eprintln!("helmet bounds {b:?}, plinth top {top}");
+    assert_eq!(helmet.len(), 1);
+    assert!((b.min.y - top).abs() < 1e-3, "{} vs {top}", b.min.y);
+    let camera = s.camera("helmet").expect("helmet camera");
+    let to_helmet = (b.center() - camera.position).normalize();
+    assert!(to_helmet.dot(camera.forward) > 0.99);
+}
