@@ -6,7 +6,7 @@
 use glam::Vec3;
 use himal::gpu::testing::run_compute;
 use himal::math::sh::{Sh9Gpu, Sh9Rgb};
-use himal::passes::sky::{PreethamSky, SkyGpuParams, sky_irradiance_sh};
+use himal::passes::sky::{PreethamSky, SkyGpuParams, sky_irradiance_sh, sky_radiance_sh};
 
 fn module_text(path: &str) -> &'static str {
     himal::shader::source(path).unwrap_or_else(|| panic!("{path} is not embedded"))
@@ -72,9 +72,10 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let d = input.dirs[i].xyz;
-    output[3u * i] = vec4f(preetham_sky_radiance(input.params, d), 0.0);
-    output[3u * i + 1u] = vec4f(sun_disk_radiance(input.params, d), 0.0);
-    output[3u * i + 2u] = vec4f(sh9_eval(input.sh, d), 0.0);
+    output[4u * i] = vec4f(preetham_sky_radiance(input.params, d), 0.0);
+    output[4u * i + 1u] = vec4f(sun_disk_radiance(input.params, d), 0.0);
+    output[4u * i + 2u] = vec4f(sh9_eval(input.sh, d), 0.0);
+    output[4u * i + 3u] = vec4f(sh9_eval_radiance_from_irradiance(input.sh, d), 0.0);
 }
 "#;
 
@@ -82,6 +83,7 @@ struct GpuResult {
     sky: Vec3,
     disk: Vec3,
     sh: Vec3,
+    sh_radiance: Vec3,
 }
 
 /// Runs the kernel for `dirs` with the sky's parameters and `sh`.
@@ -92,16 +94,17 @@ fn run_kernel(sky: &PreethamSky, sh: &Sh9Rgb, dirs: &[Vec3]) -> Vec<GpuResult> {
     for d in dirs {
         input.extend_from_slice(bytemuck::bytes_of(&d.extend(0.0).to_array()));
     }
-    let out_bytes = (dirs.len() * 3 * 16) as u64;
+    let out_bytes = (dirs.len() * 4 * 16) as u64;
     let groups = (dirs.len() as u32).div_ceil(64);
     let out = run_compute(KERNEL, "cs_main", &input, out_bytes, [groups, 1, 1])
         .unwrap_or_else(|e| panic!("sky kernel: {e}"));
     let v: &[[f32; 4]] = bytemuck::cast_slice(&out);
-    v.chunks(3)
+    v.chunks(4)
         .map(|c| GpuResult {
             sky: Vec3::from_slice(&c[0][..3]),
             disk: Vec3::from_slice(&c[1][..3]),
             sh: Vec3::from_slice(&c[2][..3]),
+            sh_radiance: Vec3::from_slice(&c[3][..3]),
         })
         .collect()
 }
@@ -181,6 +184,7 @@ fn gpu_preetham_sky_and_sun_disk_match_cpu() {
 #[test]
 fn gpu_sh9_eval_matches_cpu() {
     let mut worst = 0.0f32;
+    let mut worst_radiance = 0.0f32;
     for (name, sky) in skies() {
         let sh = sky_irradiance_sh(&sky);
         let dirs = test_directions(sky.sun_direction(), 0.01);
@@ -191,7 +195,29 @@ fn gpu_sh9_eval_matches_cpu() {
         });
         println!("{name:11}: sh9_eval max rel err {w:.2e}");
         worst = worst.max(w);
+        // Radiance from the irradiance coefficients (the Bruneton fog colour):
+        // GPU vs CPU, and the CPU inverse against the radiance SH itself.
+        let radiance = sky_radiance_sh(&sky);
+        let irradiance = radiance.radiance_to_irradiance_coeffs();
+        let (mut w_gpu, mut w_inverse) = (0.0f32, 0.0f32);
+        let gpu = run_kernel(&sky, &irradiance, &dirs);
+        for (d, g) in dirs.iter().zip(&gpu) {
+            let cpu = irradiance.radiance_from_irradiance_eval(*d);
+            let scale = radiance.c[0].length() * 0.282095;
+            w_gpu = w_gpu.max((g.sh_radiance - cpu).length() / scale);
+            w_inverse = w_inverse.max((cpu - radiance.eval(*d)).length() / scale);
+        }
+        println!(
+            "{name:11}: radiance from irradiance, GPU vs CPU {w_gpu:.2e}, inverse {w_inverse:.2e}"
+        );
+        worst_radiance = worst_radiance.max(w_gpu.max(w_inverse));
     }
+    // Measured 2026-11-22 (lavapipe): at most 5e-7 (relative to the mean
+    // radiance); threshold 1e-5.
+    assert!(
+        worst_radiance < 1e-5,
+        "radiance from irradiance {worst_radiance}"
+    );
     // Measured 0 on 2026-11-22 (lavapipe: same f32 operations in the same
     // order); threshold 2e-6 allows FMA contraction elsewhere. A 5e-5 change
     // of one basis constant gives 3e-5.

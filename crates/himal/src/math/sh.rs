@@ -137,6 +137,16 @@ impl Sh9Rgb {
     pub fn irradiance(&self, n: Vec3) -> Vec3 {
         self.radiance_to_irradiance_coeffs().eval(n)
     }
+
+    /// The inverse of [`Sh9Rgb::radiance_to_irradiance_coeffs`] evaluated at
+    /// `d`: band-limited radiance from irradiance coefficients (the Bruneton
+    /// sky's fog colour). Twin of `sh9_eval_radiance_from_irradiance`.
+    pub fn radiance_from_irradiance_eval(&self, d: Vec3) -> Vec3 {
+        let y = sh9_basis(d);
+        (0..9).fold(Vec3::ZERO, |acc, i| {
+            acc + self.c[i] * (y[i] / SH9_COSINE_BAND_FACTORS[SH9_BAND[i]])
+        })
+    }
 }
 
 /// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre

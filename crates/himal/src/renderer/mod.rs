@@ -770,7 +770,12 @@ impl Renderer {
                 } else {
                     0.0
                 },
-                0.0,
+                // fog colour from the sky SH under the Bruneton sky (deferred.wgsl)
+                if self.res.passes.sky.draws_bruneton() {
+                    1.0
+                } else {
+                    0.0
+                },
                 0.0,
             ),
         );

@@ -31,3 +31,15 @@ fn sh9_eval(sh: Sh9, d: vec3f) -> vec3f {
         + sh.c[3].xyz * y[3] + sh.c[4].xyz * y[4] + sh.c[5].xyz * y[5]
         + sh.c[6].xyz * y[6] + sh.c[7].xyz * y[7] + sh.c[8].xyz * y[8];
 }
+
+// Radiance along d from irradiance coefficients: each band divided by the
+// cosine lobe's A_l (pi, 2pi/3, pi/4), i.e. the band-limited radiance the
+// irradiance was convolved from. Twin: Sh9Rgb::radiance_from_irradiance_eval.
+fn sh9_eval_radiance_from_irradiance(sh: Sh9, d: vec3f) -> vec3f {
+    let y = sh9_basis(d);
+    let l0 = sh.c[0].xyz * y[0];
+    let l1 = sh.c[1].xyz * y[1] + sh.c[2].xyz * y[2] + sh.c[3].xyz * y[3];
+    let l2 = sh.c[4].xyz * y[4] + sh.c[5].xyz * y[5] + sh.c[6].xyz * y[6]
+        + sh.c[7].xyz * y[7] + sh.c[8].xyz * y[8];
+    return l0 / 3.14159265 + l1 * (3.0 / (2.0 * 3.14159265)) + l2 * (4.0 / 3.14159265);
+}

@@ -32,7 +32,8 @@ struct Lighting {
     sun_illuminance: vec4f,
     // sky irradiance E(n) as SH9 (klux)
     sky_irradiance: Sh9,
-    // x: extinction per metre, y: amount of aerial perspective (0 = off)
+    // x: extinction per metre, y: amount of aerial perspective (0 = off),
+    // z: 1 = inscatter from the sky SH (Bruneton sky), 0 = Preetham
     fog: vec4f,
 }
 
@@ -161,7 +162,13 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);
-        let inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
+        // fog.z = 1 (Bruneton sky, L1): the SH sky radiance toward the horizon,
+        // so distant terrain fades to the colour of the sky drawn behind it.
+        var inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
+        if (lighting.fog.z > 0.5) {
+            let d = normalize(vec3f(-v.x, max(-v.y, 0.0), -v.z) + vec3f(0.0, 1e-4, 0.0));
+            inscatter = max(sh9_eval_radiance_from_irradiance(lighting.sky_irradiance, d), vec3f(0.0)) * lighting.fog.y;
+        }
         c = c * transmittance + inscatter * (1.0 - transmittance);
     }
     return vec4f(c, 1.0);
