@@ -1,0 +1,376 @@
+//! One frame: [`Renderer::draw`] (prepare size-dependent resources,
+//! upload the frame's uniforms, build, execute and submit the frame graph)
+//! and [`Renderer::render`] (the same, read back).
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::*;
+
+/// One rendered frame read back to the CPU.
+pub struct RenderedFrame {
+    pub image: TextureData,
+    /// GPU time per pass (empty where the adapter has no timestamps).
+    pub timings: Vec<PassTiming>,
+    /// Shadow draw calls and what the shadow passes rendered.
+    pub shadows: ShadowStats,
+    /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
+    pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
+}
+
+/// Fetches the pipeline that draws `view` into `format` (none for `Final`).
+pub(super) fn prepare_view(
+    ctx: &GpuContext,
+    passes: &mut Passes,
+    view: ViewBuffer,
+    format: wgpu::TextureFormat,
+) -> Result<(), GpuError> {
+    match view {
+        ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format),
+        ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format),
+        ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format),
+        ViewBuffer::Env(v) => passes.env_view.prepare(ctx, v, format),
+        ViewBuffer::SkyOcc(v) => passes.skyocc.prepare_view(ctx, v, format),
+        ViewBuffer::Final => Ok(()),
+    }
+}
+
+/// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
+/// presents it without a read-back).
+pub struct DrawnFrame {
+    /// GPU time per pass (empty where the adapter has no timestamps).
+    pub timings: Vec<PassTiming>,
+    /// Shadow draw calls and what the shadow passes rendered.
+    pub shadows: ShadowStats,
+    /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
+    pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
+}
+
+impl Renderer {
+    fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
+        match settings.view {
+            ViewBuffer::Final => DISPLAY_FORMAT,
+            _ if settings.raw => RAW_FORMAT,
+            _ => DISPLAY_FORMAT,
+        }
+    }
+
+    /// Creates size-dependent resources and the debug pipeline if needed.
+    pub(super) fn prepare_output(
+        &mut self,
+        settings: &FrameSettings,
+    ) -> Result<wgpu::TextureFormat, Error> {
+        let size = (settings.width, settings.height);
+        let format = Self::output_format(settings);
+        prepare_view(&self.ctx, &mut self.res.passes, settings.view, format)?;
+        if settings.aa.temporal() && self.res.aa_history.as_ref().is_none_or(|h| h.size != size) {
+            let h = crate::passes::aa::AaHistory::new(&self.ctx.device, size, DISPLAY_FORMAT);
+            self.res.aa_history = Some(h);
+        }
+        if settings.aa_buffers.any()
+            && self
+                .res
+                .aa_buffer_history
+                .as_ref()
+                .is_none_or(|h| h.size != size)
+        {
+            let h = crate::passes::aa::BufferHistory::new(&self.ctx.device, size);
+            self.res.aa_buffer_history = Some(h);
+        }
+        if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
+            self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
+        }
+        let passes = &mut self.res.passes;
+        passes
+            .tonemap
+            .prepare(&self.ctx, post_state::tonemap_key(settings))?;
+        passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
+        let key = lighting_key(settings, self.res.environment.is_some());
+        passes.lighting.prepare(&self.ctx, key)?;
+        for key in GBufferKey::for_scene(&self.res.scene, settings.aa.temporal()) {
+            passes.gbuffer.prepare(&self.ctx, key)?;
+        }
+        if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
+            self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
+        }
+        let device = &self.ctx.device;
+        self.res
+            .outputs
+            .entry((size.0, size.1, format))
+            .or_insert_with(|| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("output"),
+                    size: wgpu::Extent3d {
+                        width: size.0,
+                        height: size.1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::COPY_SRC
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    // himal::present reads the display-encoded bytes as they are
+                    view_formats: if format.is_srgb() {
+                        &[wgpu::TextureFormat::Rgba8Unorm]
+                    } else {
+                        &[]
+                    },
+                })
+            });
+        Ok(format)
+    }
+
+    /// Restarts the AA history on a mode change and uploads the temporal
+    /// passes' parameters for a frame sampled at `jitter`.
+    fn prepare_aa_history(&mut self, settings: &FrameSettings, jitter: [f32; 2]) {
+        if self.aa_last != Some(settings.aa) {
+            if let Some(h) = &mut self.res.aa_history {
+                h.invalidate();
+            }
+            self.aa_last = Some(settings.aa);
+        }
+        if let Some(h) = &self.res.aa_history {
+            let params = crate::passes::aa::AaParams::new(
+                jitter,
+                h.last_jitter,
+                h.frames,
+                (self.frame_index % 2) as u32,
+                &settings.aa_tuning,
+            );
+            self.res.passes.temporal.update(&self.ctx.queue, &params);
+        }
+    }
+
+    /// Renders one frame from `camera` and reads the output back.
+    pub fn render(
+        &mut self,
+        camera: &Camera,
+        settings: &FrameSettings,
+    ) -> Result<RenderedFrame, Error> {
+        let DrawnFrame {
+            timings,
+            shadows,
+            sky_occlusion,
+        } = self.draw(camera, settings)?;
+        let output = self
+            .output(settings)
+            .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
+        Ok(RenderedFrame {
+            image: read_texture(&self.ctx, output, 0, 0)?,
+            timings,
+            shadows,
+            sky_occlusion,
+        })
+    }
+
+    /// The texture the last [`Renderer::draw`] with these settings' size and
+    /// output format wrote (display frames: `Rgba8UnormSrgb`).
+    pub fn output(&self, settings: &FrameSettings) -> Option<&wgpu::Texture> {
+        let format = Self::output_format(settings);
+        self.res
+            .outputs
+            .get(&(settings.width, settings.height, format))
+    }
+
+    /// Renders one frame from `camera` into [`Renderer::output`] and waits for
+    /// the GPU timings; the image stays on the GPU.
+    pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
+        Self::validate(settings)?;
+        let size = (settings.width, settings.height);
+        let format = self.prepare_output(settings)?;
+        self.update_sky(&settings.sun, settings.sky_model)?;
+        let probe = if settings.environment_probes && self.res.environment.is_none() {
+            self.res.passes.probes.nearest(camera.position)
+        } else {
+            None
+        };
+        if probe != self.res.active_probe {
+            self.res.active_probe = probe;
+            self.res.passes.envmap.dirty = true;
+        }
+        if settings.envmap_every_frame {
+            self.res.passes.envmap.dirty = true;
+        }
+        self.res.post.update(&self.ctx.queue, settings);
+        let aspect = size.0 as f32 / size.1 as f32;
+        let (view, proj) = (camera.view(), camera.projection(aspect));
+        // Projection jitter (A2, A3): the matrices carry it, so passes that
+        // reconstruct positions from depth stay exact; View.jitter.xy repeats
+        // it in clip units. Sample offset j (px, y down) = image shifted by -j.
+        // Debug views show the G-buffer as rasterised: no jitter there; the
+        // AO views show the AO that lighting gets, jittered like the frame,
+        // and the motion view the stabilised motion of `--aa-buffers motion`.
+        let stable_motion_view = settings.aa_buffers.motion
+            && settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Motion);
+        let jitter = match settings.view {
+            ViewBuffer::Final | ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
+            _ if stable_motion_view => settings.aa.jitter(self.frame_index),
+            _ => [0.0, 0.0],
+        };
+        let jitter_clip = Vec3::new(
+            -2.0 * jitter[0] / size.0 as f32,
+            2.0 * jitter[1] / size.1 as f32,
+            0.0,
+        );
+        let proj = Mat4::from_translation(jitter_clip) * proj;
+        self.prepare_aa_history(settings, jitter);
+        let view_proj = proj * view;
+        let prev = self.prev_view_proj.unwrap_or(view_proj);
+        let prev_time = self.prev_time.unwrap_or(settings.time_s);
+        let uniform = ViewUniform::new(
+            view,
+            proj,
+            prev,
+            camera.position,
+            camera.near,
+            size,
+            self.frame_index,
+            settings.exposure_ev,
+        )
+        .with_times(settings.time_s, prev_time)
+        .with_jitter(jitter_clip.x, jitter_clip.y);
+        self.res
+            .scene
+            .update_objects(&self.ctx.queue, settings.time_s, prev_time);
+        self.ctx
+            .queue
+            .write_buffer(&self.res.view_buffer, 0, bytemuck::bytes_of(&uniform));
+        let prev_jitter = if self.prev_view_proj.is_some() {
+            self.prev_jitter
+        } else {
+            jitter
+        };
+        self.res.passes.ao.update(
+            &self.ctx.queue,
+            &AoUniform::new(&settings.ao, proj, camera.near, size).with_jitter(jitter, prev_jitter),
+        );
+        if let Some(h) = &self.res.aa_buffer_history {
+            let (queue, tuning) = (&self.ctx.queue, &settings.aa_tuning);
+            let buffers = &self.res.passes.aa_buffers;
+            buffers.update(queue, jitter, prev_jitter, h, tuning);
+        }
+        let Some((_, _, light)) = &self.sky_light else {
+            return Err(Error::InvalidSettings("sky light missing".into()));
+        };
+        let (sun_illuminance, sky_irradiance) = match &self.res.environment {
+            Some(env) => (
+                if env.sun {
+                    light.sun_illuminance
+                } else {
+                    glam::Vec3::ZERO
+                },
+                Sh9Gpu::from(&env.irradiance_sh),
+            ),
+            None => (light.sun_illuminance, Sh9Gpu::from(&light.irradiance_sh)),
+        };
+        let lighting = LightingUniform::new(
+            light.sun_direction,
+            sun_illuminance,
+            sky_irradiance,
+            Vec4::new(
+                settings.aerial_extinction,
+                if settings.aerial_extinction > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                },
+                // fog colour from the sky SH under the Bruneton sky (deferred.wgsl)
+                if self.res.passes.sky.draws_bruneton() {
+                    1.0
+                } else {
+                    0.0
+                },
+                0.0,
+            ),
+        );
+        let shadow_stats = self.res.passes.shadows.update(
+            &self.ctx,
+            &self.res.scene,
+            camera,
+            aspect,
+            light.sun_direction,
+            settings.shadow_resolution,
+            Some(&settings.shadows),
+            settings.time_s,
+        );
+        self.ctx
+            .queue
+            .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
+        let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+        if settings.sky_occlusion_every_frame {
+            self.res.passes.skyocc.invalidate();
+        }
+        let skyocc_stats =
+            self.res
+                .passes
+                .skyocc
+                .update(&self.ctx, &self.res.scene, camera, aspect, skyocc_on);
+
+        // Alpha BLEND objects draw far to near from this camera.
+        self.res
+            .passes
+            .forward
+            .sort(&self.res.scene, camera.position);
+        let errors = FrameErrors::default();
+        let Self {
+            ctx,
+            res,
+            pool,
+            timer,
+            frame_index,
+            sky_timings,
+            ..
+        } = self;
+        let inputs = res
+            .inputs(settings, format, *frame_index, &errors)
+            .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
+        let compiled = frame::build(inputs, size, settings.view).compile()?;
+        let commands = compiled.execute(&ctx.device, pool, timer.as_mut())?;
+        if let Some(e) = errors.take_first() {
+            return Err(e.into());
+        }
+        ctx.queue.submit([commands]);
+        ctx.check("frame")?;
+        let mut timings = std::mem::take(sky_timings);
+        if let Some(t) = timer.as_mut() {
+            timings.extend(t.read_timings(&ctx.device)?);
+        }
+        self.prev_view_proj = Some(view_proj);
+        self.prev_jitter = jitter;
+        self.prev_time = Some(settings.time_s);
+        self.res.post.frame_done(settings);
+        if self.res.passes.envmap.dirty
+            && let Some(p) = self.res.active_probe
+        {
+            self.res.passes.probes.probes[p].captured = true;
+        }
+        self.res.passes.envmap.dirty = false;
+        self.frame_index += 1;
+        if let Some(h) = self
+            .res
+            .aa_history
+            .as_mut()
+            .filter(|_| settings.aa.temporal())
+        {
+            h.advance(jitter);
+        }
+        if let Some(h) = &mut self.res.aa_buffer_history {
+            h.advance(settings.aa_buffers);
+        }
+        if let Some(h) = &mut self.res.ao_history {
+            // Only the filter writes the history; any other mode leaves it stale.
+            if settings.ao.mode == AoMode::HbaoStf {
+                h.advance();
+            } else {
+                h.invalidate();
+            }
+        }
+        Ok(DrawnFrame {
+            timings,
+            shadows: shadow_stats,
+            sky_occlusion: skyocc_stats,
+        })
+    }
+}
