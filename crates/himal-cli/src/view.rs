@@ -27,7 +27,7 @@ use crate::render::RenderArgs;
 
 pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
-H HUD, P screenshot, Esc quit";
+7 TAA on AO and motion, 8 sky model, H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -133,6 +133,17 @@ impl Viewer {
             }
             KeyCode::Digit5 => s.environment_specular = !s.environment_specular,
             KeyCode::Digit6 => s.sky_occlusion = !s.sky_occlusion,
+            KeyCode::Digit7 => {
+                let on = !s.aa_buffers.any();
+                s.aa_buffers = himal::passes::aa::AaBuffers { ao: on, motion: on };
+            }
+            KeyCode::Digit8 => {
+                use himal::passes::sky::SkyModel;
+                s.sky_model = match s.sky_model {
+                    SkyModel::Bruneton => SkyModel::Preetham,
+                    SkyModel::Preetham => SkyModel::Bruneton,
+                };
+            }
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
             _ => {}
@@ -183,9 +194,15 @@ impl Viewer {
                 on(s.shadow_resolution > 0)
             ),
             format!(
-                "[4] AA {}  [5] env specular {}  [V] {}",
+                "[4] AA {}  [5] env specular {}  [6] sky occlusion {}",
                 s.aa.name(),
                 on(s.environment_specular),
+                on(s.sky_occlusion)
+            ),
+            format!(
+                "[7] TAA on AO+motion {}  [8] sky {:?}  [V] {}",
+                on(s.aa_buffers.any()),
+                s.sky_model,
                 view_name(s.view)
             ),
         ];
@@ -218,11 +235,12 @@ impl Viewer {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f32().min(0.25);
         self.last = now;
+        // The first interval runs from start-up, not from a previous frame.
         let rate = 1.0 / dt.max(1e-3);
-        self.fps = if self.fps > 0.0 {
-            0.9 * self.fps + 0.1 * rate
-        } else {
-            rate
+        self.fps = match self.frames {
+            0 => 0.0,
+            1 => rate,
+            _ => 0.9 * self.fps + 0.1 * rate,
         };
         self.clock += dt;
         let mut settings = self.settings.clone();
