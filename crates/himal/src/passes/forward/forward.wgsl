@@ -32,13 +32,6 @@ struct Lighting {
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;
 
-struct MaterialGpu {
-    base_color: vec4f,
-    emissive: vec4f,
-    params: vec4f,
-    alpha: vec4f,
-}
-
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
 @group(1) @binding(2) var base_color_sampler: sampler;

@@ -13,15 +13,6 @@
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 
-struct MaterialGpu {
-    base_color: vec4f,
-    emissive: vec4f,
-    // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
-    params: vec4f,
-    // x mode (0 opaque, 1 mask, 2 blend), y cut-off
-    alpha: vec4f,
-}
-
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
 @group(1) @binding(2) var base_color_sampler: sampler;
