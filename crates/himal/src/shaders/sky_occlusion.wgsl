@@ -91,3 +91,11 @@ fn sky_occlusion_lookup(
     let h = textureLoad(heights, texel, entry.z, 0).xy;
     return sky_occlusion_fade(sh, p.y, h.x, h.y);
 }
+
+// One sector rendered this frame (passes/skyocc resources.rs `JobGpu`).
+struct SectorJob {
+    // xy: world x, z of the rendered image's corner (texel (0, 0) min)
+    origin: vec4f,
+    // x: pool layer written
+    layer: vec4u,
+}

@@ -96,6 +96,8 @@ pub struct SkyOccPass {
     blur: [wgpu::ComputePipeline; 2],
     vis_program: Program,
     visibility: wgpu::ComputePipeline,
+    smooth_program: Program,
+    smooth: wgpu::ComputePipeline,
     view_program: Program,
     views: HashMap<(SkyOccView, wgpu::TextureFormat), wgpu::RenderPipeline>,
     pool: SectorPool,
@@ -126,8 +128,12 @@ impl SkyOccPass {
             ("TEXEL", TEXEL_SIZE as f64),
             ("ORIGIN_LIFT", reference::ORIGIN_LIFT as f64),
             ("FADE_RADIUS", reference::FADE_RADIUS as f64),
+            ("BORDER", reference::SMOOTH_BORDER as f64),
         ];
         let visibility = vis_program.compute_pipeline(ctx, "cs_main", &constants)?;
+        let smooth_program = Program::new(ctx, "passes/skyocc/visibility_smooth.wgsl")?;
+        let border = [("BORDER", reference::SMOOTH_BORDER as f64)];
+        let smooth = smooth_program.compute_pipeline(ctx, "cs_main", &border)?;
         let casters = crate::passes::shadows::casters::Casters::from_scene(scene);
         let heights = if casters.scene.is_empty() {
             (-1.0, 1.0)
@@ -141,6 +147,8 @@ impl SkyOccPass {
             blur,
             vis_program,
             visibility,
+            smooth_program,
+            smooth,
             view_program: Program::new(ctx, "passes/skyocc/view.wgsl")?,
             views: HashMap::new(),
             pool: SectorPool::new(POOL_LAYERS as usize),
@@ -440,6 +448,7 @@ impl SkyOccPass {
         let tv = |t: &wgpu::Texture| resources::array_view(t);
         let (raw, blurred) = (tv(&work.raw), tv(&work.blurred));
         let (vis, heights) = (tv(&self.textures.vis), tv(&self.textures.heights));
+        let vis_ext = tv(&work.vis_ext);
         let bg = self.vis_program.bind(
             device,
             0,
@@ -448,18 +457,33 @@ impl SkyOccPass {
                 ("blurred_load", wgpu::BindingResource::TextureView(&blurred)),
                 ("disk", self.disk.as_entire_binding()),
                 ("jobs", work.jobs.as_entire_binding()),
-                ("vis_out", wgpu::BindingResource::TextureView(&vis)),
+                ("vis_out", wgpu::BindingResource::TextureView(&vis_ext)),
                 ("heights_out", wgpu::BindingResource::TextureView(&heights)),
             ],
         )?;
-        let groups = (SECTOR_TEXELS as u32).div_ceil(8);
-        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("skyocc.visibility"),
-            timestamp_writes: None,
-        });
-        cp.set_pipeline(&self.visibility);
-        cp.set_bind_group(0, &bg, &[]);
-        cp.dispatch_workgroups(groups, groups, n);
+        let smooth_bg = self.smooth_program.bind(
+            device,
+            0,
+            &[
+                ("vis_load", wgpu::BindingResource::TextureView(&vis_ext)),
+                ("jobs", work.jobs.as_entire_binding()),
+                ("vis_out", wgpu::BindingResource::TextureView(&vis)),
+            ],
+        )?;
+        let ext = (SECTOR_TEXELS + 2 * reference::SMOOTH_BORDER) as u32;
+        for (pipeline, bg, size) in [
+            (&self.visibility, &bg, ext),
+            (&self.smooth, &smooth_bg, SECTOR_TEXELS as u32),
+        ] {
+            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("skyocc.visibility"),
+                timestamp_writes: None,
+            });
+            cp.set_pipeline(pipeline);
+            cp.set_bind_group(0, bg, &[]);
+            let groups = size.div_ceil(8);
+            cp.dispatch_workgroups(groups, groups, n);
+        }
         Ok(())
     }
 

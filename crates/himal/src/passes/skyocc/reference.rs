@@ -36,6 +36,9 @@ pub const BLUR_WEIGHTS: [f32; 2 * BLUR_RADIUS + 1] =
 pub const MARGIN_TEXELS: usize = 36;
 /// Edge of a rendered (and blurred) height field: sector plus apron.
 pub const RENDER_TEXELS: usize = SECTOR_TEXELS + 2 * MARGIN_TEXELS;
+/// Texels around the sector whose visibility is computed only to feed the
+/// 5x5 smoothing of the SH2 visibility (`visibility_smooth.wgsl`).
+pub const SMOOTH_BORDER: usize = 2;
 /// The texel's own point is lifted this much (m) so that flat ground does
 /// not occlude itself through float rounding.
 pub const ORIGIN_LIFT: f32 = 0.05;
@@ -274,13 +277,36 @@ pub fn sector_visibility(raw: &HeightImage, disk: &[Vec2]) -> (HeightImage, Vec<
     let blurred = blur(raw);
     let m = (raw.size - SECTOR_TEXELS.min(raw.size)) / 2;
     let inner = raw.size - 2 * m;
-    let mut out = Vec::with_capacity(inner * inner);
-    for y in m..m + inner {
-        for x in m..m + inner {
+    // SH2 over the sector and a SMOOTH_BORDER ring, then a 5x5 binomial
+    // smoothing: the per-texel disk rotation leaves ±1/32 noise that shows
+    // as streaks on walls.
+    let b = SMOOTH_BORDER;
+    let ext = inner + 2 * b;
+    let mut sh = Vec::with_capacity(ext * ext);
+    let mut fade = Vec::with_capacity(ext * ext);
+    for y in m - b..m + inner + b {
+        for x in m - b..m + inner + b {
             let (f, sum, h_fade) = visibility_at(raw, &blurred, disk, x, y);
+            sh.push(sh2_from_visibility(f, sum));
+            fade.push(h_fade);
+        }
+    }
+    const W: [f32; 5] = [1.0 / 16.0, 4.0 / 16.0, 6.0 / 16.0, 4.0 / 16.0, 1.0 / 16.0];
+    let mut out = Vec::with_capacity(inner * inner);
+    for y in 0..inner {
+        for x in 0..inner {
+            let mut s = Vec4::ZERO;
+            for (j, wj) in W.iter().enumerate() {
+                for (i, wi) in W.iter().enumerate() {
+                    s += sh[(y + j) * ext + x + i] * (wi * wj);
+                }
+            }
             out.push(SectorTexel {
-                sh: sh2_from_visibility(f, sum),
-                heights: Vec2::new(raw.h[y * raw.size + x], h_fade),
+                sh: s,
+                heights: Vec2::new(
+                    raw.h[(y + m) * raw.size + x + m],
+                    fade[(y + b) * ext + x + b],
+                ),
             });
         }
     }

@@ -182,6 +182,8 @@ pub struct Intermediates {
     pub depth: wgpu::Texture,
     pub scratch: wgpu::Texture,
     pub blurred: wgpu::Texture,
+    /// SH2 visibility of the sector and a `SMOOTH_BORDER` ring, before smoothing.
+    pub vis_ext: wgpu::Texture,
     pub views: Vec<wgpu::Buffer>,
     pub jobs: wgpu::Buffer,
 }
@@ -211,6 +213,14 @@ impl Intermediates {
             ),
             scratch: texture(ctx, "skyocc.scratch", n, layers, RAW_FORMAT, all),
             blurred: texture(ctx, "skyocc.blurred", n, layers, RAW_FORMAT, all),
+            vis_ext: texture(
+                ctx,
+                "skyocc.vis_ext",
+                (reference::SECTOR_TEXELS + 2 * reference::SMOOTH_BORDER) as u32,
+                layers,
+                wgpu::TextureFormat::Rgba32Float,
+                U::TEXTURE_BINDING | U::STORAGE_BINDING,
+            ),
             views: (0..jobs)
                 .map(|i| {
                     crate::gpu::pipeline::uniform_buffer(

@@ -5,7 +5,8 @@
 // ray from the texel's point (raw height + ORIGIN_LIFT) stays above the
 // blurred height at STEPS points up to RADIUS metres. Visible fraction f and
 // the sum of visible directions become an SH2 cap (shaders/sky_occlusion.wgsl),
-// stored with (raw, fade) heights in the sector's pool layer; the fade height
+// written for the sector and a BORDER ring (smoothed into the pool by
+// visibility_smooth.wgsl); (raw, fade) heights go to the sector's pool layer; the fade height
 // is the blurred field averaged over the disk scaled to FADE_RADIUS (a wide
 // blur, as the talk's blurred map; the sampled field stays sharp).
 // Twin: passes/skyocc/reference.rs `visibility_at`, `sector_visibility`.
@@ -17,32 +18,30 @@ override MARGIN: i32 = 36;
 override TEXEL: f32 = 0.25;
 override ORIGIN_LIFT: f32 = 0.05;
 override FADE_RADIUS: f32 = 2.0;
-
-struct SectorJob {
-    // xy: world x, z of the rendered image's corner (texel (0, 0) min)
-    origin: vec4f,
-    // x: pool layer written
-    layer: vec4u,
-}
+// Ring of texels around the sector computed for the smoothing pass
+// (reference::SMOOTH_BORDER).
+override BORDER: i32 = 2;
 
 @group(0) @binding(0) var raw_load: texture_2d_array<f32>;
 @group(0) @binding(1) var blurred_load: texture_2d_array<f32>;
 @group(0) @binding(2) var<storage, read> disk: array<vec2f>;
 @group(0) @binding(3) var<storage, read> jobs: array<SectorJob>;
-@group(0) @binding(4) var vis_out: texture_storage_2d_array<rgba16float, write>;
+// The sector plus BORDER texels on each side, layer = job (smoothed into the
+// pool by visibility_smooth.wgsl).
+@group(0) @binding(4) var vis_out: texture_storage_2d_array<rgba32float, write>;
 @group(0) @binding(5) var heights_out: texture_storage_2d_array<rg32float, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_main(@builtin(global_invocation_id) id: vec3u) {
-    let inner = vec2i(textureDimensions(vis_out));
+    let ext = vec2i(textureDimensions(vis_out));
     let u = vec2i(id.xy);
-    if (u.x >= inner.x || u.y >= inner.y) {
+    if (u.x >= ext.x || u.y >= ext.y) {
         return;
     }
     let job = jobs[id.z];
     let size = vec2i(textureDimensions(raw_load));
     let layer = i32(id.z);
-    let x = u + vec2i(MARGIN);
+    let x = u + vec2i(MARGIN - BORDER);
     let h_raw = textureLoad(raw_load, x, layer, 0).x;
     let origin = job.origin.xy;
     let p = vec3f(origin.x + (f32(x.x) + 0.5) * TEXEL, h_raw + ORIGIN_LIFT, origin.y + (f32(x.y) + 0.5) * TEXEL);
@@ -78,7 +77,9 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     }
     let f = f32(count) / f32(max(n, 1u));
     h_fade /= f32(max(n, 1u));
-    let out_layer = i32(job.layer.x);
-    textureStore(vis_out, u, out_layer, sh2_from_visibility(f, sum));
-    textureStore(heights_out, u, out_layer, vec4f(h_raw, h_fade, 0.0, 1.0));
+    textureStore(vis_out, u, layer, sh2_from_visibility(f, sum));
+    let v = u - vec2i(BORDER);
+    if (all(v >= vec2i(0)) && all(v < ext - 2 * BORDER)) {
+        textureStore(heights_out, v, i32(job.layer.x), vec4f(h_raw, h_fade, 0.0, 1.0));
+    }
 }
