@@ -47,7 +47,7 @@ fn check_window(frame: &image::RgbImage, window: &image::RgbImage) {
         top[2] > top[1] && bottom[1] > bottom[2],
         "{top:?} {bottom:?}"
     );
-    // Bottom-right corner (below the HUD's ~120 px): the window is the frame itself
+    // Bottom-right corner (below the HUD, about 180 px tall): the window is the frame itself
     // (swapchain path measured exact, the CPU path is the twin).
     let worst = (w * 3 / 4..w)
         .flat_map(|x| (h * 3 / 4..h).map(move |y| (x, y)))
@@ -72,14 +72,14 @@ fn check_window(frame: &image::RgbImage, window: &image::RgbImage) {
 
 #[test]
 fn viewer_presents_through_a_swapchain_with_the_hud_under_xvfb() {
-    let (stdout, frame, window) = run_viewer("gpu", (320, 180));
+    let (stdout, frame, window) = run_viewer("gpu", (480, 360));
     assert!(stdout.contains("wgpu swapchain"), "{stdout}");
     check_window(&frame, &window);
 }
 
 #[test]
 fn viewer_presents_through_the_cpu_when_asked() {
-    let (stdout, frame, window) = run_viewer("cpu", (320, 180));
+    let (stdout, frame, window) = run_viewer("cpu", (480, 360));
     assert!(stdout.contains("softbuffer"), "{stdout}");
     check_window(&frame, &window);
 }
