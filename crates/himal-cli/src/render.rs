@@ -104,6 +104,9 @@ pub struct PostArgs {
     /// L2 height-field sky occlusion (SH2 visibility, bent normals).
     #[arg(long, default_value = "on", value_name = "on|off")]
     pub sky_occlusion: String,
+    /// L2: sky light along the bent normal (off: along the surface normal).
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub bent_normals: String,
     /// Anti-aliasing after tone mapping; hraa = SMAA + temporal FLIPQUAD + TAA + unsharp.
     #[arg(
         long,
@@ -174,6 +177,11 @@ impl PostArgs {
             "on" => true,
             "off" => false,
             other => bail!("--sky-occlusion {other}: expected on or off"),
+        };
+        settings.bent_normals = match self.bent_normals.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--bent-normals {other}: expected on or off"),
         };
         Ok(())
     }

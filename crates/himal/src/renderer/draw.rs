@@ -282,7 +282,7 @@ impl Renderer {
                 } else {
                     0.0
                 },
-                0.0,
+                if settings.bent_normals { 1.0 } else { 0.0 },
             ),
         );
         let shadow_stats = self.res.passes.shadows.update(

@@ -132,6 +132,9 @@ pub struct FrameSettings {
     /// library (the L3 relighting test compares against unoccluded lighting);
     /// the CLI turns it on.
     pub sky_occlusion: bool,
+    /// L2: evaluate the sky light along the bent normal (on by default);
+    /// off keeps the visibility but uses the surface normal (comparisons).
+    pub bent_normals: bool,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -176,6 +179,7 @@ impl FrameSettings {
             time_s: 0.0,
             environment_specular: true,
             sky_occlusion: false,
+            bent_normals: true,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

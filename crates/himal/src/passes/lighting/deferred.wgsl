@@ -33,7 +33,8 @@ struct Lighting {
     // sky irradiance E(n) as SH9 (klux)
     sky_irradiance: Sh9,
     // x: extinction per metre, y: amount of aerial perspective (0 = off),
-    // z: 1 = inscatter from the sky SH (Bruneton sky), 0 = Preetham
+    // z: 1 = inscatter from the sky SH (Bruneton sky), 0 = Preetham;
+    // w: 1 = sky light along the bent normal (L2), 0 = along n
     fog: vec4f,
 }
 
@@ -96,7 +97,9 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: 
     var n_sky = n;
     var sky_visibility = 1.0;
     if (SKY_OCCLUSION) {
-        n_sky = bent_normal_from_sh_visibility(n, sky_vis);
+        if (lighting.fog.w > 0.5) {
+            n_sky = bent_normal_from_sh_visibility(n, sky_vis);
+        }
         sky_visibility = sh2_visibility_cosine(sky_vis, n_sky);
     }
     let ao = ao_in * sky_visibility;
