@@ -251,21 +251,11 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
     assert_eq!(gpu.sky_occlusion.rendered, gpu.sky_occlusion.wanted);
     let img = gpu.image.to_rgba_f32().expect("f32");
     s.sky_occlusion = false;
-    let open = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let open = raw_frame(&mut r, &camera, &s);
     // Bent normals off (`--bent-normals off`): the same visibility along n.
     s.sky_occlusion = true;
     s.bent_normals = false;
-    let unbent = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let unbent = raw_frame(&mut r, &camera, &s);
     s.bent_normals = true;
     s.sky_occlusion = false;
     let bent_changed = img
@@ -281,19 +271,9 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
     assert!(bent_changed > 200, "{bent_changed}");
     // The same two frames with the environment specular (L3 normalisation).
     s.environment_specular = true;
-    let open_env = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let open_env = raw_frame(&mut r, &camera, &s);
     s.sky_occlusion = true;
-    let occluded_env = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let occluded_env = raw_frame(&mut r, &camera, &s);
     let ctx = r.context();
     let sector = r
         .sky_occlusion()
@@ -446,4 +426,17 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
         "{n_l3} pixels, smallest ratio {min_l3}"
     );
     assert!(worst_l3 < 0.02, "L3 ratio worst {worst_l3}");
+}
+
+/// One frame's raw (float) output.
+fn raw_frame(
+    r: &mut himal::Renderer,
+    camera: &himal::scene::Camera,
+    s: &FrameSettings,
+) -> Vec<[f32; 4]> {
+    r.render(camera, s)
+        .expect("frame")
+        .image
+        .to_rgba_f32()
+        .expect("f32")
 }

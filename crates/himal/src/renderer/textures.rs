@@ -119,6 +119,31 @@ pub fn mip_count(width: u32, height: u32) -> u32 {
 }
 
 impl MaterialTextures {
+    /// One bind group (group 1: `material` and the `<slot>_texture` /
+    /// `<slot>_sampler` pairs) per material, for any program declaring that
+    /// group (`textured.wgsl`, `forward.wgsl`).
+    pub fn bind_groups(
+        &self,
+        program: &Program,
+        device: &wgpu::Device,
+    ) -> Result<Vec<wgpu::BindGroup>, GpuError> {
+        let names: Vec<(String, String)> = SLOTS
+            .iter()
+            .map(|s| (format!("{s}_texture"), format!("{s}_sampler")))
+            .collect();
+        self.materials
+            .iter()
+            .map(|mat| {
+                let mut entries = vec![("material", mat.uniform.as_entire_binding())];
+                for ((tex, smp), (view, sampler)) in names.iter().zip(mat.slots) {
+                    entries.push((tex, wgpu::BindingResource::TextureView(&self.views[view])));
+                    entries.push((smp, wgpu::BindingResource::Sampler(&self.samplers[sampler])));
+                }
+                program.bind(device, 1, &entries)
+            })
+            .collect()
+    }
+
     pub fn upload(ctx: &GpuContext, pbr: &PbrSet) -> Result<Self, GpuError> {
         let mipmap = Program::new(ctx, "renderer/mipmap.wgsl")?;
         let mut out = MaterialTextures {

@@ -21,7 +21,6 @@ use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
 use crate::renderer::scene_gpu::{Draw, SceneGpu, vertex_layout};
-use crate::renderer::textures::{MaterialTextures, SLOTS};
 
 /// A forward permutation: which fragment entry and whether back faces are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -246,8 +245,7 @@ impl ForwardPass {
         pass.execute(move |ctx| {
             let scene = inputs.scene;
             let Some(m) = &scene.materials else { return };
-            let Some(groups) = errors.record(material_bind_groups(&self.program, ctx.device, m))
-            else {
+            let Some(groups) = errors.record(m.bind_groups(&self.program, ctx.device)) else {
                 return;
             };
             let Some(frame_group) = errors.record(self.program.bind(
@@ -319,27 +317,4 @@ impl ForwardPass {
         });
         hdr
     }
-}
-
-/// One bind group (group 1 of forward.wgsl) per glTF material.
-fn material_bind_groups(
-    program: &Program,
-    device: &wgpu::Device,
-    m: &MaterialTextures,
-) -> Result<Vec<wgpu::BindGroup>, GpuError> {
-    let names: Vec<(String, String)> = SLOTS
-        .iter()
-        .map(|s| (format!("{s}_texture"), format!("{s}_sampler")))
-        .collect();
-    m.materials
-        .iter()
-        .map(|mat| {
-            let mut entries = vec![("material", mat.uniform.as_entire_binding())];
-            for ((tex, smp), (view, sampler)) in names.iter().zip(mat.slots) {
-                entries.push((tex, wgpu::BindingResource::TextureView(&m.views[view])));
-                entries.push((smp, wgpu::BindingResource::Sampler(&m.samplers[sampler])));
-            }
-            program.bind(device, 1, &entries)
-        })
-        .collect()
 }

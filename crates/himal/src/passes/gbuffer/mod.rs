@@ -15,7 +15,6 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
-use crate::renderer::textures::{MaterialTextures, SLOTS};
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -215,7 +214,7 @@ impl GBufferPass {
                 return;
             };
             let materials = match &scene.materials {
-                Some(m) => errors.record(material_bind_groups(&self.textured, ctx.device, m)),
+                Some(m) => errors.record(m.bind_groups(&self.textured, ctx.device)),
                 None => Some(Vec::new()),
             };
             let Some(materials) = materials else { return };
@@ -299,27 +298,4 @@ impl GBufferPass {
         });
         out
     }
-}
-
-/// One bind group (group 1 of textured.wgsl) per glTF material.
-fn material_bind_groups(
-    program: &Program,
-    device: &wgpu::Device,
-    m: &MaterialTextures,
-) -> Result<Vec<wgpu::BindGroup>, GpuError> {
-    let names: Vec<(String, String)> = SLOTS
-        .iter()
-        .map(|s| (format!("{s}_texture"), format!("{s}_sampler")))
-        .collect();
-    m.materials
-        .iter()
-        .map(|mat| {
-            let mut entries = vec![("material", mat.uniform.as_entire_binding())];
-            for ((tex, smp), (view, sampler)) in names.iter().zip(mat.slots) {
-                entries.push((tex, wgpu::BindingResource::TextureView(&m.views[view])));
-                entries.push((smp, wgpu::BindingResource::Sampler(&m.samplers[sampler])));
-            }
-            program.bind(device, 1, &entries)
-        })
-        .collect()
 }
