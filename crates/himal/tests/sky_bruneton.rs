@@ -135,6 +135,9 @@ fn sky_sh_matches_numerical_integration() {
     ];
     // Worst relative error for normals up, down, horizontal; GPU vs CPU projection.
     let (mut worst, mut worst_twin) = ([0.0f32; 3], 0.0f32);
+    // Errors averaged over the sphere of normals (Ramamoorthi & Hanrahan's measure).
+    let (mut worst_mean, mut worst_rms) = (0.0f32, 0.0f32);
+    let lum = |v: Vec3| v.dot(Vec3::new(0.2126, 0.7152, 0.0722));
     for elevation in [-2.0f32, 2.0, 10.0, 25.0, 45.0, 80.0] {
         let sun = sun_at(elevation);
         let (radiance_sh, _) = projector.project(ctx, tables(), sun, None).expect("sh");
@@ -142,30 +145,16 @@ fn sky_sh_matches_numerical_integration() {
         // Twin: the same quadrature on the CPU lookups.
         let cpu_sh = Sh9Rgb::project(|d| cpu.sky_radiance(d, sun), SKY_SH_SAMPLES)
             .radiance_to_irradiance_coeffs();
-        // E(n) by a 96 x 192 midpoint rule over the sphere.
-        let (rows, cols) = (96, 192);
-        let mut e = [Vec3::ZERO; 6];
-        for i in 0..rows {
-            let theta = (i as f32 + 0.5) / rows as f32 * std::f32::consts::PI;
-            let d_omega = theta.sin()
-                * (std::f32::consts::PI / rows as f32)
-                * (std::f32::consts::TAU / cols as f32);
-            for j in 0..cols {
-                let phi = (j as f32 + 0.5) / cols as f32 * std::f32::consts::TAU;
-                let w = Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                );
-                let l = cpu.sky_radiance(w, sun) * d_omega;
-                for (k, n) in normals.iter().enumerate() {
-                    e[k] += l * n.dot(w).max(0.0);
-                }
-            }
-        }
-        for (k, n) in normals.iter().enumerate() {
-            let rel = (sh.eval(*n) - e[k]).length() / e[k].length();
-            let twin = (sh.eval(*n) - cpu_sh.eval(*n)).length() / cpu_sh.eval(*n).length();
+        // L(w) dw on a 96 x 192 midpoint grid; E(n) = sum L max(n.w, 0) dw.
+        let radiance: Vec<(Vec3, Vec3)> = sphere_grid(96)
+            .map(|(w, d_omega)| (w, cpu.sky_radiance(w, sun) * d_omega))
+            .collect();
+        let irradiance =
+            |n: Vec3| -> Vec3 { radiance.iter().map(|(w, l)| *l * n.dot(*w).max(0.0)).sum() };
+        for n in normals {
+            let e = irradiance(n);
+            let rel = (sh.eval(n) - e).length() / e.length();
+            let twin = (sh.eval(n) - cpu_sh.eval(n)).length() / cpu_sh.eval(n).length();
             let kind = if n.y > 0.5 {
                 0
             } else if n.y < -0.5 {
@@ -177,27 +166,68 @@ fn sky_sh_matches_numerical_integration() {
             worst_twin = worst_twin.max(twin);
             eprintln!(
                 "  sun {elevation:5.1} deg, n {n}: SH {:.4}, integrated {:.4}, rel {rel:.4}, GPU vs CPU SH {twin:.2e}",
-                sh.eval(*n),
-                e[k]
+                sh.eval(n),
+                e
             );
         }
+        // Over 16 x 32 normals weighted by solid angle, on luminance: mean
+        // relative error and RMS error over RMS irradiance.
+        let (mut rel_sum, mut err2, mut e2, mut weight) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for (n, d_omega) in sphere_grid(16) {
+            let e = lum(irradiance(n));
+            let d = lum(sh.eval(n)) - e;
+            rel_sum += d.abs() / e * d_omega;
+            err2 += d * d * d_omega;
+            e2 += e * e * d_omega;
+            weight += d_omega;
+        }
+        let (mean, rms) = (rel_sum / weight, (err2 / e2).sqrt());
+        eprintln!(
+            "  sun {elevation:5.1} deg over the sphere of normals: mean relative {mean:.4}, normalised RMS {rms:.4}"
+        );
+        worst_mean = worst_mean.max(mean);
+        worst_rms = worst_rms.max(rms);
     }
     eprintln!(
-        "sky SH3 irradiance vs integration, worst: up {:.4}, down {:.4}, horizontal {:.4}; GPU vs CPU projection {worst_twin:.2e}",
+        "sky SH3 irradiance vs integration, worst: over the sphere mean {worst_mean:.4} / RMS {worst_rms:.4}; up {:.4}, down {:.4}, horizontal {:.4}; GPU vs CPU projection {worst_twin:.2e}",
         worst[0], worst[1], worst[2]
     );
     // The projection itself: GPU against the same quadrature on the CPU
     // lookups, measured 2.4e-5 on 2026-11-22 (f32 sums); threshold 1e-4.
     assert!(worst_twin < 1e-4, "{worst_twin}");
-    // SH3 truncation (the quadrature is converged: n = 256 changes E by
+    // The issue's 3%, as Ramamoorthi & Hanrahan (2001) state SH3's irradiance
+    // error: averaged over all normals. Measured 2026-11-22, worst over the
+    // six suns (2 deg): mean relative 0.0204, normalised RMS 0.0197.
+    assert!(worst_mean < 0.03, "mean over normals {worst_mean}");
+    assert!(worst_rms < 0.03, "RMS over normals {worst_rms}");
+    // Single normals (the quadrature is converged: n = 256 changes E by
     // < 0.5%). Measured 2026-11-22, worst over the six suns: horizontal
-    // 0.0195 (issue threshold 0.03 holds); up 0.099 and down 0.46, both at a
-    // 2-degree sun: the bright red horizon band over a dark ground is band
-    // 4 and up, which the cosine lobe's SH3 drops, and E(down) is small.
-    // Thresholds 0.03, 0.12, 0.5 (docs/techniques/L1.md).
+    // 0.0196; up 0.099 and down 0.46, both at a 2-degree sun: the bright
+    // horizon over a darker ground is band 4 and up, which SH3 drops (band 4
+    // would still leave 0.13, band 6 0.07: docs/techniques/L1.md), and
+    // E(down) is small. Thresholds 0.03, 0.12, 0.5.
     assert!(worst[2] < 0.03, "horizontal {}", worst[2]);
     assert!(worst[0] < 0.12, "up {}", worst[0]);
     assert!(worst[1] < 0.5, "down {}", worst[1]);
+}
+
+/// Midpoint grid over the sphere, `rows` x 2 `rows`: (direction, solid angle).
+fn sphere_grid(rows: usize) -> impl Iterator<Item = (Vec3, f32)> {
+    use std::f32::consts::{PI, TAU};
+    let cols = 2 * rows;
+    (0..rows).flat_map(move |i| {
+        let theta = (i as f32 + 0.5) / rows as f32 * PI;
+        let d_omega = theta.sin() * (PI / rows as f32) * (TAU / cols as f32);
+        (0..cols).map(move |j| {
+            let phi = (j as f32 + 0.5) / cols as f32 * TAU;
+            let w = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            (w, d_omega)
+        })
+    })
 }
 
 #[test]
