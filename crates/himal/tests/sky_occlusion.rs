@@ -8,13 +8,13 @@ mod common;
 use std::path::Path;
 
 use common::{environment_specular, lighting_params, pixel_ray, renderer};
-use glam::{IVec2, Vec2, Vec3, Vec4};
+use glam::{IVec2, Vec2, Vec3};
 use himal::gpu::testing::shared_context;
 use himal::passes::lighting::reference::{ambient_luminance_ratio, shade_sky_occluded};
 use himal::passes::skyocc::reference::{
-    self as twin, HeightImage, RENDER_TEXELS, SECTOR_SIZE, SECTOR_TEXELS, TEXEL_SIZE,
+    self as twin, HeightImage, MARGIN_TEXELS, RENDER_TEXELS, SECTOR_SIZE, SECTOR_TEXELS, TEXEL_SIZE,
 };
-use himal::passes::skyocc::{SectorReadback, SkyOccPass};
+use himal::passes::skyocc::{SectorReadback, SkyOccPass, SkyOccView};
 use himal::renderer::scene_gpu::SceneGpu;
 use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
@@ -88,19 +88,24 @@ fn scene() -> Scene {
     Scene::from_toml_str(CANYON_AND_WALL, "canyon.toml", Path::new(".")).expect("scene")
 }
 
-/// A bumpy raw height image with a pit, a wall and a slope (twin inputs).
-fn synthetic_raw(origin: Vec2) -> HeightImage {
-    HeightImage::from_fn(RENDER_TEXELS, TEXEL_SIZE, origin, |x, z| {
+/// Twin inputs: bumpy sloped terrain with a pit, and the raw image of that
+/// terrain with a 6 m wall on it.
+fn synthetic_images(origin: Vec2) -> (HeightImage, HeightImage) {
+    let terrain = |x: f32, z: f32| {
         let (lx, lz) = (x - origin.x, z - origin.y);
-        let mut h = 0.05 * lx + 0.3 * (lx * 0.7).sin() * (lz * 0.45).cos();
-        if (30.0..31.0).contains(&lx) && lz > 20.0 {
-            h += 6.0;
-        }
-        if (50.0..60.0).contains(&lx) && (40.0..50.0).contains(&lz) {
-            h -= 4.0;
-        }
-        h
-    })
+        let h = 0.05 * lx + 0.3 * (lx * 0.7).sin() * (lz * 0.45).cos();
+        let pit = (50.0..60.0).contains(&lx) && (40.0..50.0).contains(&lz);
+        if pit { h - 4.0 } else { h }
+    };
+    let raw = HeightImage::from_fn(RENDER_TEXELS, TEXEL_SIZE, origin, |x, z| {
+        let (lx, lz) = (x - origin.x, z - origin.y);
+        let wall = (30.0..31.0).contains(&lx) && lz > 20.0;
+        terrain(x, z) + if wall { 6.0 } else { 0.0 }
+    });
+    (
+        raw,
+        HeightImage::from_fn(RENDER_TEXELS, TEXEL_SIZE, origin, terrain),
+    )
 }
 
 #[test]
@@ -108,12 +113,12 @@ fn blur_and_visibility_match_cpu_twin() {
     let ctx = shared_context().expect("GPU");
     let scene = scene();
     let mut pass = SkyOccPass::new(ctx, &scene).expect("pass");
-    let raw = synthetic_raw(Vec2::new(-9.0, 3.0));
+    let (raw, ground) = synthetic_images(Vec2::new(-9.0, 3.0));
     let gpu = pass
-        .run_kernels(ctx, std::slice::from_ref(&raw))
+        .run_kernels(ctx, &[(raw.clone(), ground.clone())])
         .expect("kernels");
     let disk = twin::poisson_disk(twin::SAMPLES);
-    let (blurred, cpu) = twin::sector_visibility(&raw, &disk);
+    let (blurred, cpu) = twin::sector_visibility(&raw, &ground, &disk);
     let blur_err = gpu[0]
         .blurred
         .iter()
@@ -140,7 +145,8 @@ fn blur_and_visibility_match_cpu_twin() {
     );
     // Same f32 arithmetic, same order: measured blur max 0 m on 2026-11-22; threshold 1e-4.
     assert!(blur_err < 1e-4, "blur {blur_err}");
-    // The fade height sums 32 texels (GPU fma / order): measured 3.2e-4 m on 2026-11-22; threshold 2e-3.
+    // The fade height sums 32 texels in the same order: measured 0 m on
+    // 2026-11-22 (3.2e-4 with per-texel rotated taps); threshold 2e-3.
     assert!(height_err < 2e-3, "heights {height_err}");
     // fp16 storage (~1e-3) plus rare samples flipped by rounding at a
     // texel edge (one sample = 1/32 of the cap). Measured on 2026-11-22 (with the 5x5 smoothing): mean 6.3e-4, worst 0.001, 0 texels > 0.01.
@@ -163,14 +169,18 @@ fn canyon_sector() -> SectorReadback {
 #[test]
 fn sky_visibility_matches_ray_traced_height_field() {
     let sector = canyon_sector();
-    // Rendered heights: the analytic field, texel for texel.
-    let mut wrong = 0;
+    // Rendered heights: the analytic field, texel for texel; the terrain
+    // height (the plane alone, the boxes left out) is 0 everywhere.
+    let (mut wrong, mut wrong_terrain) = (0, 0);
     for j in 0..SECTOR_TEXELS {
         for i in 0..SECTOR_TEXELS {
             let (x, z) = ((i as f32 + 0.5) * TEXEL_SIZE, (j as f32 + 0.5) * TEXEL_SIZE);
-            let h = sector.heights[j * SECTOR_TEXELS + i].x;
-            if (h - canyon_height(x, z)).abs() > 1e-3 {
+            let r = (j + MARGIN_TEXELS) * RENDER_TEXELS + i + MARGIN_TEXELS;
+            if (sector.raw[r] - canyon_height(x, z)).abs() > 1e-3 {
                 wrong += 1;
+            }
+            if sector.heights[j * SECTOR_TEXELS + i].x.abs() > 1e-3 {
+                wrong_terrain += 1;
             }
         }
     }
@@ -178,6 +188,10 @@ fn sky_visibility_matches_ray_traced_height_field() {
     assert!(
         wrong == 0,
         "{wrong} height texels differ from the analytic field"
+    );
+    assert!(
+        wrong_terrain == 0,
+        "{wrong_terrain} terrain texels are not 0"
     );
     // Ground texels of the canyon floor and both sides of the wall, every
     // 4th texel along x and 16th along z, in the middle of the structures.
@@ -217,20 +231,6 @@ fn sky_visibility_matches_ray_traced_height_field() {
         assert!(f <= 0.1, "{name}: fraction MAE {f}");
         assert!(c <= 0.1, "{name}: cosine MAE {c}");
     }
-}
-
-/// Bilinear sample of a sector's SH at local coordinates in [0, 1)², clamped
-/// like the GPU sampler (twin of `textureSampleLevel` in `sky_occlusion_lookup`).
-fn sample_sh(sector: &SectorReadback, local: Vec2) -> Vec4 {
-    let n = SECTOR_TEXELS as i32;
-    let p = local * n as f32 - 0.5;
-    let p0 = p.floor();
-    let f = p - p0;
-    let at = |x: i32, y: i32| sector.sh[(y.clamp(0, n - 1) * n + x.clamp(0, n - 1)) as usize];
-    let (x, y) = (p0.x as i32, p0.y as i32);
-    let top = at(x, y).lerp(at(x + 1, y), f.x);
-    let bottom = at(x, y + 1).lerp(at(x + 1, y + 1), f.x);
-    top.lerp(bottom, f.y)
 }
 
 #[test]
@@ -332,9 +332,7 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
             if blocked || near_box {
                 continue;
             }
-            let t = (Vec2::new(p.x, p.z) / TEXEL_SIZE).floor();
-            let hv = sector.heights[(t.y as usize) * SECTOR_TEXELS + t.x as usize];
-            let sh = twin::fade_to_visible(sample_sh(&sector, l), p.y, hv.x, hv.y);
+            let sh = twin::sector_lookup(&sector.sh, &sector.heights, l, p.y);
             let cpu = shade_sky_occluded(
                 &material,
                 1.0,
@@ -439,4 +437,88 @@ fn raw_frame(
         .image
         .to_rgba_f32()
         .expect("f32")
+}
+
+/// A 20 m wall at 30 degrees to the texel grid on a ground plane.
+const ROTATED_WALL: &str = r#"
+[sun]
+time = 14.0
+
+[[material]]
+name = "grey"
+albedo_linear = [0.5, 0.5, 0.5]
+glossiness = 0.4
+reflectance = 0.04
+metallic = 0.0
+anisotropy = 0.0
+ao = 1.0
+
+[[object]]
+name = "ground"
+primitive = "plane"
+material = "grey"
+size = [200.0, 200.0]
+position = [32.0, 0.0, 32.0]
+
+[[object]]
+name = "wall"
+primitive = "box"
+material = "grey"
+size = [20.0, 4.0, 0.5]
+position = [32.0, 2.0, 32.0]
+rotation = [0.0, 30.0, 0.0]
+
+[[camera]]
+name = "main"
+position = [38.5, 2.0, 43.3]
+target = [32.0, 2.0, 32.0]
+fov_y = 60.0
+"#;
+
+/// `--view sky-visibility` along a wall that is not aligned with the texels:
+/// the fade must not step from texel to texel (the streaks of a nearest,
+/// object-top fade height). Measures the mean second difference along
+/// image rows on the wall.
+#[test]
+fn sky_visibility_is_smooth_along_a_rotated_wall() {
+    let scene = Scene::from_toml_str(ROTATED_WALL, "wall.toml", Path::new(".")).expect("scene");
+    let camera = scene.camera("main").expect("camera").clone();
+    let (w, h) = (160u32, 96u32);
+    let mut r = renderer(&scene);
+    let mut s = FrameSettings::new(w, h, scene.sun.clone());
+    s.view = ViewBuffer::SkyOcc(SkyOccView::Visibility);
+    s.raw = true;
+    s.sky_occlusion = true;
+    let img = raw_frame(&mut r, &camera, &s);
+    // Wall pixels: the ray meets the facing side's plane inside the wall,
+    // 0.3 m from its edges.
+    let (centre, yaw) = (Vec3::new(32.0, 2.0, 32.0), 30f32.to_radians());
+    let along = Vec3::new(yaw.cos(), 0.0, -yaw.sin());
+    let normal = Vec3::new(yaw.sin(), 0.0, yaw.cos());
+    let face = centre + normal * 0.25;
+    let on_wall = |x: u32, y: u32| {
+        let d = pixel_ray(&camera, (w, h), x, y);
+        let t = (face - camera.position).dot(normal) / d.dot(normal);
+        let p = camera.position + d * t;
+        t > 0.0 && (p - face).dot(along).abs() < 9.7 && (0.3..3.7).contains(&p.y)
+    };
+    let (mut sum, mut n) = (0.0f32, 0);
+    for y in 0..h {
+        for x in 1..w - 1 {
+            if on_wall(x - 1, y) && on_wall(x, y) && on_wall(x + 1, y) {
+                let v = |x: u32| img[(y * w + x) as usize][0];
+                sum += (v(x + 1) - 2.0 * v(x) + v(x - 1)).abs();
+                n += 1;
+            }
+        }
+    }
+    let roughness = sum / n.max(1) as f32;
+    eprintln!(
+        "rotated wall: {n} pixel triples, mean |second difference| of the visibility {roughness:.5}"
+    );
+    assert!(n > 1000, "{n} wall pixels");
+    // Measured 2026-11-22: 0.00031. The fade before (object-top height,
+    // nearest texel, per-texel rotated fade taps) 0.00344; with the terrain
+    // height and unrotated taps but nearest texels 0.00074. Threshold 0.0006.
+    assert!(roughness < 6e-4, "{roughness}");
 }

@@ -253,6 +253,9 @@ pub struct Object {
     pub motion: Option<Motion>,
     /// Alpha-tested, swaying cards; `None` for opaque geometry.
     pub foliage: Option<Foliage>,
+    /// Terrain (height fields and planes): sky occlusion fades by the height
+    /// above it (L2).
+    pub ground: bool,
 }
 
 impl Object {

@@ -108,6 +108,7 @@ impl Placer {
                     transform,
                     motion: None,
                     foliage: None,
+                    ground: true,
                 });
                 continue;
             }
@@ -204,6 +205,7 @@ impl Placer {
                         transform,
                         motion: None,
                         foliage: world.foliage(o, mesh)?,
+                        ground: false,
                     });
                     continue;
                 }
@@ -254,6 +256,7 @@ impl Placer {
                     transform,
                     motion,
                     foliage,
+                    ground: prim == "plane",
                 };
                 bounds = bounds.union(&object.swept_bounds(&local));
                 out.push(object);

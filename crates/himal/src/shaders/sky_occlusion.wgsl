@@ -62,14 +62,14 @@ fn sh2_visibility_cosine(sh: vec4f, n: vec3f) -> f32 {
     return clamp(v, 0.0, 1.0);
 }
 
-// Full occlusion at the surface height, none at the fade (blurred) height.
-fn sky_occlusion_fade(sh: vec4f, y: f32, h_surface: f32, h_blurred: f32) -> vec4f {
-    let t = saturate((y - h_surface) / max(h_blurred - h_surface, 0.1));
+// Full occlusion at the terrain height, none at the fade (blurred) height.
+fn sky_occlusion_fade(sh: vec4f, y: f32, h_terrain: f32, h_blurred: f32) -> vec4f {
+    let t = saturate((y - h_terrain) / max(h_blurred - h_terrain, 0.1));
     return mix(sh, sh2_unoccluded(), t);
 }
 
 // SH2 visibility at world point p with normal n: sector table -> pool layer,
-// bilinear SH, nearest heights, faded; unoccluded where no sector is resident.
+// bilinear SH and (terrain, fade) heights, faded; unoccluded where no sector is resident.
 fn sky_occlusion_lookup(
     table: texture_2d<i32>,
     vis: texture_2d_array<f32>,
@@ -87,8 +87,19 @@ fn sky_occlusion_lookup(
     }
     let local = xz / SKYOCC_SECTOR_SIZE - vec2f(sector);
     let sh = textureSampleLevel(vis, bilinear, local, entry.z, 0.0);
-    let texel = clamp(vec2i(local * f32(SKYOCC_SECTOR_TEXELS)), vec2i(0), vec2i(SKYOCC_SECTOR_TEXELS - 1));
-    let h = textureLoad(heights, texel, entry.z, 0).xy;
+    // Heights bilinear by hand (Rg32Float is not filterable); nearest texels
+    // step every 25 cm, which streaks walls.
+    let tc = local * f32(SKYOCC_SECTOR_TEXELS) - 0.5;
+    let t0 = floor(tc);
+    let f = tc - t0;
+    let last = vec2i(SKYOCC_SECTOR_TEXELS - 1);
+    let i0 = clamp(vec2i(t0), vec2i(0), last);
+    let i1 = clamp(vec2i(t0) + 1, vec2i(0), last);
+    let h00 = textureLoad(heights, i0, entry.z, 0).xy;
+    let h10 = textureLoad(heights, vec2i(i1.x, i0.y), entry.z, 0).xy;
+    let h01 = textureLoad(heights, vec2i(i0.x, i1.y), entry.z, 0).xy;
+    let h11 = textureLoad(heights, i1, entry.z, 0).xy;
+    let h = mix(mix(h00, h10, f.x), mix(h01, h11, f.x), f.y);
     return sky_occlusion_fade(sh, p.y, h.x, h.y);
 }
 

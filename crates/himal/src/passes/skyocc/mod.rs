@@ -5,7 +5,7 @@
 //! (orthographic, 25 cm per texel, with an apron of [`MARGIN_TEXELS`]),
 //! `skyocc.blur` blurs it (binomial, sigma 25 cm) and `skyocc.visibility`
 //! turns it into an SH2 visibility per texel (rotated Poisson disk, cap
-//! rotated to the mean visible direction) plus (surface, blurred) heights,
+//! rotated to the mean visible direction) plus (terrain, blurred) heights,
 //! stored in a fixed pool of texture-array layers with LRU eviction
 //! ([`pool`]). Lighting looks the sector up in a 32x32 table
 //! (`shaders/sky_occlusion.wgsl`). CPU twin: [`reference`]. Docs:
@@ -57,10 +57,12 @@ pub struct SkyOccStats {
     pub resident: u32,
 }
 
-/// One sector rendered this frame.
+/// One sector rendered this frame: every opaque draw, and the ground's
+/// (rendered again alone for the terrain height the lighting fades from).
 #[derive(Clone, Debug)]
 struct Job {
     draws: Vec<Draw>,
+    ground_draws: Vec<Draw>,
 }
 
 /// The pool textures lighting reads, as graph handles (ordering after this
@@ -83,8 +85,10 @@ pub struct SkyOccBindings<'a> {
 #[derive(Clone, Debug)]
 pub struct SectorReadback {
     pub sh: Vec<Vec4>,
-    /// (surface, fade) heights.
+    /// (terrain, fade) heights.
     pub heights: Vec<Vec2>,
+    /// The rendered image, highest surface ([`RENDER_TEXELS`]²).
+    pub raw: Vec<f32>,
     /// The blurred rendered image ([`RENDER_TEXELS`]²).
     pub blurred: Vec<f32>,
 }
@@ -106,6 +110,8 @@ pub struct SkyOccPass {
     disk: wgpu::Buffer,
     /// Object bounds over all time (draw culling per sector) and the scene's heights.
     bounds: Vec<Aabb>,
+    /// Per object: terrain ([`crate::scene::Object::ground`]).
+    ground: Vec<bool>,
     heights: (f32, f32),
     jobs: Vec<Job>,
     pub stats: SkyOccStats,
@@ -156,6 +162,7 @@ impl SkyOccPass {
             work: None,
             disk: resources::disk_buffer(ctx),
             bounds: casters.bounds,
+            ground: scene.objects.iter().map(|o| o.ground).collect(),
             heights,
             jobs: Vec::new(),
             stats: SkyOccStats::default(),
@@ -268,6 +275,11 @@ impl SkyOccPass {
                 .filter(inside)
                 .cloned()
                 .collect();
+            let ground_draws = draws
+                .iter()
+                .filter(|d| self.ground.get(d.object as usize) == Some(&true))
+                .cloned()
+                .collect();
             let view_proj = self.sector_view_proj(origin);
             ctx.queue.write_buffer(
                 &work.views[i],
@@ -280,7 +292,10 @@ impl SkyOccPass {
                 origin: [origin.x, origin.y, 0.0, 0.0],
                 layer: [layer, 0, 0, 0],
             });
-            jobs.push(Job { draws });
+            jobs.push(Job {
+                draws,
+                ground_draws,
+            });
         }
         self.jobs = jobs;
         if !gpu_jobs.is_empty() {
@@ -315,9 +330,11 @@ impl SkyOccPass {
             return SkyOccFrame { vis, heights };
         };
         let raw = graph.import_texture("skyocc.raw", &work.raw);
+        let ground = graph.import_texture("skyocc.ground", &work.ground);
         let blurred = graph.import_texture("skyocc.blurred", &work.blurred);
         let mut pass = graph.add_pass("skyocc.heightfield");
         let raw = pass.write(raw, TextureAccess::ColorAttachment);
+        let ground = pass.write(ground, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
             self.record_heightfields(ctx.encoder, ctx.device, scene, work, errors);
         });
@@ -330,6 +347,7 @@ impl SkyOccPass {
         let mut pass = graph.add_pass("skyocc.visibility");
         pass.side_effect();
         pass.read(raw, TextureAccess::Sampled);
+        pass.read(ground, TextureAccess::Sampled);
         pass.read(blurred, TextureAccess::Sampled);
         vis = pass.write(vis, TextureAccess::StorageWrite);
         heights = pass.write(heights, TextureAccess::StorageWrite);
@@ -340,7 +358,8 @@ impl SkyOccPass {
         SkyOccFrame { vis, heights }
     }
 
-    /// One render pass per job into layer i of the raw height image.
+    /// Per job, two render passes into layer i: every opaque draw into the
+    /// raw height image, the ground's alone into the terrain height image.
     fn record_heightfields(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -360,43 +379,45 @@ impl SkyOccPass {
                 ],
             );
             let Some(bg) = errors.record(bg) else { return };
-            let color = resources::layer_view(&work.raw, i as u32);
             let depth = resources::layer_view(&work.depth, i as u32);
-            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("skyocc.heightfield"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bottom as f64,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 1.0,
+            for (target, draws) in [(&work.raw, &job.draws), (&work.ground, &job.ground_draws)] {
+                let color = resources::layer_view(target, i as u32);
+                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("skyocc.heightfield"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &color,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: bottom as f64,
+                                g: 0.0,
+                                b: 0.0,
+                                a: 1.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
                         }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            if job.draws.is_empty() {
-                continue;
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                if draws.is_empty() {
+                    continue;
+                }
+                rp.set_pipeline(&self.height_pipeline);
+                rp.set_bind_group(0, &bg, &[]);
+                scene.bind_geometry(&mut rp);
+                SceneGpu::draw_list(&mut rp, draws);
             }
-            rp.set_pipeline(&self.height_pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            scene.bind_geometry(&mut rp);
-            SceneGpu::draw_list(&mut rp, &job.draws);
         }
     }
 
@@ -446,7 +467,7 @@ impl SkyOccPass {
         n: u32,
     ) -> Result<(), GpuError> {
         let tv = |t: &wgpu::Texture| resources::array_view(t);
-        let (raw, blurred) = (tv(&work.raw), tv(&work.blurred));
+        let (raw, ground, blurred) = (tv(&work.raw), tv(&work.ground), tv(&work.blurred));
         let (vis, heights) = (tv(&self.textures.vis), tv(&self.textures.heights));
         let vis_ext = tv(&work.vis_ext);
         let bg = self.vis_program.bind(
@@ -454,6 +475,7 @@ impl SkyOccPass {
             0,
             &[
                 ("raw_load", wgpu::BindingResource::TextureView(&raw)),
+                ("ground_load", wgpu::BindingResource::TextureView(&ground)),
                 ("blurred_load", wgpu::BindingResource::TextureView(&blurred)),
                 ("disk", self.disk.as_entire_binding()),
                 ("jobs", work.jobs.as_entire_binding()),

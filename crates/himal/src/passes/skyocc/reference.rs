@@ -188,7 +188,9 @@ pub fn visibility_at(
     let (mut count, mut sum, mut h_fade) = (0u32, Vec3::ZERO, 0.0f32);
     for d in disk {
         let q = Vec2::new(c * d.x - s * d.y, s * d.x + c * d.y);
-        let f = Vec2::new(p.x, p.z) + q * FADE_RADIUS;
+        // Unrotated: the same kernel at every texel, a blur (rotating it
+        // per texel would streak the fade along walls).
+        let f = Vec2::new(p.x, p.z) + *d * FADE_RADIUS;
         h_fade += blurred.at_world(f.x, f.y);
         let dir = hemisphere_from_disk(q);
         let visible = (1..=MARCH_STEPS).all(|k| {
@@ -257,14 +259,37 @@ pub fn sh2_visibility_cosine(sh: Vec4, n: Vec3) -> f32 {
 }
 
 /// Fade to visible with height above the terrain (talk): full occlusion at
-/// the surface height the visibility was computed for, none at the blurred
-/// (fade) height; the SH blends linearly toward [`sh2_unoccluded`].
-pub fn fade_to_visible(sh: Vec4, y: f32, h_surface: f32, h_blurred: f32) -> Vec4 {
-    let t = ((y - h_surface) / (h_blurred - h_surface).max(0.1)).clamp(0.0, 1.0);
+/// the terrain height, none at the blurred (fade) height; the SH blends
+/// linearly toward [`sh2_unoccluded`].
+pub fn fade_to_visible(sh: Vec4, y: f32, h_terrain: f32, h_blurred: f32) -> Vec4 {
+    let t = ((y - h_terrain) / (h_blurred - h_terrain).max(0.1)).clamp(0.0, 1.0);
     sh.lerp(sh2_unoccluded(), t)
 }
 
-/// One sector's output texel: SH2 visibility and (surface, fade) heights.
+/// Bilinear sample of a [`SECTOR_TEXELS`]² row-major layer at `local` in
+/// [0, 1)², taps clamped to the layer (the GPU's clamp-to-edge sampler).
+pub fn sample_bilinear<T: Copy>(texels: &[T], local: Vec2, lerp: impl Fn(T, T, f32) -> T) -> T {
+    let n = SECTOR_TEXELS as i32;
+    let p = local * n as f32 - 0.5;
+    let p0 = p.floor();
+    let f = p - p0;
+    let at = |x: i32, y: i32| texels[(y.clamp(0, n - 1) * n + x.clamp(0, n - 1)) as usize];
+    let (x, y) = (p0.x as i32, p0.y as i32);
+    let top = lerp(at(x, y), at(x + 1, y), f.x);
+    let bottom = lerp(at(x, y + 1), at(x + 1, y + 1), f.x);
+    lerp(top, bottom, f.y)
+}
+
+/// Twin of `sky_occlusion_lookup` (`shaders/sky_occlusion.wgsl`) inside one
+/// resident sector: bilinear SH2 and (terrain, fade) heights at `local`,
+/// faded for a point at height `y`.
+pub fn sector_lookup(sh: &[Vec4], heights: &[Vec2], local: Vec2, y: f32) -> Vec4 {
+    let v = sample_bilinear(sh, local, |a, b, t| a.lerp(b, t));
+    let h = sample_bilinear(heights, local, |a, b, t| a.lerp(b, t));
+    fade_to_visible(v, y, h.x, h.y)
+}
+
+/// One sector's output texel: SH2 visibility and (terrain, fade) heights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectorTexel {
     pub sh: Vec4,
@@ -272,8 +297,13 @@ pub struct SectorTexel {
 }
 
 /// Twin of the blur and visibility passes for one rendered height image
-/// ([`RENDER_TEXELS`]² with the apron): the sector's inner texels, row-major.
-pub fn sector_visibility(raw: &HeightImage, disk: &[Vec2]) -> (HeightImage, Vec<SectorTexel>) {
+/// and its terrain-only image (both [`RENDER_TEXELS`]² with the apron): the
+/// sector's inner texels, row-major.
+pub fn sector_visibility(
+    raw: &HeightImage,
+    ground: &HeightImage,
+    disk: &[Vec2],
+) -> (HeightImage, Vec<SectorTexel>) {
     let blurred = blur(raw);
     let m = (raw.size - SECTOR_TEXELS.min(raw.size)) / 2;
     let inner = raw.size - 2 * m;
@@ -304,7 +334,7 @@ pub fn sector_visibility(raw: &HeightImage, disk: &[Vec2]) -> (HeightImage, Vec<
             out.push(SectorTexel {
                 sh: s,
                 heights: Vec2::new(
-                    raw.h[(y + m) * raw.size + x + m],
+                    ground.h[(y + m) * ground.size + x + m],
                     fade[(y + b) * ext + x + b],
                 ),
             });

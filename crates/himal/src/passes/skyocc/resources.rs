@@ -178,7 +178,10 @@ impl PoolTextures {
 /// the first frame with sky occlusion: raw heights, depth, blur scratch,
 /// blurred heights; the sector views and the job list.
 pub struct Intermediates {
+    /// Highest surface per texel (every opaque draw).
     pub raw: wgpu::Texture,
+    /// Highest ground surface per texel (terrain objects only).
+    pub ground: wgpu::Texture,
     pub depth: wgpu::Texture,
     pub scratch: wgpu::Texture,
     pub blurred: wgpu::Texture,
@@ -198,6 +201,14 @@ impl Intermediates {
             raw: texture(
                 ctx,
                 "skyocc.raw",
+                n,
+                layers,
+                RAW_FORMAT,
+                all | U::RENDER_ATTACHMENT | U::COPY_DST,
+            ),
+            ground: texture(
+                ctx,
+                "skyocc.ground",
                 n,
                 layers,
                 RAW_FORMAT,

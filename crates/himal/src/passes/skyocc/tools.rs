@@ -49,12 +49,12 @@ impl SkyOccPass {
     }
 
     /// Tests: runs the blur and visibility kernels on given raw height
-    /// images ([`RENDER_TEXELS`]², origin = world x, z of texel (0, 0)),
-    /// writing pool layers 0..n.
+    /// images and their terrain-only images (pairs of [`RENDER_TEXELS`]²,
+    /// origin = world x, z of texel (0, 0)), writing pool layers 0..n.
     pub fn run_kernels(
         &mut self,
         ctx: &GpuContext,
-        raws: &[reference::HeightImage],
+        images: &[(reference::HeightImage, reference::HeightImage)],
     ) -> Result<Vec<SectorReadback>, GpuError> {
         if self.textures.layers < POOL_LAYERS {
             self.textures = PoolTextures::new(ctx, POOL_LAYERS, SECTOR_TEXELS as u32);
@@ -62,16 +62,19 @@ impl SkyOccPass {
         let work = self
             .work
             .get_or_insert_with(|| Intermediates::new(ctx, MAX_SECTORS_PER_FRAME as u32));
-        let n = raws.len().min(MAX_SECTORS_PER_FRAME) as u32;
+        let n = images.len().min(MAX_SECTORS_PER_FRAME) as u32;
         let mut jobs = Vec::new();
-        for (i, raw) in raws.iter().take(n as usize).enumerate() {
-            if raw.size != RENDER_TEXELS {
-                return Err(GpuError::Other(format!(
-                    "raw height image {i} is {}², not {RENDER_TEXELS}²",
-                    raw.size
-                )));
+        for (i, (raw, ground)) in images.iter().take(n as usize).enumerate() {
+            for (what, image) in [("raw", raw), ("ground", ground)] {
+                if image.size != RENDER_TEXELS {
+                    return Err(GpuError::Other(format!(
+                        "{what} height image {i} is {}², not {RENDER_TEXELS}²",
+                        image.size
+                    )));
+                }
             }
             resources::write_layer(ctx, &work.raw, i as u32, &raw.h);
+            resources::write_layer(ctx, &work.ground, i as u32, &ground.h);
             jobs.push(resources::JobGpu {
                 origin: [raw.origin.x, raw.origin.y, 0.0, 0.0],
                 layer: [i as u32, 0, 0, 0],
@@ -110,11 +113,15 @@ impl SkyOccPass {
             .work
             .as_ref()
             .ok_or_else(|| GpuError::Other("no work".into()))?;
-        let blurred = crate::gpu::read_texture(ctx, &work.blurred, 0, job)?.to_rgba_f32()?;
+        let image = |t: &wgpu::Texture| -> Result<Vec<f32>, GpuError> {
+            let texels = crate::gpu::read_texture(ctx, t, 0, job)?.to_rgba_f32()?;
+            Ok(texels.iter().map(|v| v[0]).collect())
+        };
         Ok(SectorReadback {
             sh: vis.iter().map(|v| Vec4::from_array(*v)).collect(),
             heights,
-            blurred: blurred.iter().map(|v| v[0]).collect(),
+            raw: image(&work.raw)?,
+            blurred: image(&work.blurred)?,
         })
     }
 

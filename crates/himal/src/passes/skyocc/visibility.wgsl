@@ -6,7 +6,8 @@
 // blurred height at STEPS points up to RADIUS metres. Visible fraction f and
 // the sum of visible directions become an SH2 cap (shaders/sky_occlusion.wgsl),
 // written for the sector and a BORDER ring (smoothed into the pool by
-// visibility_smooth.wgsl); (raw, fade) heights go to the sector's pool layer; the fade height
+// visibility_smooth.wgsl); (terrain, fade) heights go to the sector's pool
+// layer (terrain: the ground alone, rendered into ground_load); the fade height
 // is the blurred field averaged over the disk scaled to FADE_RADIUS (a wide
 // blur, as the talk's blurred map; the sampled field stays sharp).
 // Twin: passes/skyocc/reference.rs `visibility_at`, `sector_visibility`.
@@ -30,6 +31,7 @@ override BORDER: i32 = 2;
 // pool by visibility_smooth.wgsl).
 @group(0) @binding(4) var vis_out: texture_storage_2d_array<rgba32float, write>;
 @group(0) @binding(5) var heights_out: texture_storage_2d_array<rg32float, write>;
+@group(0) @binding(6) var ground_load: texture_2d_array<f32>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_main(@builtin(global_invocation_id) id: vec3u) {
@@ -59,7 +61,9 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         let r2 = min(dot(q, q), 1.0);
         let lift = sqrt(max(2.0 - r2, 0.0));
         let dir = vec3f(q.x * lift, 1.0 - r2, q.y * lift);
-        let tf = clamp(vec2i(floor((p.xz + q * FADE_RADIUS - origin) / TEXEL)), vec2i(0), size - 1);
+        // Fade taps unrotated: one kernel for every texel (a blur; rotated
+        // per texel they streak the fade along walls).
+        let tf = clamp(vec2i(floor((p.xz + dk * FADE_RADIUS - origin) / TEXEL)), vec2i(0), size - 1);
         h_fade += textureLoad(blurred_load, tf, layer, 0).x;
         var visible = true;
         for (var i = 1u; i <= STEPS; i = i + 1u) {
@@ -80,6 +84,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     textureStore(vis_out, u, layer, sh2_from_visibility(f, sum));
     let v = u - vec2i(BORDER);
     if (all(v >= vec2i(0)) && all(v < ext - 2 * BORDER)) {
-        textureStore(heights_out, v, i32(job.layer.x), vec4f(h_raw, h_fade, 0.0, 1.0));
+        let h_ground = textureLoad(ground_load, x, layer, 0).x;
+        textureStore(heights_out, v, i32(job.layer.x), vec4f(h_ground, h_fade, 0.0, 1.0));
     }
 }

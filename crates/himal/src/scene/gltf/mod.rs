@@ -381,6 +381,7 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
                     transform: world,
                     motion: None,
                     foliage: None,
+                    ground: false,
                 });
             }
         }

@@ -161,6 +161,7 @@ fn merge(
             transform: transform * o.transform,
             motion: None,
             foliage: None,
+            ground: false,
         }));
     out.lights.extend(asset.lights.iter().filter_map(|l| {
         let mut l = super::local_light(l)?;
