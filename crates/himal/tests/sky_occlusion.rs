@@ -19,10 +19,8 @@ use himal::renderer::scene_gpu::SceneGpu;
 use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
 
-/// Ground at 0; a canyon 6 m wide between two 5 m plateaus (x 10..20 and
-/// 26..36); a 1 m thick, 4 m high wall at x 46..47; all from z 8 to 56,
-/// inside sector (0, 0).
-const CANYON_AND_WALL: &str = r#"
+/// Sun, a grey material and a 200 m ground plane at y = 0 around sector (0, 0).
+const GROUND: &str = r#"
 [sun]
 time = "10:00"
 
@@ -42,6 +40,12 @@ material = "grey"
 size = [200.0, 200.0]
 position = [32.0, 0.0, 32.0]
 
+"#;
+
+/// On [`GROUND`]: a canyon 6 m wide between two 5 m plateaus (x 10..20 and
+/// 26..36); a 1 m thick, 4 m high wall at x 46..47; all from z 8 to 56,
+/// inside sector (0, 0).
+const CANYON_AND_WALL: &str = r#"
 [[object]]
 name = "plateau_west"
 primitive = "box"
@@ -70,6 +74,12 @@ target = [40.0, 0.0, 30.0]
 fov_y = 60.0
 "#;
 
+/// [`GROUND`] plus `objects` (scene text) as a scene.
+fn scene_on_ground(objects: &str) -> Scene {
+    let text = format!("{GROUND}\n{objects}");
+    Scene::from_toml_str(&text, "ground.toml", Path::new(".")).expect("scene")
+}
+
 /// The analytic height of [`CANYON_AND_WALL`].
 fn canyon_height(x: f32, z: f32) -> f32 {
     if !(8.0..=56.0).contains(&z) {
@@ -85,7 +95,7 @@ fn canyon_height(x: f32, z: f32) -> f32 {
 }
 
 fn scene() -> Scene {
-    Scene::from_toml_str(CANYON_AND_WALL, "canyon.toml", Path::new(".")).expect("scene")
+    scene_on_ground(CANYON_AND_WALL)
 }
 
 /// Twin inputs: bumpy sloped terrain with a pit, and the raw image of that
@@ -439,27 +449,8 @@ fn raw_frame(
         .expect("f32")
 }
 
-/// A 20 m wall at 30 degrees to the texel grid on a ground plane.
+/// On [`GROUND`]: a 20 m wall at 30 degrees to the texel grid.
 const ROTATED_WALL: &str = r#"
-[sun]
-time = 14.0
-
-[[material]]
-name = "grey"
-albedo_linear = [0.5, 0.5, 0.5]
-glossiness = 0.4
-reflectance = 0.04
-metallic = 0.0
-anisotropy = 0.0
-ao = 1.0
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "grey"
-size = [200.0, 200.0]
-position = [32.0, 0.0, 32.0]
-
 [[object]]
 name = "wall"
 primitive = "box"
@@ -481,7 +472,7 @@ fov_y = 60.0
 /// image rows on the wall.
 #[test]
 fn sky_visibility_is_smooth_along_a_rotated_wall() {
-    let scene = Scene::from_toml_str(ROTATED_WALL, "wall.toml", Path::new(".")).expect("scene");
+    let scene = scene_on_ground(ROTATED_WALL);
     let camera = scene.camera("main").expect("camera").clone();
     let (w, h) = (160u32, 96u32);
     let mut r = renderer(&scene);
