@@ -3,7 +3,7 @@
 //! linear), full mip chains generated on the GPU (`mipmap.wgsl`), one
 //! sampler per distinct glTF sampler, 1x1 defaults for absent slots, and a
 //! uniform of factors per material (twin of `MaterialGpu` in
-//! `passes/gbuffer/textured.wgsl`). CPU twin of the mip generation:
+//! `shaders/gltf_material.wgsl`). CPU twin of the mip generation:
 //! [`next_mip_reference`].
 
 use std::collections::HashMap;
@@ -18,7 +18,7 @@ use crate::scene::gltf::{
     AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, Wrap,
 };
 
-/// Twin of `MaterialGpu` in textured.wgsl.
+/// Twin of `MaterialGpu` in shaders/gltf_material.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct MaterialGpu {

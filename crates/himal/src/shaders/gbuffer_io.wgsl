@@ -28,14 +28,3 @@ fn gbuffer_motion(curr_clip: vec4f, prev_clip: vec4f) -> vec2f {
     let prev = prev_clip.xy / prev_clip.w;
     return (prev - curr) * vec2f(0.5, -0.5);
 }
-
-// A glTF material's factors (group 1 binding 0 of the textured G-buffer and
-// forward shaders); twin of renderer/textures.rs `MaterialGpu`.
-struct MaterialGpu {
-    base_color: vec4f,
-    emissive: vec4f,
-    // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
-    params: vec4f,
-    // x mode (0 opaque, 1 mask, 2 blend), y cut-off
-    alpha: vec4f,
-}

@@ -13,6 +13,7 @@
 #import view
 #import tangent_frame
 #import scene
+#import gltf_material
 #import brdf
 #import sh
 #import envmap
@@ -31,20 +32,6 @@ struct Lighting {
 @group(0) @binding(3) var env_specular: texture_cube<f32>;
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;
-
-@group(1) @binding(0) var<uniform> material: MaterialGpu;
-@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
-@group(1) @binding(2) var base_color_sampler: sampler;
-@group(1) @binding(3) var metal_rough_texture: texture_2d<f32>;
-@group(1) @binding(4) var metal_rough_sampler: sampler;
-@group(1) @binding(5) var normal_texture: texture_2d<f32>;
-@group(1) @binding(6) var normal_sampler: sampler;
-@group(1) @binding(7) var occlusion_texture: texture_2d<f32>;
-@group(1) @binding(8) var occlusion_sampler: sampler;
-@group(1) @binding(9) var emissive_texture: texture_2d<f32>;
-@group(1) @binding(10) var emissive_sampler: sampler;
-@group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
-@group(1) @binding(12) var anisotropy_sampler: sampler;
 
 struct VertexOut {
     // invariant: the emissive pass's depth test Equal must see the G-buffer's value
@@ -67,18 +54,10 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     out.clip = view.view_proj * world;
     out.world = world.xyz;
     out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
-    let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
-    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w * sign(det));
+    out.tangent = gltf_world_tangent(o, in.tangent);
     out.color = in.color;
     out.surface = in.surface;
     return out;
-}
-
-fn forward_anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
-    let a = max(alpha, 0.002);
-    let s = saturate(strength);
-    let alpha_t = a + (1.0 - a) * s * s;
-    return saturate((1.0 - a / alpha_t) / 0.9);
 }
 
 @fragment
@@ -109,7 +88,7 @@ fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
     let roughness = saturate((1.0 - in.surface.x) * mr.g);
     let metallic = saturate(in.surface.z * mr.b);
     let ao = 1.0 + material.params.y * (occlusion - 1.0);
-    let anisotropy = forward_anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
+    let anisotropy = anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
     let surf = surface_from_material(in.color.rgb * base.rgb, 1.0 - roughness, in.surface.y, metallic, anisotropy);
     let v = normalize(view.camera_position.xyz - in.world);
     let n_o_v = max(dot(tbn[2], v), 1e-4);

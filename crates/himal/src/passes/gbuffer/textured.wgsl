@@ -9,23 +9,10 @@
 #import view
 #import tangent_frame
 #import scene
+#import gltf_material
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
-
-@group(1) @binding(0) var<uniform> material: MaterialGpu;
-@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
-@group(1) @binding(2) var base_color_sampler: sampler;
-@group(1) @binding(3) var metal_rough_texture: texture_2d<f32>;
-@group(1) @binding(4) var metal_rough_sampler: sampler;
-@group(1) @binding(5) var normal_texture: texture_2d<f32>;
-@group(1) @binding(6) var normal_sampler: sampler;
-@group(1) @binding(7) var occlusion_texture: texture_2d<f32>;
-@group(1) @binding(8) var occlusion_sampler: sampler;
-@group(1) @binding(9) var emissive_texture: texture_2d<f32>;
-@group(1) @binding(10) var emissive_sampler: sampler;
-@group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
-@group(1) @binding(12) var anisotropy_sampler: sampler;
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -50,21 +37,10 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     // view_proj already carries the frame's jitter (the AA contract).
     out.clip = out.curr_clip;
     out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
-    // A mirroring model matrix flips handedness: fold its sign into w.
-    let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
-    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w * sign(det));
+    out.tangent = gltf_world_tangent(o, in.tangent);
     out.color = in.color;
     out.surface = in.surface;
     return out;
-}
-
-// KHR_materials_anisotropy strength s at GGX alpha -> himal anisotropy with
-// the same alpha_t / alpha_b ratio (CPU twin: scene::gltf::anisotropy_from_khr).
-fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
-    let a = max(alpha, 0.002);
-    let s = saturate(strength);
-    let alpha_t = a + (1.0 - a) * s * s;
-    return saturate((1.0 - a / alpha_t) / 0.9);
 }
 
 // A2: -0.5 under temporal anti-aliasing (two jittered samples per pixel

@@ -1,0 +1,45 @@
+// A glTF material as the textured G-buffer (passes/gbuffer/textured.wgsl)
+// and the forward passes (passes/forward/forward.wgsl) bind it: the factors
+// and the six texture/sampler pairs of group 1 (renderer/textures.rs
+// `MaterialTextures::bind_groups`), and what both derive from them.
+#import scene
+
+// The factors (group 1 binding 0); twin of renderer/textures.rs `MaterialGpu`.
+struct MaterialGpu {
+    base_color: vec4f,
+    emissive: vec4f,
+    // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
+    params: vec4f,
+    // x mode (0 opaque, 1 mask, 2 blend), y cut-off
+    alpha: vec4f,
+}
+
+@group(1) @binding(0) var<uniform> material: MaterialGpu;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var base_color_sampler: sampler;
+@group(1) @binding(3) var metal_rough_texture: texture_2d<f32>;
+@group(1) @binding(4) var metal_rough_sampler: sampler;
+@group(1) @binding(5) var normal_texture: texture_2d<f32>;
+@group(1) @binding(6) var normal_sampler: sampler;
+@group(1) @binding(7) var occlusion_texture: texture_2d<f32>;
+@group(1) @binding(8) var occlusion_sampler: sampler;
+@group(1) @binding(9) var emissive_texture: texture_2d<f32>;
+@group(1) @binding(10) var emissive_sampler: sampler;
+@group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
+@group(1) @binding(12) var anisotropy_sampler: sampler;
+
+// KHR_materials_anisotropy strength s at GGX alpha -> himal anisotropy with
+// the same alpha_t / alpha_b ratio (CPU twin: scene::gltf::anisotropy_from_khr).
+fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
+    let a = max(alpha, 0.002);
+    let s = saturate(strength);
+    let alpha_t = a + (1.0 - a) * s * s;
+    return saturate((1.0 - a / alpha_t) / 0.9);
+}
+
+// The vertex tangent in world space; a mirroring model matrix flips
+// handedness, so its sign folds into w.
+fn gltf_world_tangent(o: Object, tangent: vec4f) -> vec4f {
+    let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
+    return vec4f((o.model * vec4f(tangent.xyz, 0.0)).xyz, tangent.w * sign(det));
+}
