@@ -1,6 +1,8 @@
 //! Recording helpers shared by the passes.
 
-use crate::graph::PassContext;
+use crate::frame::FrameErrors;
+use crate::gpu::GpuError;
+use crate::graph::{PassContext, TextureHandle};
 
 /// Depth attachment of a full-screen pass that only tests against depth.
 pub struct DepthTest<'v> {
@@ -40,6 +42,29 @@ pub fn draw_fullscreen(
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.draw(0..3, 0..1);
+}
+
+/// Records a debug view (`--view ...`): one full-screen draw of the view's
+/// pipeline into `output`, cleared to black, with the group `bind` builds.
+/// `pipeline` is `None` when the view was not prepared for the output's
+/// format: an error naming the view (`what`) is recorded instead.
+pub fn record_view<'e>(
+    ctx: &mut PassContext<'e>,
+    pipeline: Option<&wgpu::RenderPipeline>,
+    what: impl FnOnce() -> String,
+    output: TextureHandle,
+    errors: &FrameErrors,
+    bind: impl FnOnce(&PassContext<'e>) -> Result<wgpu::BindGroup, GpuError>,
+) {
+    let Some(pipeline) = pipeline else {
+        errors.record::<()>(Err(GpuError::Other(format!("{} was not prepared", what()))));
+        return;
+    };
+    if let Some(bg) = errors.record(bind(ctx)) {
+        let target = ctx.view(output);
+        let clear = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+        draw_fullscreen(ctx, pipeline, &bg, target, clear, None);
+    }
 }
 
 /// A colour target state without blending.

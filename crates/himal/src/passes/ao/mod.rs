@@ -21,7 +21,7 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, PassContext, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target, view_pipeline};
+use crate::passes::common::{draw_fullscreen, record_view, target, view_pipeline};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -490,35 +490,21 @@ impl AoPass {
         pass.read(read, TextureAccess::Sampled);
         let output = pass.write(output, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "AO view {kind:?} was not prepared"
-                ))));
-                return;
-            };
-            // Bind the one texture this view reads in every slot: the others are unused.
-            let t = tv(ctx, read);
-            let bind_group = self.view_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params.as_entire_binding()),
-                    ("ao", t.clone()),
-                    ("hbao_load", t.clone()),
-                    ("stability_load", t),
-                ],
-            );
-            if let Some(bg) = errors.record(bind_group) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let what = || format!("AO view {kind:?}");
+            record_view(ctx, pipeline, what, output, errors, |ctx| {
+                // Bind the one texture this view reads in every slot: the others are unused.
+                let t = tv(ctx, read);
+                self.view_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("params", self.params.as_entire_binding()),
+                        ("ao", t.clone()),
+                        ("hbao_load", t.clone()),
+                        ("stability_load", t),
+                    ],
+                )
+            });
         });
         output
     }

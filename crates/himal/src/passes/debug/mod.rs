@@ -7,7 +7,7 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::common::{record_view, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -92,44 +92,30 @@ impl DebugPass {
         pass.read_buffer(exposure, BufferAccess::StorageRead);
         let output = pass.write(output, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "debug view {view_kind:?} was not prepared"
-                ))));
-                return;
-            };
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("gbuffer_albedo", tv(gbuffer.albedo)),
-                    ("gbuffer_frame", tv(gbuffer.frame)),
-                    ("gbuffer_material", tv(gbuffer.material)),
-                    ("motion", tv(gbuffer.motion)),
-                    ("depth", tv(gbuffer.depth)),
-                    ("hdr", tv(hdr)),
-                    ("exposure", exposure_buffer.as_entire_binding()),
-                    ("post", post.post.as_entire_binding()),
-                    ("bloom", tv(bloom)),
-                    (
-                        "bloom_sampler",
-                        wgpu::BindingResource::Sampler(post.sampler),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bind_group) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let what = || format!("debug view {view_kind:?}");
+            record_view(ctx, pipeline, what, output, errors, |ctx| {
+                let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
+                self.program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("view", view.as_entire_binding()),
+                        ("gbuffer_albedo", tv(gbuffer.albedo)),
+                        ("gbuffer_frame", tv(gbuffer.frame)),
+                        ("gbuffer_material", tv(gbuffer.material)),
+                        ("motion", tv(gbuffer.motion)),
+                        ("depth", tv(gbuffer.depth)),
+                        ("hdr", tv(hdr)),
+                        ("exposure", exposure_buffer.as_entire_binding()),
+                        ("post", post.post.as_entire_binding()),
+                        ("bloom", tv(bloom)),
+                        (
+                            "bloom_sampler",
+                            wgpu::BindingResource::Sampler(post.sampler),
+                        ),
+                    ],
+                )
+            });
         });
         output
     }

@@ -7,7 +7,7 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::common::{record_view, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -70,45 +70,31 @@ impl EnvViewPass {
         pass.read_buffer(exposure, BufferAccess::StorageRead);
         let output = pass.write(output, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "environment view {kind:?} was not prepared"
-                ))));
-                return;
-            };
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("gbuffer_frame", tv(gbuffer.frame)),
-                    ("gbuffer_material", tv(gbuffer.material)),
-                    ("depth", tv(gbuffer.depth)),
-                    // `env` orders this pass after the filter; the cube view is the pass's own
-                    (
-                        "env_specular",
-                        wgpu::BindingResource::TextureView(&envmap.filtered_cube),
-                    ),
-                    (
-                        "env_sampler",
-                        wgpu::BindingResource::Sampler(&envmap.sampler),
-                    ),
-                    ("exposure", exposure_buffer.as_entire_binding()),
-                    ("post", post.post.as_entire_binding()),
-                ],
-            );
-            if let Some(bg) = errors.record(bind_group) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let what = || format!("environment view {kind:?}");
+            record_view(ctx, pipeline, what, output, errors, |ctx| {
+                let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
+                self.program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("view", view.as_entire_binding()),
+                        ("gbuffer_frame", tv(gbuffer.frame)),
+                        ("gbuffer_material", tv(gbuffer.material)),
+                        ("depth", tv(gbuffer.depth)),
+                        // `env` orders this pass after the filter; the cube view is the pass's own
+                        (
+                            "env_specular",
+                            wgpu::BindingResource::TextureView(&envmap.filtered_cube),
+                        ),
+                        (
+                            "env_sampler",
+                            wgpu::BindingResource::Sampler(&envmap.sampler),
+                        ),
+                        ("exposure", exposure_buffer.as_entire_binding()),
+                        ("post", post.post.as_entire_binding()),
+                    ],
+                )
+            });
         });
         output
     }

@@ -2,6 +2,7 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
+use crate::passes::common::record_view;
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
@@ -267,34 +268,20 @@ impl ShadowPass {
         pass.read(depth, TextureAccess::Sampled);
         let output = pass.write(output, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "shadow view {kind:?} was not prepared"
-                ))));
-                return;
-            };
-            let tv = wgpu::BindingResource::TextureView;
-            let bg = self.view_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("params", self.params.as_entire_binding()),
-                    ("depth", tv(ctx.view(depth))),
-                    ("mask", tv(ctx.view(mask))),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let what = || format!("shadow view {kind:?}");
+            record_view(ctx, pipeline, what, output, errors, |ctx| {
+                let tv = wgpu::BindingResource::TextureView;
+                self.view_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("view", view.as_entire_binding()),
+                        ("params", self.params.as_entire_binding()),
+                        ("depth", tv(ctx.view(depth))),
+                        ("mask", tv(ctx.view(mask))),
+                    ],
+                )
+            });
         });
         output
     }

@@ -24,7 +24,7 @@ use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::passes::common::{record_view, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::renderer::scene_gpu::{Draw, SceneGpu};
 use crate::scene::{Aabb, Camera, Scene};
@@ -529,38 +529,24 @@ impl SkyOccPass {
         }
         let output = pass.write(output, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "sky occlusion view {kind:?} was not prepared"
-                ))));
-                return;
-            };
-            let b = self.bindings();
-            let tv = wgpu::BindingResource::TextureView;
-            let bg = self.view_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("gbuffer_frame", tv(ctx.view(gbuffer.frame))),
-                    ("depth", tv(ctx.view(gbuffer.depth))),
-                    ("skyocc_table", tv(b.table)),
-                    ("skyocc_vis", tv(b.vis)),
-                    ("skyocc_heights_load", tv(b.heights)),
-                    ("skyocc_sampler", wgpu::BindingResource::Sampler(b.sampler)),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
+            let what = || format!("sky occlusion view {kind:?}");
+            record_view(ctx, pipeline, what, output, errors, |ctx| {
+                let b = self.bindings();
+                let tv = wgpu::BindingResource::TextureView;
+                self.view_program.bind(
+                    ctx.device,
+                    0,
+                    &[
+                        ("view", view.as_entire_binding()),
+                        ("gbuffer_frame", tv(ctx.view(gbuffer.frame))),
+                        ("depth", tv(ctx.view(gbuffer.depth))),
+                        ("skyocc_table", tv(b.table)),
+                        ("skyocc_vis", tv(b.vis)),
+                        ("skyocc_heights_load", tv(b.heights)),
+                        ("skyocc_sampler", wgpu::BindingResource::Sampler(b.sampler)),
+                    ],
+                )
+            });
         });
         output
     }
