@@ -365,7 +365,7 @@ pub(super) fn image(
     let index = img.index();
     let (bytes, label): (std::borrow::Cow<[u8]>, String) = match img.source() {
         gltf::image::Source::View { view, .. } => {
-            let data = super::view_bytes(cx, &view, buffers)?;
+            let data = super::buffers::view_bytes(cx, &view, buffers)?;
             (
                 data.into(),
                 format!("image {index} (buffer view {})", view.index()),

@@ -9,6 +9,7 @@
 //! which material. Missing tangents are generated with MikkTSpace
 //! (`tangents.rs`). Every problem is an error naming the file.
 
+mod buffers;
 mod material;
 pub(crate) mod placement;
 mod tangents;
@@ -22,12 +23,15 @@ pub use material::{
     Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
 };
 
+pub(crate) use buffers::GltfContext;
+use buffers::{check_accessors, check_position_accessors};
+
 use super::{Aabb, Camera, Mesh, NamedCamera, Object, SceneError, Vertex};
 
 /// Largest accepted image side (texels); larger ones are refused, not decoded.
 pub const MAX_TEXTURE_SIZE: u32 = 8192;
 /// Largest accepted vertex or index count per primitive.
-const MAX_ELEMENTS: usize = 1 << 26;
+pub(crate) const MAX_ELEMENTS: usize = 1 << 26;
 
 /// Materials and textures of the textured G-buffer path.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -93,157 +97,6 @@ pub struct GltfAsset {
     pub gltf_primitives: usize,
     /// World bounds of all objects.
     pub bounds: Aabb,
-}
-
-/// The file being loaded, for messages and relative URIs.
-pub(crate) struct GltfContext {
-    path: PathBuf,
-}
-
-impl GltfContext {
-    fn invalid(&self, message: impl Into<String>) -> SceneError {
-        SceneError::Invalid {
-            file: self.path.display().to_string(),
-            message: message.into(),
-        }
-    }
-
-    /// Bytes of a URI: a `data:` URI (base64) or a file beside the model.
-    fn read_uri(&self, uri: &str) -> Result<Vec<u8>, SceneError> {
-        if let Some(rest) = uri.strip_prefix("data:") {
-            let (_, data) = rest
-                .split_once(";base64,")
-                .ok_or_else(|| self.invalid("data URI is not base64"))?;
-            return base64_decode(data).ok_or_else(|| self.invalid("data URI: bad base64"));
-        }
-        let relative = percent_decode(uri);
-        if relative.contains("://") {
-            return Err(self.invalid(format!("URI \"{uri}\": only files and data URIs are read")));
-        }
-        let file = material::base_dir(&self.path).join(&relative);
-        std::fs::read(&file)
-            .map_err(|e| self.invalid(format!("cannot read \"{}\": {e}", file.display())))
-    }
-}
-
-fn percent_decode(s: &str) -> String {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        let hex = |c: u8| (c as char).to_digit(16);
-        if b[i] == b'%'
-            && i + 2 < b.len()
-            && let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2]))
-        {
-            out.push((h * 16 + l) as u8);
-            i += 3;
-            continue;
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
-fn base64_decode(s: &str) -> Option<Vec<u8>> {
-    let value = |c: u8| match c {
-        b'A'..=b'Z' => Some(c - b'A'),
-        b'a'..=b'z' => Some(c - b'a' + 26),
-        b'0'..=b'9' => Some(c - b'0' + 52),
-        b'+' | b'-' => Some(62),
-        b'/' | b'_' => Some(63),
-        _ => None,
-    };
-    let mut out = Vec::with_capacity(s.len() * 3 / 4);
-    let (mut acc, mut bits) = (0u32, 0u32);
-    for c in s.bytes().filter(|c| !c.is_ascii_whitespace()) {
-        if c == b'=' {
-            break;
-        }
-        acc = (acc << 6) | value(c)? as u32;
-        bits += 6;
-        if bits >= 8 {
-            bits -= 8;
-            out.push((acc >> bits) as u8);
-        }
-    }
-    Some(out)
-}
-
-/// Bytes of a buffer view, range-checked.
-fn view_bytes<'b>(
-    cx: &GltfContext,
-    view: &gltf::buffer::View,
-    buffers: &'b [Vec<u8>],
-) -> Result<&'b [u8], SceneError> {
-    let data = &buffers[view.buffer().index()];
-    data.get(view.offset()..view.offset().saturating_add(view.length()))
-        .ok_or_else(|| {
-            cx.invalid(format!(
-                "buffer view {} (bytes {}..+{}) is outside buffer {} ({} bytes)",
-                view.index(),
-                view.offset(),
-                view.length(),
-                view.buffer().index(),
-                data.len()
-            ))
-        })
-}
-
-/// Checks that every accessor's elements lie inside its buffer view, so
-/// the gltf crate's readers never run off the data.
-fn check_accessors(
-    cx: &GltfContext,
-    doc: &gltf::Document,
-    buffers: &[Vec<u8>],
-) -> Result<(), SceneError> {
-    for a in doc.accessors() {
-        let elem = a.size();
-        if a.count() == 0 || a.count() > MAX_ELEMENTS {
-            return Err(cx.invalid(format!("accessor {} has count {}", a.index(), a.count())));
-        }
-        let Some(view) = a.view() else { continue };
-        let bytes = view_bytes(cx, &view, buffers)?;
-        let stride = view.stride().unwrap_or(elem).max(elem);
-        let end = (a.count() - 1)
-            .checked_mul(stride)
-            .and_then(|x| x.checked_add(a.offset()))
-            .and_then(|x| x.checked_add(elem));
-        if end.is_none_or(|e| e > bytes.len()) {
-            return Err(cx.invalid(format!(
-                "accessor {} ({} elements of {elem} bytes, stride {stride}, offset {}) runs past buffer view {} ({} bytes)",
-                a.index(),
-                a.count(),
-                a.offset(),
-                view.index(),
-                bytes.len()
-            )));
-        }
-    }
-    Ok(())
-}
-
-/// Every primitive's POSITION names an existing accessor.
-fn check_position_accessors(cx: &GltfContext, root: &gltf::json::Root) -> Result<(), SceneError> {
-    use gltf::json::mesh::Semantic;
-    use gltf::json::validation::Checked;
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            if let Some(a) = primitive
-                .attributes
-                .get(&Checked::Valid(Semantic::Positions))
-                && a.value() >= root.accessors.len()
-            {
-                return Err(cx.invalid(format!(
-                    "mesh {m} primitive {p}: POSITION accessor {} does not exist ({} accessors)",
-                    a.value(),
-                    root.accessors.len()
-                )));
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Loads a .gltf (with its .bin and images) or a .glb file.
