@@ -513,3 +513,45 @@ fn sky_visibility_is_smooth_along_a_rotated_wall() {
     // height and unrotated taps but nearest texels 0.00074. Threshold 0.0006.
     assert!(roughness < 6e-4, "{roughness}");
 }
+
+/// On [`GROUND`]: a static pillar and a moving cart, both 3 m tall.
+const PILLAR_AND_CART: &str = r#"
+[[object]]
+name = "pillar"
+primitive = "box"
+material = "grey"
+size = [2.0, 3.0, 2.0]
+position = [20.0, 1.5, 20.0]
+
+[[object]]
+name = "cart"
+primitive = "box"
+material = "grey"
+size = [2.0, 3.0, 2.0]
+position = [40.0, 1.5, 40.0]
+orbit = { radius = 2.0, period = 10.0, phase = 0 }
+"#;
+
+/// Moving objects stay out of the height field: a sector is rendered once,
+/// and their footprint would stay where they were at that moment.
+#[test]
+fn height_field_holds_static_geometry_only() {
+    let ctx = shared_context().expect("GPU");
+    let scene = scene_on_ground(PILLAR_AND_CART);
+    let gpu_scene = SceneGpu::upload(ctx, &scene).expect("upload");
+    let mut pass = SkyOccPass::new(ctx, &scene).expect("pass");
+    let sector = pass
+        .render_sectors(ctx, &gpu_scene, &[IVec2::new(0, 0)])
+        .expect("render")
+        .remove(0);
+    let raw_at = |name: &str| {
+        let o = scene.objects.iter().find(|o| o.name == name).expect(name);
+        let p = o.transform_at(0.0).w_axis;
+        let t = (Vec2::new(p.x, p.z) / TEXEL_SIZE).floor().as_uvec2();
+        sector.raw[(t.y as usize + MARGIN_TEXELS) * RENDER_TEXELS + t.x as usize + MARGIN_TEXELS]
+    };
+    let (pillar, cart) = (raw_at("pillar"), raw_at("cart"));
+    eprintln!("height field: pillar {pillar} m, moving cart {cart} m");
+    assert!((pillar - 3.0).abs() < 1e-3, "pillar {pillar}");
+    assert!(cart.abs() < 1e-3, "cart {cart}");
+}

@@ -112,6 +112,8 @@ pub struct SkyOccPass {
     bounds: Vec<Aabb>,
     /// Per object: terrain ([`crate::scene::Object::ground`]).
     ground: Vec<bool>,
+    /// Per object: moves (left out of the height fields).
+    moving: Vec<bool>,
     heights: (f32, f32),
     jobs: Vec<Job>,
     pub stats: SkyOccStats,
@@ -163,6 +165,7 @@ impl SkyOccPass {
             disk: resources::disk_buffer(ctx),
             bounds: casters.bounds,
             ground: scene.objects.iter().map(|o| o.ground).collect(),
+            moving: casters.moving,
             heights,
             jobs: Vec::new(),
             stats: SkyOccStats::default(),
@@ -260,13 +263,17 @@ impl SkyOccPass {
         let mut jobs = Vec::new();
         for (i, &(sector, layer)) in planned.iter().enumerate() {
             let origin = Self::render_origin(sector);
+            // Static geometry only: a moving object's footprint would stay
+            // where it was when the sector was rendered.
             let inside = |d: &&Draw| {
-                self.bounds.get(d.object as usize).is_some_and(|b| {
-                    b.max.x >= origin.x
-                        && b.min.x <= origin.x + w
-                        && b.max.z >= origin.y
-                        && b.min.z <= origin.y + w
-                })
+                let i = d.object as usize;
+                self.moving.get(i) == Some(&false)
+                    && self.bounds.get(i).is_some_and(|b| {
+                        b.max.x >= origin.x
+                            && b.min.x <= origin.x + w
+                            && b.max.z >= origin.y
+                            && b.min.z <= origin.y + w
+                    })
             };
             let draws: Vec<Draw> = scene
                 .draws_opaque
