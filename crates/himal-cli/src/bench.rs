@@ -96,6 +96,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         return crate::bench_envmap::run(&args.gpu, &scene, &camera, &settings, args.frames);
     }
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    // No table cache: the warm-up frame times the table computation.
+    renderer.set_sky_table_sizes(args.post.table_sizes()?);
     let warm_up = renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     // L1: the Bruneton tables (once) and the sky SH (per time of day) ran
     // before the warm-up frame: reported apart from the per-frame rows.

@@ -3,6 +3,7 @@
 
 mod aa_patterns;
 mod ao;
+mod bake;
 mod bench;
 mod bench_ao;
 mod bench_envmap;
@@ -38,6 +39,9 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Compile every pipeline permutation the renderer can use and write the pipeline cache.
     Prewarm(prewarm::PrewarmArgs),
+    /// Compute offline data into the cache with a progress bar: the L1 sky
+    /// tables (default and/or reference sizes).
+    Bake(bake::BakeArgs),
     /// List adapters, the chosen one, its features and limits.
     Info(GpuArgs),
     /// A5: error estimate of six anti-aliasing sample patterns (CPU only).
@@ -149,6 +153,7 @@ fn main() -> Result<()> {
         Command::View(a) => view::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::Prewarm(a) => prewarm::run(&a),
+        Command::Bake(a) => bake::run(&a),
         Command::Info(a) => info(&a),
         Command::AaPatterns(a) => aa_patterns::run(&a),
     }

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use himal::image_io::ImageKind;
+use himal::passes::sky::bruneton::TableSizes;
 use himal::scene::{Camera, Scene};
 use himal::{FrameSettings, Renderer, ViewBuffer};
 
@@ -121,9 +122,24 @@ pub struct PostArgs {
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
     #[arg(long, default_value = "bruneton", value_name = "preetham|bruneton")]
     pub sky: String,
+    /// L1 Bruneton table sizes: default (fast) or reference (Bruneton 2017's;
+    /// minutes on a software rasteriser: bake them first with `himal bake`).
+    #[arg(long, default_value = "default", value_name = "default|reference")]
+    pub sky_tables: String,
 }
 
 impl PostArgs {
+    /// The Bruneton table sizes of `--sky-tables`.
+    pub fn table_sizes(&self) -> Result<TableSizes> {
+        parse_table_sizes(&self.sky_tables)
+    }
+
+    /// Sets the renderer's sky table cache (`gpu`'s cache directory) and sizes.
+    pub fn configure(&self, renderer: &mut Renderer, gpu: &crate::GpuArgs) -> Result<()> {
+        renderer.set_sky_table_cache(gpu.cache_dir());
+        renderer.set_sky_table_sizes(self.table_sizes()?);
+        Ok(())
+    }
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
         settings.sky_model = self.sky.parse()?;
@@ -320,6 +336,15 @@ pub fn setup(
     Ok((scene, camera, settings))
 }
 
+/// `--sky-tables` / `--tables`: default or reference.
+pub fn parse_table_sizes(s: &str) -> Result<TableSizes> {
+    match s {
+        "default" => Ok(TableSizes::DEFAULT),
+        "reference" => Ok(TableSizes::REFERENCE),
+        other => bail!("sky tables {other}: expected default or reference"),
+    }
+}
+
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (scene, camera, mut settings) = setup(args)?;
     let (width, height) = (settings.width, settings.height);
@@ -329,7 +354,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(parse_time_lapse)
         .transpose()?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
-    renderer.set_sky_table_cache(args.gpu.cache_dir());
+    args.post.configure(&mut renderer, &args.gpu)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
         return Ok(());

@@ -532,7 +532,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     let args = &view.render;
     let (scene, camera, settings) = crate::render::setup(args)?;
     let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
-    renderer.set_sky_table_cache(args.gpu.cache_dir());
+    args.post.configure(&mut renderer, &args.gpu)?;
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow::anyhow!("himal view needs a display (X11; e.g. xvfb-run for automated runs): {e}")
     })?;

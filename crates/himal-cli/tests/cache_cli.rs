@@ -1,4 +1,5 @@
-//! `himal prewarm` and the post options from the command line (E1, H2, H3).
+//! `himal prewarm`, `himal bake` and the post options from the command
+//! line (E1, L1, H2, H3).
 
 use std::process::Command;
 
@@ -55,6 +56,15 @@ fn bad_post_options_are_rejected() {
             "white point",
         ),
         (&["prewarm", "--cache", "off"][..], "cache directory"),
+        (&["bake", "--cache", "off"][..], "cache directory"),
+        (
+            &["bake", "--tables", "nope", "--cache", "/nonexistent"][..],
+            "--tables nope",
+        ),
+        (
+            &["render", "--sky-tables", "huge", "--size", "8x8"][..],
+            "sky tables huge",
+        ),
     ] {
         let (ok, _, err) = himal(args);
         assert!(!ok, "{args:?} should fail");
@@ -63,4 +73,27 @@ fn bad_post_options_are_rejected() {
             "{args:?}: stderr lacks \"{needle}\":\n{err}"
         );
     }
+}
+
+#[test]
+fn bake_writes_the_sky_tables_once() {
+    let dir = std::env::temp_dir().join(format!("himal-cli-bake-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_string_lossy().to_string();
+    let (ok, out, err) = himal(&["bake", "--cache", &d]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("default sky tables (scattering 256x64x16)"),
+        "{out}"
+    );
+    let files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("cache dir")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".himal-sky"))
+        .collect();
+    assert_eq!(files.len(), 1, "one table file");
+    let (ok, out, err) = himal(&["bake", "--cache", &d]);
+    assert!(ok, "{err}");
+    assert!(out.contains("already baked"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -386,3 +386,34 @@ fn moon_lights_the_night_only() {
         "{dusk}"
     );
 }
+
+/// `himal bake`'s path: the tables computed one step at a time (waiting for
+/// each) equal the single-submission tables, and the progress runs 0..=n.
+#[test]
+fn tables_computed_step_by_step_are_the_same() {
+    let ctx = shared_context().expect("GPU");
+    let mut calls = Vec::new();
+    let stepped = BrunetonTables::compute_with_progress(ctx, test_config(), &mut |done, n, id| {
+        calls.push((done, n, id.to_string()))
+    })
+    .expect("tables");
+    let n = calls.last().map(|c| c.1).unwrap_or(0);
+    // transmittance, direct irradiance, single; density, irradiance, multiple per order 2..=4.
+    assert_eq!(n, 12, "{n} steps");
+    let done: Vec<usize> = calls.iter().map(|c| c.0).collect();
+    assert_eq!(done, (0..=n).collect::<Vec<_>>());
+    assert_eq!(calls[0].2, "sky.tables.transmittance");
+    let one = tables();
+    for (a, b, what) in [
+        (&stepped.transmittance, &one.transmittance, "transmittance"),
+        (&stepped.irradiance, &one.irradiance, "irradiance"),
+        (&stepped.scattering, &one.scattering, "scattering"),
+        (&stepped.single_mie, &one.single_mie, "single Mie"),
+    ] {
+        for z in 0..a.depth_or_array_layers() {
+            let (ta, tb) = (read_texture(ctx, a, 0, z), read_texture(ctx, b, 0, z));
+            let (ta, tb) = (ta.expect("read"), tb.expect("read"));
+            assert!(ta.bytes == tb.bytes, "{what} layer {z} differs");
+        }
+    }
+}

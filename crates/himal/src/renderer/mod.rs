@@ -138,6 +138,7 @@ pub struct Renderer {
     sky_timings: Vec<PassTiming>,
     /// Directory of the Bruneton table cache file (`None`: compute each run).
     sky_table_cache: Option<std::path::PathBuf>,
+    sky_table_sizes: crate::passes::sky::bruneton::TableSizes,
     /// Anti-aliasing mode of the previous frame (a change restarts the history).
     aa_last: Option<crate::passes::aa::AaMode>,
 }
@@ -259,6 +260,7 @@ impl Renderer {
             sky_light: None,
             sky_timings: Vec::new(),
             sky_table_cache: None,
+            sky_table_sizes: crate::passes::sky::bruneton::TableSizes::DEFAULT,
             aa_last: None,
         })
     }
@@ -447,9 +449,21 @@ impl Renderer {
         &mut self,
         tables: crate::passes::sky::bruneton::BrunetonTables,
     ) -> Result<(), Error> {
+        self.sky_table_sizes = tables.config.sizes;
         self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
         self.sky_light = None;
         Ok(())
+    }
+
+    /// L1: the Bruneton table sizes (default [`TableSizes::DEFAULT`]); other
+    /// sizes are loaded from the table cache or computed at the next frame.
+    ///
+    /// [`TableSizes::DEFAULT`]: crate::passes::sky::bruneton::TableSizes::DEFAULT
+    pub fn set_sky_table_sizes(&mut self, sizes: crate::passes::sky::bruneton::TableSizes) {
+        if sizes != self.sky_table_sizes {
+            self.sky_table_sizes = sizes;
+            self.sky_light = None;
+        }
     }
 
     /// L1: loads / stores the Bruneton tables in `dir` (e.g. the pipeline
@@ -463,7 +477,9 @@ impl Renderer {
     /// first Bruneton frame does it otherwise).
     pub fn prepare_bruneton(&mut self) -> Result<(), Error> {
         let cache = self.sky_table_cache.as_deref();
-        let t = (self.res.passes.sky).prepare_bruneton(&self.ctx, cache, self.timer.as_mut())?;
+        let sizes = self.sky_table_sizes;
+        let sky = &mut self.res.passes.sky;
+        let t = sky.prepare_bruneton(&self.ctx, sizes, cache, self.timer.as_mut())?;
         self.sky_timings.extend(t);
         Ok(())
     }

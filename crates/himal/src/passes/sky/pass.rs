@@ -186,17 +186,23 @@ impl SkyPass {
     }
 
     /// L1: loads (cache file in `cache_dir`) or computes the Bruneton tables
-    /// once and creates their pipelines; returns the computation's timings.
+    /// at `sizes` once (again when the sizes change) and creates their
+    /// pipelines; returns the computation's timings.
     pub fn prepare_bruneton(
         &mut self,
         ctx: &GpuContext,
+        sizes: TableSizes,
         cache_dir: Option<&std::path::Path>,
         timer: Option<&mut PassTimer>,
     ) -> Result<Vec<PassTiming>, GpuError> {
-        if self.bruneton.is_some() {
+        if self
+            .bruneton
+            .as_ref()
+            .is_some_and(|b| b.tables.config.sizes == sizes)
+        {
             return Ok(Vec::new());
         }
-        let config = AtmosphereConfig::earth(TableSizes::DEFAULT);
+        let config = AtmosphereConfig::earth(sizes);
         let (tables, timings) = BrunetonTables::load_or_compute(ctx, config, cache_dir, timer)?;
         self.set_bruneton(ctx, tables)?;
         Ok(timings)

@@ -60,6 +60,18 @@ impl TableSizes {
         nu: 8,
         density_samples: 8,
     };
+    /// Bruneton 2017's sizes (scattering 256 x 128 x 32, a 16 x 32 density
+    /// quadrature): minutes on a software rasteriser, so baked ahead
+    /// (`himal bake --tables reference`) and chosen with `--sky-tables`.
+    pub const REFERENCE: TableSizes = TableSizes {
+        transmittance: (256, 64),
+        irradiance: (64, 16),
+        r: 32,
+        mu: 128,
+        mu_s: 32,
+        nu: 8,
+        density_samples: 16,
+    };
     /// Small scattering tables for tests (fast on lavapipe); the 2D tables
     /// at full size (cheap, and a coarse transmittance table misses the
     /// ground horizon by several percent).
@@ -292,6 +304,9 @@ struct Step {
     groups: [u32; 3],
 }
 
+/// `progress(done, steps, next step's id)` of [`BrunetonTables::compute_with_progress`].
+pub type TableProgress<'a> = dyn FnMut(usize, usize, &str) + 'a;
+
 impl BrunetonTables {
     /// Earth tables at [`TableSizes::DEFAULT`].
     pub fn compute(ctx: &GpuContext) -> Result<Self, GpuError> {
@@ -304,6 +319,26 @@ impl BrunetonTables {
         ctx: &GpuContext,
         config: AtmosphereConfig,
         timer: Option<&mut PassTimer>,
+    ) -> Result<(Self, Vec<PassTiming>), GpuError> {
+        Self::compute_steps(ctx, config, timer, None)
+    }
+
+    /// Computes the tables for `config` one step at a time, waiting for
+    /// each, and calls `progress(done, steps, next step's id)` before every
+    /// step and once at the end (`himal bake`'s progress bar).
+    pub fn compute_with_progress(
+        ctx: &GpuContext,
+        config: AtmosphereConfig,
+        progress: &mut TableProgress<'_>,
+    ) -> Result<Self, GpuError> {
+        Ok(Self::compute_steps(ctx, config, None, Some(progress))?.0)
+    }
+
+    fn compute_steps(
+        ctx: &GpuContext,
+        config: AtmosphereConfig,
+        timer: Option<&mut PassTimer>,
+        progress: Option<&mut TableProgress<'_>>,
     ) -> Result<(Self, Vec<PassTiming>), GpuError> {
         let s = config.sizes;
         let params = uniform_buffer(ctx, "sky.atmosphere", &config.gpu_params());
@@ -476,7 +511,18 @@ impl BrunetonTables {
         let final_scattering = 1 - scattering_out;
         let final_irradiance = irradiance_prev;
 
-        let timings = run_steps(ctx, &steps, timer)?;
+        let timings = match progress {
+            None => run_steps(ctx, &steps, timer)?,
+            Some(progress) => {
+                for (i, step) in steps.iter().enumerate() {
+                    progress(i, steps.len(), &step.id);
+                    run_steps(ctx, std::slice::from_ref(step), None)?;
+                    ctx.wait(&step.id)?;
+                }
+                progress(steps.len(), steps.len(), "done");
+                Vec::new()
+            }
+        };
         let [s0, s1] = scattering;
         let [e0, e1] = irradiance;
         Ok((
