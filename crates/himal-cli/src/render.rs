@@ -140,6 +140,7 @@ impl PostArgs {
         renderer.set_sky_table_sizes(self.table_sizes()?);
         Ok(())
     }
+
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
         settings.sky_model = self.sky.parse()?;
