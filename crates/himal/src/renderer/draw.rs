@@ -182,7 +182,7 @@ impl Renderer {
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun, settings.sky_model)?;
         let probe = if settings.environment_probes && self.res.environment.is_none() {
-            self.res.passes.probes.nearest(camera.position)
+            (self.res.passes.probes).select(camera.position, self.res.active_probe)
         } else {
             None
         };

@@ -3,7 +3,8 @@
 //! G-buffer pass, then relit by the deferred lighting pass (sun unshadowed,
 //! sky SH unoccluded, no fog, no AO) and the sky pass whenever the time of
 //! day changes, mirrored into the source cube and filtered like the sky
-//! (L4). The probe nearest the camera is used.
+//! (L4). The probe nearest the camera is used, with hysteresis
+//! ([`select_probe`]).
 
 use glam::Vec3;
 
@@ -27,6 +28,10 @@ pub const FACE_AXES: [(Vec3, Vec3); 6] = [
 /// Near plane of the face cameras (metres).
 pub const PROBE_NEAR: f32 = 0.05;
 
+/// Hysteresis of the probe switch: another probe must be this fraction of
+/// the current one's distance nearer (see [`ProbeSet::select`]).
+pub const PROBE_SWITCH_MARGIN: f32 = 0.1;
+
 /// The camera that renders face `face` of a probe at `position`.
 pub fn face_camera(position: Vec3, face: usize) -> Camera {
     let (forward, up) = FACE_AXES[face];
@@ -36,6 +41,31 @@ pub fn face_camera(position: Vec3, face: usize) -> Camera {
         up,
         fov_y_deg: 90.0,
         near: PROBE_NEAR,
+    }
+}
+
+/// The probe to use from `camera_position` while `current` is in use: the
+/// nearest, but `current` is kept until another probe is nearer by
+/// [`PROBE_SWITCH_MARGIN`] of its distance (at least 1 m), so a camera
+/// hovering halfway does not relight and refilter every frame.
+pub fn select_probe(
+    positions: &[Vec3],
+    camera_position: Vec3,
+    current: Option<usize>,
+) -> Option<usize> {
+    let distance = |i: usize| positions[i].distance(camera_position);
+    let nearest = (0..positions.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b)))?;
+    match current.filter(|&c| c < positions.len() && c != nearest) {
+        Some(c) => {
+            let d = distance(c);
+            let margin = (d * PROBE_SWITCH_MARGIN).max(1.0);
+            Some(if distance(nearest) < d - margin {
+                nearest
+            } else {
+                c
+            })
+        }
+        None => Some(nearest),
     }
 }
 
@@ -139,17 +169,11 @@ impl ProbeSet {
         })
     }
 
-    /// The probe nearest `camera_position`, if any.
-    pub fn nearest(&self, camera_position: Vec3) -> Option<usize> {
-        self.probes
-            .iter()
-            .enumerate()
-            .min_by(|a, b| {
-                let da = a.1.position.distance_squared(camera_position);
-                let db = b.1.position.distance_squared(camera_position);
-                da.total_cmp(&db)
-            })
-            .map(|(i, _)| i)
+    /// The probe to use from `camera_position` while `current` is in use
+    /// ([`select_probe`]).
+    pub fn select(&self, camera_position: Vec3, current: Option<usize>) -> Option<usize> {
+        let positions: Vec<Vec3> = self.probes.iter().map(|p| p.position).collect();
+        select_probe(&positions, camera_position, current)
     }
 
     /// Copies a freshly rendered G-buffer face into the probe's textures;
@@ -261,5 +285,30 @@ impl ProbeSet {
             }
         });
         source
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn probe_switch_has_hysteresis() {
+        let probes = [Vec3::ZERO, Vec3::new(20.0, 0.0, 0.0)];
+        let at = |x: f32| Vec3::new(x, 2.0, 0.0);
+        // No probe in use: the nearest.
+        assert_eq!(select_probe(&probes, at(9.0), None), Some(0));
+        assert_eq!(select_probe(&probes, at(11.0), None), Some(1));
+        // Just past halfway the first stays; 10 % of its distance nearer, the second wins.
+        assert_eq!(select_probe(&probes, at(10.5), Some(0)), Some(0));
+        assert_eq!(select_probe(&probes, at(11.5), Some(0)), Some(1));
+        // And back: hovering around x = 10 never flips.
+        for x in [9.6, 10.4, 9.7, 10.3] {
+            assert_eq!(select_probe(&probes, at(x), Some(1)), Some(1), "x {x}");
+            assert_eq!(select_probe(&probes, at(x), Some(0)), Some(0), "x {x}");
+        }
+        // A stale index (probes changed) falls back to the nearest.
+        assert_eq!(select_probe(&probes, at(1.0), Some(7)), Some(0));
+        assert_eq!(select_probe(&[], at(1.0), Some(0)), None);
     }
 }
