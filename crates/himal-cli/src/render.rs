@@ -134,10 +134,23 @@ impl PostArgs {
         parse_table_sizes(&self.sky_tables)
     }
 
-    /// Sets the renderer's sky table cache (`gpu`'s cache directory) and sizes.
+    /// Sets the renderer's sky table cache (`gpu`'s cache directory) and
+    /// sizes; says so when reference tables will be computed (minutes on a
+    /// software rasteriser).
     pub fn configure(&self, renderer: &mut Renderer, gpu: &crate::GpuArgs) -> Result<()> {
+        let sizes = self.table_sizes()?;
+        let config = himal::passes::sky::bruneton::AtmosphereConfig::earth(sizes);
+        let cached = gpu
+            .cache_dir()
+            .is_some_and(|d| himal::passes::sky::bruneton::cache_file(&d, &config).exists());
+        if sizes == TableSizes::REFERENCE && self.sky == "bruneton" && !cached {
+            eprintln!(
+                "note: computing the reference sky tables (not baked; minutes on a software \
+                 rasteriser); `himal bake --tables reference` keeps them"
+            );
+        }
         renderer.set_sky_table_cache(gpu.cache_dir());
-        renderer.set_sky_table_sizes(self.table_sizes()?);
+        renderer.set_sky_table_sizes(sizes);
         Ok(())
     }
 
