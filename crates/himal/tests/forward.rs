@@ -9,7 +9,6 @@ mod common;
 use std::path::PathBuf;
 
 use glam::{Vec2, Vec3, Vec4};
-use himal::FrameSettings;
 use himal::gpu::testing::run_compute;
 use himal::math::brdf::{Material, surface_from_material};
 use himal::math::sampling::{Pcg32, uniform_sample_sphere};
@@ -203,23 +202,12 @@ const SIZE: u32 = 64;
 /// that differ only in materials share one camera).
 fn render(path: &std::path::Path, camera: &himal::scene::Camera) -> (Vec<Vec3>, Vec<f32>) {
     let scene = Scene::from_gltf(path).unwrap_or_else(|e| panic!("{e}"));
-    let mut r = common::renderer(&scene);
-    let mut view = |name: &str| {
-        let mut s = FrameSettings::new(SIZE, SIZE, scene.sun.clone());
-        s.view = name.parse().expect("view");
-        s.raw = true;
-        s.aa = himal::passes::aa::AaMode::None;
-        r.render(camera, &s)
-            .expect("frame")
-            .image
-            .to_rgba_f32()
-            .expect("rgba")
-    };
-    let hdr = view("lighting")
-        .iter()
-        .map(|p| Vec3::new(p[0], p[1], p[2]))
-        .collect();
-    let depth = view("depth").iter().map(|p| p[0]).collect();
+    let [hdr, depth]: [Vec<[f32; 4]>; 2] =
+        common::raw_views(&scene, camera, SIZE, &["lighting", "depth"])
+            .try_into()
+            .expect("two views");
+    let hdr = hdr.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+    let depth = depth.iter().map(|p| p[0]).collect();
     (hdr, depth)
 }
 

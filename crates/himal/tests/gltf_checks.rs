@@ -11,7 +11,6 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Quat, Vec2, Vec3};
-use himal::FrameSettings;
 use himal::scene::{Camera, Scene};
 
 fn sample(model: &str) -> PathBuf {
@@ -84,25 +83,6 @@ fn anisotropic_quad(name: &str, rotation: Quat, strength: f32, angle: f32) -> Pa
     path
 }
 
-/// A raw view (`lighting`, `normal`, `tangent`, `depth`) of `scene` from `camera`.
-fn views(scene: &Scene, camera: &Camera, size: u32, names: &[&str]) -> Vec<Vec<[f32; 4]>> {
-    let mut r = common::renderer(scene);
-    names
-        .iter()
-        .map(|name| {
-            let mut s = FrameSettings::new(size, size, scene.sun.clone());
-            s.view = name.parse().expect("view");
-            s.raw = true;
-            s.aa = himal::passes::aa::AaMode::None;
-            r.render(camera, &s)
-                .expect("frame")
-                .image
-                .to_rgba_f32()
-                .expect("rgba")
-        })
-        .collect()
-}
-
 /// Pixel position (x right, y down) of world point `p`.
 fn to_pixel(view_proj: &Mat4, p: Vec3, size: u32) -> Vec2 {
     let c = view_proj.project_point3(p);
@@ -157,7 +137,7 @@ fn highlight(name: &str, strength: f32, angle: f32) -> (f32, f32, f32) {
     let scene = Scene::from_gltf(&path).expect("scene");
     let _ = std::fs::remove_file(path);
     let camera = Camera::look_at(l * 5.0, Vec3::ZERO, 40.0);
-    let v = views(&scene, &camera, SIZE, &["lighting", "depth"]);
+    let v = common::raw_views(&scene, &camera, SIZE, &["lighting", "depth"]);
     let lum: Vec<f32> = v[0]
         .iter()
         .zip(&v[1])
@@ -228,7 +208,7 @@ fn corrected_anisotropy_bands_store_the_plain_bands_direction() {
     let scene = Scene::from_gltf(&sample("AnisotropyRotationTest")).expect("model");
     let camera = scene.camera("default").expect("camera").clone();
     let size = 256;
-    let v = views(&scene, &camera, size, &["tangent", "depth"]);
+    let v = common::raw_views(&scene, &camera, size, &["tangent", "depth"]);
     let vp = camera.view_projection(1.0);
     // Node translations (from the file): plain bands, then the corrected ones.
     let plain = [
@@ -362,7 +342,7 @@ fn normal_mapped_bumps_tilt_outward_in_both_tangent_tests() {
     for (model, count) in [("NormalTangentTest", 30), ("NormalTangentMirrorTest", 40)] {
         let scene = Scene::from_gltf(&sample(model)).expect("model");
         let camera = scene.camera("default").expect("camera").clone();
-        let v = views(&scene, &camera, size, &["normal", "depth"]);
+        let v = common::raw_views(&scene, &camera, size, &["normal", "depth"]);
         let domes = dome_tilts(&v[0], &v[1], size, &camera);
         let min_x = domes.iter().map(|d| d.1).fold(1.0, f32::min);
         let min_y = domes.iter().map(|d| d.2).fold(1.0, f32::min);
@@ -386,7 +366,7 @@ fn normal_mapped_bumps_tilt_outward_in_both_tangent_tests() {
         }
     }
     let camera = scene.camera("default").expect("camera").clone();
-    let v = views(&scene, &camera, size, &["normal", "depth"]);
+    let v = common::raw_views(&scene, &camera, size, &["normal", "depth"]);
     let flipped = dome_tilts(&v[0], &v[1], size, &camera);
     let inward = flipped.iter().filter(|d| d.1.min(d.2) < 0.5).count();
     report.push(format!(

@@ -15,6 +15,26 @@ pub fn renderer(scene: &Scene) -> Renderer {
     Renderer::new(ctx, scene).expect("renderer")
 }
 
+/// Raw debug views (`lighting`, `normal`, `tangent`, `depth`, ...) of
+/// `scene` from `camera`, `size` square, no anti-aliasing: RGBA f32 per view.
+pub fn raw_views(scene: &Scene, camera: &Camera, size: u32, names: &[&str]) -> Vec<Vec<[f32; 4]>> {
+    let mut r = renderer(scene);
+    names
+        .iter()
+        .map(|name| {
+            let mut s = himal::FrameSettings::new(size, size, scene.sun.clone());
+            s.view = name.parse().expect("view");
+            s.raw = true;
+            s.aa = himal::passes::aa::AaMode::None;
+            r.render(camera, &s)
+                .expect("frame")
+                .image
+                .to_rgba_f32()
+                .expect("rgba")
+        })
+        .collect()
+}
+
 /// Sun and sky of the scene's time of day, as the lighting pass gets them.
 pub fn lighting_params(scene: &Scene) -> LightingParams {
     let sun = &scene.sun;
