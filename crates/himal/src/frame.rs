@@ -18,14 +18,11 @@
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
 
-use std::cell::RefCell;
-
-use crate::gpu::GpuError;
-use crate::graph::FrameGraph;
-use crate::passes::aa::{
-    AaBuffers, AaFrame, AaHistory, AaMode, BufferHistory, BufferTaaPass, SmaaPass, TemporalPass,
-};
-use crate::passes::ao::{AoHistory, AoInputs, AoPass, AoSettings, AoTargets};
+use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::SceneGpu;
+use crate::graph::{FrameGraph, History};
+use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
+use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
@@ -39,34 +36,7 @@ use crate::passes::post::{
 use crate::passes::shadows::ShadowPass;
 use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::SkyOccPass;
-use crate::renderer::ViewBuffer;
-use crate::renderer::scene_gpu::SceneGpu;
-
-/// Errors raised while a pass records (closures cannot return them).
-#[derive(Default)]
-pub struct FrameErrors(RefCell<Vec<GpuError>>);
-
-impl FrameErrors {
-    /// Keeps the error, if any, and returns the value.
-    pub fn record<T>(&self, r: Result<T, GpuError>) -> Option<T> {
-        match r {
-            Ok(v) => Some(v),
-            Err(e) => {
-                self.0.borrow_mut().push(e);
-                None
-            }
-        }
-    }
-
-    pub fn take_first(&self) -> Option<GpuError> {
-        let mut v = self.0.borrow_mut();
-        if v.is_empty() {
-            None
-        } else {
-            Some(v.remove(0))
-        }
-    }
-}
+use crate::settings::ViewBuffer;
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
@@ -93,8 +63,10 @@ pub struct Passes {
 
 /// What the frame reads that outlives it.
 pub struct FrameInputs<'a> {
+    pub ctx: &'a GpuContext,
     pub passes: &'a Passes,
     pub scene: &'a SceneGpu,
+    /// Frame constants: bound wherever a shader names them.
     pub view: &'a wgpu::Buffer,
     pub lighting: &'a wgpu::Buffer,
     pub sky: &'a wgpu::Buffer,
@@ -106,32 +78,33 @@ pub struct FrameInputs<'a> {
     pub luminance: &'a LuminanceBuffers,
     pub post: PostFrame<'a>,
     pub output: &'a wgpu::Texture,
-    /// 1x1 white mask bound when shadows are off (the pass planned nothing).
-    pub shadow_placeholder: &'a wgpu::Texture,
-    /// AO settings and history; `None` = AO off.
-    pub ao: Option<(&'a AoSettings, &'a AoHistory)>,
-    /// 1x1 white texture bound in place of AO when it is off.
-    pub ao_placeholder: &'a wgpu::Texture,
-    /// Lighting permutation (prepared by the renderer).
+    /// Every temporal ring (AO, colour and buffer TAA), declared beforehand.
+    pub history: &'a History,
+    /// AO settings; `None` = AO off.
+    pub ao: Option<&'a AoSettings>,
+    /// Lighting permutation.
     pub lighting_key: LightingKey,
     /// Anti-aliasing after tone mapping.
-    pub aa: FrameAa<'a>,
-    pub errors: &'a FrameErrors,
+    pub aa: FrameAa,
 }
 
-/// The anti-aliasing of one frame (mode, SMAA subsample, temporal history).
+/// The anti-aliasing of one frame (mode, SMAA subsample, buffer TAAs).
 #[derive(Clone, Copy)]
-pub struct FrameAa<'a> {
+pub struct FrameAa {
     pub mode: AaMode,
     pub subsample: u32,
-    pub history: Option<&'a AaHistory>,
-    /// Buffers with their own TAA and its history (`None`: none).
-    pub buffers: Option<(AaBuffers, &'a BufferHistory)>,
+    /// Buffers with their own TAA (`None`: none).
+    pub buffers: Option<AaBuffers>,
 }
 
 /// Builds the frame graph; a debug `shown` view replaces tone mapping.
-pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -> FrameGraph<'a> {
+pub fn build<'a>(
+    inputs: FrameInputs<'a>,
+    size: (u32, u32),
+    shown: ViewBuffer,
+) -> Result<FrameGraph<'a>, GpuError> {
     let FrameInputs {
+        ctx,
         passes,
         scene,
         view,
@@ -140,60 +113,62 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         luminance,
         post,
         output,
-        shadow_placeholder,
+        history,
         ao,
-        ao_placeholder,
         lighting_key,
         sky_no_disk,
         probe,
         aa,
-        errors,
     } = inputs;
     let mut g = FrameGraph::new();
+    let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
+    g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
-    let gbuffer = passes
-        .gbuffer
-        .add(&mut g, size, view, scene, mip_bias, errors);
-    let shadow_mask = passes
-        .shadows
-        .add(&mut g, size, gbuffer, view, scene, errors);
+    let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, mip_bias);
+    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, view, scene);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {
-        Some((b, h)) if b.motion => Some(passes.aa_buffers.add_motion(
+        Some(b) if b.motion => Some(passes.aa_buffers.add_motion(
             &mut g,
             gbuffer.motion,
-            h,
-            errors,
-        )),
+            history,
+        )?),
         _ => None,
     };
     let gbuffer = GBuffer {
         motion: stable_motion.unwrap_or(gbuffer.motion),
         ..gbuffer
     };
-    let ao_targets = ao.map(|(settings, history)| {
-        let inputs = AoInputs {
-            settings,
-            view,
-            depth: gbuffer.depth,
-            history,
-        };
-        let t = passes.ao.add(&mut g, size, inputs, errors);
-        match aa.buffers {
-            Some((b, h)) if b.ao => {
-                let jitter_free = stable_motion.is_some();
-                let ao =
-                    passes
-                        .aa_buffers
-                        .add_ao(&mut g, t.ao, gbuffer.motion, jitter_free, h, errors);
-                AoTargets { ao, ..t }
-            }
-            _ => t,
+    let ao_targets = match ao {
+        Some(settings) => {
+            let inputs = AoInputs {
+                settings,
+                depth: gbuffer.depth,
+                history,
+            };
+            let t = passes.ao.add(&mut g, size, inputs);
+            Some(match aa.buffers {
+                Some(b) if b.ao => {
+                    let jitter_free = stable_motion.is_some();
+                    let motion = gbuffer.motion;
+                    let ao = passes.aa_buffers.add_ao(
+                        ctx,
+                        &mut g,
+                        t.ao,
+                        motion,
+                        jitter_free,
+                        history,
+                    )?;
+                    AoTargets { ao, ..t }
+                }
+                _ => t,
+            })
         }
-    });
+        None => None,
+    };
     // L2: new sectors' height fields and SH2 visibility (side effect: the pool).
-    let skyocc = passes.skyocc.add(&mut g, scene, errors);
+    let skyocc = passes.skyocc.add(&mut g, scene);
     let env = match probe {
         Some((index, capture)) if passes.envmap.dirty => {
             // L3: relight the probe's G-buffer cube face by face with the
@@ -205,18 +180,16 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             for face in 0..6 {
                 g.set_pass_prefix(Some(format!("envmap.probe{index}.face{face}")));
                 let view = &probes.probes[index].faces[face].view;
+                g.set_frame_constants(&[("view", view), ("lighting", lighting), ("sky", sky)]);
                 let stored = if capture {
-                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, false, errors);
+                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, false);
                     probes.add_store(&mut g, index, face, fresh)
                 } else {
                     probes.import_face(&mut g, index, face)
                 };
                 let relight = LightingInputs {
-                    view,
-                    lighting,
-                    sky,
-                    shadow_mask: g.import_texture("shadow.off", shadow_placeholder),
-                    ao: g.import_texture("ao.off", ao_placeholder),
+                    shadow_mask: None,
+                    ao: None,
                     lights: &passes.shadows.local_lights,
                     envmap: &passes.envmap,
                     env: env_before,
@@ -224,45 +197,26 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
                     skyocc_frame: skyocc,
                     key: LightingKey::RELIGHT,
                 };
-                let hdr = passes.lighting.add(&mut g, size, stored, relight, errors);
-                let hdr = passes
-                    .sky
-                    .add(&mut g, hdr, stored.depth, view, sky_no_disk, errors);
-                source = probes.add_mirror(
-                    &mut g,
-                    face,
-                    hdr,
-                    source,
-                    passes.envmap.source_level0(),
-                    errors,
-                );
+                let hdr = passes.lighting.add(ctx, &mut g, size, stored, relight);
+                let hdr = passes.sky.add(&mut g, hdr, stored.depth, Some(sky_no_disk));
+                source = probes.add_mirror(&mut g, face, hdr, source);
             }
             g.set_pass_prefix(None);
-            passes.envmap.add_mips_and_filter(&mut g, source, errors)
+            g.set_frame_constants(&constants);
+            passes.envmap.add_mips_and_filter(&mut g, source)
         }
         // L1: the Bruneton sky is captured by the sky pass from its tables.
         _ if passes.envmap.dirty && !passes.envmap.fixed_source && passes.sky.draws_bruneton() => {
             let source = passes.envmap.import_source(&mut g);
-            let target = passes.envmap.source_level0();
-            let source = passes
-                .sky
-                .add_capture(&mut g, source, target, sky_no_disk, errors);
-            passes.envmap.add_mips_and_filter(&mut g, source, errors)
+            let edge = passes.envmap.size;
+            let source = passes.sky.add_capture(&mut g, source, edge, sky_no_disk)?;
+            passes.envmap.add_mips_and_filter(&mut g, source)
         }
-        _ => passes.envmap.add(&mut g, sky_no_disk, errors),
+        _ => passes.envmap.add(&mut g, sky_no_disk),
     };
     let lighting_inputs = LightingInputs {
-        view,
-        lighting,
-        sky,
-        shadow_mask: match shadow_mask {
-            Some(m) => m,
-            None => g.import_texture("shadow.off", shadow_placeholder),
-        },
-        ao: match ao_targets {
-            Some(t) => t.ao,
-            None => g.import_texture("ao.off", ao_placeholder),
-        },
+        shadow_mask,
+        ao: ao_targets.map(|t| t.ao),
         lights: &passes.shadows.local_lights,
         envmap: &passes.envmap,
         env,
@@ -272,10 +226,8 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
     };
     let hdr = passes
         .lighting
-        .add(&mut g, size, gbuffer, lighting_inputs, errors);
-    let hdr = passes
-        .sky
-        .add(&mut g, hdr, gbuffer.depth, view, sky, errors);
+        .add(ctx, &mut g, size, gbuffer, lighting_inputs);
+    let hdr = passes.sky.add(&mut g, hdr, gbuffer.depth, None);
     // glTF emission and alpha BLEND surfaces (passes/forward).
     let forward = ForwardInputs {
         view,
@@ -284,37 +236,26 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
         envmap: &passes.envmap,
         env,
     };
-    let hdr = passes
-        .forward
-        .add(&mut g, hdr, gbuffer.depth, forward, errors);
-    let measured = passes.luminance.add(&mut g, hdr, size, luminance, errors);
+    let hdr = passes.forward.add(&mut g, hdr, gbuffer.depth, forward);
+    let measured = passes.luminance.add(&mut g, hdr, size, luminance);
     let exposure = if post.adaptation {
-        let adapted = passes.adapt.add(
-            &mut g,
-            measured,
-            &luminance.result,
-            post.adapted,
-            post.uniform,
-            errors,
-        );
-        (adapted, post.adapted)
+        passes
+            .adapt
+            .add(&mut g, measured, post.adapted, post.uniform)
     } else {
-        (measured, &luminance.result)
+        measured
     };
     let bloom_inputs = BloomInputs {
         post: post.uniform,
-        exposure: exposure.1,
+        exposure,
     };
-    let bloom = post.bloom_passes.map(|n| {
-        passes
-            .bloom
-            .add(&mut g, hdr, exposure.0, bloom_inputs, n, errors)
-    });
+    let bloom = post
+        .bloom_passes
+        .map(|n| passes.bloom.add(ctx, &mut g, hdr, bloom_inputs, n));
     let post_inputs = PostInputs {
         post: post.uniform,
         exposure,
         bloom,
-        placeholder: post.bloom_placeholder,
         sampler: &passes.bloom.sampler,
     };
     let out = g.import_texture("output", output);
@@ -323,7 +264,7 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             let chain = AaFrame {
                 mode: aa.mode,
                 subsample: aa.subsample,
-                history: aa.history,
+                history,
                 smaa: &passes.smaa,
                 temporal: &passes.temporal,
                 depth: gbuffer.depth,
@@ -334,50 +275,35 @@ pub fn build<'a>(inputs: FrameInputs<'a>, size: (u32, u32), shown: ViewBuffer) -
             let tonemap = |g: &mut FrameGraph<'a>, target| {
                 passes
                     .tonemap
-                    .add(g, post.tonemap, hdr, post_inputs, target, errors)
+                    .add(ctx, g, post.tonemap, hdr, post_inputs, target)
             };
-            crate::passes::aa::add_chain(&mut g, chain, out, tonemap, errors)
+            crate::passes::aa::add_chain(ctx, &mut g, chain, out, tonemap)?
         }
-        ViewBuffer::Ao(v) => match ao_targets {
-            Some(t) => passes.ao.add_view(&mut g, v, t, out, errors),
-            None => {
-                errors.record::<()>(Err(GpuError::Other(
-                    "AO views need AO on (--ao hbao or hbao+stf)".into(),
-                )));
-                out
-            }
-        },
-        ViewBuffer::Shadow(v) => match shadow_mask {
-            Some(m) => passes
-                .shadows
-                .add_view(&mut g, v, m, gbuffer.depth, view, out, errors),
-            None => {
-                errors.record::<()>(Err(GpuError::Other(
-                    "shadow views need shadows on (--shadows csm or csm+static)".into(),
-                )));
-                out
-            }
-        },
-        ViewBuffer::Env(v) => passes.env_view.add(
-            &mut g,
-            v,
-            gbuffer,
-            env,
-            &passes.envmap,
-            post_inputs,
-            out,
-            view,
-            errors,
-        ),
-        ViewBuffer::SkyOcc(v) => passes
-            .skyocc
-            .add_view(&mut g, v, skyocc, gbuffer, view, out, errors),
-        ViewBuffer::Debug(v) => {
+        ViewBuffer::Ao(v) => {
+            let t = ao_targets.ok_or_else(|| {
+                GpuError::Other("AO views need AO on (--ao hbao or hbao+stf)".into())
+            })?;
+            passes.ao.add_view(ctx, &mut g, v, t, out)
+        }
+        ViewBuffer::Shadow(v) => {
+            let m = shadow_mask.ok_or_else(|| {
+                GpuError::Other("shadow views need shadows on (--shadows csm or csm+static)".into())
+            })?;
             passes
-                .debug
-                .add(&mut g, v, gbuffer, hdr, post_inputs, out, view, errors)
+                .shadows
+                .add_view(ctx, &mut g, v, m, gbuffer.depth, out)
         }
+        ViewBuffer::Env(v) => {
+            let envmap = &passes.envmap;
+            passes
+                .env_view
+                .add(ctx, &mut g, v, gbuffer, env, envmap, post_inputs, out)
+        }
+        ViewBuffer::SkyOcc(v) => passes.skyocc.add_view(ctx, &mut g, v, skyocc, gbuffer, out),
+        ViewBuffer::Debug(v) => passes
+            .debug
+            .add(ctx, &mut g, v, gbuffer, hdr, post_inputs, out),
     };
     g.mark_output(out);
-    g
+    Ok(g)
 }

@@ -16,6 +16,7 @@
 
 pub mod frame;
 pub mod gpu;
+pub mod gpu_scene;
 pub mod graph;
 pub mod image_io;
 pub mod math;
@@ -23,6 +24,7 @@ pub mod passes;
 pub mod present;
 pub mod renderer;
 pub mod scene;
+pub mod settings;
 pub mod shader;
 
 pub use renderer::{DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer};

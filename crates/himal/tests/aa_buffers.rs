@@ -2,15 +2,15 @@
 //! `aa.taa_ao` against their CPU twins on a small synthetic input.
 
 use half::f16;
-use himal::frame::FrameErrors;
 use himal::gpu::testing::shared_context;
 use himal::gpu::{GpuContext, read_texture};
-use himal::graph::{FrameGraph, TexturePool};
+use himal::graph::{FrameGraph, History};
+use himal::passes::aa::BufferTaaPass;
 use himal::passes::aa::smaa::reference::Plane;
+use himal::passes::aa::temporal::buffers::{self, AO_HISTORY, MOTION_HISTORY};
 use himal::passes::aa::temporal::buffers::{AO_FORMAT, buffer_params};
 use himal::passes::aa::temporal::reference as twin;
 use himal::passes::aa::temporal::{MOTION_FORMAT, TemporalTuning};
-use himal::passes::aa::{BufferHistory, BufferTaaPass};
 
 const W: usize = 24;
 const H: usize = 20;
@@ -87,17 +87,8 @@ fn worst<const N: usize>(a: &Plane<N>, b: &Plane<N>, scale: [f32; N]) -> f32 {
         .fold(0.0, f32::max)
 }
 
-fn submit(ctx: &GpuContext, g: FrameGraph<'_>, errors: &FrameErrors) {
-    let mut pool = TexturePool::new();
-    let commands = g
-        .compile()
-        .expect("compile")
-        .execute(&ctx.device, &mut pool, None)
-        .expect("execute");
-    if let Some(e) = errors.take_first() {
-        panic!("recording: {e}");
-    }
-    ctx.queue.submit([commands]);
+fn submit(ctx: &GpuContext, g: FrameGraph<'_>) {
+    himal::graph::run(ctx, g, None, "test").expect("frame graph");
     ctx.wait("test").expect("gpu");
 }
 
@@ -105,7 +96,9 @@ fn submit(ctx: &GpuContext, g: FrameGraph<'_>, errors: &FrameErrors) {
 fn motion_and_ao_taa_match_their_cpu_twins() {
     let ctx = shared_context().expect("GPU (lavapipe)");
     let pass = BufferTaaPass::new(ctx).expect("pipelines");
-    let history = BufferHistory::new(&ctx.device, (W as u32, H as u32));
+    let mut history = History::new();
+    buffers::declare_history(&mut history, &ctx.device, (W as u32, H as u32));
+    let ring = |name, frames_ago| history.texture(name, frames_ago).expect("declared");
     let tuning = TemporalTuning::default();
     let (jitter, prev_jitter) = ([0.0, -0.5], [-0.5, 0.0]);
     let size = [W as f32, H as f32];
@@ -148,21 +141,21 @@ fn motion_and_ao_taa_match_their_cpu_twins() {
 
     let t_raw = texture(ctx, MOTION_FORMAT);
     let raw = upload(ctx, &t_raw, &raw);
-    let motion_hist = upload(ctx, history.motion().0, &motion_hist);
+    let motion_hist = upload(ctx, ring(MOTION_HISTORY, 1), &motion_hist);
     let t_ao = texture(ctx, AO_FORMAT);
     let ao = upload(ctx, &t_ao, &ao);
-    let ao_hist = upload(ctx, history.ao().0, &ao_hist);
+    let ao_hist = upload(ctx, ring(AO_HISTORY, 1), &ao_hist);
     let t_out = texture(ctx, AO_FORMAT);
     let p_ao = buffer_params(jitter, prev_jitter, 5, tuning.ao_tolerance, &tuning);
     let p_motion = buffer_params(jitter, prev_jitter, 5, tuning.motion_clamp_px, &tuning);
     pass.update_params(&ctx.queue, &p_ao, &p_motion);
-
-    let errors = FrameErrors::default();
     let mut g = FrameGraph::new();
     let m = g.import_texture("raw", &t_raw);
-    let stable = pass.add_motion(&mut g, m, &history, &errors);
+    let stable = pass.add_motion(&mut g, m, &history).expect("declared");
     let a = g.import_texture("ao", &t_ao);
-    let out = pass.add_ao(&mut g, a, stable, true, &history, &errors);
+    let out = pass
+        .add_ao(ctx, &mut g, a, stable, true, &history)
+        .expect("declared");
     let keep = g.import_texture("out", &t_out);
     let mut copy = g.add_pass("copy");
     copy.read(out, himal::graph::TextureAccess::CopySrc);
@@ -173,12 +166,13 @@ fn motion_and_ao_taa_match_their_cpu_twins() {
             ctx.texture(keep).as_image_copy(),
             ctx.texture(out).size(),
         );
+        Ok(())
     });
     g.mark_output(keep);
-    submit(ctx, g, &errors);
+    submit(ctx, g);
 
     let cpu_motion = twin::taa_motion(&p_motion, &raw, &motion_hist);
-    let gpu_motion: Plane<2> = read(ctx, history.motion().1);
+    let gpu_motion: Plane<2> = read(ctx, ring(MOTION_HISTORY, 0));
     let d_motion = worst(&cpu_motion, &gpu_motion, size);
     // How many pixels kept history (differ from the jitter-free motion by > 0.001 px).
     let stabilised = (0..W * H)
@@ -195,7 +189,7 @@ fn motion_and_ao_taa_match_their_cpu_twins() {
 
     let (cpu_out, cpu_next) = twin::taa_ao(&p_ao, &ao, &ao_hist, &gpu_motion, true);
     let gpu_out: Plane<4> = read(ctx, &t_out);
-    let gpu_next: Plane<4> = read(ctx, history.ao().1);
+    let gpu_next: Plane<4> = read(ctx, ring(AO_HISTORY, 0));
     let d_out = worst(&cpu_out, &gpu_out, [1.0, 0.0, 0.0, 0.0]);
     let d_next = worst(&cpu_next, &gpu_next, [1.0, size[0], size[1], 0.0]);
     let accumulated = (0..W * H)
@@ -218,15 +212,17 @@ fn motion_and_ao_taa_match_their_cpu_twins() {
     );
 
     // aa.taa_ao on the G-buffer motion (no aa.taa_motion): it removes the jitter itself.
-    let ao_hist = upload(ctx, history.ao().0, &ao_hist);
+    let ao_hist = upload(ctx, ring(AO_HISTORY, 1), &ao_hist);
     let mut g = FrameGraph::new();
     let m = g.import_texture("raw", &t_raw);
     let a = g.import_texture("ao", &t_ao);
-    let out = pass.add_ao(&mut g, a, m, false, &history, &errors);
+    let out = pass
+        .add_ao(ctx, &mut g, a, m, false, &history)
+        .expect("declared");
     g.mark_output(out);
-    submit(ctx, g, &errors);
+    submit(ctx, g);
     let (_, cpu_next) = twin::taa_ao(&p_ao, &ao, &ao_hist, &raw, false);
-    let gpu_next: Plane<4> = read(ctx, history.ao().1);
+    let gpu_next: Plane<4> = read(ctx, ring(AO_HISTORY, 0));
     let d_raw = worst(&cpu_next, &gpu_next, [1.0, size[0], size[1], 0.0]);
     println!("taa_ao from G-buffer motion: max |diff| {d_raw}");
     // Measured 2026-11-22: 0.00049; threshold 0.002.

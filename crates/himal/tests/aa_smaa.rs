@@ -2,10 +2,9 @@
 //! (rotated high-contrast polygon, a thin line, a depth step).
 
 use glam::Vec3;
-use himal::frame::FrameErrors;
 use himal::gpu::testing::shared_context;
 use himal::gpu::{GpuContext, read_texture};
-use himal::graph::{FrameGraph, TexturePool};
+use himal::graph::FrameGraph;
 use himal::math::quat_frame::{decode_frame, encode_frame};
 use himal::passes::aa::smaa::reference::{
     EdgeSettings, Luts, Plane, WeightSettings, blending_weights, detect_edges, linear_to_srgb,
@@ -210,7 +209,6 @@ fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32], frames: &[u32
     let edges_t = texture(ctx, size, EDGES_FORMAT, &[], 2);
     let weights_t = texture(ctx, size, WEIGHTS_FORMAT, &[], 4);
     let out_t = texture(ctx, size, srgb, &[], 4);
-    let errors = FrameErrors::default();
     let mut g = FrameGraph::new();
     let inputs = SmaaInputs {
         color: g.import_texture("color", &color_t),
@@ -218,24 +216,15 @@ fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32], frames: &[u32
         normals: g.import_texture("frame", &frame_t),
     };
     let e = g.import_texture("edges", &edges_t);
-    let e = smaa.add_edges(&mut g, inputs, e, &errors);
+    let e = smaa.add_edges(&mut g, inputs, e);
     let wt = g.import_texture("weights", &weights_t);
-    let wt = smaa.add_weights(&mut g, e, wt, 0, &errors);
+    let wt = smaa.add_weights(&mut g, e, wt, 0);
     let o = g.import_texture("out", &out_t);
-    let o = smaa.add_blend(&mut g, inputs.color, wt, o, &errors);
+    let o = smaa.add_blend(&mut g, inputs.color, wt, o);
     g.mark_output(o);
     g.mark_output(e);
     g.mark_output(wt);
-    let mut pool = TexturePool::new();
-    let commands = g
-        .compile()
-        .expect("compile")
-        .execute(&ctx.device, &mut pool, None)
-        .expect("execute");
-    if let Some(e) = errors.take_first() {
-        panic!("recording: {e}");
-    }
-    ctx.queue.submit([commands]);
+    himal::graph::run(ctx, g, None, "test").expect("frame graph");
     ctx.wait("test").expect("gpu");
     let bytes = |t: &wgpu::Texture| read_texture(ctx, t, 0, 0).expect("read back").bytes;
     let mut edges = Plane::new(w, h);

@@ -2,10 +2,9 @@
 //! accepted and rejected history), TAA update, unsharp.
 
 use half::f16;
-use himal::frame::FrameErrors;
 use himal::gpu::testing::shared_context;
 use himal::gpu::{GpuContext, read_texture};
-use himal::graph::{FrameGraph, TexturePool};
+use himal::graph::FrameGraph;
 use himal::passes::aa::smaa::reference::{Plane, srgb_to_linear};
 use himal::passes::aa::temporal::reference as twin;
 use himal::passes::aa::temporal::{
@@ -101,17 +100,8 @@ fn read_f16(ctx: &GpuContext, t: &wgpu::Texture) -> Vec<f32> {
         .collect()
 }
 
-fn submit(ctx: &GpuContext, g: FrameGraph<'_>, errors: &FrameErrors) {
-    let mut pool = TexturePool::new();
-    let commands = g
-        .compile()
-        .expect("compile")
-        .execute(&ctx.device, &mut pool, None)
-        .expect("execute");
-    if let Some(e) = errors.take_first() {
-        panic!("recording: {e}");
-    }
-    ctx.queue.submit([commands]);
+fn submit(ctx: &GpuContext, g: FrameGraph<'_>) {
+    himal::graph::run(ctx, g, None, "test").expect("frame graph");
     ctx.wait("test").expect("gpu");
 }
 
@@ -166,8 +156,6 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let t_taa_out = texture(ctx, RESOLVED_FORMAT, &[], 8);
     let t_resolved = texture(ctx, RESOLVED_FORMAT, &[], 8);
     let t_unsharp = texture(ctx, RESOLVED_FORMAT, &[], 8);
-
-    let errors = FrameErrors::default();
     let mut g = FrameGraph::new();
     let c = g.import_texture("cur", &t_cur);
     let p1 = g.import_texture("prev", &t_prev);
@@ -176,6 +164,7 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let mp = g.import_texture("mp", &t_mp);
     let mn = g.import_texture("mn", &t_mn);
     let (resolved, mn) = pass.add_resolve(
+        ctx,
         &mut g,
         (ResolveMode::FlipQuad, false),
         c,
@@ -183,13 +172,12 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         m,
         mp,
         mn,
-        &errors,
     );
     let keep = g.import_texture("resolved.copy", &t_resolved);
-    let keep = pass.add_unsharp(&mut g, resolved, keep, &errors);
+    let keep = pass.add_unsharp(ctx, &mut g, resolved, keep);
     g.mark_output(keep);
     g.mark_output(mn);
-    submit(ctx, g, &errors);
+    submit(ctx, g);
     // Second graph (pass ids are unique per graph): TAA on the unsharpened
     // resolve, then unsharp again.
     let mut g = FrameGraph::new();
@@ -199,13 +187,13 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let h = g.import_texture("h", &t_hist);
     let hn = g.import_texture("hn", &t_hist_next);
     let out = g.import_texture("out", &t_taa_out);
-    let (hn, out) = pass.add_taa(&mut g, keep, h, hn, mn, mp, out, &errors);
+    let (hn, out) = pass.add_taa(ctx, &mut g, keep, h, hn, mn, mp, out);
     let u = g.import_texture("unsharp", &t_unsharp);
-    let u = pass.add_unsharp(&mut g, out, u, &errors);
+    let u = pass.add_unsharp(ctx, &mut g, out, u);
     for h in [hn, u] {
         g.mark_output(h);
     }
-    submit(ctx, g, &errors);
+    submit(ctx, g);
 
     // CPU chain, each step fed with the GPU's previous result where the GPU
     // quantises (f16 targets).

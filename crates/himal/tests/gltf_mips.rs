@@ -5,8 +5,8 @@
 
 use himal::gpu::read_texture;
 use himal::gpu::testing::shared_context;
+use himal::gpu_scene::textures::{MaterialTextures, mip_count, next_mip_reference};
 use himal::math::sampling::Pcg32;
-use himal::renderer::textures::{MaterialTextures, mip_count, next_mip_reference};
 use himal::scene::gltf::{ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, TextureSlot};
 
 #[test]

@@ -48,6 +48,7 @@ fn frame<'a>(readback: &'a wgpu::Buffer, culled_ran: &'a Cell<bool>) -> FrameGra
             })],
             ..Default::default()
         });
+        Ok(())
     });
 
     let mut p = g.add_pass("copy");
@@ -75,12 +76,16 @@ fn frame<'a>(readback: &'a wgpu::Buffer, culled_ran: &'a Cell<bool>) -> FrameGra
             depth_or_array_layers: 1,
         };
         ctx.encoder.copy_texture_to_buffer(src, dst, size);
+        Ok(())
     });
 
     let mut p = g.add_pass("debug.culled");
     p.read(color1, TextureAccess::Sampled);
     p.write(unused, TextureAccess::ColorAttachment);
-    p.execute(move |_| culled_ran.set(true));
+    p.execute(move |_| {
+        culled_ran.set(true);
+        Ok(())
+    });
     g
 }
 
@@ -166,7 +171,7 @@ fn imported_texture_without_needed_usage_is_an_error() {
     g.mark_output(h);
     let mut p = g.add_pass("write.history");
     p.write(h, TextureAccess::StorageWrite);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     match g.compile() {
         Err(GraphError::ImportedUsage { resource, .. }) => assert_eq!(resource, "history"),
         other => panic!("expected ImportedUsage, got ok={}", other.is_ok()),
@@ -191,6 +196,7 @@ fn validation_error_in_a_pass_is_returned_not_panicked() {
         let buf = ctx.buffer(b1);
         // 64 bytes into a 16-byte buffer: a wgpu validation error.
         ctx.encoder.copy_buffer_to_buffer(buf, 0, buf, 0, 64);
+        Ok(())
     });
     let graph = g.compile().expect("compile");
     let mut pool = TexturePool::new();

@@ -5,11 +5,10 @@
 
 use glam::Vec3;
 use half::f16;
-use himal::frame::FrameErrors;
 use himal::gpu::pipeline::uniform_buffer;
 use himal::gpu::testing::shared_context;
 use himal::gpu::{GpuContext, read_buffer, read_texture};
-use himal::graph::{FrameGraph, TexturePool};
+use himal::graph::FrameGraph;
 use himal::passes::lighting::HDR_FORMAT;
 use himal::passes::post::reference::{self, Image};
 use himal::passes::post::{
@@ -87,17 +86,8 @@ fn download(ctx: &GpuContext, texture: &wgpu::Texture) -> Image {
     }
 }
 
-fn submit(ctx: &GpuContext, graph: FrameGraph<'_>, errors: &FrameErrors) {
-    let mut pool = TexturePool::new();
-    let commands = graph
-        .compile()
-        .expect("compile")
-        .execute(&ctx.device, &mut pool, None)
-        .expect("execute");
-    if let Some(e) = errors.take_first() {
-        panic!("recording: {e}");
-    }
-    ctx.queue.submit([commands]);
+fn submit(ctx: &GpuContext, graph: FrameGraph<'_>) {
+    himal::graph::run(ctx, graph, None, "test").expect("frame graph");
     ctx.wait("test").expect("gpu");
 }
 
@@ -120,12 +110,11 @@ fn gpu_log_average(ctx: &GpuContext, pass: &LuminancePass, img: &Image) -> (f32,
     let texture = upload(ctx, img);
     let size = (img.width, img.height);
     let buffers = LuminanceBuffers::new(&ctx.device, size);
-    let errors = FrameErrors::default();
     let mut g = FrameGraph::new();
     let hdr = g.import_texture("hdr", &texture);
-    let result = pass.add(&mut g, hdr, size, &buffers, &errors);
+    let result = pass.add(&mut g, hdr, size, &buffers);
     g.mark_buffer_output(result);
-    submit(ctx, g, &errors);
+    submit(ctx, g);
     let bytes = read_buffer(ctx, &buffers.result).expect("result");
     let v: &[f32] = bytemuck::cast_slice(&bytes);
     (v[1], v[3])
@@ -231,13 +220,12 @@ fn adaptation_follows_the_exponential_law_after_a_step() {
         } else {
             &shade
         };
-        let errors = FrameErrors::default();
         let mut g = FrameGraph::new();
         let hdr = g.import_texture("hdr", texture);
-        let measured = luminance.add(&mut g, hdr, size, &buffers, &errors);
-        let out = adapt.add(&mut g, measured, &buffers.result, &adapted, &post, &errors);
+        let measured = luminance.add(&mut g, hdr, size, &buffers);
+        let out = adapt.add(&mut g, measured, &adapted, &post);
         g.mark_buffer_output(out);
-        submit(ctx, g, &errors);
+        submit(ctx, g);
         let bytes = read_buffer(ctx, &adapted).expect("adapted");
         let v: &[f32] = bytemuck::cast_slice(&bytes);
         let (l_a, l_avg) = (v[1] as f64, v[2] as f64);
@@ -304,23 +292,19 @@ fn gpu_bloom(
         ),
     );
     let exposure_buffer = uniform_like_storage(ctx, [0.0, exposure, 0.0, 0.0]);
+    let mut g = FrameGraph::new();
     let inputs = BloomInputs {
         post: &post,
-        exposure: &exposure_buffer,
+        exposure: g.import_buffer("exposure", &exposure_buffer),
     };
-    let errors = FrameErrors::default();
-    let mut g = FrameGraph::new();
     let s = g.import_texture("src", &src);
     let d = g.import_texture("dst", &dst);
     let out = match k {
-        Some(k) => bloom.add_blur(&mut g, s, d, k, inputs, &errors),
-        None => {
-            let e = g.import_buffer("exposure", &exposure_buffer);
-            bloom.add_bright(&mut g, s, e, d, inputs, &errors)
-        }
+        Some(k) => bloom.add_blur(ctx, &mut g, s, d, k, inputs),
+        None => bloom.add_bright(&mut g, s, d, inputs),
     };
     g.mark_output(out);
-    submit(ctx, g, &errors);
+    submit(ctx, g);
     download(ctx, &dst)
 }
 
@@ -348,8 +332,7 @@ fn worst_relative(gpu: &Image, cpu: &Image) -> f32 {
 #[test]
 fn kawase_and_bright_pass_match_cpu_twins() {
     let ctx = shared_context().expect("adapter");
-    let mut bloom = BloomPass::new(ctx).expect("bloom");
-    bloom.prepare(ctx, 4).expect("prepare");
+    let bloom = BloomPass::new(ctx).expect("bloom");
     let mut rng = Rng(7);
     // Odd sizes exercise the clamp-to-edge borders.
     let img = quantize(&Image {
@@ -388,9 +371,8 @@ fn kawase_and_bright_pass_match_cpu_twins() {
 #[test]
 fn kawase_chain_preserves_energy() {
     let ctx = shared_context().expect("adapter");
-    let mut bloom = BloomPass::new(ctx).expect("bloom");
+    let bloom = BloomPass::new(ctx).expect("bloom");
     let passes = BloomSettings::default().passes;
-    bloom.prepare(ctx, passes).expect("prepare");
     // A bright blob in the middle of a 64x64 quarter-resolution target; the
     // chain's reach (sum of k + 1/2, ~12.5 texels) stays inside the borders.
     let img = quantize(&gray(64, 64, |x, y| {

@@ -10,12 +10,12 @@ use std::path::Path;
 use common::{environment_specular, lighting_params, pixel_ray, renderer};
 use glam::{IVec2, Vec2, Vec3};
 use himal::gpu::testing::shared_context;
+use himal::gpu_scene::SceneGpu;
 use himal::passes::lighting::reference::{ambient_luminance_ratio, shade_sky_occluded};
 use himal::passes::skyocc::reference::{
     self as twin, HeightImage, MARGIN_TEXELS, RENDER_TEXELS, SECTOR_SIZE, SECTOR_TEXELS, TEXEL_SIZE,
 };
 use himal::passes::skyocc::{SectorReadback, SkyOccPass, SkyOccView};
-use himal::renderer::scene_gpu::SceneGpu;
 use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
 

@@ -12,10 +12,10 @@ use common::{lighting_params, pixel_ray, renderer};
 use glam::{Mat4, Vec2, Vec3};
 use himal::gpu::testing::run_compute;
 use himal::gpu::{GpuContext, GpuOptions, read_buffer};
+use himal::gpu_scene::uniforms::ViewUniform;
+use himal::gpu_scene::{ObjectGpu, SceneGpu};
 use himal::math::brdf::Material;
 use himal::passes::lighting::reference::shade;
-use himal::renderer::scene_gpu::{ObjectGpu, SceneGpu};
-use himal::renderer::uniforms::ViewUniform;
 use himal::scene::{AlphaPattern, Camera, Mesh, Object, Scene, vegetation};
 use himal::{FrameSettings, ViewBuffer};
 

@@ -247,6 +247,15 @@ impl Program {
     }
 }
 
+/// A colour target state without blending.
+pub fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
 /// A uniform buffer initialised with `data`.
 pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &T) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;

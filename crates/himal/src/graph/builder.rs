@@ -12,11 +12,13 @@ use super::resource::{
     BufferAccess, BufferDesc, BufferHandle, ResourceAccess, TextureAccess, TextureDesc,
     TextureHandle,
 };
+use crate::gpu::GpuError;
 
 /// Distinguishes graphs so a handle kept from last frame's graph is rejected.
 static NEXT_GRAPH_ID: AtomicU32 = AtomicU32::new(1);
 
-pub(crate) type PassFn<'a> = Box<dyn for<'e> FnOnce(&mut PassContext<'e>) + 'a>;
+pub(crate) type PassFn<'a> =
+    Box<dyn for<'e> FnOnce(&mut PassContext<'e>) -> Result<(), GpuError> + 'a>;
 
 /// Where a resource's memory comes from.
 pub(crate) enum Backing<'a, T> {
@@ -98,6 +100,8 @@ pub struct FrameGraph<'a> {
     pub(crate) errors: Vec<GraphError>,
     /// Prepended to pass ids while set (a pass reused for another view).
     prefix: Option<String>,
+    /// Buffers nodes bind by name when they do not bind them ([`Self::set_frame_constants`]).
+    pub(crate) frame_constants: Vec<(&'static str, &'a wgpu::Buffer)>,
 }
 
 impl Default for FrameGraph<'_> {
@@ -114,6 +118,7 @@ impl<'a> FrameGraph<'a> {
             passes: Vec::new(),
             errors: Vec::new(),
             prefix: None,
+            frame_constants: Vec::new(),
         }
     }
 
@@ -384,14 +389,25 @@ impl<'a> PassBuilder<'_, 'a> {
         BufferHandle { version, ..h }
     }
 
+    /// The pass id (with the graph's prefix).
+    pub fn id(&self) -> &str {
+        &self.graph.passes[self.pass].id
+    }
+
+    /// Records misuse found while declaring; `compile` reports it.
+    pub(crate) fn error(&mut self, e: GraphError) {
+        self.graph.passes[self.pass].errors.push(e);
+    }
+
     /// Never culled (read-backs, presentation).
     pub fn side_effect(&mut self) {
         self.graph.passes[self.pass].side_effect = true;
     }
 
     /// Registers the pass with its recording closure; it runs at
-    /// [`CompiledGraph::execute`] unless the pass is culled.
-    pub fn execute(self, f: impl FnOnce(&mut PassContext<'_>) + 'a) {
+    /// [`CompiledGraph::execute`] unless the pass is culled. The first
+    /// error a closure returns ends the recording and is what `execute` returns.
+    pub fn execute(self, f: impl FnOnce(&mut PassContext<'_>) -> Result<(), GpuError> + 'a) {
         self.graph.passes[self.pass].exec = Some(Box::new(f));
     }
 }

@@ -21,6 +21,7 @@ pub struct PassContext<'e> {
     textures: &'e [Option<&'e wgpu::Texture>],
     views: &'e [OnceCell<wgpu::TextureView>],
     buffers: &'e [Option<&'e wgpu::Buffer>],
+    fallbacks: &'e [&'e wgpu::TextureView],
 }
 
 impl<'e> PassContext<'e> {
@@ -75,6 +76,11 @@ impl<'e> PassContext<'e> {
         self.buffers[i].ok_or_else(|| GraphError::UnknownHandle {
             context: self.pass_id.to_string(),
         })
+    }
+
+    /// The graph's constant texture for an absent optional input.
+    pub fn fallback(&self, f: super::Fallback) -> &'e wgpu::TextureView {
+        self.fallbacks[f.index()]
     }
 
     /// # Panics
@@ -151,6 +157,10 @@ impl CompiledGraph<'_> {
                 pool.take_buffer(device, &self.plan.buffer_slots[s], &label)
             })
             .collect();
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("himal.frame_graph"),
+        });
+        pool.prepare_fallbacks(device, &mut encoder);
         let pool = &*pool;
 
         let n = self.resources.len();
@@ -179,9 +189,7 @@ impl CompiledGraph<'_> {
         let views: Vec<OnceCell<wgpu::TextureView>> = (0..n).map(|_| OnceCell::new()).collect();
         let names: Vec<&str> = self.resources.iter().map(|r| r.name.as_str()).collect();
 
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("himal.frame_graph"),
-        });
+        let fallbacks = pool.fallback_views();
         let query = timer.as_ref().map(|t| t.query_set());
         for (i, (f, pass)) in self.closures.into_iter().zip(&self.passes).enumerate() {
             if let Some(q) = query {
@@ -198,9 +206,19 @@ impl CompiledGraph<'_> {
                 textures: &textures,
                 views: &views,
                 buffers: &buffers,
+                fallbacks: &fallbacks,
             };
-            f(&mut ctx);
+            let result = f(&mut ctx);
             encoder.pop_debug_group();
+            if let Err(e) = result {
+                // Close the scopes before returning: the first error is the one reported.
+                let _ = pollster::block_on(validation.pop());
+                let _ = pollster::block_on(oom.pop());
+                return Err(GraphError::Pass {
+                    pass: pass.id.clone(),
+                    message: e.to_string(),
+                });
+            }
             if let Some(q) = query {
                 encoder.write_timestamp(q, 2 * i as u32 + 1);
             }
@@ -210,6 +228,7 @@ impl CompiledGraph<'_> {
             t.record_resolve(&mut encoder, ids);
         }
         let commands = encoder.finish();
+        pool.fallbacks_recorded();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
         match v.or(o) {

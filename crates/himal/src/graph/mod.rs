@@ -28,6 +28,8 @@ mod builder;
 mod compile;
 mod describe;
 mod execute;
+mod history;
+mod node;
 mod pool;
 mod resource;
 mod timer;
@@ -38,6 +40,8 @@ mod tests;
 pub use builder::{FrameGraph, PassBuilder};
 pub use compile::{BufferKey, CompiledGraph, CompiledPass, PoolAssignment, PoolPlan, TextureKey};
 pub use execute::PassContext;
+pub use history::{History, HistoryFrame};
+pub use node::{Fallback, Node, RasterFn, Written};
 pub use pool::TexturePool;
 pub use resource::{
     BufferAccess, BufferDesc, BufferHandle, ResourceAccess, ResourceUse, TextureAccess,
@@ -90,6 +94,10 @@ pub enum GraphError {
     TimerCapacity { passes: usize, capacity: u32 },
     #[error("device: {0}")]
     Device(String),
+    #[error("pass '{pass}': {message}")]
+    Binding { pass: String, message: String },
+    #[error("pass '{pass}': {message}")]
+    Pass { pass: String, message: String },
 }
 
 impl GraphError {
@@ -101,5 +109,26 @@ impl GraphError {
             },
             e => e,
         }
+    }
+}
+
+/// Compiles, records (timed with `timer`) with a pool of its own, submits
+/// and checks `graph` outside a frame (precomputation, tools, tests).
+pub fn run(
+    ctx: &crate::gpu::GpuContext,
+    graph: FrameGraph<'_>,
+    mut timer: Option<&mut PassTimer>,
+    context: &str,
+) -> Result<Vec<PassTiming>, crate::gpu::GpuError> {
+    let graph_error = |e: GraphError| crate::gpu::GpuError::Other(format!("{context}: {e}"));
+    let compiled = graph.compile().map_err(graph_error)?;
+    let commands = compiled
+        .execute(&ctx.device, &mut TexturePool::new(), timer.as_deref_mut())
+        .map_err(graph_error)?;
+    ctx.queue.submit([commands]);
+    ctx.check(context)?;
+    match timer {
+        Some(t) => t.read_timings(&ctx.device).map_err(graph_error),
+        None => Ok(Vec::new()),
     }
 }

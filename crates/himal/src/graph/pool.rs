@@ -2,6 +2,7 @@
 
 use std::collections::HashMap;
 
+use super::Fallback;
 use super::compile::{BufferKey, TextureKey};
 
 struct Pooled<T> {
@@ -20,6 +21,11 @@ pub struct TexturePool {
     textures: HashMap<TextureKey, Vec<Pooled<wgpu::Texture>>>,
     buffers: HashMap<BufferKey, Vec<Pooled<wgpu::Buffer>>>,
     frame: u64,
+    /// Views of the 1x1 [`Fallback`] textures, in `Fallback::ALL` order.
+    fallbacks: Vec<(wgpu::Texture, wgpu::TextureView)>,
+    /// Set once a frame that recorded their clears finished recording; until
+    /// then every execute records them (a failed frame is never submitted).
+    fallbacks_cleared: std::cell::Cell<bool>,
 }
 
 impl TexturePool {
@@ -41,6 +47,51 @@ impl TexturePool {
 
     pub fn buffer_count(&self) -> usize {
         self.buffers.values().map(Vec::len).sum()
+    }
+
+    /// Creates the [`Fallback`] textures on first use and records their clears.
+    pub(crate) fn prepare_fallbacks(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        if self.fallbacks_cleared.get() {
+            return;
+        }
+        if self.fallbacks.is_empty() {
+            self.fallbacks = Fallback::ALL
+                .iter()
+                .map(|f| fallback_texture(device, *f))
+                .collect();
+        }
+        for (f, (_, view)) in Fallback::ALL.iter().zip(&self.fallbacks) {
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("himal.fallback.clear"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(f.value()),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        }
+    }
+
+    /// Views of the fallback textures, in `Fallback::ALL` order.
+    pub(crate) fn fallback_views(&self) -> Vec<&wgpu::TextureView> {
+        self.fallbacks.iter().map(|(_, v)| v).collect()
+    }
+
+    /// The frame that recorded the fallback clears finished recording.
+    pub(crate) fn fallbacks_recorded(&self) {
+        self.fallbacks_cleared.set(true);
     }
 
     /// Drops objects not used by the last `max_idle_frames` executes
@@ -128,4 +179,24 @@ impl TexturePool {
     pub(crate) fn buffer(&self, key: &BufferKey, index: usize) -> Option<&wgpu::Buffer> {
         self.buffers.get(key)?.get(index).map(|p| &p.object)
     }
+}
+
+/// A 1x1 fallback texture (cleared to its value by the first frame).
+fn fallback_texture(device: &wgpu::Device, f: Fallback) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(&format!("himal.fallback.{f:?}")),
+        size: wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    (texture, view)
 }

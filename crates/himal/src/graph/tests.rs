@@ -24,20 +24,20 @@ fn diamond_orders_producers_first() {
     // only where needed: declaration order is kept when valid.
     let mut a = g.add_pass("a");
     let x1 = a.write(x, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut c = g.add_pass("c");
     c.read(x1, TextureAccess::Sampled);
     let z1 = c.write(z, TextureAccess::StorageWrite);
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     let mut b = g.add_pass("b");
     b.read(x1, TextureAccess::Sampled);
     let y1 = b.write(y, TextureAccess::ColorAttachment);
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut d = g.add_pass("d");
     d.read(y1, TextureAccess::Sampled);
     d.read(z1, TextureAccess::Sampled);
     d.write(out, TextureAccess::ColorAttachment);
-    d.execute(|_| {});
+    d.execute(|_| Ok(()));
     let g = g.compile().expect("valid diamond");
     assert_eq!(ids(&g), ["a", "c", "b", "d"]);
     assert!(g.culled().is_empty());
@@ -55,14 +55,14 @@ fn reader_of_old_version_runs_before_overwrite() {
     g.mark_output(copy);
     let mut a = g.add_pass("light");
     let t1 = a.write(t, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("sky");
     b.write(t1, TextureAccess::ColorAttachment);
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut c = g.add_pass("snapshot");
     c.read(t1, TextureAccess::CopySrc);
     c.write(copy, TextureAccess::CopyDst);
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     let g = g.compile().expect("reorderable");
     assert_eq!(ids(&g), ["light", "snapshot", "sky"]);
 }
@@ -74,16 +74,16 @@ fn reading_overwritten_version_after_depending_on_overwrite_is_a_cycle() {
     let s = g.create_texture("s", desc(F::Rgba16Float));
     let mut a = g.add_pass("a");
     let t1 = a.write(t, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("b");
     b.write(t1, TextureAccess::ColorAttachment);
     let s1 = b.write(s, TextureAccess::ColorAttachment);
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut c = g.add_pass("c");
     c.read(t1, TextureAccess::Sampled);
     c.read(s1, TextureAccess::Sampled);
     c.side_effect();
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     match g.compile() {
         Err(GraphError::Cycle(p)) => assert_eq!(p, ["b", "c"]),
         other => panic!("expected Cycle, got {:?}", other.map(|g| ids(&g).join(","))),
@@ -98,15 +98,15 @@ fn dead_branch_graph(keep_dead: bool) -> Vec<String> {
     g.mark_output(out);
     let mut a = g.add_pass("a");
     let x1 = a.write(x, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("debug.dead");
     b.read(x1, TextureAccess::Sampled);
     let dead1 = b.write(dead, TextureAccess::ColorAttachment);
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut c = g.add_pass("c");
     c.read(x1, TextureAccess::Sampled);
     c.write(out, TextureAccess::ColorAttachment);
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     if keep_dead {
         g.mark_output(dead1);
     }
@@ -132,7 +132,7 @@ fn nothing_reaches_an_output_culls_everything() {
     let x = g.create_texture("x", desc(F::Rgba16Float));
     let mut a = g.add_pass("a");
     a.write(x, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     assert!(g.passes().is_empty());
     assert_eq!(g.culled(), ["a"]);
@@ -144,14 +144,14 @@ fn side_effect_pass_and_its_inputs_are_kept() {
     let lum = g.create_buffer("lum", BufferDesc::new(256));
     let mut a = g.add_pass("lum.reduce");
     let lum1 = a.write_buffer(lum, BufferAccess::StorageWrite);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("lum.readback");
     b.read_buffer(lum1, BufferAccess::CopySrc);
     b.side_effect();
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut c = g.add_pass("unused");
     c.read_buffer(lum1, BufferAccess::Uniform);
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     assert_eq!(ids(&g), ["lum.reduce", "lum.readback"]);
     assert_eq!(g.culled(), ["unused"]);
@@ -167,15 +167,15 @@ fn usages_are_the_union_of_live_accesses() {
     let t = g.create_texture("t", desc(F::Rgba8Unorm));
     let mut a = g.add_pass("draw");
     let t1 = a.write(t, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("sample");
     b.read(t1, TextureAccess::Sampled);
     b.side_effect();
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let mut c = g.add_pass("copy");
     c.read(t1, TextureAccess::CopySrc);
     c.side_effect();
-    c.execute(|_| {});
+    c.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     use wgpu::TextureUsages as U;
     let want = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
@@ -191,12 +191,12 @@ fn buffer_usages_and_extra_usages() {
     let args = g.create_buffer("args", d);
     let mut a = g.add_pass("cull");
     let args1 = a.write_buffer(args, BufferAccess::StorageWrite);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("draw");
     b.read_buffer(args1, BufferAccess::Indirect);
     b.read_buffer(args1, BufferAccess::Uniform);
     b.side_effect();
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     use wgpu::BufferUsages as U;
     let want = U::STORAGE | U::INDIRECT | U::UNIFORM | U::COPY_DST;
@@ -211,7 +211,7 @@ fn read_before_write_is_an_error() {
     let mut a = g.add_pass("a");
     a.read(t, TextureAccess::Sampled);
     a.side_effect();
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let err = g.compile().err();
     let want = GraphError::ReadBeforeWrite {
         pass: "a".into(),
@@ -227,7 +227,7 @@ fn imported_version_zero_counts_as_written() {
     let mut a = g.add_pass("a");
     a.read(h, TextureAccess::Sampled);
     a.side_effect();
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     assert!(g.compile().is_ok());
 }
 
@@ -237,10 +237,10 @@ fn two_writers_of_one_version_is_stale() {
     let t = g.import_texture_desc("t", desc(F::Rgba8Unorm));
     let mut a = g.add_pass("a");
     a.write(t, TextureAccess::ColorAttachment);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let mut b = g.add_pass("b");
     b.write(t, TextureAccess::ColorAttachment);
-    b.execute(|_| {});
+    b.execute(|_| Ok(()));
     let want = GraphError::StaleVersion {
         pass: "b".into(),
         resource: "t".into(),
@@ -253,8 +253,8 @@ fn two_writers_of_one_version_is_stale() {
 #[test]
 fn duplicate_pass_and_missing_execute() {
     let mut g = FrameGraph::new();
-    g.add_pass("ao.hbao").execute(|_| {});
-    g.add_pass("ao.hbao").execute(|_| {});
+    g.add_pass("ao.hbao").execute(|_| Ok(()));
+    g.add_pass("ao.hbao").execute(|_| Ok(()));
     assert_eq!(
         g.compile().err(),
         Some(GraphError::DuplicatePass("ao.hbao".into()))
@@ -275,7 +275,7 @@ fn foreign_handles_wrong_access_and_duplicate_names_are_errors() {
     let mut g = FrameGraph::new();
     let mut a = g.add_pass("a");
     a.read(foreign, TextureAccess::Sampled);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     let want = GraphError::UnknownHandle {
         context: "a".into(),
     };
@@ -285,7 +285,7 @@ fn foreign_handles_wrong_access_and_duplicate_names_are_errors() {
     let t = g.create_texture("t", desc(F::Rgba8Unorm));
     let mut a = g.add_pass("a");
     a.write(t, TextureAccess::Sampled);
-    a.execute(|_| {});
+    a.execute(|_| Ok(()));
     assert!(matches!(
         g.compile(),
         Err(GraphError::InvalidAccess {
@@ -316,22 +316,22 @@ fn pool_plan_reuses_slots_after_last_use() {
     g.mark_output(out);
     let mut p = g.add_pass("p0");
     let a1 = p.write(a, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let mut p = g.add_pass("p1");
     p.read(a1, TextureAccess::Sampled);
     let b1 = p.write(b, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     // a is dead after p1: c (same key) takes its slot; b overlaps c.
     let mut p = g.add_pass("p2");
     p.read(b1, TextureAccess::Sampled);
     let c1 = p.write(c, TextureAccess::ColorAttachment);
     let h1 = p.write(half, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let mut p = g.add_pass("p3");
     p.read(c1, TextureAccess::Sampled);
     p.read(h1, TextureAccess::Sampled);
     p.write(out, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     let plan = g.pool_plan();
     let slot = |n: &str| plan.texture_slot(n).expect("planned");
@@ -352,12 +352,12 @@ fn transient_output_keeps_its_slot_to_the_end() {
     let b = g.create_texture("b", desc(F::Rgba8Unorm));
     let mut p = g.add_pass("p0");
     let a1 = p.write(a, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     g.mark_output(a1);
     let mut p = g.add_pass("p1");
     p.write(b, TextureAccess::ColorAttachment);
     p.side_effect();
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let g = g.compile().expect("valid");
     let plan = g.pool_plan();
     assert_ne!(plan.texture_slot("debug.a"), plan.texture_slot("b"));
@@ -373,15 +373,15 @@ fn describe_lists_passes_accesses_and_usages() {
     let mut p = g.add_pass("gbuffer");
     let albedo1 = p.write(albedo, TextureAccess::ColorAttachment);
     let depth1 = p.write(depth, TextureAccess::DepthAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let mut p = g.add_pass("lighting");
     p.read(albedo1, TextureAccess::Sampled);
     p.read(depth1, TextureAccess::DepthRead);
     p.write(hdr, TextureAccess::ColorAttachment);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let mut p = g.add_pass("debug.unused");
     p.read(depth1, TextureAccess::Sampled);
-    p.execute(|_| {});
+    p.execute(|_| Ok(()));
     let text = g.compile().expect("valid").describe();
     for needle in [
         "1. gbuffer",

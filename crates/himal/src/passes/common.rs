@@ -1,22 +1,50 @@
 //! Recording helpers shared by the passes.
 
-use crate::frame::FrameErrors;
-use crate::gpu::GpuError;
-use crate::graph::{PassContext, TextureHandle};
+use crate::gpu::pipeline::{Program, RenderSpec};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, Node, PassContext, TextureHandle};
 
-/// Depth attachment of a full-screen pass that only tests against depth.
-pub struct DepthTest<'v> {
-    pub view: &'v wgpu::TextureView,
+pub use crate::gpu::pipeline::target;
+
+/// A full-screen program with its one pipeline (a pass step without permutations).
+pub struct Step {
+    pub program: Program,
+    pub pipeline: wgpu::RenderPipeline,
 }
 
-/// Records one full-screen triangle into `target`.
+impl Step {
+    /// Composes `path` and fetches its full-screen pipeline into `format`.
+    pub fn new(
+        ctx: &GpuContext,
+        path: &str,
+        label: &str,
+        format: wgpu::TextureFormat,
+        constants: &[(&str, f64)],
+    ) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, path)?;
+        let targets = [target(format)];
+        let mut spec = RenderSpec::fullscreen(label, &targets);
+        spec.constants = constants;
+        let pipeline = program.render_pipeline(ctx, &spec)?;
+        Ok(Self { program, pipeline })
+    }
+
+    /// A full-screen node of this step.
+    pub fn node<'g, 'a>(&'a self, graph: &'g mut FrameGraph<'a>, id: &str) -> Node<'g, 'a> {
+        graph
+            .fullscreen(id, &self.program)
+            .pipeline(Ok(self.pipeline.clone()))
+    }
+}
+
+/// Records one full-screen triangle into `target` (for passes that draw
+/// more than once; single draws are [`crate::graph::FrameGraph::fullscreen`] nodes).
 pub fn draw_fullscreen(
     ctx: &mut PassContext<'_>,
     pipeline: &wgpu::RenderPipeline,
     bind_group: &wgpu::BindGroup,
     target: &wgpu::TextureView,
     load: wgpu::LoadOp<wgpu::Color>,
-    depth: Option<DepthTest<'_>>,
 ) {
     let label = ctx.pass_id().to_string();
     let mut pass = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -30,11 +58,7 @@ pub fn draw_fullscreen(
                 store: wgpu::StoreOp::Store,
             },
         })],
-        depth_stencil_attachment: depth.map(|d| wgpu::RenderPassDepthStencilAttachment {
-            view: d.view,
-            depth_ops: None,
-            stencil_ops: None,
-        }),
+        depth_stencil_attachment: None,
         timestamp_writes: None,
         occlusion_query_set: None,
         multiview_mask: None,
@@ -44,47 +68,44 @@ pub fn draw_fullscreen(
     pass.draw(0..3, 0..1);
 }
 
-/// Records a debug view (`--view ...`): one full-screen draw of the view's
-/// pipeline into `output`, cleared to black, with the group `bind` builds.
-/// `pipeline` is `None` when the view was not prepared for the output's
-/// format: an error naming the view (`what`) is recorded instead.
-pub fn record_view<'e>(
-    ctx: &mut PassContext<'e>,
-    pipeline: Option<&wgpu::RenderPipeline>,
-    what: impl FnOnce() -> String,
-    output: TextureHandle,
-    errors: &FrameErrors,
-    bind: impl FnOnce(&PassContext<'e>) -> Result<wgpu::BindGroup, GpuError>,
-) {
-    let Some(pipeline) = pipeline else {
-        errors.record::<()>(Err(GpuError::Other(format!("{} was not prepared", what()))));
-        return;
-    };
-    if let Some(bg) = errors.record(bind(ctx)) {
-        let target = ctx.view(output);
-        let clear = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
-        draw_fullscreen(ctx, pipeline, &bg, target, clear, None);
-    }
-}
-
-/// A colour target state without blending.
-pub fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
-    Some(wgpu::ColorTargetState {
-        format,
-        blend: None,
-        write_mask: wgpu::ColorWrites::ALL,
-    })
+/// Clears `target` (declared written by the pass) to `color`.
+pub fn clear_target(
+    ctx: &mut PassContext<'_>,
+    target: TextureHandle,
+    color: wgpu::Color,
+) -> Result<(), GpuError> {
+    let view = ctx
+        .try_view(target)
+        .map_err(|e| GpuError::Other(e.to_string()))?;
+    let label = ctx.pass_id().to_string();
+    ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(&label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(color),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    Ok(())
 }
 
 /// Pipeline of a debug-view shader (`VIEW` selects the buffer, `DISPLAY`
 /// viewable vs raw): float targets get raw values, others display values.
 pub fn view_pipeline(
-    ctx: &crate::gpu::GpuContext,
-    program: &crate::gpu::pipeline::Program,
+    ctx: &GpuContext,
+    program: &Program,
     label: &str,
     view_id: u32,
     format: wgpu::TextureFormat,
-) -> Result<wgpu::RenderPipeline, crate::gpu::GpuError> {
+) -> Result<wgpu::RenderPipeline, GpuError> {
     let display = !matches!(
         format,
         wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
@@ -94,7 +115,23 @@ pub fn view_pipeline(
         ("VIEW", view_id as f64),
         ("DISPLAY", if display { 1.0 } else { 0.0 }),
     ];
-    let mut spec = crate::gpu::pipeline::RenderSpec::fullscreen(label, &targets);
+    let mut spec = RenderSpec::fullscreen(label, &targets);
     spec.constants = &constants;
     program.render_pipeline(ctx, &spec)
+}
+
+/// The pipeline of a debug view into the format of `output`.
+pub fn view_pipeline_for(
+    ctx: &GpuContext,
+    graph: &FrameGraph<'_>,
+    program: &Program,
+    label: &str,
+    view_id: u32,
+    output: TextureHandle,
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    let format = graph
+        .texture_desc(output)
+        .map(|d| d.format)
+        .ok_or_else(|| GpuError::Other(format!("{label}: the output is not in this graph")))?;
+    view_pipeline(ctx, program, label, view_id, format)
 }

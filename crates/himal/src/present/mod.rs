@@ -11,9 +11,9 @@ use std::collections::HashMap;
 
 pub use overlay::{GLYPH, Hud, LINE, Overlay};
 
+use crate::gpu::pipeline::target;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::passes::common::target;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -17,19 +17,20 @@ pub struct RenderedFrame {
     pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
 }
 
-/// Fetches the pipeline that draws `view` into `format` (none for `Final`).
+/// Fetches the pipeline that draws `view` into `format` into the cache
+/// (none for `Final`): pre-warming.
 pub(super) fn prepare_view(
     ctx: &GpuContext,
-    passes: &mut Passes,
+    passes: &Passes,
     view: ViewBuffer,
     format: wgpu::TextureFormat,
 ) -> Result<(), GpuError> {
     match view {
-        ViewBuffer::Debug(v) => passes.debug.prepare(ctx, v, format),
-        ViewBuffer::Ao(v) => passes.ao.prepare_view(ctx, v, format),
-        ViewBuffer::Shadow(v) => passes.shadows.prepare_view(ctx, v, format),
-        ViewBuffer::Env(v) => passes.env_view.prepare(ctx, v, format),
-        ViewBuffer::SkyOcc(v) => passes.skyocc.prepare_view(ctx, v, format),
+        ViewBuffer::Debug(v) => passes.debug.pipeline(ctx, v, format).map(drop),
+        ViewBuffer::Ao(v) => passes.ao.view_pipeline(ctx, v, format).map(drop),
+        ViewBuffer::Shadow(v) => passes.shadows.view_pipeline(ctx, v, format).map(drop),
+        ViewBuffer::Env(v) => passes.env_view.pipeline(ctx, v, format).map(drop),
+        ViewBuffer::SkyOcc(v) => passes.skyocc.view_pipeline(ctx, v, format).map(drop),
         ViewBuffer::Final => Ok(()),
     }
 }
@@ -61,31 +62,17 @@ impl Renderer {
     ) -> Result<wgpu::TextureFormat, Error> {
         let size = (settings.width, settings.height);
         let format = Self::output_format(settings);
-        prepare_view(&self.ctx, &mut self.res.passes, settings.view, format)?;
-        if settings.aa.temporal() && self.res.aa_history.as_ref().is_none_or(|h| h.size != size) {
-            let h = crate::passes::aa::AaHistory::new(&self.ctx.device, size, DISPLAY_FORMAT);
-            self.res.aa_history = Some(h);
+        let (device, history) = (&self.ctx.device, &mut self.res.history);
+        if settings.aa.temporal() {
+            crate::passes::aa::temporal::declare_history(history, device, size, DISPLAY_FORMAT);
         }
-        if settings.aa_buffers.any()
-            && self
-                .res
-                .aa_buffer_history
-                .as_ref()
-                .is_none_or(|h| h.size != size)
-        {
-            let h = crate::passes::aa::BufferHistory::new(&self.ctx.device, size);
-            self.res.aa_buffer_history = Some(h);
+        if settings.aa_buffers.any() {
+            crate::passes::aa::temporal::buffers::declare_history(history, device, size);
         }
-        if self.res.ao_history.as_ref().is_none_or(|h| h.size != size) {
-            self.res.ao_history = Some(AoHistory::new(&self.ctx.device, size));
+        if settings.ao.mode == AoMode::HbaoStf {
+            crate::passes::ao::declare_history(history, device, size);
         }
         let passes = &mut self.res.passes;
-        passes
-            .tonemap
-            .prepare(&self.ctx, post_state::tonemap_key(settings))?;
-        passes.bloom.prepare(&self.ctx, settings.bloom.passes)?;
-        let key = lighting_key(settings, self.res.environment.is_some());
-        passes.lighting.prepare(&self.ctx, key)?;
         for key in GBufferKey::for_scene(&self.res.scene, settings.aa.temporal()) {
             passes.gbuffer.prepare(&self.ctx, key)?;
         }
@@ -125,17 +112,16 @@ impl Renderer {
     /// Restarts the AA history on a mode change and uploads the temporal
     /// passes' parameters for a frame sampled at `jitter`.
     fn prepare_aa_history(&mut self, settings: &FrameSettings, jitter: [f32; 2]) {
+        use crate::passes::aa::temporal;
         if self.aa_last != Some(settings.aa) {
-            if let Some(h) = &mut self.res.aa_history {
-                h.invalidate();
-            }
+            temporal::reset_history(&mut self.res.history);
             self.aa_last = Some(settings.aa);
         }
-        if let Some(h) = &self.res.aa_history {
+        if settings.aa.temporal() {
             let params = crate::passes::aa::AaParams::new(
                 jitter,
-                h.last_jitter,
-                h.frames,
+                self.aa_last_jitter,
+                self.res.history.frames(temporal::RAW_HISTORY),
                 (self.frame_index % 2) as u32,
                 &settings.aa_tuning,
             );
@@ -246,10 +232,10 @@ impl Renderer {
             &self.ctx.queue,
             &AoUniform::new(&settings.ao, proj, camera.near, size).with_jitter(jitter, prev_jitter),
         );
-        if let Some(h) = &self.res.aa_buffer_history {
+        if settings.aa_buffers.any() {
             let (queue, tuning) = (&self.ctx.queue, &settings.aa_tuning);
             let buffers = &self.res.passes.aa_buffers;
-            buffers.update(queue, jitter, prev_jitter, h, tuning);
+            buffers.update(queue, jitter, prev_jitter, &self.res.history, tuning);
         }
         let Some((_, _, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
@@ -313,7 +299,6 @@ impl Renderer {
             .passes
             .forward
             .sort(&self.res.scene, camera.position);
-        let errors = FrameErrors::default();
         let Self {
             ctx,
             res,
@@ -324,14 +309,21 @@ impl Renderer {
             ..
         } = self;
         let inputs = res
-            .inputs(settings, format, *frame_index, &errors)
+            .inputs(ctx, settings, format, *frame_index)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
-        let compiled = frame::build(inputs, size, settings.view).compile()?;
-        let commands = compiled.execute(&ctx.device, pool, timer.as_mut())?;
-        if let Some(e) = errors.take_first() {
-            return Err(e.into());
-        }
+        let recorded = frame::build(inputs, size, settings.view)
+            .map_err(Error::from)
+            .and_then(|g| Ok(g.compile()?))
+            .and_then(|c| Ok(c.execute(&ctx.device, pool, timer.as_mut())?));
+        let commands = match recorded {
+            Ok(c) => c,
+            Err(e) => {
+                res.history.discard();
+                return Err(e);
+            }
+        };
         ctx.queue.submit([commands]);
+        res.history.swap();
         ctx.check("frame")?;
         let mut timings = std::mem::take(sky_timings);
         if let Some(t) = timer.as_mut() {
@@ -348,24 +340,8 @@ impl Renderer {
         }
         self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
-        if let Some(h) = self
-            .res
-            .aa_history
-            .as_mut()
-            .filter(|_| settings.aa.temporal())
-        {
-            h.advance(jitter);
-        }
-        if let Some(h) = &mut self.res.aa_buffer_history {
-            h.advance(settings.aa_buffers);
-        }
-        if let Some(h) = &mut self.res.ao_history {
-            // Only the filter writes the history; any other mode leaves it stale.
-            if settings.ao.mode == AoMode::HbaoStf {
-                h.advance();
-            } else {
-                h.invalidate();
-            }
+        if settings.aa.temporal() && settings.view == ViewBuffer::Final {
+            self.aa_last_jitter = jitter;
         }
         Ok(DrawnFrame {
             timings,

@@ -4,22 +4,20 @@
 mod draw;
 pub mod environment;
 pub mod post_state;
-pub mod scene_gpu;
-pub mod settings;
-pub mod textures;
-pub mod uniforms;
 
 use std::collections::HashMap;
 
 use glam::Mat4;
 
 use crate::Error;
-use crate::frame::{self, FrameErrors, FrameInputs, Passes};
+use crate::frame::{self, FrameInputs, Passes};
 use crate::gpu::pipeline::uniform_buffer;
 use crate::gpu::{GpuContext, GpuError, TextureData, read_texture};
-use crate::graph::{PassTimer, PassTiming, TexturePool};
+use crate::gpu_scene::SceneGpu;
+use crate::gpu_scene::uniforms::{LightingUniform, ViewUniform};
+use crate::graph::{History, PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
-use crate::passes::ao::{AoHistory, AoMode, AoPass, AoUniform};
+use crate::passes::ao::{AoMode, AoPass, AoUniform};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass, EnvViewPass};
@@ -31,12 +29,10 @@ use crate::passes::post::{
 use crate::passes::shadows::{ShadowPass, ShadowStats};
 use crate::passes::sky::{SkyGpuParams, SkyLight, SkyModel, SkyPass};
 use crate::scene::{Camera, Scene, SunDesc};
-use post_state::PostState;
-use scene_gpu::SceneGpu;
-pub use settings::{
+pub use crate::settings::{
     DEFAULT_SHADOW_RESOLUTION, DISPLAY_FORMAT, FrameSettings, RAW_FORMAT, ViewBuffer,
 };
-use uniforms::{LightingUniform, ViewUniform};
+use post_state::PostState;
 
 use draw::prepare_view;
 pub use draw::{DrawnFrame, RenderedFrame};
@@ -55,12 +51,8 @@ struct Resources {
     luminance: Option<((u32, u32), LuminanceBuffers)>,
     post: PostState,
     outputs: HashMap<(u32, u32, wgpu::TextureFormat), wgpu::Texture>,
-    shadow_placeholder: wgpu::Texture,
-    ao_history: Option<AoHistory>,
-    ao_placeholder: wgpu::Texture,
-    aa_history: Option<crate::passes::aa::AaHistory>,
-    /// History of the TAA on the AO and motion buffers (`--aa-buffers`).
-    aa_buffer_history: Option<crate::passes::aa::BufferHistory>,
+    /// Every temporal ring (AO, colour TAA, buffer TAA), swapped after submit.
+    history: History,
     /// An HDR environment instead of the physical sky (issue #8).
     environment: Option<environment::EnvironmentGpu>,
 }
@@ -68,13 +60,14 @@ struct Resources {
 impl Resources {
     fn inputs<'a>(
         &'a self,
+        ctx: &'a GpuContext,
         settings: &'a FrameSettings,
         format: wgpu::TextureFormat,
         frame_index: u64,
-        errors: &'a FrameErrors,
     ) -> Option<FrameInputs<'a>> {
         let size = (settings.width, settings.height);
         Some(FrameInputs {
+            ctx,
             passes: &self.passes,
             scene: &self.scene,
             view: &self.view_buffer,
@@ -83,12 +76,8 @@ impl Resources {
             luminance: &self.luminance.as_ref()?.1,
             post: self.post.frame(settings),
             output: self.outputs.get(&(size.0, size.1, format))?,
-            shadow_placeholder: &self.shadow_placeholder,
-            ao: match (settings.ao.mode, &self.ao_history) {
-                (AoMode::Off, _) | (_, None) => None,
-                (_, Some(h)) => Some((&settings.ao, h)),
-            },
-            ao_placeholder: &self.ao_placeholder,
+            history: &self.history,
+            ao: (settings.ao.mode != AoMode::Off).then_some(&settings.ao),
             lighting_key: lighting_key(settings, self.environment.is_some()),
             sky_no_disk: &self.sky_no_disk_buffer,
             probe: self
@@ -97,14 +86,8 @@ impl Resources {
             aa: crate::frame::FrameAa {
                 mode: settings.aa,
                 subsample: settings.aa.smaa_subsample(frame_index),
-                history: self.aa_history.as_ref().filter(|_| settings.aa.temporal()),
-                buffers: self
-                    .aa_buffer_history
-                    .as_ref()
-                    .filter(|_| settings.aa_buffers.any())
-                    .map(|h| (settings.aa_buffers, h)),
+                buffers: settings.aa_buffers.any().then_some(settings.aa_buffers),
             },
-            errors,
         })
     }
 }
@@ -141,6 +124,8 @@ pub struct Renderer {
     sky_table_sizes: crate::passes::sky::bruneton::TableSizes,
     /// Anti-aliasing mode of the previous frame (a change restarts the history).
     aa_last: Option<crate::passes::aa::AaMode>,
+    /// Sample offset of the last frame written to the colour TAA's ring.
+    aa_last_jitter: [f32; 2],
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -175,7 +160,7 @@ impl Renderer {
             passes.gbuffer.prepare(&ctx, key)?;
         }
         if !scene.probes.is_empty() {
-            passes.lighting.prepare(&ctx, LightingKey::RELIGHT)?;
+            passes.lighting.pipeline(&ctx, LightingKey::RELIGHT)?;
         }
         let environment = match &scene.environment {
             Some(desc) => {
@@ -205,31 +190,6 @@ impl Renderer {
         // A probe capture adds 30 passes (6 faces x G-buffer, store, relight,
         // sky, mirror) to the shadow, AO, lighting and post passes.
         let timer = PassTimer::new(&ctx.device, &ctx.queue, 128);
-        let white = |label| {
-            use wgpu::util::DeviceExt;
-            ctx.device.create_texture_with_data(
-                &ctx.queue,
-                &wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: 1,
-                        height: 1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::Rgba8Unorm,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                },
-                wgpu::util::TextureDataOrder::LayerMajor,
-                &[255; 4],
-            )
-        };
-        // 1x1 white: the shadow mask when shadows are off, AO when AO is off.
-        let shadow_placeholder = white("shadow.off");
-        let ao_placeholder = white("ao.off");
         let post = PostState::new(&ctx);
         Ok(Self {
             ctx,
@@ -244,11 +204,7 @@ impl Renderer {
                 luminance: None,
                 post,
                 outputs: HashMap::new(),
-                shadow_placeholder,
-                ao_history: None,
-                ao_placeholder,
-                aa_history: None,
-                aa_buffer_history: None,
+                history: History::new(),
                 environment,
             },
             pool: TexturePool::new(),
@@ -262,6 +218,7 @@ impl Renderer {
             sky_table_cache: None,
             sky_table_sizes: crate::passes::sky::bruneton::TableSizes::DEFAULT,
             aa_last: None,
+            aa_last_jitter: [0.0, 0.0],
         })
     }
 
@@ -283,47 +240,27 @@ impl Renderer {
         self.res.scene.triangles
     }
 
-    /// Bytes held by the scene's buffers and the transient texture pool.
-    pub fn memory(&self) -> Vec<(&'static str, u64)> {
-        vec![
-            ("scene buffers", self.res.scene.bytes),
-            ("frame targets (pool)", self.pool.allocated_bytes()),
+    /// Bytes held by the scene's buffers, the transient texture pool and
+    /// each history ring (by its name).
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        let mut rows = vec![
+            ("scene buffers".to_string(), self.res.scene.bytes),
             (
-                "AO history",
-                self.res.ao_history.as_ref().map_or(0, AoHistory::bytes),
+                "frame targets (pool)".to_string(),
+                self.pool.allocated_bytes(),
             ),
-            (
-                "AA history",
-                self.res
-                    .aa_history
-                    .as_ref()
-                    .map_or(0, crate::passes::aa::AaHistory::bytes),
-            ),
-            (
-                "AA buffer history",
-                self.res
-                    .aa_buffer_history
-                    .as_ref()
-                    .map_or(0, crate::passes::aa::BufferHistory::bytes),
-            ),
-        ]
+        ];
+        rows.extend(self.res.history.memory());
+        rows
     }
 
     /// Forgets the previous frame (camera cut): motion vectors become zero,
-    /// the next frame starts adapted.
+    /// the next frame starts adapted, every history ring starts again.
     pub fn reset_history(&mut self) {
         self.prev_view_proj = None;
-        if let Some(h) = &mut self.res.ao_history {
-            h.invalidate();
-        }
         self.prev_time = None;
         self.res.post.reset = true;
-        if let Some(h) = &mut self.res.aa_history {
-            h.invalidate();
-        }
-        if let Some(h) = &mut self.res.aa_buffer_history {
-            h.invalidate();
-        }
+        self.res.history.reset();
     }
 
     /// E1 pre-warm: fetches every pipeline permutation a frame of this
@@ -335,11 +272,13 @@ impl Renderer {
     pub fn prewarm(&mut self) -> Result<(), Error> {
         let (ctx, passes) = (&self.ctx, &mut self.res.passes);
         for key in crate::passes::post::TonemapKey::all() {
-            passes.tonemap.prepare(ctx, key)?;
+            passes.tonemap.pipeline(ctx, key)?;
         }
-        passes.bloom.prepare(ctx, BloomSettings::MAX_PASSES)?;
+        for k in 0..BloomSettings::MAX_PASSES {
+            passes.bloom.blur_pipeline(ctx, k)?;
+        }
         for key in LightingKey::all() {
-            passes.lighting.prepare(ctx, key)?;
+            passes.lighting.pipeline(ctx, key)?;
         }
         for key in GBufferKey::for_scene(&self.res.scene, true) {
             passes.gbuffer.prepare(ctx, key)?;
@@ -514,12 +453,11 @@ impl Renderer {
                 settings.time_s,
             );
         }
-        let errors = FrameErrors::default();
         let inputs = self
             .res
-            .inputs(settings, format, self.frame_index, &errors)
+            .inputs(&self.ctx, settings, format, self.frame_index)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
-        Ok(frame::build(inputs, size, settings.view)
+        Ok(frame::build(inputs, size, settings.view)?
             .compile()?
             .describe())
     }

@@ -7,7 +7,6 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::pipeline::uniform_buffer;
 use crate::passes::debug::DebugView;
-use crate::passes::lighting::HDR_FORMAT;
 use crate::passes::post::{
     self, BloomSettings, FrameDelta, PostFrame, PostUniform, TonemapKey, adapted_buffer,
 };
@@ -16,7 +15,6 @@ use crate::renderer::{FrameSettings, ViewBuffer};
 pub struct PostState {
     pub uniform: wgpu::Buffer,
     pub adapted: wgpu::Buffer,
-    pub bloom_placeholder: wgpu::Texture,
     /// The next frame starts adapted (first frame, camera cut, adaptation was off).
     pub reset: bool,
     last_frame: Option<Instant>,
@@ -87,24 +85,9 @@ pub fn validate(settings: &FrameSettings) -> Result<(), Error> {
 
 impl PostState {
     pub fn new(ctx: &GpuContext) -> Self {
-        let bloom_placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("bloom.off"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
         Self {
             uniform: uniform_buffer(ctx, "post", &<PostUniform as bytemuck::Zeroable>::zeroed()),
             adapted: adapted_buffer(&ctx.device),
-            bloom_placeholder,
             reset: true,
             last_frame: None,
         }
@@ -143,7 +126,6 @@ impl PostState {
         PostFrame {
             uniform: &self.uniform,
             adapted: &self.adapted,
-            bloom_placeholder: &self.bloom_placeholder,
             bloom_passes: bloom_passes(settings),
             adaptation: settings.adaptation.enabled,
             tonemap: tonemap_key(settings),

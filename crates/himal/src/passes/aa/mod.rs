@@ -9,12 +9,11 @@ pub mod temporal;
 
 pub use settings::{AaBuffers, AaMode};
 pub use smaa::{SmaaInputs, SmaaPass};
-pub use temporal::buffers::{BufferHistory, BufferTaaPass};
-pub use temporal::{AaHistory, AaParams, TemporalPass, TemporalTuning};
+pub use temporal::buffers::BufferTaaPass;
+pub use temporal::{AaParams, TemporalPass, TemporalTuning};
 
-use crate::frame::FrameErrors;
-use crate::gpu::GpuError;
-use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{FrameGraph, History, TextureDesc, TextureHandle};
 use temporal::{RESOLVED_FORMAT, ResolveMode};
 
 /// What the anti-aliasing chain of one frame needs.
@@ -22,8 +21,8 @@ pub struct AaFrame<'a> {
     pub mode: AaMode,
     /// SMAA area-table subsample index of this frame.
     pub subsample: u32,
-    /// History of the temporal modes (`None` for none/smaa).
-    pub history: Option<&'a AaHistory>,
+    /// Holds the temporal modes' rings ([`temporal::declare_history`]).
+    pub history: &'a History,
     pub smaa: &'a SmaaPass,
     pub temporal: &'a TemporalPass,
     pub depth: TextureHandle,
@@ -44,35 +43,31 @@ pub struct AaFrame<'a> {
 /// smaa-t2x: tonemap → ldr → SMAA (T2x areas) → raw → resolve (2 taps) → TAA → output.
 /// hraa: tonemap → ldr → SMAA → raw → resolve (FLIPQUAD) → TAA → unsharp → output.
 pub fn add_chain<'a>(
+    ctx: &GpuContext,
     g: &mut FrameGraph<'a>,
     aa: AaFrame<'a>,
     output: TextureHandle,
     tonemap: impl FnOnce(&mut FrameGraph<'a>, TextureHandle) -> TextureHandle,
-    errors: &'a FrameErrors,
-) -> TextureHandle {
+) -> Result<TextureHandle, GpuError> {
     let Some(desc) = g.texture_desc(output).cloned() else {
-        return tonemap(g, output);
+        return Ok(tonemap(g, output));
     };
     let size = (desc.width, desc.height);
     if aa.mode == AaMode::None {
-        return tonemap(g, output);
+        return Ok(tonemap(g, output));
     }
-    let history = match (aa.mode.temporal(), aa.history) {
-        (false, _) => None,
-        (true, Some(h)) => Some(h.frame()),
-        (true, None) => {
-            errors.record::<()>(Err(GpuError::Other(
-                "temporal anti-aliasing without its history".into(),
-            )));
-            return tonemap(g, output);
-        }
+    let ring = |g: &mut FrameGraph<'a>, name: &str| {
+        aa.history
+            .import(g, name)
+            .ok_or_else(|| GpuError::Other(format!("temporal anti-aliasing without {name}")))
+    };
+    let raw = match aa.mode.temporal() {
+        true => Some(ring(g, temporal::RAW_HISTORY)?),
+        false => None,
     };
     // Where this frame's (SMAA-filtered) samples go: the output, or the
     // history ring that the resolve reads.
-    let stage = match &history {
-        Some(h) => g.import_texture("aa.raw", h.raw),
-        None => output,
-    };
+    let stage = raw.map_or(output, |r| r.next);
     let stage = if aa.mode.smaa() {
         let ldr = g.create_texture("ldr", TextureDesc::new_2d(size.0, size.1, desc.format));
         let ldr = tonemap(g, ldr);
@@ -81,20 +76,15 @@ pub fn add_chain<'a>(
             depth: aa.depth,
             normals: aa.normals,
         };
-        aa.smaa.add(g, inputs, size, aa.subsample, stage, errors)
+        aa.smaa.add(g, inputs, size, aa.subsample, stage)
     } else {
         tonemap(g, stage)
     };
-    let Some(history) = history else {
-        return stage;
+    let Some(raw) = raw else {
+        return Ok(stage);
     };
-    let raw = stage;
-    let previous = (
-        g.import_texture("aa.raw.prev", history.raw_prev),
-        g.import_texture("aa.raw.prev2", history.raw_prev2),
-    );
-    let motion_prev = g.import_texture("aa.motion.prev", history.motion_prev);
-    let motion_next = g.import_texture("aa.motion", history.motion);
+    let motion_ring = ring(g, temporal::MOTION_HISTORY)?;
+    let motion_prev = motion_ring.previous[0];
     let mode = match aa.mode {
         AaMode::Taa => ResolveMode::PassThrough,
         AaMode::SmaaT2x => ResolveMode::TwoTap,
@@ -102,20 +92,19 @@ pub fn add_chain<'a>(
     };
     let t = aa.temporal;
     let (resolved, motion) = t.add_resolve(
+        ctx,
         g,
         (mode, aa.motion_jitter_free),
-        raw,
-        previous,
+        stage,
+        (raw.previous[0], raw.previous[1]),
         aa.motion,
         motion_prev,
-        motion_next,
-        errors,
+        motion_ring.next,
     );
     if aa.mode == AaMode::Tfq {
-        return t.add_unsharp(g, resolved, output, errors);
+        return Ok(t.add_unsharp(ctx, g, resolved, output));
     }
-    let taa_prev = g.import_texture("aa.taa.prev", history.taa_prev);
-    let taa_next = g.import_texture("aa.taa", history.taa);
+    let taa = ring(g, temporal::TAA_HISTORY)?;
     let color = if aa.mode == AaMode::Hraa {
         g.create_texture(
             "aa.taa.out",
@@ -125,18 +114,18 @@ pub fn add_chain<'a>(
         output
     };
     let (_, color) = t.add_taa(
+        ctx,
         g,
         resolved,
-        taa_prev,
-        taa_next,
+        taa.previous[0],
+        taa.next,
         motion,
         motion_prev,
         color,
-        errors,
     );
-    if aa.mode == AaMode::Hraa {
-        t.add_unsharp(g, color, output, errors)
+    Ok(if aa.mode == AaMode::Hraa {
+        t.add_unsharp(ctx, g, color, output)
     } else {
         color
-    }
+    })
 }

@@ -11,17 +11,14 @@
 pub mod reference;
 mod settings;
 
-use std::collections::HashMap;
-
 use wgpu::util::DeviceExt;
 
 pub use settings::{AoMode, AoSettings, AoUniform, AoView, jitter_4x4};
 
-use crate::frame::FrameErrors;
-use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
+use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, PassContext, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, record_view, target, view_pipeline};
+use crate::graph::{Fallback, FrameGraph, History, TextureAccess, TextureDesc, TextureHandle};
+use crate::passes::common::{Step, clear_target, view_pipeline_for};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -31,75 +28,21 @@ pub const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// ao.blur_y output and history: (AO, linear depth, N).
 pub const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The ping-pong history (AO, Z, N) of the temporal filter, owned by the renderer.
-pub struct AoHistory {
-    textures: [wgpu::Texture; 2],
-    pub size: (u32, u32),
-    /// Index of the texture holding the previous frame.
-    previous: usize,
-    /// False on first use and after a camera cut: the previous texture is cleared to (1, 0, 0).
-    valid: bool,
-}
+/// The temporal filter's history ring (AO, Z, N) in the graph's [`History`].
+pub const HISTORY: &str = "ao.history";
 
-impl AoHistory {
-    pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
-        let make = |label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: HISTORY_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
-        Self {
-            textures: [make("ao.history.0"), make("ao.history.1")],
-            size,
-            previous: 0,
-            valid: false,
-        }
-    }
-
-    /// Forgets the history (camera cut).
-    pub fn invalidate(&mut self) {
-        self.valid = false;
-    }
-
-    /// (previous, next, previous must be cleared first).
-    pub fn pair(&self) -> (&wgpu::Texture, &wgpu::Texture, bool) {
-        (
-            &self.textures[self.previous],
-            &self.textures[1 - self.previous],
-            !self.valid,
-        )
-    }
-
-    /// After a frame was submitted: next becomes previous.
-    pub fn advance(&mut self) {
-        self.previous = 1 - self.previous;
-        self.valid = true;
-    }
-
-    pub fn bytes(&self) -> u64 {
-        2 * self.size.0 as u64 * self.size.1 as u64 * 8
-    }
+/// Declares the history ring of a `size` frame (before the graph is built).
+pub fn declare_history(history: &mut History, device: &wgpu::Device, size: (u32, u32)) {
+    let desc = TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT);
+    history.declare(device, HISTORY, &desc, 2);
 }
 
 /// What the AO graph nodes read besides the depth buffer.
 pub struct AoInputs<'a> {
     pub settings: &'a AoSettings,
-    pub view: &'a wgpu::Buffer,
     pub depth: TextureHandle,
-    pub history: &'a AoHistory,
+    /// Holds [`HISTORY`] (declared with [`declare_history`]).
+    pub history: &'a History,
 }
 
 /// Textures the AO nodes produce.
@@ -111,28 +54,6 @@ pub struct AoTargets {
     pub stability: TextureHandle,
 }
 
-struct Step {
-    program: Program,
-    pipeline: wgpu::RenderPipeline,
-}
-
-impl Step {
-    fn new(
-        ctx: &GpuContext,
-        path: &str,
-        label: &str,
-        format: wgpu::TextureFormat,
-        constants: &[(&str, f64)],
-    ) -> Result<Self, GpuError> {
-        let program = Program::new(ctx, path)?;
-        let targets = [target(format)];
-        let mut spec = RenderSpec::fullscreen(label, &targets);
-        spec.constants = constants;
-        let pipeline = program.render_pipeline(ctx, &spec)?;
-        Ok(Self { program, pipeline })
-    }
-}
-
 pub struct AoPass {
     hbao: Step,
     stability: Step,
@@ -141,7 +62,6 @@ pub struct AoPass {
     blur_y: Step,
     blur_y_stf: Step,
     view_program: Program,
-    views: HashMap<(AoView, wgpu::TextureFormat), wgpu::RenderPipeline>,
     jitter: wgpu::Texture,
     linear_sampler: wgpu::Sampler,
     params: wgpu::Buffer,
@@ -207,7 +127,6 @@ impl AoPass {
                 &[],
             )?,
             view_program: Program::new(ctx, "passes/ao/view.wgsl")?,
-            views: HashMap::new(),
             jitter,
             linear_sampler,
             params: uniform_buffer(
@@ -223,19 +142,20 @@ impl AoPass {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(uniform));
     }
 
-    /// Builds the pipeline of an AO debug view into `format` (float = raw values).
-    pub fn prepare_view(
-        &mut self,
+    /// The pipeline of AO debug view `view` into `format` (float = raw values).
+    pub fn view_pipeline(
+        &self,
         ctx: &GpuContext,
         view: AoView,
         format: wgpu::TextureFormat,
-    ) -> Result<(), GpuError> {
-        if self.views.contains_key(&(view, format)) {
-            return Ok(());
-        }
-        let pipeline = view_pipeline(ctx, &self.view_program, "ao.view", view as u32, format)?;
-        self.views.insert((view, format), pipeline);
-        Ok(())
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        crate::passes::common::view_pipeline(
+            ctx,
+            &self.view_program,
+            "ao.view",
+            view as u32,
+            format,
+        )
     }
 
     /// Adds the AO nodes for a `size` frame.
@@ -244,273 +164,147 @@ impl AoPass {
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         inputs: AoInputs<'a>,
-        errors: &'a FrameErrors,
     ) -> AoTargets {
         let AoInputs {
             settings,
-            view,
             depth,
             history,
         } = inputs;
         let ao_size = settings.ao_size(size);
-        let params = &self.params;
-        let sampler = &self.linear_sampler;
+        let (params, sampler) = (&self.params, &self.linear_sampler);
+        let white = wgpu::LoadOp::Clear(wgpu::Color::WHITE);
 
         let raw = graph.create_texture(
             "ao.raw",
             TextureDesc::new_2d(ao_size.0, ao_size.1, RAW_FORMAT),
         );
         let jitter = graph.import_texture("ao.jitter", &self.jitter);
-        let raw = self.node(
-            graph,
-            "ao.hbao",
-            &self.hbao,
-            &[depth, jitter],
-            raw,
-            errors,
-            move |ctx, program| {
-                program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", params.as_entire_binding()),
-                        ("depth", tv(ctx, depth)),
-                        ("jitter_load", tv(ctx, jitter)),
-                    ],
-                )
-            },
-        );
+        let raw = self
+            .hbao
+            .node(graph, "ao.hbao")
+            .uniform("params", params)
+            .read("depth", depth)
+            .read("jitter_load", jitter)
+            .color(raw, white)
+            .draw();
         let stability = graph.create_texture(
             "ao.stability",
             TextureDesc::new_2d(ao_size.0, ao_size.1, STABILITY_FORMAT),
         );
-        let stability = self.node(
-            graph,
-            "ao.stability",
-            &self.stability,
-            &[raw],
-            stability,
-            errors,
-            move |ctx, program| {
-                program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", params.as_entire_binding()),
-                        ("hbao_load", tv(ctx, raw)),
-                    ],
-                )
-            },
-        );
+        let stability = self
+            .stability
+            .node(graph, "ao.stability")
+            .uniform("params", params)
+            .read("hbao_load", raw)
+            .color(stability, white)
+            .draw();
         let full = TextureDesc::new_2d(size.0, size.1, PACKED_FORMAT);
         let packed = graph.create_texture("ao.packed", full.clone());
-        let packed = self.node(
-            graph,
-            "ao.pack",
-            &self.pack,
-            &[depth, raw],
-            packed,
-            errors,
-            move |ctx, program| {
-                program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", params.as_entire_binding()),
-                        ("depth", tv(ctx, depth)),
-                        ("hbao", tv(ctx, raw)),
-                        ("linear_sampler", wgpu::BindingResource::Sampler(sampler)),
-                    ],
-                )
-            },
-        );
+        let packed = self
+            .pack
+            .node(graph, "ao.pack")
+            .uniform("params", params)
+            .read("depth", depth)
+            .read("hbao", raw)
+            .sampler("linear_sampler", sampler)
+            .color(packed, white)
+            .draw();
         let blurred_x = graph.create_texture("ao.blurred_x", full);
-        let blurred_x = self.node(
-            graph,
-            "ao.blur_x",
-            &self.blur_x,
-            &[packed],
-            blurred_x,
-            errors,
-            move |ctx, program| {
-                program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", params.as_entire_binding()),
-                        ("packed", tv(ctx, packed)),
-                        ("linear_sampler", wgpu::BindingResource::Sampler(sampler)),
-                    ],
-                )
-            },
-        );
-        let ao = if settings.mode == AoMode::HbaoStf {
-            let (previous, next, clear) = history.pair();
-            let mut previous = graph.import_texture("ao.history.previous", previous);
-            if clear {
-                // The talk's clear values: (AO, Z) = (1, 0), N = 0.
-                let mut pass = graph.add_pass("ao.history_clear");
-                previous = pass.write(previous, TextureAccess::ColorAttachment);
-                pass.execute(move |ctx| {
-                    let label = ctx.pass_id().to_string();
-                    ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some(&label),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: ctx.view(previous),
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(wgpu::Color {
-                                    r: 1.0,
-                                    g: 0.0,
-                                    b: 0.0,
-                                    a: 0.0,
-                                }),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
-                        depth_stencil_attachment: None,
-                        timestamp_writes: None,
-                        occlusion_query_set: None,
-                        multiview_mask: None,
+        let blurred_x = self
+            .blur_x
+            .node(graph, "ao.blur_x")
+            .uniform("params", params)
+            .read("packed", packed)
+            .sampler("linear_sampler", sampler)
+            .color(blurred_x, white)
+            .draw();
+        let ring = (settings.mode == AoMode::HbaoStf)
+            .then(|| history.import(graph, HISTORY))
+            .flatten();
+        let ao = match ring {
+            Some(ring) => {
+                let mut previous = ring.previous[0];
+                if ring.frames == 0 {
+                    // The talk's clear values: (AO, Z) = (1, 0), N = 0.
+                    let mut pass = graph.add_pass("ao.history_clear");
+                    previous = pass.write(previous, TextureAccess::ColorAttachment);
+                    pass.execute(move |ctx| {
+                        let clear = wgpu::Color {
+                            r: 1.0,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
+                        };
+                        clear_target(ctx, previous, clear)
                     });
-                });
+                }
+                let next = self
+                    .blur_y_stf
+                    .node(graph, "ao.blur_y_stf")
+                    .uniform("params", params)
+                    .read("blurred_x", blurred_x)
+                    .read("depth", depth)
+                    .read("stability_load", stability)
+                    .read("history", previous)
+                    .sampler("linear_sampler", sampler)
+                    .color(ring.next, white)
+                    .draw();
+                // The history outlives the frame.
+                graph.mark_output(next);
+                next
             }
-            let next = graph.import_texture("ao.history.next", next);
-            let next = self.node(
-                graph,
-                "ao.blur_y_stf",
-                &self.blur_y_stf,
-                &[blurred_x, depth, stability, previous],
-                next,
-                errors,
-                move |ctx, program| {
-                    program.bind(
-                        ctx.device,
-                        0,
-                        &[
-                            ("params", params.as_entire_binding()),
-                            ("view", view.as_entire_binding()),
-                            ("blurred_x", tv(ctx, blurred_x)),
-                            ("depth", tv(ctx, depth)),
-                            ("stability_load", tv(ctx, stability)),
-                            ("history", tv(ctx, previous)),
-                            ("linear_sampler", wgpu::BindingResource::Sampler(sampler)),
-                        ],
-                    )
-                },
-            );
-            // The history outlives the frame.
-            graph.mark_output(next);
-            next
-        } else {
-            let out = graph.create_texture(
-                "ao.filtered",
-                TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT),
-            );
-            // Without the filter, the history and stability bindings are unused:
-            // bind textures this pass reads anyway so no extra node runs.
-            self.node(
-                graph,
-                "ao.blur_y",
-                &self.blur_y,
-                &[blurred_x, depth, raw],
-                out,
-                errors,
-                move |ctx, program| {
-                    program.bind(
-                        ctx.device,
-                        0,
-                        &[
-                            ("params", params.as_entire_binding()),
-                            ("view", view.as_entire_binding()),
-                            ("blurred_x", tv(ctx, blurred_x)),
-                            ("depth", tv(ctx, depth)),
-                            ("stability_load", tv(ctx, raw)),
-                            ("history", tv(ctx, blurred_x)),
-                            ("linear_sampler", wgpu::BindingResource::Sampler(sampler)),
-                        ],
-                    )
-                },
-            )
+            None => {
+                let out = graph.create_texture(
+                    "ao.filtered",
+                    TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT),
+                );
+                // Without the filter (STF = false) the shader reads neither.
+                self.blur_y
+                    .node(graph, "ao.blur_y")
+                    .uniform("params", params)
+                    .read("blurred_x", blurred_x)
+                    .read("depth", depth)
+                    .optional("stability_load", None, Fallback::White)
+                    .optional("history", None, Fallback::Black)
+                    .sampler("linear_sampler", sampler)
+                    .color(out, white)
+                    .draw()
+            }
         };
         AoTargets { ao, raw, stability }
-    }
-
-    /// One full-screen node: reads `reads`, writes `output` with the bind group `bind` makes.
-    #[allow(clippy::too_many_arguments)]
-    fn node<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        id: &str,
-        step: &'a Step,
-        reads: &[TextureHandle],
-        output: TextureHandle,
-        errors: &'a FrameErrors,
-        bind: impl for<'c> Fn(&PassContext<'c>, &Program) -> Result<wgpu::BindGroup, GpuError> + 'a,
-    ) -> TextureHandle {
-        let mut pass = graph.add_pass(id);
-        for &t in reads {
-            pass.read(t, TextureAccess::Sampled);
-        }
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            if let Some(bg) = errors.record(bind(ctx, &step.program)) {
-                let target = ctx.view(output);
-                draw_fullscreen(
-                    ctx,
-                    &step.pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                    None,
-                );
-            }
-        });
-        output
     }
 
     /// Draws AO debug view `kind` into `output`.
     pub fn add_view<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         kind: AoView,
         targets: AoTargets,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let format = graph.texture_desc(output).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.views.get(&(kind, f)));
-        let mut pass = graph.add_pass("ao.view");
-        let read = match kind {
-            AoView::Ao => targets.ao,
-            AoView::Raw => targets.raw,
-            AoView::Stability => targets.stability,
+        let pipeline = view_pipeline_for(
+            ctx,
+            graph,
+            &self.view_program,
+            "ao.view",
+            kind as u32,
+            output,
+        );
+        let (ao, raw, stability) = match kind {
+            AoView::Ao => (Some(targets.ao), None, None),
+            AoView::Raw => (None, Some(targets.raw), None),
+            AoView::Stability => (None, None, Some(targets.stability)),
         };
-        pass.read(read, TextureAccess::Sampled);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let what = || format!("AO view {kind:?}");
-            record_view(ctx, pipeline, what, output, errors, |ctx| {
-                // Bind the one texture this view reads in every slot: the others are unused.
-                let t = tv(ctx, read);
-                self.view_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", self.params.as_entire_binding()),
-                        ("ao", t.clone()),
-                        ("hbao_load", t.clone()),
-                        ("stability_load", t),
-                    ],
-                )
-            });
-        });
-        output
+        // The view reads one buffer; the others are unused by its permutation.
+        graph
+            .fullscreen("ao.view", &self.view_program)
+            .pipeline(pipeline)
+            .uniform("params", &self.params)
+            .optional("ao", ao, Fallback::Black)
+            .optional("hbao_load", raw, Fallback::Black)
+            .optional("stability_load", stability, Fallback::Black)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
-}
-
-/// A sampled-texture binding of `h`.
-fn tv<'c>(ctx: &PassContext<'c>, h: TextureHandle) -> wgpu::BindingResource<'c> {
-    wgpu::BindingResource::TextureView(ctx.view(h))
 }

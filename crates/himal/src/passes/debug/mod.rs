@@ -1,13 +1,10 @@
 //! Debug views (`himal render --view BUFFER`): one G-buffer channel or the
 //! HDR lighting buffer, as a viewable image (PNG) or raw values (EXR).
 
-use std::collections::HashMap;
-
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{BufferAccess, FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{record_view, view_pipeline};
+use crate::graph::{BufferAccess, Fallback, FrameGraph, TextureHandle};
+use crate::passes::common::{view_pipeline, view_pipeline_for};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -32,91 +29,53 @@ pub enum DebugView {
 
 pub struct DebugPass {
     program: Program,
-    pipelines: HashMap<(DebugView, wgpu::TextureFormat), wgpu::RenderPipeline>,
 }
 
 impl DebugPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         Ok(Self {
             program: Program::new(ctx, "passes/debug/view.wgsl")?,
-            pipelines: HashMap::new(),
         })
     }
 
-    /// Builds the pipeline for `view` into `format` (float formats get raw values).
-    pub fn prepare(
-        &mut self,
+    /// The pipeline of `view` into `format` (float formats get raw values).
+    pub fn pipeline(
+        &self,
         ctx: &GpuContext,
         view: DebugView,
         format: wgpu::TextureFormat,
-    ) -> Result<(), GpuError> {
-        if self.pipelines.contains_key(&(view, format)) {
-            return Ok(());
-        }
-        let pipeline = view_pipeline(ctx, &self.program, "debug.view", view as u32, format)?;
-        self.pipelines.insert((view, format), pipeline);
-        Ok(())
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        view_pipeline(ctx, &self.program, "debug.view", view as u32, format)
     }
 
+    /// Draws `view_kind` of the G-buffer, HDR or bloom into `output`.
     #[allow(clippy::too_many_arguments)]
     pub fn add<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         view_kind: DebugView,
         gbuffer: GBuffer,
         hdr: TextureHandle,
         post: PostInputs<'a>,
         output: TextureHandle,
-        view: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let bloom = match post.bloom {
-            Some(b) => b,
-            None => graph.import_texture("bloom.off", post.placeholder),
-        };
-        let (exposure, exposure_buffer) = post.exposure;
-        let format = graph.texture_desc(output).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.pipelines.get(&(view_kind, f)));
-        let mut pass = graph.add_pass("debug.view");
-        for t in [
-            gbuffer.albedo,
-            gbuffer.frame,
-            gbuffer.material,
-            gbuffer.motion,
-            gbuffer.depth,
-            hdr,
-            bloom,
-        ] {
-            pass.read(t, TextureAccess::Sampled);
-        }
-        pass.read_buffer(exposure, BufferAccess::StorageRead);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let what = || format!("debug view {view_kind:?}");
-            record_view(ctx, pipeline, what, output, errors, |ctx| {
-                let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-                self.program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("view", view.as_entire_binding()),
-                        ("gbuffer_albedo", tv(gbuffer.albedo)),
-                        ("gbuffer_frame", tv(gbuffer.frame)),
-                        ("gbuffer_material", tv(gbuffer.material)),
-                        ("motion", tv(gbuffer.motion)),
-                        ("depth", tv(gbuffer.depth)),
-                        ("hdr", tv(hdr)),
-                        ("exposure", exposure_buffer.as_entire_binding()),
-                        ("post", post.post.as_entire_binding()),
-                        ("bloom", tv(bloom)),
-                        (
-                            "bloom_sampler",
-                            wgpu::BindingResource::Sampler(post.sampler),
-                        ),
-                    ],
-                )
-            });
-        });
-        output
+        let id = view_kind as u32;
+        let pipeline = view_pipeline_for(ctx, graph, &self.program, "debug.view", id, output);
+        graph
+            .fullscreen("debug.view", &self.program)
+            .pipeline(pipeline)
+            .read("gbuffer_albedo", gbuffer.albedo)
+            .read("gbuffer_frame", gbuffer.frame)
+            .read("gbuffer_material", gbuffer.material)
+            .read("motion", gbuffer.motion)
+            .read("depth", gbuffer.depth)
+            .read("hdr", hdr)
+            .read_buffer("exposure", post.exposure, BufferAccess::StorageRead)
+            .uniform("post", post.post)
+            .optional("bloom", post.bloom, Fallback::Black)
+            .sampler("bloom_sampler", post.sampler)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
 }

@@ -11,7 +11,6 @@ mod view;
 
 pub use view::{EnvView, EnvViewPass};
 
-use crate::frame::FrameErrors;
 use wgpu::util::DeviceExt;
 
 use crate::gpu::pipeline::Program;
@@ -272,17 +271,13 @@ impl EnvMapPass {
                 },
             );
         }
-        let errors = FrameErrors::default();
         let mut graph = FrameGraph::new();
-        let filtered = self.add_steps(&mut graph, None, &errors);
+        let filtered = self.add_steps(&mut graph, None);
         graph.mark_output(filtered);
         let commands =
             graph
                 .compile()?
                 .execute(&ctx.device, &mut crate::graph::TexturePool::new(), None)?;
-        if let Some(e) = errors.take_first() {
-            return Err(e.into());
-        }
         ctx.queue.submit([commands]);
         ctx.check("envmap.filter_faces")?;
         Ok(())
@@ -290,14 +285,9 @@ impl EnvMapPass {
 
     /// Adds capture, mips and filtering when [`Self::dirty`]; returns the
     /// filtered cube's handle for the lighting pass to read.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        sky: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
+    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>, sky: &'a wgpu::Buffer) -> TextureHandle {
         if self.dirty && !self.fixed_source {
-            self.add_steps(graph, Some(sky), errors)
+            self.add_steps(graph, Some(sky))
         } else {
             graph.import_texture("envmap.filtered", &self.filtered)
         }
@@ -308,13 +298,12 @@ impl EnvMapPass {
         &'a self,
         graph: &mut FrameGraph<'a>,
         sky: Option<&'a wgpu::Buffer>,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let mut source = self.import_source(graph);
         if let Some(sky) = sky {
-            source = self.add_capture(graph, source, sky, errors);
+            source = self.add_capture(graph, source, sky);
         }
-        self.add_mips_and_filter(graph, source, errors)
+        self.add_mips_and_filter(graph, source)
     }
 
     /// The source cube in `graph` (for passes that fill its level 0).
@@ -332,19 +321,13 @@ impl EnvMapPass {
         &'a self,
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let source = self.add_mips(graph, source, errors);
-        self.add_filter(graph, source, errors)
+        let source = self.add_mips(graph, source);
+        self.add_filter(graph, source)
     }
 
     /// `envmap.mips`: the box-filtered chain of the source cube below level 0.
-    fn add_mips<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        source: TextureHandle,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
+    fn add_mips<'a>(&'a self, graph: &mut FrameGraph<'a>, source: TextureHandle) -> TextureHandle {
         let size = self.size;
         let mut pass = graph.add_pass("envmap.mips");
         pass.read(source, TextureAccess::Sampled);
@@ -361,14 +344,13 @@ impl EnvMapPass {
                         ("child", wgpu::BindingResource::TextureView(&child)),
                     ],
                 );
-                let Some(bg) = errors.record(bg) else {
-                    return;
-                };
+                let bg = bg?;
                 let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
                 cp.set_pipeline(&self.downsample);
                 cp.set_bind_group(0, &bg, &[]);
                 dispatch_faces(&mut cp, (size >> mip).max(1));
             }
+            Ok(())
         });
         source
     }
@@ -378,7 +360,6 @@ impl EnvMapPass {
         &'a self,
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let filtered = graph.import_texture("envmap.filtered", &self.filtered);
         let size = self.size;
@@ -409,14 +390,13 @@ impl EnvMapPass {
                         ("out_texture", wgpu::BindingResource::TextureView(&target)),
                     ],
                 );
-                let Some(bg) = errors.record(bg) else {
-                    return;
-                };
+                let bg = bg?;
                 let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
                 cp.set_pipeline(if mip == 0 { &self.copy } else { &self.filter });
                 cp.set_bind_group(0, &bg, &[]);
                 dispatch_faces(&mut cp, (size >> mip).max(1));
             }
+            Ok(())
         });
         filtered
     }
@@ -432,19 +412,15 @@ impl EnvMapPass {
     ) -> Result<(f64, f64), crate::Error> {
         let mut pool = crate::graph::TexturePool::new();
         let mut run = |filter: bool| -> Result<f64, crate::Error> {
-            let errors = FrameErrors::default();
             let mut graph = FrameGraph::new();
             let source = self.import_source(&mut graph);
             let out = if filter {
-                self.add_filter(&mut graph, source, &errors)
+                self.add_filter(&mut graph, source)
             } else {
-                self.add_mips(&mut graph, source, &errors)
+                self.add_mips(&mut graph, source)
             };
             graph.mark_output(out);
             let commands = graph.compile()?.execute(&ctx.device, &mut pool, None)?;
-            if let Some(e) = errors.take_first() {
-                return Err(e.into());
-            }
             ctx.wait("envmap timing")?;
             let start = std::time::Instant::now();
             ctx.queue.submit([commands]);
@@ -468,7 +444,6 @@ impl EnvMapPass {
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
         sky: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let size = self.size;
         let mut pass = graph.add_pass("envmap.capture");
@@ -485,13 +460,15 @@ impl EnvMapPass {
                     ),
                 ],
             );
-            if let Some(bg) = errors.record(bg) {
+            let bg = bg?;
+            {
                 let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
                 cp.set_pipeline(&self.capture);
                 cp.set_bind_group(0, &bg, &[]);
                 let n = size.div_ceil(WORKGROUP);
                 cp.dispatch_workgroups(n, n, 6);
             }
+            Ok(())
         });
         source
     }

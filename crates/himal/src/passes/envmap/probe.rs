@@ -10,9 +10,9 @@ use glam::Vec3;
 
 use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::uniforms::ViewUniform;
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
 use crate::passes::gbuffer::{ALBEDO_FORMAT, DEPTH_FORMAT, FRAME_FORMAT, GBuffer, MATERIAL_FORMAT};
-use crate::renderer::uniforms::ViewUniform;
 use crate::scene::Camera;
 
 /// (forward, up) of the cube faces +X, -X, +Y, -Y, +Z, -Z (Vulkan convention).
@@ -215,6 +215,7 @@ impl ProbeSet {
                     },
                 );
             }
+            Ok(())
         });
         for o in &outputs {
             graph.mark_output(*o);
@@ -247,44 +248,28 @@ impl ProbeSet {
         }
     }
 
-    /// Writes relit face `hdr` (camera layout) into layer `face` of `source`.
+    /// Writes relit face `hdr` (camera layout) into layer `face` of level 0 of `source`.
     pub fn add_mirror<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         face: usize,
         hdr: TextureHandle,
         source: TextureHandle,
-        source_level0: &'a wgpu::TextureView,
-        errors: &'a crate::frame::FrameErrors,
     ) -> TextureHandle {
-        let mut pass = graph.add_pass("mirror");
-        pass.read(hdr, TextureAccess::Sampled);
-        let source = pass.write(source, TextureAccess::StorageWrite);
-        let size = self.size;
-        pass.execute(move |ctx| {
-            let bg = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    (
-                        "face_hdr",
-                        wgpu::BindingResource::TextureView(ctx.view(hdr)),
-                    ),
-                    (
-                        "out_texture",
-                        wgpu::BindingResource::TextureView(source_level0),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
-                cp.set_pipeline(&self.mirror[face]);
-                cp.set_bind_group(0, &bg, &[]);
-                let n = size.div_ceil(8);
-                cp.dispatch_workgroups(n, n, 1);
-            }
-        });
-        source
+        let level0 = wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            base_mip_level: 0,
+            mip_level_count: Some(1),
+            ..Default::default()
+        };
+        let n = self.size.div_ceil(8);
+        graph
+            .compute("mirror", &self.program)
+            .compute_pipeline(Ok(self.mirror[face].clone()))
+            .read("face_hdr", hdr)
+            .storage_view("out_texture", source, level0)
+            .dispatch([n, n, 1])
+            .storage[0]
     }
 }
 

@@ -13,14 +13,13 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::{Draw, SceneGpu, vertex_layout};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
-use crate::renderer::scene_gpu::{Draw, SceneGpu, vertex_layout};
 
 /// A forward permutation: which fragment entry and whether back faces are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -177,22 +176,12 @@ impl ForwardPass {
         hdr: TextureHandle,
         depth: TextureHandle,
         inputs: ForwardInputs<'a>,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let scene = inputs.scene;
         let mut hdr = hdr;
         if !scene.draws_emissive.is_empty() {
             let draws: Vec<(Draw, usize)> = scene.draws_emissive.clone();
-            hdr = self.add_pass(
-                graph,
-                "forward.emissive",
-                true,
-                hdr,
-                depth,
-                draws,
-                inputs,
-                errors,
-            );
+            hdr = self.add_pass(graph, "forward.emissive", true, hdr, depth, draws, inputs);
         }
         if !scene.draws_blend.is_empty() {
             let mut draws: Vec<(Draw, usize)> = self
@@ -209,16 +198,7 @@ impl ForwardPass {
                     .map(|(d, m, _)| (d.clone(), *m))
                     .collect();
             }
-            hdr = self.add_pass(
-                graph,
-                "forward.blend",
-                false,
-                hdr,
-                depth,
-                draws,
-                inputs,
-                errors,
-            );
+            hdr = self.add_pass(graph, "forward.blend", false, hdr, depth, draws, inputs);
         }
         hdr
     }
@@ -233,7 +213,6 @@ impl ForwardPass {
         depth: TextureHandle,
         draws: Vec<(Draw, usize)>,
         inputs: ForwardInputs<'a>,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let mut pass = graph.add_pass(id);
         pass.read(depth, TextureAccess::DepthRead);
@@ -244,11 +223,11 @@ impl ForwardPass {
         let pipelines = &self.pipelines;
         pass.execute(move |ctx| {
             let scene = inputs.scene;
-            let Some(m) = &scene.materials else { return };
-            let Some(groups) = errors.record(m.bind_groups(&self.program, ctx.device)) else {
-                return;
+            let Some(m) = &scene.materials else {
+                return Ok(());
             };
-            let Some(frame_group) = errors.record(self.program.bind(
+            let groups = m.bind_groups(&self.program, ctx.device)?;
+            let frame_group = self.program.bind(
                 ctx.device,
                 0,
                 &[
@@ -268,9 +247,7 @@ impl ForwardPass {
                         wgpu::BindingResource::TextureView(&inputs.envmap.dfg_view),
                     ),
                 ],
-            )) else {
-                return;
-            };
+            )?;
             let label = ctx.pass_id().to_string();
             let (target, depth_view) = (ctx.view(hdr), ctx.view(depth));
             let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -305,15 +282,15 @@ impl ForwardPass {
                     double_sided: binding.double_sided,
                 };
                 let Some(pipeline) = pipelines.get(&key) else {
-                    errors.record::<()>(Err(GpuError::Other(format!(
+                    return Err(GpuError::Other(format!(
                         "forward permutation {key:?} was not prepared"
-                    ))));
-                    return;
+                    )));
                 };
                 rp.set_pipeline(pipeline);
                 rp.set_bind_group(1, group, &[]);
                 SceneGpu::draw_list(&mut rp, std::slice::from_ref(draw));
             }
+            Ok(())
         });
         hdr
     }

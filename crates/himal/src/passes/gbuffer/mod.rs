@@ -9,12 +9,11 @@
 
 use std::collections::HashMap;
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::{SceneGpu, vertex_layout};
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::target;
-use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -185,7 +184,6 @@ impl GBufferPass {
         view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
         mip_bias: bool,
-        errors: &'a FrameErrors,
     ) -> GBuffer {
         let (w, h) = size;
         let albedo =
@@ -208,26 +206,20 @@ impl GBufferPass {
         let pipelines = &self.pipelines;
         pass.execute(move |ctx| {
             let Some(vertex) = pipelines.get(&GBufferKey::VERTEX) else {
-                errors.record::<()>(Err(GpuError::Other(
-                    "G-buffer pipeline not prepared".into(),
-                )));
-                return;
+                return Err(GpuError::Other("G-buffer pipeline not prepared".into()));
             };
             let materials = match &scene.materials {
-                Some(m) => errors.record(m.bind_groups(&self.textured, ctx.device)),
-                None => Some(Vec::new()),
+                Some(m) => m.bind_groups(&self.textured, ctx.device)?,
+                None => Vec::new(),
             };
-            let Some(materials) = materials else { return };
-            let Some(bind_group) = errors.record(self.program.bind(
+            let bind_group = self.program.bind(
                 ctx.device,
                 0,
                 &[
                     ("view", view.as_entire_binding()),
                     ("objects", scene.objects.as_entire_binding()),
                 ],
-            )) else {
-                return;
-            };
+            )?;
             let colour = |v| {
                 Some(wgpu::RenderPassColorAttachment {
                     view: v,
@@ -274,10 +266,9 @@ impl GBufferPass {
                     };
                     let key = GBufferKey::textured(binding.double_sided, mip_bias);
                     let Some(pipeline) = pipelines.get(&key) else {
-                        errors.record::<()>(Err(GpuError::Other(format!(
+                        return Err(GpuError::Other(format!(
                             "G-buffer permutation {key:?} was not prepared"
-                        ))));
-                        return;
+                        )));
                     };
                     rp.set_pipeline(pipeline);
                     rp.set_bind_group(1, group, &[]);
@@ -286,15 +277,15 @@ impl GBufferPass {
             }
             if !scene.draws_vegetation.is_empty() {
                 let Some(pipeline) = pipelines.get(&GBufferKey::VEGETATION) else {
-                    errors.record::<()>(Err(GpuError::Other(
+                    return Err(GpuError::Other(
                         "G-buffer vegetation permutation was not prepared".into(),
-                    )));
-                    return;
+                    ));
                 };
                 rp.set_pipeline(pipeline);
                 rp.set_bind_group(0, &bind_group, &[]);
                 SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
             }
+            Ok(())
         });
         out
     }

@@ -6,13 +6,10 @@
 
 pub mod reference;
 
-use std::collections::HashMap;
-
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
+use crate::graph::{Fallback, FrameGraph, TextureDesc, TextureHandle};
+use crate::passes::common::target;
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::skyocc::{SkyOccFrame, SkyOccPass};
@@ -81,164 +78,82 @@ impl LightingKey {
     }
 }
 
-/// Uniform buffers the lighting pass reads (owned by the renderer).
+/// What the lighting pass reads besides the G-buffer and the frame
+/// constants (view, lighting, sky).
 pub struct LightingInputs<'a> {
-    pub view: &'a wgpu::Buffer,
-    pub lighting: &'a wgpu::Buffer,
-    pub sky: &'a wgpu::Buffer,
-    /// Shadow mask of `shadows.mask`, R = sun visibility (1x1 white when off).
-    pub shadow_mask: TextureHandle,
-    /// Screen-space AO (`.x`); a 1x1 white placeholder when AO is off.
-    pub ao: TextureHandle,
+    /// Shadow mask of `shadows.mask`, R = sun visibility; `None`: unshadowed.
+    pub shadow_mask: Option<TextureHandle>,
+    /// Screen-space AO (`.x`); `None`: unoccluded.
+    pub ao: Option<TextureHandle>,
     /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
     pub lights: &'a wgpu::Buffer,
-    /// Filtered environment cube and DFG table (L4); `env` orders the read
-    /// after this frame's filtering, if any.
+    /// Filtered environment cube (L4, `envmap.filtered` after this
+    /// frame's filtering, if any) and the pass's DFG table and sampler.
     pub envmap: &'a EnvMapPass,
     pub env: TextureHandle,
-    /// Sky occlusion pool (L2): handles order the read after this frame's
-    /// sector updates; bound whatever the permutation.
+    /// Sky occlusion pool (L2) after this frame's sector updates.
     pub skyocc: &'a SkyOccPass,
     pub skyocc_frame: SkyOccFrame,
-    /// The permutation to draw with (prepared beforehand).
+    /// The permutation to draw with.
     pub key: LightingKey,
 }
 
 pub struct LightingPass {
     program: Program,
-    pipelines: HashMap<LightingKey, wgpu::RenderPipeline>,
 }
 
 impl LightingPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let mut pass = Self {
+        let pass = Self {
             program: Program::new(ctx, "passes/lighting/deferred.wgsl")?,
-            pipelines: HashMap::new(),
         };
-        pass.prepare(ctx, LightingKey::default())?;
+        pass.pipeline(ctx, LightingKey::default())?;
         Ok(pass)
     }
 
-    /// Fetches the pipeline of permutation `key` (memory, disk or compile).
-    pub fn prepare(&mut self, ctx: &GpuContext, key: LightingKey) -> Result<(), GpuError> {
-        if self.pipelines.contains_key(&key) {
-            return Ok(());
-        }
+    /// The pipeline of permutation `key` (memory, disk or compile).
+    pub fn pipeline(
+        &self,
+        ctx: &GpuContext,
+        key: LightingKey,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [target(HDR_FORMAT)];
         let mut spec = RenderSpec::fullscreen("lighting.deferred", &targets);
         let constants = key.constants();
         spec.constants = &constants;
-        let pipeline = self.program.render_pipeline(ctx, &spec)?;
-        self.pipelines.insert(key, pipeline);
-        Ok(())
+        self.program.render_pipeline(ctx, &spec)
     }
 
     /// Shades the G-buffer into a new HDR target (sky pixels stay black).
     pub fn add<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         gbuffer: GBuffer,
         inputs: LightingInputs<'a>,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let hdr = graph.create_texture("hdr", TextureDesc::new_2d(size.0, size.1, HDR_FORMAT));
-        let mut pass = graph.add_pass("lighting.deferred");
-        for t in [
-            gbuffer.albedo,
-            gbuffer.frame,
-            gbuffer.material,
-            gbuffer.depth,
-            inputs.shadow_mask,
-            inputs.ao,
-            inputs.env,
-            inputs.skyocc_frame.vis,
-            inputs.skyocc_frame.heights,
-        ] {
-            pass.read(t, TextureAccess::Sampled);
-        }
-        let hdr = pass.write(hdr, TextureAccess::ColorAttachment);
-        let pipeline = self.pipelines.get(&inputs.key);
-        pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "lighting permutation {:?} was not prepared",
-                    inputs.key
-                ))));
-                return;
-            };
-            let sky = inputs.skyocc.bindings();
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", inputs.view.as_entire_binding()),
-                    ("lighting", inputs.lighting.as_entire_binding()),
-                    ("sky", inputs.sky.as_entire_binding()),
-                    (
-                        "gbuffer_albedo",
-                        wgpu::BindingResource::TextureView(ctx.view(gbuffer.albedo)),
-                    ),
-                    (
-                        "gbuffer_frame",
-                        wgpu::BindingResource::TextureView(ctx.view(gbuffer.frame)),
-                    ),
-                    (
-                        "gbuffer_material",
-                        wgpu::BindingResource::TextureView(ctx.view(gbuffer.material)),
-                    ),
-                    (
-                        "depth",
-                        wgpu::BindingResource::TextureView(ctx.view(gbuffer.depth)),
-                    ),
-                    (
-                        "shadow_mask",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.shadow_mask)),
-                    ),
-                    (
-                        "ao",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.ao)),
-                    ),
-                    ("lights", inputs.lights.as_entire_binding()),
-                    (
-                        "env_specular",
-                        wgpu::BindingResource::TextureView(&inputs.envmap.filtered_cube),
-                    ),
-                    (
-                        "env_sampler",
-                        wgpu::BindingResource::Sampler(&inputs.envmap.sampler),
-                    ),
-                    (
-                        "dfg_lut",
-                        wgpu::BindingResource::TextureView(&inputs.envmap.dfg_view),
-                    ),
-                    (
-                        "skyocc_table",
-                        wgpu::BindingResource::TextureView(sky.table),
-                    ),
-                    ("skyocc_vis", wgpu::BindingResource::TextureView(sky.vis)),
-                    (
-                        "skyocc_heights_load",
-                        wgpu::BindingResource::TextureView(sky.heights),
-                    ),
-                    (
-                        "skyocc_sampler",
-                        wgpu::BindingResource::Sampler(sky.sampler),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bind_group) {
-                let target = ctx.view(hdr);
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    None,
-                );
-            }
-        });
-        hdr
+        let envmap = inputs.envmap;
+        let sky = inputs.skyocc.bindings();
+        graph
+            .fullscreen("lighting.deferred", &self.program)
+            .pipeline(self.pipeline(ctx, inputs.key))
+            .read("gbuffer_albedo", gbuffer.albedo)
+            .read("gbuffer_frame", gbuffer.frame)
+            .read("gbuffer_material", gbuffer.material)
+            .read("depth", gbuffer.depth)
+            .optional("shadow_mask", inputs.shadow_mask, Fallback::White)
+            .optional("ao", inputs.ao, Fallback::White)
+            .uniform("lights", inputs.lights)
+            .read_cube("env_specular", inputs.env)
+            .sampler("env_sampler", &envmap.sampler)
+            .external("dfg_lut", &envmap.dfg_view)
+            .external("skyocc_table", sky.table)
+            .read_array("skyocc_vis", inputs.skyocc_frame.vis)
+            .read_array("skyocc_heights_load", inputs.skyocc_frame.heights)
+            .sampler("skyocc_sampler", sky.sampler)
+            .color(hdr, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
 }

@@ -12,10 +12,9 @@ pub use bloom::{BloomInputs, BloomPass};
 pub use params::{AdaptationSettings, BloomSettings, FrameDelta, PostUniform};
 pub use tonemap::{PostInputs, TonemapKey, TonemapPass};
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureHandle};
 
 /// Tile edge in pixels of `post.luminance` (16x16 threads, 4x4 pixels each).
 pub const TILE: u32 = 64;
@@ -74,40 +73,22 @@ impl LuminancePass {
         hdr: TextureHandle,
         size: (u32, u32),
         buffers: &'a LuminanceBuffers,
-        errors: &'a FrameErrors,
     ) -> BufferHandle {
         let partials = graph.import_buffer("luminance.partials", &buffers.partials);
         let result = graph.import_buffer("luminance.result", &buffers.result);
-        let mut pass = graph.add_pass("post.luminance");
-        pass.read(hdr, TextureAccess::Sampled);
-        pass.write_buffer(partials, BufferAccess::StorageWrite);
-        let result = pass.write_buffer(result, BufferAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("hdr", wgpu::BindingResource::TextureView(ctx.view(hdr))),
-                    ("partials", buffers.partials.as_entire_binding()),
-                    ("result", buffers.result.as_entire_binding()),
-                ],
-            );
-            let Some(bg) = errors.record(bind_group) else {
-                return;
-            };
-            let mut cp = ctx
-                .encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("post.luminance"),
-                    timestamp_writes: None,
-                });
-            cp.set_bind_group(0, &bg, &[]);
-            cp.set_pipeline(&self.partial);
-            cp.dispatch_workgroups(size.0.div_ceil(TILE), size.1.div_ceil(TILE), 1);
-            cp.set_pipeline(&self.last);
-            cp.dispatch_workgroups(1, 1, 1);
-        });
-        result
+        let last = &self.last;
+        graph
+            .compute("post.luminance", &self.program)
+            .compute_pipeline(Ok(self.partial.clone()))
+            .read("hdr", hdr)
+            .write_buffer("partials", partials)
+            .write_buffer("result", result)
+            .dispatch_with(move |cp| {
+                cp.dispatch_workgroups(size.0.div_ceil(TILE), size.1.div_ceil(TILE), 1);
+                cp.set_pipeline(last);
+                cp.dispatch_workgroups(1, 1, 1);
+            })
+            .buffer(result)
     }
 }
 
@@ -143,39 +124,18 @@ impl AdaptPass {
         &'a self,
         graph: &mut FrameGraph<'a>,
         measured: BufferHandle,
-        measured_buffer: &'a wgpu::Buffer,
         adapted_buffer: &'a wgpu::Buffer,
         post: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
     ) -> BufferHandle {
         let adapted = graph.import_buffer("adapt.state", adapted_buffer);
-        let mut pass = graph.add_pass("post.adapt");
-        pass.read_buffer(measured, BufferAccess::StorageRead);
-        let adapted = pass.write_buffer(adapted, BufferAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("post", post.as_entire_binding()),
-                    ("measured", measured_buffer.as_entire_binding()),
-                    ("adapted", adapted_buffer.as_entire_binding()),
-                ],
-            );
-            let Some(bg) = errors.record(bind_group) else {
-                return;
-            };
-            let mut cp = ctx
-                .encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("post.adapt"),
-                    timestamp_writes: None,
-                });
-            cp.set_bind_group(0, &bg, &[]);
-            cp.set_pipeline(&self.pipeline);
-            cp.dispatch_workgroups(1, 1, 1);
-        });
-        adapted
+        graph
+            .compute("post.adapt", &self.program)
+            .compute_pipeline(Ok(self.pipeline.clone()))
+            .uniform("post", post)
+            .read_buffer("measured", measured, BufferAccess::StorageRead)
+            .write_buffer("adapted", adapted)
+            .dispatch([1, 1, 1])
+            .buffer(adapted)
     }
 }
 
@@ -185,8 +145,6 @@ pub struct PostFrame<'a> {
     pub uniform: &'a wgpu::Buffer,
     /// Adapted-luminance state (persistent).
     pub adapted: &'a wgpu::Buffer,
-    /// 1x1 texture bound in place of the bloom when bloom is off.
-    pub bloom_placeholder: &'a wgpu::Texture,
     /// Kawase passes; `None` = no bloom chain.
     pub bloom_passes: Option<u32>,
     /// Expose for the adapted luminance (else for this frame's log-average).

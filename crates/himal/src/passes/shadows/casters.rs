@@ -1,7 +1,7 @@
 //! Shadow casters on the CPU: per-object bounds, which objects are static
 //! (S2) and the per-map draw lists culled against a sun view.
 
-use crate::renderer::scene_gpu::Draw;
+use crate::gpu_scene::Draw;
 use crate::scene::{Aabb, Object, Scene};
 
 use super::cascades::ShadowFit;

@@ -6,7 +6,7 @@ use glam::Mat4;
 use super::casters::DrawLists;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::renderer::scene_gpu::{SceneGpu, vertex_layout};
+use crate::gpu_scene::{SceneGpu, vertex_layout};
 
 /// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
 const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [

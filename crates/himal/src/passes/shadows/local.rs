@@ -8,7 +8,7 @@ use glam::{Mat4, Vec3};
 
 use super::atlas::{AtlasAllocator, AtlasRequest, AtlasTile, importance};
 use super::casters::{Casters, DrawLists};
-use crate::renderer::scene_gpu::SceneGpu;
+use crate::gpu_scene::SceneGpu;
 use crate::scene::{Aabb, LightDesc, LightKind};
 
 /// Twin of `LocalLight` in `shaders/shadow.wgsl`.
@@ -202,7 +202,7 @@ pub fn plan(
 /// (not all eight corners beyond one clip plane): a cube face sees about a
 /// sixth of the light's sphere.
 fn cull_frustum(lists: &DrawLists, casters: &Casters, view_proj: Mat4) -> DrawLists {
-    let inside = |d: &&crate::renderer::scene_gpu::Draw| {
+    let inside = |d: &&crate::gpu_scene::Draw| {
         let Some(b) = casters.bounds.get(d.object as usize) else {
             return false;
         };

@@ -18,17 +18,14 @@ pub mod reference;
 pub mod settings;
 pub mod static_map;
 
-use std::collections::HashMap;
-
 use glam::{Mat4, Vec3};
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::SceneGpu;
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
 use crate::passes::common::{draw_fullscreen, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
-use crate::renderer::scene_gpu::SceneGpu;
 use crate::scene::{Camera, LightDesc, Scene};
 use atlas::AtlasAllocator;
 pub use cascades::{CASCADES, ShadowFit};
@@ -109,7 +106,6 @@ pub struct ShadowPass {
     hero_blend: wgpu::RenderPipeline,
     params: wgpu::Buffer,
     view_program: Program,
-    debug_views: HashMap<(ShadowView, wgpu::TextureFormat), wgpu::RenderPipeline>,
     /// Comparison sampler of every map.
     pub sampler: wgpu::Sampler,
     /// 1x1 depth bound where a map is absent.
@@ -234,7 +230,6 @@ impl ShadowPass {
             hero_blend,
             params,
             view_program,
-            debug_views: HashMap::new(),
             sampler,
             placeholder,
             casters: Casters::from_scene(scene),
@@ -252,23 +247,14 @@ impl ShadowPass {
         })
     }
 
-    /// Creates the pipeline of a shadow debug view in `format`.
-    pub fn prepare_view(
-        &mut self,
+    /// The pipeline of a shadow debug view in `format`.
+    pub fn view_pipeline(
+        &self,
         ctx: &GpuContext,
         view: ShadowView,
         format: wgpu::TextureFormat,
-    ) -> Result<(), GpuError> {
-        if self.debug_views.contains_key(&(view, format)) {
-            return Ok(());
-        }
-        let id = match view {
-            ShadowView::Mask => 1,
-            ShadowView::Cascades => 2,
-        };
-        let pipeline = view_pipeline(ctx, &self.view_program, "shadows.view", id, format)?;
-        self.debug_views.insert((view, format), pipeline);
-        Ok(())
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        view_pipeline(ctx, &self.view_program, "shadows.view", view.id(), format)
     }
 
     /// Plans this frame (fits, culled draw lists, the static slice, the hero)
@@ -442,7 +428,7 @@ impl ShadowPass {
                 s.hero_resolution,
             );
             let mut lists = DrawLists::default();
-            let is_hero = |d: &&crate::renderer::scene_gpu::Draw| d.object as usize == h;
+            let is_hero = |d: &&crate::gpu_scene::Draw| d.object as usize == h;
             lists
                 .opaque
                 .extend(scene.draws_opaque.iter().filter(is_hero).cloned());
@@ -489,8 +475,8 @@ impl ShadowPass {
     }
 
     /// Every static object's draws, opaque first (the static map's fill order).
-    fn static_draws(&self, scene: &SceneGpu) -> Vec<(crate::renderer::scene_gpu::Draw, bool)> {
-        let keep = |d: &crate::renderer::scene_gpu::Draw| {
+    fn static_draws(&self, scene: &SceneGpu) -> Vec<(crate::gpu_scene::Draw, bool)> {
+        let keep = |d: &crate::gpu_scene::Draw| {
             !self
                 .casters
                 .moving
@@ -513,10 +499,7 @@ impl ShadowPass {
 }
 
 /// The draws of `all[range]` split back into opaque and vegetation lists.
-fn take_range(
-    all: &[(crate::renderer::scene_gpu::Draw, bool)],
-    range: &std::ops::Range<usize>,
-) -> DrawLists {
+fn take_range(all: &[(crate::gpu_scene::Draw, bool)], range: &std::ops::Range<usize>) -> DrawLists {
     let mut lists = DrawLists::default();
     for (d, veg) in &all[range.start.min(all.len())..range.end.min(all.len())] {
         if *veg {

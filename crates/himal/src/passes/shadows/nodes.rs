@@ -2,7 +2,7 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::passes::common::record_view;
+use crate::passes::common::view_pipeline_for;
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
@@ -14,7 +14,6 @@ impl ShadowPass {
         gbuffer: GBuffer,
         view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
-        errors: &'a FrameErrors,
     ) -> Option<TextureHandle> {
         let plan = self.plan.as_ref()?;
         let (g_depth, g_frame) = (gbuffer.depth, gbuffer.frame);
@@ -35,11 +34,12 @@ impl ShadowPass {
                         ("objects", scene.objects.as_entire_binding()),
                     ],
                 );
-                let Some(bg) = errors.record(bg) else { return };
+                let bg = bg?;
                 let target = layer_view(ctx.texture(map), i as u32, false);
                 let label = ctx.pass_id();
                 self.depth32
                     .record(ctx.encoder, label, &target, true, &bg, scene, lists);
+                Ok(())
             });
         }
         // The static slice writes the back map, outside the graph's pool.
@@ -65,11 +65,12 @@ impl ShadowPass {
                         ("objects", scene.objects.as_entire_binding()),
                     ],
                 );
-                let Some(bg) = errors.record(bg) else { return };
+                let bg = bg?;
                 let target = layer_view(ctx.texture(h), 0, false);
                 let label = ctx.pass_id();
                 self.depth16
                     .record(ctx.encoder, label, &target, update.clear, &bg, scene, lists);
+                Ok(())
             });
         }
         let hero_map = plan.hero.as_ref().map(|(_, lists)| {
@@ -86,11 +87,12 @@ impl ShadowPass {
                         ("objects", scene.objects.as_entire_binding()),
                     ],
                 );
-                let Some(bg) = errors.record(bg) else { return };
+                let bg = bg?;
                 let target = layer_view(ctx.texture(map), 0, false);
                 let label = ctx.pass_id();
                 self.depth32
                     .record(ctx.encoder, label, &target, true, &bg, scene, lists);
+                Ok(())
             });
             map
         });
@@ -101,7 +103,7 @@ impl ShadowPass {
                 graph.create_texture("shadow.atlas", TextureDesc::new_2d(n, n, SHADOW_FORMAT));
             let mut pass = graph.add_pass("shadows.atlas");
             let map = pass.write(map, TextureAccess::DepthAttachment);
-            pass.execute(move |ctx| self.record_atlas(ctx, map, scene, errors));
+            pass.execute(move |ctx| self.record_atlas(ctx, map, scene));
             map
         });
 
@@ -171,7 +173,7 @@ impl ShadowPass {
                     ),
                 ],
             );
-            let Some(bg) = errors.record(bg) else { return };
+            let bg = bg?;
             let target = ctx.view(mask);
             draw_fullscreen(
                 ctx,
@@ -179,11 +181,11 @@ impl ShadowPass {
                 &bg,
                 target,
                 wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                None,
             );
             if hero_map.is_some() {
-                draw_fullscreen(ctx, &self.hero_blend, &bg, target, wgpu::LoadOp::Load, None);
+                draw_fullscreen(ctx, &self.hero_blend, &bg, target, wgpu::LoadOp::Load);
             }
+            Ok(())
         });
         Some(mask)
     }
@@ -194,9 +196,10 @@ impl ShadowPass {
         ctx: &mut crate::graph::PassContext<'_>,
         map: TextureHandle,
         scene: &SceneGpu,
-        errors: &FrameErrors,
-    ) {
-        let Some(plan) = &self.plan else { return };
+    ) -> Result<(), GpuError> {
+        let Some(plan) = &self.plan else {
+            return Ok(());
+        };
         let mut groups = Vec::with_capacity(plan.projectors.len());
         for buffer in &self.atlas_views[..plan.projectors.len()] {
             let bg = self.depth_program.bind(
@@ -207,7 +210,7 @@ impl ShadowPass {
                     ("objects", scene.objects.as_entire_binding()),
                 ],
             );
-            let Some(bg) = errors.record(bg) else { return };
+            let bg = bg?;
             groups.push(bg);
         }
         let target = ctx.view(map);
@@ -247,42 +250,29 @@ impl ShadowPass {
                 SceneGpu::draw_list(&mut rp, &p.draws.vegetation);
             }
         }
+        Ok(())
     }
 
     /// `--view shadow-mask | cascades` from the mask into `output`.
-    #[allow(clippy::too_many_arguments)]
     pub fn add_view<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         kind: ShadowView,
         mask: TextureHandle,
         depth: TextureHandle,
-        view: &'a wgpu::Buffer,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let format = graph.texture_desc(output).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.debug_views.get(&(kind, f)));
-        let mut pass = graph.add_pass("shadows.view");
-        pass.read(mask, TextureAccess::Sampled);
-        pass.read(depth, TextureAccess::Sampled);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let what = || format!("shadow view {kind:?}");
-            record_view(ctx, pipeline, what, output, errors, |ctx| {
-                let tv = wgpu::BindingResource::TextureView;
-                self.view_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("view", view.as_entire_binding()),
-                        ("params", self.params.as_entire_binding()),
-                        ("depth", tv(ctx.view(depth))),
-                        ("mask", tv(ctx.view(mask))),
-                    ],
-                )
-            });
-        });
-        output
+        let id = kind.id();
+        let pipeline =
+            view_pipeline_for(ctx, graph, &self.view_program, "shadows.view", id, output);
+        graph
+            .fullscreen("shadows.view", &self.view_program)
+            .pipeline(pipeline)
+            .uniform("params", &self.params)
+            .read("depth", depth)
+            .read("mask", mask)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
 }

@@ -119,3 +119,13 @@ pub enum ShadowView {
     /// yellow = cascades 0-3, magenta = static map, grey = none.
     Cascades,
 }
+
+impl ShadowView {
+    /// The view shader's `VIEW` constant.
+    pub fn id(self) -> u32 {
+        match self {
+            ShadowView::Mask => 1,
+            ShadowView::Cascades => 2,
+        }
+    }
+}

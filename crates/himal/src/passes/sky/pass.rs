@@ -5,12 +5,11 @@
 //! `passes/sky/bruneton/capture.wgsl`; CPU twins: `passes/sky/preetham.rs`,
 //! `passes/sky/bruneton/reference.rs`.
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{FrameGraph, TextureHandle};
 use crate::graph::{PassTimer, PassTiming};
-use crate::passes::common::{DepthTest, draw_fullscreen, target};
+use crate::passes::common::target;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
 use crate::passes::sky::bruneton::{
@@ -218,37 +217,33 @@ impl SkyPass {
     }
 
     /// `sky.capture`: the Bruneton sky (from `sky`'s sun direction) into
-    /// `target`, mip 0 of the environment source cube behind `source`.
+    /// mip 0 of the environment source cube behind `source`, edge `size`.
     /// Call only when [`SkyPass::draws_bruneton`].
     pub fn add_capture<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
-        target: &'a wgpu::TextureView,
+        size: u32,
         sky: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
-        let mut pass = graph.add_pass("sky.capture");
-        let source = pass.write(source, TextureAccess::StorageWrite);
-        let size = graph_size(target);
-        pass.execute(move |ctx| {
-            let Some(b) = &self.bruneton else {
-                return;
-            };
-            let mut entries = b
-                .views
-                .bindings(&b.tables.params, &b.tables.sampler)
-                .to_vec();
-            entries.push(("sky", sky.as_entire_binding()));
-            entries.push(("out_texture", wgpu::BindingResource::TextureView(target)));
-            if let Some(bg) = errors.record(b.capture_program.bind(ctx.device, 0, &entries)) {
-                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
-                cp.set_pipeline(&b.capture);
-                cp.set_bind_group(0, &bg, &[]);
-                cp.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6);
-            }
-        });
-        source
+    ) -> Result<TextureHandle, GpuError> {
+        let b = self
+            .bruneton
+            .as_ref()
+            .ok_or_else(|| GpuError::Other("sky.capture without Bruneton tables".into()))?;
+        let level0 = wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            base_mip_level: 0,
+            mip_level_count: Some(1),
+            ..Default::default()
+        };
+        let written = graph
+            .compute("sky.capture", &b.capture_program)
+            .compute_pipeline(Ok(b.capture.clone()))
+            .externals(b.views.bindings(&b.tables.params, &b.tables.sampler))
+            .uniform("sky", sky)
+            .storage_view("out_texture", source, level0)
+            .dispatch([size.div_ceil(8), size.div_ceil(8), 6]);
+        Ok(written.storage[0])
     }
 
     /// Draws `image` (equirectangular, turned by `rotation` radians about +Y)
@@ -270,59 +265,36 @@ impl SkyPass {
         Ok(())
     }
 
+    /// Draws the sky where `depth` is clear into `hdr`, with the graph's
+    /// frame constants (`view`, and `sky` unless `sky` overrides it).
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         hdr: TextureHandle,
         depth: TextureHandle,
-        view: &'a wgpu::Buffer,
-        sky: &'a wgpu::Buffer,
-        errors: &'a FrameErrors,
+        sky: Option<&'a wgpu::Buffer>,
     ) -> TextureHandle {
-        let mut pass = graph.add_pass("sky");
-        pass.read(depth, TextureAccess::DepthRead);
-        let hdr = pass.write(hdr, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let (pipeline, image, sampler) = match &self.environment {
-                Some((p, i, s)) => (p, i, s),
-                None => (&self.pipeline, &self.placeholder.0, &self.placeholder.1),
-            };
-            let off = &self.tables_off;
-            let (pipeline, tables) = match &self.bruneton {
-                Some(b) if self.draws_bruneton() => (
-                    &b.pipeline,
-                    b.views.bindings(&b.tables.params, &b.tables.sampler),
-                ),
-                _ => (pipeline, off.views.bindings(&off.params, &off.sampler)),
-            };
-            let mut entries = vec![
-                ("view", view.as_entire_binding()),
-                ("sky", sky.as_entire_binding()),
-                ("environment", wgpu::BindingResource::TextureView(image)),
-                (
-                    "environment_sampler",
-                    wgpu::BindingResource::Sampler(sampler),
-                ),
-            ];
-            entries.extend(tables);
-            let bind_group = self.program.bind(ctx.device, 0, &entries);
-            if let Some(bg) = errors.record(bind_group) {
-                let (target, depth) = (ctx.view(hdr), ctx.view(depth));
-                draw_fullscreen(
-                    ctx,
-                    pipeline,
-                    &bg,
-                    target,
-                    wgpu::LoadOp::Load,
-                    Some(DepthTest { view: depth }),
-                );
-            }
-        });
-        hdr
+        let (pipeline, image, sampler) = match &self.environment {
+            Some((p, i, s)) => (p, i, s),
+            None => (&self.pipeline, &self.placeholder.0, &self.placeholder.1),
+        };
+        let off = &self.tables_off;
+        let (pipeline, tables) = match &self.bruneton {
+            Some(b) if self.draws_bruneton() => (
+                &b.pipeline,
+                b.views.bindings(&b.tables.params, &b.tables.sampler),
+            ),
+            _ => (pipeline, off.views.bindings(&off.params, &off.sampler)),
+        };
+        let mut node = graph
+            .fullscreen("sky", &self.program)
+            .pipeline(Ok(pipeline.clone()))
+            .external("environment", image)
+            .sampler("environment_sampler", sampler)
+            .externals(tables);
+        if let Some(sky) = sky {
+            node = node.uniform("sky", sky);
+        }
+        node.color(hdr, wgpu::LoadOp::Load).depth_test(depth).draw()
     }
-}
-
-/// Edge of a cube-face view's texture (the capture target is square).
-fn graph_size(target: &wgpu::TextureView) -> u32 {
-    target.texture().width()
 }

@@ -16,17 +16,14 @@ pub mod reference;
 mod resources;
 mod tools;
 
-use std::collections::HashMap;
-
 use glam::{Mat4, Vec2, Vec4};
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::{Draw, SceneGpu};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{record_view, view_pipeline};
+use crate::passes::common::{view_pipeline, view_pipeline_for};
 use crate::passes::gbuffer::GBuffer;
-use crate::renderer::scene_gpu::{Draw, SceneGpu};
 use crate::scene::{Aabb, Camera, Scene};
 use pool::{Sector, SectorPool, visible_sectors};
 pub use reference::{MARGIN_TEXELS, RENDER_TEXELS, SECTOR_TEXELS, TEXEL_SIZE};
@@ -103,7 +100,6 @@ pub struct SkyOccPass {
     smooth_program: Program,
     smooth: wgpu::ComputePipeline,
     view_program: Program,
-    views: HashMap<(SkyOccView, wgpu::TextureFormat), wgpu::RenderPipeline>,
     pool: SectorPool,
     textures: PoolTextures,
     work: Option<Intermediates>,
@@ -158,7 +154,6 @@ impl SkyOccPass {
             smooth_program,
             smooth,
             view_program: Program::new(ctx, "passes/skyocc/view.wgsl")?,
-            views: HashMap::new(),
             pool: SectorPool::new(POOL_LAYERS as usize),
             textures: PoolTextures::new(ctx, 1, 1),
             work: None,
@@ -172,18 +167,14 @@ impl SkyOccPass {
         })
     }
 
-    /// Builds the pipeline of a debug view.
-    pub fn prepare_view(
-        &mut self,
+    /// The pipeline of a debug view in `format`.
+    pub fn view_pipeline(
+        &self,
         ctx: &GpuContext,
         view: SkyOccView,
         format: wgpu::TextureFormat,
-    ) -> Result<(), GpuError> {
-        if !self.views.contains_key(&(view, format)) {
-            let p = view_pipeline(ctx, &self.view_program, "skyocc.view", view as u32, format)?;
-            self.views.insert((view, format), p);
-        }
-        Ok(())
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        view_pipeline(ctx, &self.view_program, "skyocc.view", view as u32, format)
     }
 
     /// Orthographic top-down projection of the rendered image at `origin`:
@@ -325,12 +316,7 @@ impl SkyOccPass {
 
     /// Adds this frame's sector updates (none when nothing is planned) and
     /// returns the pool textures lighting reads.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        scene: &'a SceneGpu,
-        errors: &'a FrameErrors,
-    ) -> SkyOccFrame {
+    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>, scene: &'a SceneGpu) -> SkyOccFrame {
         let mut vis = graph.import_texture("skyocc.vis", &self.textures.vis);
         let mut heights = graph.import_texture("skyocc.heights", &self.textures.heights);
         let Some(work) = self.work.as_ref().filter(|_| !self.jobs.is_empty()) else {
@@ -343,13 +329,15 @@ impl SkyOccPass {
         let raw = pass.write(raw, TextureAccess::ColorAttachment);
         let ground = pass.write(ground, TextureAccess::ColorAttachment);
         pass.execute(move |ctx| {
-            self.record_heightfields(ctx.encoder, ctx.device, scene, work, errors);
+            self.record_heightfields(ctx.encoder, ctx.device, scene, work)?;
+            Ok(())
         });
         let mut pass = graph.add_pass("skyocc.blur");
         pass.read(raw, TextureAccess::Sampled);
         let blurred = pass.write(blurred, TextureAccess::StorageWrite);
         pass.execute(move |ctx| {
-            errors.record(self.record_blur(ctx.encoder, ctx.device, work, self.jobs.len() as u32));
+            self.record_blur(ctx.encoder, ctx.device, work, self.jobs.len() as u32)?;
+            Ok(())
         });
         let mut pass = graph.add_pass("skyocc.visibility");
         pass.side_effect();
@@ -360,7 +348,8 @@ impl SkyOccPass {
         heights = pass.write(heights, TextureAccess::StorageWrite);
         pass.execute(move |ctx| {
             let n = self.jobs.len() as u32;
-            errors.record(self.record_visibility(ctx.encoder, ctx.device, work, n));
+            self.record_visibility(ctx.encoder, ctx.device, work, n)?;
+            Ok(())
         });
         SkyOccFrame { vis, heights }
     }
@@ -373,8 +362,7 @@ impl SkyOccPass {
         device: &wgpu::Device,
         scene: &SceneGpu,
         work: &Intermediates,
-        errors: &FrameErrors,
-    ) {
+    ) -> Result<(), GpuError> {
         let (bottom, _) = self.heights;
         for (i, job) in self.jobs.iter().enumerate() {
             let bg = self.height_program.bind(
@@ -385,7 +373,7 @@ impl SkyOccPass {
                     ("objects", scene.objects.as_entire_binding()),
                 ],
             );
-            let Some(bg) = errors.record(bg) else { return };
+            let bg = bg?;
             let depth = resources::layer_view(&work.depth, i as u32);
             for (target, draws) in [(&work.raw, &job.draws), (&work.ground, &job.ground_draws)] {
                 let color = resources::layer_view(target, i as u32);
@@ -426,6 +414,7 @@ impl SkyOccPass {
                 SceneGpu::draw_list(&mut rp, draws);
             }
         }
+        Ok(())
     }
 
     /// Blur along x (raw -> scratch), then y (scratch -> blurred), `n` layers.
@@ -517,45 +506,29 @@ impl SkyOccPass {
     }
 
     /// The debug view of the sky visibility or the bent normal into `output`.
-    #[allow(clippy::too_many_arguments)]
     pub fn add_view<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         kind: SkyOccView,
         frame: SkyOccFrame,
         gbuffer: GBuffer,
-        view: &'a wgpu::Buffer,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let format = graph.texture_desc(output).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.views.get(&(kind, f)));
-        let mut pass = graph.add_pass("skyocc.view");
-        for t in [gbuffer.frame, gbuffer.depth, frame.vis, frame.heights] {
-            pass.read(t, TextureAccess::Sampled);
-        }
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let what = || format!("sky occlusion view {kind:?}");
-            record_view(ctx, pipeline, what, output, errors, |ctx| {
-                let b = self.bindings();
-                let tv = wgpu::BindingResource::TextureView;
-                self.view_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("view", view.as_entire_binding()),
-                        ("gbuffer_frame", tv(ctx.view(gbuffer.frame))),
-                        ("depth", tv(ctx.view(gbuffer.depth))),
-                        ("skyocc_table", tv(b.table)),
-                        ("skyocc_vis", tv(b.vis)),
-                        ("skyocc_heights_load", tv(b.heights)),
-                        ("skyocc_sampler", wgpu::BindingResource::Sampler(b.sampler)),
-                    ],
-                )
-            });
-        });
-        output
+        let id = kind as u32;
+        let pipeline = view_pipeline_for(ctx, graph, &self.view_program, "skyocc.view", id, output);
+        let b = self.bindings();
+        graph
+            .fullscreen("skyocc.view", &self.view_program)
+            .pipeline(pipeline)
+            .read("gbuffer_frame", gbuffer.frame)
+            .read("depth", gbuffer.depth)
+            .external("skyocc_table", b.table)
+            .read_array("skyocc_vis", frame.vis)
+            .read_array("skyocc_heights_load", frame.heights)
+            .sampler("skyocc_sampler", b.sampler)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
 
     /// Forgets resident sectors (the scene's geometry changed).

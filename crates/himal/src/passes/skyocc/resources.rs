@@ -3,7 +3,7 @@
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::renderer::scene_gpu::vertex_layout;
+use crate::gpu_scene::vertex_layout;
 
 use super::reference::{self, RENDER_TEXELS};
 

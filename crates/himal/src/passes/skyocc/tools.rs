@@ -9,9 +9,8 @@ use super::{
     MAX_SECTORS_PER_FRAME, POOL_LAYERS, RENDER_TEXELS, SECTOR_TEXELS, SectorReadback, SkyOccPass,
     reference,
 };
-use crate::frame::FrameErrors;
 use crate::gpu::{GpuContext, GpuError};
-use crate::renderer::scene_gpu::SceneGpu;
+use crate::gpu_scene::SceneGpu;
 
 impl SkyOccPass {
     /// Tests and tools: renders `sectors` (at most [`MAX_SECTORS_PER_FRAME`])
@@ -26,18 +25,14 @@ impl SkyOccPass {
         let planned = self.pool.plan(sectors, MAX_SECTORS_PER_FRAME);
         let layers: Vec<u32> = sectors.iter().filter_map(|s| self.pool.layer(*s)).collect();
         self.plan_jobs(ctx, scene, &planned, sectors);
-        let errors = FrameErrors::default();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let n = self.jobs.len() as u32;
         if let Some(work) = &self.work {
-            self.record_heightfields(&mut encoder, &ctx.device, scene, work, &errors);
+            self.record_heightfields(&mut encoder, &ctx.device, scene, work)?;
             if n > 0 {
                 self.record_blur(&mut encoder, &ctx.device, work, n)?;
                 self.record_visibility(&mut encoder, &ctx.device, work, n)?;
             }
-        }
-        if let Some(e) = errors.take_first() {
-            return Err(e);
         }
         ctx.queue.submit([encoder.finish()]);
         ctx.check("skyocc.render_sectors")?;

@@ -6,11 +6,10 @@
 pub mod lut;
 pub mod reference;
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
+use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
+use crate::passes::common::target;
 
 /// Edge texture format (RG: left, top edge).
 pub const EDGES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
@@ -37,8 +36,8 @@ pub struct SmaaPass {
     /// By area-table subsample index (0 = 1x; 1, 2 = T2x frames).
     weights: [wgpu::RenderPipeline; 3],
     blend: wgpu::RenderPipeline,
-    area: wgpu::Texture,
-    search: wgpu::Texture,
+    area: wgpu::TextureView,
+    search: wgpu::TextureView,
     linear: wgpu::Sampler,
     point: wgpu::Sampler,
 }
@@ -107,14 +106,16 @@ impl SmaaPass {
             lut::AREA_SIZE,
             wgpu::TextureFormat::Rg8Unorm,
             &lut::area_texture(),
-        );
+        )
+        .create_view(&Default::default());
         let search = lut_texture(
             ctx,
             "aa.smaa.search",
             lut::SEARCH_SIZE,
             wgpu::TextureFormat::R8Unorm,
             &lut::search_texture(),
-        );
+        )
+        .create_view(&Default::default());
         let linear = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("aa.smaa.linear"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -145,38 +146,15 @@ impl SmaaPass {
         graph: &mut FrameGraph<'a>,
         inputs: SmaaInputs,
         out: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let mut pass = graph.add_pass("aa.smaa.edges");
-        pass.read(inputs.color, TextureAccess::Sampled);
-        pass.read(inputs.depth, TextureAccess::Sampled);
-        pass.read(inputs.normals, TextureAccess::Sampled);
-        let out = pass.write(out, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let bg = self.edges_program.bind(
-                ctx.device,
-                0,
-                &[
-                    (
-                        "color",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.color)),
-                    ),
-                    (
-                        "depth",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.depth)),
-                    ),
-                    (
-                        "gbuffer_frame",
-                        wgpu::BindingResource::TextureView(ctx.view(inputs.normals)),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let load = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
-                draw_fullscreen(ctx, &self.edges, &bg, ctx.view(out), load, None);
-            }
-        });
-        out
+        graph
+            .fullscreen("aa.smaa.edges", &self.edges_program)
+            .pipeline(Ok(self.edges.clone()))
+            .read("color", inputs.color)
+            .read("depth", inputs.depth)
+            .read("gbuffer_frame", inputs.normals)
+            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
+            .draw()
     }
 
     /// `aa.smaa.weights` into `out` ([`WEIGHTS_FORMAT`]) with area-table
@@ -187,38 +165,18 @@ impl SmaaPass {
         edges: TextureHandle,
         out: TextureHandle,
         subsample: u32,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let pipeline = &self.weights[(subsample as usize).min(2)];
-        let mut pass = graph.add_pass("aa.smaa.weights");
-        pass.read(edges, TextureAccess::Sampled);
-        let out = pass.write(out, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let area = self.area.create_view(&Default::default());
-            let search = self.search.create_view(&Default::default());
-            let bg = self.weights_program.bind(
-                ctx.device,
-                0,
-                &[
-                    (
-                        "edges_tex",
-                        wgpu::BindingResource::TextureView(ctx.view(edges)),
-                    ),
-                    ("area_tex", wgpu::BindingResource::TextureView(&area)),
-                    ("search_tex", wgpu::BindingResource::TextureView(&search)),
-                    (
-                        "linear_sampler",
-                        wgpu::BindingResource::Sampler(&self.linear),
-                    ),
-                    ("point_sampler", wgpu::BindingResource::Sampler(&self.point)),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let load = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
-                draw_fullscreen(ctx, pipeline, &bg, ctx.view(out), load, None);
-            }
-        });
-        out
+        graph
+            .fullscreen("aa.smaa.weights", &self.weights_program)
+            .pipeline(Ok(pipeline.clone()))
+            .read("edges_tex", edges)
+            .external("area_tex", &self.area)
+            .external("search_tex", &self.search)
+            .sampler("linear_sampler", &self.linear)
+            .sampler("point_sampler", &self.point)
+            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
+            .draw()
     }
 
     /// `aa.smaa.blend` into `output`; returns its new version.
@@ -228,34 +186,15 @@ impl SmaaPass {
         color: TextureHandle,
         weights: TextureHandle,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let mut pass = graph.add_pass("aa.smaa.blend");
-        pass.read(color, TextureAccess::Sampled);
-        pass.read(weights, TextureAccess::Sampled);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let bg = self.blend_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("color", wgpu::BindingResource::TextureView(ctx.view(color))),
-                    (
-                        "weights_tex",
-                        wgpu::BindingResource::TextureView(ctx.view(weights)),
-                    ),
-                    (
-                        "linear_sampler",
-                        wgpu::BindingResource::Sampler(&self.linear),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let load = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
-                draw_fullscreen(ctx, &self.blend, &bg, ctx.view(output), load, None);
-            }
-        });
-        output
+        graph
+            .fullscreen("aa.smaa.blend", &self.blend_program)
+            .pipeline(Ok(self.blend.clone()))
+            .read("color", color)
+            .read("weights_tex", weights)
+            .sampler("linear_sampler", &self.linear)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
 
     /// The whole chain: edges → weights (area table `subsample`) → blend into `output`.
@@ -266,14 +205,13 @@ impl SmaaPass {
         size: (u32, u32),
         subsample: u32,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
         let (w, h) = size;
         let edges = graph.create_texture("aa.smaa.edges", TextureDesc::new_2d(w, h, EDGES_FORMAT));
-        let edges = self.add_edges(graph, inputs, edges, errors);
+        let edges = self.add_edges(graph, inputs, edges);
         let weights =
             graph.create_texture("aa.smaa.weights", TextureDesc::new_2d(w, h, WEIGHTS_FORMAT));
-        let weights = self.add_weights(graph, edges, weights, subsample, errors);
-        self.add_blend(graph, inputs.color, weights, output, errors)
+        let weights = self.add_weights(graph, edges, weights, subsample);
+        self.add_blend(graph, inputs.color, weights, output)
     }
 }

@@ -3,94 +3,27 @@
 //! G-buffer, `aa.taa_ao` accumulates the AO after the STF. Each keeps its
 //! own history ring and parameters (the colour TAA's acceptance and tuning).
 
-use std::collections::HashMap;
-
 use bytemuck::Zeroable;
 
-use super::{AaParams, MOTION_FORMAT, TemporalTuning, draw_mrt};
-use crate::frame::FrameErrors;
+use super::{AaParams, MOTION_FORMAT, TemporalTuning};
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::aa::settings::AaBuffers;
-use crate::passes::common::target;
+use crate::graph::{FrameGraph, History, TextureDesc, TextureHandle};
+use crate::passes::common::{Step, target};
 
 /// (AO, Z, N) of the AO chain, and the AO history (AO, m0x, m0y).
 pub const AO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The history rings of the buffer TAAs, owned by the renderer.
-pub struct BufferHistory {
-    pub size: (u32, u32),
-    ao: [wgpu::Texture; 2],
-    motion: [wgpu::Texture; 2],
-    frame: usize,
-    /// Consecutive frames each ring was written since a cut (0: no history).
-    pub frames_ao: u32,
-    pub frames_motion: u32,
-}
+/// The buffer TAAs' history rings in the graph's [`History`].
+pub const AO_HISTORY: &str = "aa.taa_ao.history";
+pub const MOTION_HISTORY: &str = "aa.taa_motion.history";
 
-impl BufferHistory {
-    pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
-        let make = |label: String, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&label),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            })
-        };
-        Self {
-            size,
-            ao: [0, 1].map(|i| make(format!("aa.taa_ao.history.{i}"), AO_FORMAT)),
-            motion: [0, 1].map(|i| make(format!("aa.taa_motion.history.{i}"), MOTION_FORMAT)),
-            frame: 0,
-            frames_ao: 0,
-            frames_motion: 0,
-        }
-    }
-
-    /// Forgets both histories (camera cut).
-    pub fn invalidate(&mut self) {
-        self.frames_ao = 0;
-        self.frames_motion = 0;
-    }
-
-    /// (previous, next) of the AO ring.
-    pub fn ao(&self) -> (&wgpu::Texture, &wgpu::Texture) {
-        (&self.ao[(self.frame + 1) % 2], &self.ao[self.frame % 2])
-    }
-
-    /// (previous, next) of the motion ring.
-    pub fn motion(&self) -> (&wgpu::Texture, &wgpu::Texture) {
-        (
-            &self.motion[(self.frame + 1) % 2],
-            &self.motion[self.frame % 2],
-        )
-    }
-
-    /// After a frame with `buffers` was submitted: a ring that was not
-    /// written loses its history.
-    pub fn advance(&mut self, buffers: AaBuffers) {
-        self.frame += 1;
-        let count = |on: bool, n: u32| if on { n.saturating_add(1) } else { 0 };
-        self.frames_ao = count(buffers.ao, self.frames_ao);
-        self.frames_motion = count(buffers.motion, self.frames_motion);
-    }
-
-    pub fn bytes(&self) -> u64 {
-        self.size.0 as u64 * self.size.1 as u64 * (2 * 8 + 2 * 4)
-    }
+/// Declares both rings for a `size` frame (before the graph is built).
+pub fn declare_history(history: &mut History, device: &wgpu::Device, size: (u32, u32)) {
+    let ao = TextureDesc::new_2d(size.0, size.1, AO_FORMAT);
+    history.declare(device, AO_HISTORY, &ao, 2);
+    let motion = TextureDesc::new_2d(size.0, size.1, MOTION_FORMAT);
+    history.declare(device, MOTION_HISTORY, &motion, 2);
 }
 
 /// The parameters of a buffer TAA: the colour TAA's, with `history_frames`
@@ -111,10 +44,7 @@ pub fn buffer_params(
 /// The buffer TAA pipelines and their parameters.
 pub struct BufferTaaPass {
     ao_program: Program,
-    motion_program: Program,
-    /// `aa.taa_ao` by JITTER_FREE_MOTION.
-    ao: HashMap<bool, wgpu::RenderPipeline>,
-    motion: wgpu::RenderPipeline,
+    motion: Step,
     params_ao: wgpu::Buffer,
     params_motion: wgpu::Buffer,
     linear: wgpu::Sampler,
@@ -123,33 +53,43 @@ pub struct BufferTaaPass {
 impl BufferTaaPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let ao_program = Program::new(ctx, "passes/aa/temporal/taa_ao.wgsl")?;
-        let motion_program = Program::new(ctx, "passes/aa/temporal/taa_motion.wgsl")?;
-        let mut ao = HashMap::new();
-        for jitter_free in [false, true] {
-            let targets = [target(AO_FORMAT), target(AO_FORMAT)];
-            let mut spec = RenderSpec::fullscreen("aa.taa_ao", &targets);
-            let constants = [("JITTER_FREE_MOTION", if jitter_free { 1.0 } else { 0.0 })];
-            spec.constants = &constants;
-            ao.insert(jitter_free, ao_program.render_pipeline(ctx, &spec)?);
-        }
-        let targets = [target(MOTION_FORMAT)];
-        let spec = RenderSpec::fullscreen("aa.taa_motion", &targets);
-        let motion = motion_program.render_pipeline(ctx, &spec)?;
+        let motion = Step::new(
+            ctx,
+            "passes/aa/temporal/taa_motion.wgsl",
+            "aa.taa_motion",
+            MOTION_FORMAT,
+            &[],
+        )?;
         let linear = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("aa.buffers.linear"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self {
+        let pass = Self {
             ao_program,
-            motion_program,
-            ao,
             motion,
             params_ao: uniform_buffer(ctx, "aa.taa_ao.params", &AaParams::zeroed()),
             params_motion: uniform_buffer(ctx, "aa.taa_motion.params", &AaParams::zeroed()),
             linear,
-        })
+        };
+        for jitter_free in [false, true] {
+            pass.ao_pipeline(ctx, jitter_free)?;
+        }
+        Ok(pass)
+    }
+
+    /// `aa.taa_ao` by `JITTER_FREE_MOTION`.
+    pub fn ao_pipeline(
+        &self,
+        ctx: &GpuContext,
+        jitter_free: bool,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let targets = [target(AO_FORMAT), target(AO_FORMAT)];
+        let mut spec = RenderSpec::fullscreen("aa.taa_ao", &targets);
+        let constants = [("JITTER_FREE_MOTION", if jitter_free { 1.0 } else { 0.0 })];
+        spec.constants = &constants;
+        self.ao_program.render_pipeline(ctx, &spec)
     }
 
     /// Uploads this frame's parameters: sample offsets (px) of this and the
@@ -159,20 +99,20 @@ impl BufferTaaPass {
         queue: &wgpu::Queue,
         jitter: [f32; 2],
         prev_jitter: [f32; 2],
-        history: &BufferHistory,
+        history: &History,
         tuning: &TemporalTuning,
     ) {
         let ao = buffer_params(
             jitter,
             prev_jitter,
-            history.frames_ao,
+            history.frames(AO_HISTORY),
             tuning.ao_tolerance,
             tuning,
         );
         let motion = buffer_params(
             jitter,
             prev_jitter,
-            history.frames_motion,
+            history.frames(MOTION_HISTORY),
             tuning.motion_clamp_px,
             tuning,
         );
@@ -190,51 +130,36 @@ impl BufferTaaPass {
         &'a self,
         graph: &mut FrameGraph<'a>,
         motion: TextureHandle,
-        history: &'a BufferHistory,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
-        let (prev, next) = history.motion();
-        let prev = graph.import_texture("aa.taa_motion.prev", prev);
-        let next = graph.import_texture("aa.taa_motion.next", next);
-        let mut pass = graph.add_pass("aa.taa_motion");
-        pass.read(motion, TextureAccess::Sampled);
-        pass.read(prev, TextureAccess::Sampled);
-        let next = pass.write(next, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bg = self.motion_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params_motion.as_entire_binding()),
-                    ("motion", tv(motion)),
-                    ("history", tv(prev)),
-                    (
-                        "linear_sampler",
-                        wgpu::BindingResource::Sampler(&self.linear),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                draw_mrt(ctx, &self.motion, &bg, &[next]);
-            }
-        });
+        history: &'a History,
+    ) -> Result<TextureHandle, GpuError> {
+        let ring = history
+            .import(graph, MOTION_HISTORY)
+            .ok_or_else(|| GpuError::Other(format!("{MOTION_HISTORY} was not declared")))?;
+        let next = self
+            .motion
+            .node(graph, "aa.taa_motion")
+            .uniform("params", &self.params_motion)
+            .read("motion", motion)
+            .read("history", ring.previous[0])
+            .sampler("linear_sampler", &self.linear)
+            .color(ring.next, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw();
         // The history outlives the frame.
         graph.mark_output(next);
-        next
+        Ok(next)
     }
 
     /// `aa.taa_ao`: the AO chain's (AO, Z, N) with the accumulated AO; `motion`
     /// is the G-buffer's, or `aa.taa_motion`'s when `jitter_free`.
     pub fn add_ao<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         ao: TextureHandle,
         motion: TextureHandle,
         jitter_free: bool,
-        history: &'a BufferHistory,
-        errors: &'a FrameErrors,
-    ) -> TextureHandle {
+        history: &'a History,
+    ) -> Result<TextureHandle, GpuError> {
         let size = graph
             .texture_desc(ao)
             .map_or((1, 1), |d| (d.width, d.height));
@@ -242,41 +167,22 @@ impl BufferTaaPass {
             "aa.taa_ao.out",
             TextureDesc::new_2d(size.0, size.1, AO_FORMAT),
         );
-        let (prev, next) = history.ao();
-        let prev = graph.import_texture("aa.taa_ao.prev", prev);
-        let next = graph.import_texture("aa.taa_ao.next", next);
-        let mut pass = graph.add_pass("aa.taa_ao");
-        for h in [ao, motion, prev] {
-            pass.read(h, TextureAccess::Sampled);
-        }
-        let out = pass.write(out, TextureAccess::ColorAttachment);
-        let next = pass.write(next, TextureAccess::ColorAttachment);
-        let pipeline = self.ao.get(&jitter_free);
-        pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other("aa.taa_ao missing".into())));
-                return;
-            };
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bg = self.ao_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params_ao.as_entire_binding()),
-                    ("ao", tv(ao)),
-                    ("history", tv(prev)),
-                    ("motion", tv(motion)),
-                    (
-                        "linear_sampler",
-                        wgpu::BindingResource::Sampler(&self.linear),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                draw_mrt(ctx, pipeline, &bg, &[out, next]);
-            }
-        });
-        graph.mark_output(next);
-        out
+        let ring = history
+            .import(graph, AO_HISTORY)
+            .ok_or_else(|| GpuError::Other(format!("{AO_HISTORY} was not declared")))?;
+        let clear = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+        let written = graph
+            .fullscreen("aa.taa_ao", &self.ao_program)
+            .pipeline(self.ao_pipeline(ctx, jitter_free))
+            .uniform("params", &self.params_ao)
+            .read("ao", ao)
+            .read("history", ring.previous[0])
+            .read("motion", motion)
+            .sampler("linear_sampler", &self.linear)
+            .color(out, clear)
+            .color(ring.next, clear)
+            .draw_targets();
+        graph.mark_output(written.colors[1]);
+        Ok(written.colors[0])
     }
 }

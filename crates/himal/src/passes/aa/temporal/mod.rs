@@ -5,15 +5,12 @@
 pub mod buffers;
 pub mod reference;
 
-use std::collections::HashMap;
-
 use bytemuck::{Pod, Zeroable};
 
-use crate::frame::FrameErrors;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, target};
+use crate::graph::{FrameGraph, History, TextureDesc, TextureHandle};
+use crate::passes::common::target;
 
 /// Resolved colour and TAA history (linear).
 pub const RESOLVED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -109,91 +106,30 @@ pub enum ResolveMode {
     FlipQuad = 2,
 }
 
-/// Textures kept between frames, owned by the renderer.
-pub struct AaHistory {
-    pub size: (u32, u32),
-    /// Each frame's anti-aliased samples before the resolve (N, N−1, N−2 rotate).
-    raw: [wgpu::Texture; 3],
-    motion: [wgpu::Texture; 2],
-    taa: [wgpu::Texture; 2],
-    /// Frame counter of the ring.
-    frame: usize,
-    /// Consecutive frames written since the last cut.
-    pub frames: u32,
-    /// Jitter of the last frame written.
-    pub last_jitter: [f32; 2],
+/// The temporal passes' history rings in the graph's [`History`]: each
+/// frame's anti-aliased samples before the resolve (N, N−1, N−2), the
+/// jitter-free motion and the TAA colour.
+pub const RAW_HISTORY: &str = "aa.raw";
+pub const MOTION_HISTORY: &str = "aa.motion";
+pub const TAA_HISTORY: &str = "aa.taa";
+
+/// Declares the three rings for a `size` frame whose samples are `raw_format`.
+pub fn declare_history(
+    history: &mut History,
+    device: &wgpu::Device,
+    size: (u32, u32),
+    raw_format: wgpu::TextureFormat,
+) {
+    let desc = |format| TextureDesc::new_2d(size.0, size.1, format);
+    history.declare(device, RAW_HISTORY, &desc(raw_format), 3);
+    history.declare(device, MOTION_HISTORY, &desc(MOTION_FORMAT), 2);
+    history.declare(device, TAA_HISTORY, &desc(RESOLVED_FORMAT), 2);
 }
 
-/// The textures one frame reads and writes.
-pub struct HistoryFrame<'a> {
-    pub raw: &'a wgpu::Texture,
-    pub raw_prev: &'a wgpu::Texture,
-    pub raw_prev2: &'a wgpu::Texture,
-    pub motion: &'a wgpu::Texture,
-    pub motion_prev: &'a wgpu::Texture,
-    pub taa: &'a wgpu::Texture,
-    pub taa_prev: &'a wgpu::Texture,
-}
-
-impl AaHistory {
-    pub fn new(device: &wgpu::Device, size: (u32, u32), raw_format: wgpu::TextureFormat) -> Self {
-        let make = |label: &str, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
-        Self {
-            size,
-            raw: [0, 1, 2].map(|i| make(&format!("aa.raw.{i}"), raw_format)),
-            motion: [0, 1].map(|i| make(&format!("aa.motion.{i}"), MOTION_FORMAT)),
-            taa: [0, 1].map(|i| make(&format!("aa.taa.{i}"), RESOLVED_FORMAT)),
-            frame: 0,
-            frames: 0,
-            last_jitter: [0.0, 0.0],
-        }
-    }
-
-    /// Forgets the history (camera cut, mode change).
-    pub fn invalidate(&mut self) {
-        self.frames = 0;
-    }
-
-    pub fn frame(&self) -> HistoryFrame<'_> {
-        let f = self.frame;
-        HistoryFrame {
-            raw: &self.raw[f % 3],
-            raw_prev: &self.raw[(f + 2) % 3],
-            raw_prev2: &self.raw[(f + 1) % 3],
-            motion: &self.motion[f % 2],
-            motion_prev: &self.motion[(f + 1) % 2],
-            taa: &self.taa[f % 2],
-            taa_prev: &self.taa[(f + 1) % 2],
-        }
-    }
-
-    /// After a frame was submitted with sample offset `jitter`.
-    pub fn advance(&mut self, jitter: [f32; 2]) {
-        self.frame += 1;
-        self.frames = self.frames.saturating_add(1);
-        self.last_jitter = jitter;
-    }
-
-    pub fn bytes(&self) -> u64 {
-        let px = self.size.0 as u64 * self.size.1 as u64;
-        px * (3 * 4 + 2 * 4 + 2 * 8)
+/// The history rings restart (a camera cut or a change of mode).
+pub fn reset_history(history: &mut History) {
+    for name in [RAW_HISTORY, MOTION_HISTORY, TAA_HISTORY] {
+        history.reset_one(name);
     }
 }
 
@@ -202,48 +138,13 @@ pub struct TemporalPass {
     resolve_program: Program,
     taa_program: Program,
     unsharp_program: Program,
-    /// By (mode, motion input already jitter-free).
-    resolve: HashMap<(ResolveMode, bool), wgpu::RenderPipeline>,
-    taa: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
-    unsharp: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
     params: wgpu::Buffer,
     linear: wgpu::Sampler,
 }
 
 impl TemporalPass {
-    /// Builds every permutation for output format `output_format`.
+    /// Fetches every permutation for output format `output_format`.
     pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
-        let resolve_program = Program::new(ctx, "passes/aa/temporal/resolve.wgsl")?;
-        let taa_program = Program::new(ctx, "passes/aa/temporal/taa.wgsl")?;
-        let unsharp_program = Program::new(ctx, "passes/aa/temporal/unsharp.wgsl")?;
-        let mut resolve = HashMap::new();
-        for mode in [
-            ResolveMode::PassThrough,
-            ResolveMode::TwoTap,
-            ResolveMode::FlipQuad,
-        ] {
-            for jitter_free in [false, true] {
-                let targets = [target(RESOLVED_FORMAT), target(MOTION_FORMAT)];
-                let mut spec = RenderSpec::fullscreen("aa.resolve", &targets);
-                let constants = [
-                    ("MODE", mode as u32 as f64),
-                    ("JITTER_FREE_MOTION", if jitter_free { 1.0 } else { 0.0 }),
-                ];
-                spec.constants = &constants;
-                let pipeline = resolve_program.render_pipeline(ctx, &spec)?;
-                resolve.insert((mode, jitter_free), pipeline);
-            }
-        }
-        let mut taa = HashMap::new();
-        let mut unsharp = HashMap::new();
-        for format in [RESOLVED_FORMAT, output_format] {
-            let targets = [target(RESOLVED_FORMAT), target(format)];
-            let spec = RenderSpec::fullscreen("aa.taa", &targets);
-            taa.insert(format, taa_program.render_pipeline(ctx, &spec)?);
-            let targets = [target(format)];
-            let spec = RenderSpec::fullscreen("aa.unsharp", &targets);
-            unsharp.insert(format, unsharp_program.render_pipeline(ctx, &spec)?);
-        }
         let params = crate::gpu::pipeline::uniform_buffer(ctx, "aa.params", &AaParams::zeroed());
         let linear = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("aa.linear"),
@@ -251,16 +152,66 @@ impl TemporalPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self {
-            resolve_program,
-            taa_program,
-            unsharp_program,
-            resolve,
-            taa,
-            unsharp,
+        let pass = Self {
+            resolve_program: Program::new(ctx, "passes/aa/temporal/resolve.wgsl")?,
+            taa_program: Program::new(ctx, "passes/aa/temporal/taa.wgsl")?,
+            unsharp_program: Program::new(ctx, "passes/aa/temporal/unsharp.wgsl")?,
             params,
             linear,
-        })
+        };
+        for mode in [
+            ResolveMode::PassThrough,
+            ResolveMode::TwoTap,
+            ResolveMode::FlipQuad,
+        ] {
+            for jitter_free in [false, true] {
+                pass.resolve_pipeline(ctx, mode, jitter_free)?;
+            }
+        }
+        for format in [RESOLVED_FORMAT, output_format] {
+            pass.taa_pipeline(ctx, format)?;
+            pass.unsharp_pipeline(ctx, format)?;
+        }
+        Ok(pass)
+    }
+
+    /// `aa.resolve` of `mode`; `jitter_free`: the motion input is already jitter-free.
+    pub fn resolve_pipeline(
+        &self,
+        ctx: &GpuContext,
+        mode: ResolveMode,
+        jitter_free: bool,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let targets = [target(RESOLVED_FORMAT), target(MOTION_FORMAT)];
+        let mut spec = RenderSpec::fullscreen("aa.resolve", &targets);
+        let constants = [
+            ("MODE", mode as u32 as f64),
+            ("JITTER_FREE_MOTION", if jitter_free { 1.0 } else { 0.0 }),
+        ];
+        spec.constants = &constants;
+        self.resolve_program.render_pipeline(ctx, &spec)
+    }
+
+    /// `aa.taa` writing its colour in `format`.
+    pub fn taa_pipeline(
+        &self,
+        ctx: &GpuContext,
+        format: wgpu::TextureFormat,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let targets = [target(RESOLVED_FORMAT), target(format)];
+        let spec = RenderSpec::fullscreen("aa.taa", &targets);
+        self.taa_program.render_pipeline(ctx, &spec)
+    }
+
+    /// `aa.unsharp` into `format`.
+    pub fn unsharp_pipeline(
+        &self,
+        ctx: &GpuContext,
+        format: wgpu::TextureFormat,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let targets = [target(format)];
+        let spec = RenderSpec::fullscreen("aa.unsharp", &targets);
+        self.unsharp_program.render_pipeline(ctx, &spec)
     }
 
     /// Uploads this frame's parameters.
@@ -273,6 +224,7 @@ impl TemporalPass {
     #[allow(clippy::too_many_arguments)]
     pub fn add_resolve<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         (mode, jitter_free): (ResolveMode, bool),
         current: TextureHandle,
@@ -280,7 +232,6 @@ impl TemporalPass {
         motion: TextureHandle,
         motion_prev: TextureHandle,
         motion_next: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> (TextureHandle, TextureHandle) {
         let size = graph
             .texture_desc(current)
@@ -289,42 +240,27 @@ impl TemporalPass {
             "aa.resolved",
             TextureDesc::new_2d(size.0, size.1, RESOLVED_FORMAT),
         );
-        let mut pass = graph.add_pass("aa.resolve");
-        for h in [current, previous.0, previous.1, motion, motion_prev] {
-            pass.read(h, TextureAccess::Sampled);
-        }
-        let out = pass.write(out, TextureAccess::ColorAttachment);
-        let motion_next = pass.write(motion_next, TextureAccess::ColorAttachment);
-        let pipeline = self.resolve.get(&(mode, jitter_free));
-        pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!("aa.resolve {mode:?} missing"))));
-                return;
-            };
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bg = self.resolve_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params.as_entire_binding()),
-                    ("current", tv(current)),
-                    ("previous", tv(previous.0)),
-                    ("previous2", tv(previous.1)),
-                    ("motion", tv(motion)),
-                    ("previous_motion", tv(motion_prev)),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                draw_mrt(ctx, pipeline, &bg, &[out, motion_next]);
-            }
-        });
-        (out, motion_next)
+        let black = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+        let w = graph
+            .fullscreen("aa.resolve", &self.resolve_program)
+            .pipeline(self.resolve_pipeline(ctx, mode, jitter_free))
+            .uniform("params", &self.params)
+            .read("current", current)
+            .read("previous", previous.0)
+            .read("previous2", previous.1)
+            .read("motion", motion)
+            .read("previous_motion", motion_prev)
+            .color(out, black)
+            .color(motion_next, black)
+            .draw_targets();
+        (w.colors[0], w.colors[1])
     }
 
     /// `aa.taa`: returns (history next, colour) — colour written into `color_out`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_taa<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         input: TextureHandle,
         history_prev: TextureHandle,
@@ -332,115 +268,45 @@ impl TemporalPass {
         motion: TextureHandle,
         motion_prev: TextureHandle,
         color_out: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> (TextureHandle, TextureHandle) {
-        let format = graph.texture_desc(color_out).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.taa.get(&f));
-        let mut pass = graph.add_pass("aa.taa");
-        for h in [input, history_prev, motion, motion_prev] {
-            pass.read(h, TextureAccess::Sampled);
-        }
-        let history_next = pass.write(history_next, TextureAccess::ColorAttachment);
-        let color_out = pass.write(color_out, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "aa.taa for {format:?} missing"
-                ))));
-                return;
-            };
-            let tv = |h| wgpu::BindingResource::TextureView(ctx.view(h));
-            let bg = self.taa_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params.as_entire_binding()),
-                    ("input", tv(input)),
-                    ("history", tv(history_prev)),
-                    ("motion", tv(motion)),
-                    ("previous_motion", tv(motion_prev)),
-                    (
-                        "linear_sampler",
-                        wgpu::BindingResource::Sampler(&self.linear),
-                    ),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                draw_mrt(ctx, pipeline, &bg, &[history_next, color_out]);
-            }
-        });
-        (history_next, color_out)
+        let pipeline = match graph.texture_desc(color_out) {
+            Some(d) => self.taa_pipeline(ctx, d.format),
+            None => Err(GpuError::Other("aa.taa: unknown output".into())),
+        };
+        let black = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+        let w = graph
+            .fullscreen("aa.taa", &self.taa_program)
+            .pipeline(pipeline)
+            .uniform("params", &self.params)
+            .read("input", input)
+            .read("history", history_prev)
+            .read("motion", motion)
+            .read("previous_motion", motion_prev)
+            .sampler("linear_sampler", &self.linear)
+            .color(history_next, black)
+            .color(color_out, black)
+            .draw_targets();
+        (w.colors[0], w.colors[1])
     }
 
     /// `aa.unsharp` from `input` into `output`.
     pub fn add_unsharp<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         input: TextureHandle,
         output: TextureHandle,
-        errors: &'a FrameErrors,
     ) -> TextureHandle {
-        let format = graph.texture_desc(output).map(|d| d.format);
-        let pipeline = format.and_then(|f| self.unsharp.get(&f));
-        let mut pass = graph.add_pass("aa.unsharp");
-        pass.read(input, TextureAccess::Sampled);
-        let output = pass.write(output, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            let Some(pipeline) = pipeline else {
-                errors.record::<()>(Err(GpuError::Other(format!(
-                    "aa.unsharp for {format:?} missing"
-                ))));
-                return;
-            };
-            let bg = self.unsharp_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("params", self.params.as_entire_binding()),
-                    ("input", wgpu::BindingResource::TextureView(ctx.view(input))),
-                ],
-            );
-            if let Some(bg) = errors.record(bg) {
-                let load = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
-                draw_fullscreen(ctx, pipeline, &bg, ctx.view(output), load, None);
-            }
-        });
-        output
+        let pipeline = match graph.texture_desc(output) {
+            Some(d) => self.unsharp_pipeline(ctx, d.format),
+            None => Err(GpuError::Other("aa.unsharp: unknown output".into())),
+        };
+        graph
+            .fullscreen("aa.unsharp", &self.unsharp_program)
+            .pipeline(pipeline)
+            .uniform("params", &self.params)
+            .read("input", input)
+            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+            .draw()
     }
-}
-
-/// One full-screen triangle into several colour targets.
-pub(crate) fn draw_mrt(
-    ctx: &mut crate::graph::PassContext<'_>,
-    pipeline: &wgpu::RenderPipeline,
-    bind_group: &wgpu::BindGroup,
-    targets: &[TextureHandle],
-) {
-    let label = ctx.pass_id().to_string();
-    let views: Vec<&wgpu::TextureView> = targets.iter().map(|&h| ctx.view(h)).collect();
-    let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
-        .iter()
-        .map(|view| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        })
-        .collect();
-    let mut pass = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(&label),
-        color_attachments: &attachments,
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, bind_group, &[]);
-    pass.draw(0..3, 0..1);
 }

@@ -5,7 +5,7 @@
 
 use super::{
     AtmosphereConfig, BrunetonTables, MAX_SCATTERING_ORDER, TRANSMITTANCE_FORMAT, TableSizes,
-    run_graph, table_sampler, table_texture, table_texture_format, tex, view,
+    table_sampler, table_texture, table_texture_format, tex, view,
 };
 use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
@@ -271,7 +271,8 @@ fn run_steps(
             cp.set_pipeline(&step.pipeline);
             cp.set_bind_group(0, &step.bind_group, &[]);
             cp.dispatch_workgroups(step.groups[0], step.groups[1], step.groups[2]);
+            Ok(())
         });
     }
-    run_graph(ctx, graph, timer, "sky.tables")
+    crate::graph::run(ctx, graph, timer, "sky.tables")
 }

@@ -14,8 +14,7 @@ mod sh;
 
 use glam::Vec3;
 
-use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, PassTimer, PassTiming, TexturePool};
+use crate::gpu::GpuContext;
 use crate::passes::sky::reference::GROUND_ALBEDO;
 use crate::passes::sky::sun::{SUN_ANGULAR_RADIUS_DEG, SUN_ILLUMINANCE_KLUX};
 
@@ -293,10 +292,6 @@ fn tex(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::TextureView(v)
 }
 
-fn graph_error(e: impl std::fmt::Display) -> GpuError {
-    GpuError::Other(format!("sky.tables: {e}"))
-}
-
 impl BrunetonTables {
     /// Views of (transmittance, scattering, single Mie, irradiance) for binding.
     pub fn views(&self) -> TableViews {
@@ -332,24 +327,5 @@ impl TableViews {
             ("irradiance", tex(&self.irradiance)),
             ("table_sampler", wgpu::BindingResource::Sampler(sampler)),
         ]
-    }
-}
-
-/// Compiles, records (timed with `timer`), submits and checks `graph`.
-pub(crate) fn run_graph(
-    ctx: &GpuContext,
-    graph: FrameGraph<'_>,
-    mut timer: Option<&mut PassTimer>,
-    context: &str,
-) -> Result<Vec<PassTiming>, GpuError> {
-    let compiled = graph.compile().map_err(graph_error)?;
-    let commands = compiled
-        .execute(&ctx.device, &mut TexturePool::new(), timer.as_deref_mut())
-        .map_err(graph_error)?;
-    ctx.queue.submit([commands]);
-    ctx.check(context)?;
-    match timer {
-        Some(t) => t.read_timings(&ctx.device).map_err(graph_error),
-        None => Ok(Vec::new()),
     }
 }

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::{BrunetonTables, run_graph};
+use super::BrunetonTables;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError, read_buffer};
 use crate::graph::{FrameGraph, PassTimer, PassTiming};
@@ -97,8 +97,9 @@ impl SkyShProjector {
             cp.set_pipeline(pipeline);
             cp.set_bind_group(0, bg, &[]);
             cp.dispatch_workgroups(1, 1, 1);
+            Ok(())
         });
-        let timings = run_graph(ctx, graph, timer, "sky.sh")?;
+        let timings = crate::graph::run(ctx, graph, timer, "sky.sh")?;
         let bytes = read_buffer(ctx, &self.output)?;
         let v: &[[f32; 4]] = bytemuck::try_cast_slice(&bytes)
             .map_err(|e| GpuError::Other(format!("sky.sh read-back: {e}")))?;

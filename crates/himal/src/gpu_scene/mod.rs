@@ -10,6 +10,9 @@ use wgpu::util::DeviceExt;
 use crate::gpu::{GpuContext, GpuError};
 use crate::scene::{Object, Scene, Vertex};
 
+pub mod textures;
+pub mod uniforms;
+
 /// Twin of `Object` in `shaders/scene.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -60,7 +63,7 @@ pub struct SceneGpu {
     /// each is in `draws_textured` too.
     pub draws_emissive: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
-    pub materials: Option<super::textures::MaterialTextures>,
+    pub materials: Option<textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
     pub animated: Vec<(u32, Object)>,
     pub triangles: u64,
@@ -150,7 +153,7 @@ impl SceneGpu {
         let materials = if scene.pbr.materials.is_empty() {
             None
         } else {
-            Some(super::textures::MaterialTextures::upload(ctx, &scene.pbr)?)
+            Some(textures::MaterialTextures::upload(ctx, &scene.pbr)?)
         };
         let bytes = materials.as_ref().map_or(0, |m| m.bytes)
             + (std::mem::size_of_val(vertices.as_slice())

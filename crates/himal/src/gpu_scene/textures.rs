@@ -11,9 +11,9 @@ use std::collections::HashMap;
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::gpu::pipeline::target;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::passes::common::target;
 use crate::scene::gltf::{
     AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, Wrap,
 };
@@ -145,7 +145,7 @@ impl MaterialTextures {
     }
 
     pub fn upload(ctx: &GpuContext, pbr: &PbrSet) -> Result<Self, GpuError> {
-        let mipmap = Program::new(ctx, "renderer/mipmap.wgsl")?;
+        let mipmap = Program::new(ctx, "gpu_scene/mipmap.wgsl")?;
         let mut out = MaterialTextures {
             textures: Vec::new(),
             views: Vec::new(),
