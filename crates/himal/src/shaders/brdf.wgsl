@@ -3,8 +3,8 @@
 // Anisotropic GGX D (Burley 2012), height-correlated anisotropic Smith V
 // (Heitz 2014), Schlick F, Lambert diffuse. t, b, n: right-handed orthonormal
 // shading frame (t = anisotropy x); v to the eye, l to the light.
+#import math
 
-const PI: f32 = 3.14159265358979;
 // alpha floor: glossiness 1 would make D a delta (see MIN_ALPHA in brdf.rs).
 const BRDF_MIN_ALPHA: f32 = 0.002;
 // n.v floor: normal-mapped normals facing away shade as grazing.

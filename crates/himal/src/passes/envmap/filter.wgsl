@@ -9,6 +9,7 @@
 // alpha 0.64 in tests/envmap.rs), so none is added. The estimate is weighted
 // by n.l (Karis 2013). Twin: reference.rs `filter_fis`.
 #import envmap
+#import math
 
 struct FilterParams {
     // x: alpha, y: samples N, z: source face size w, w: source mip count
@@ -33,7 +34,7 @@ fn cs_filter(@builtin(global_invocation_id) id: vec3u) {
     let w = params.p.z;
     let max_lod = params.p.w - 1.0;
     let basis = envmap_basis(n);
-    let omega_p = 4.0 * ENVMAP_PI / (6.0 * w * w);
+    let omega_p = 4.0 * PI / (6.0 * w * w);
     var sum = vec3f(0.0);
     var weight = 0.0;
     for (var i = 0u; i < count; i++) {

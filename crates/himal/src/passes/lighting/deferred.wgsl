@@ -24,6 +24,7 @@
 #import envmap
 #import sky_occlusion
 #import color
+#import math
 
 struct Lighting {
     // xyz: unit vector towards the sun
