@@ -43,6 +43,15 @@ fn surface_from_material(albedo: vec3f, glossiness: f32, reflectance: f32, metal
     );
 }
 
+// Isotropic GGX D = a^2 / (pi ((h.n)^2 (a^2 - 1) + 1)^2): the environment
+// filter's pdf (passes/envmap/filter.wgsl; twin: envmap/reference.rs `d_ggx`).
+// Not d_ggx_aniso(alpha, alpha): the same value, other rounding.
+fn d_ggx(n_o_h: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = n_o_h * n_o_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
 // D = 1 / (pi ax ay ((h.t/ax)^2 + (h.b/ay)^2 + (h.n)^2)^2)
 fn d_ggx_aniso(n_o_h: f32, t_o_h: f32, b_o_h: f32, alpha_x: f32, alpha_y: f32) -> f32 {
     let tx = t_o_h / alpha_x;

@@ -33,13 +33,6 @@ fn envmap_sample_ggx(u: vec2f, alpha: f32) -> vec3f {
     return normalize(h);
 }
 
-// Isotropic GGX distribution D(h).
-fn envmap_d_ggx(n_o_h: f32, alpha: f32) -> f32 {
-    let a2 = alpha * alpha;
-    let d = n_o_h * n_o_h * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
-}
-
 // An orthonormal basis (x, y) around unit n (Duff et al. 2017).
 fn envmap_basis(n: vec3f) -> mat3x3f {
     let sign = select(-1.0, 1.0, n.z >= 0.0);
