@@ -89,7 +89,7 @@ fn wgsl_modules_validate_with_naga() {
     ] {
         himal::shader::compose_str(name, kernel).unwrap_or_else(|e| panic!("{e}"));
     }
-    // Both modules in one shader: no clashing names (PI lives in brdf.wgsl).
+    // Both modules in one shader: no clashing names (PI lives in math.wgsl).
     let both = format!("#import brdf\n{TANGENT_FRAME_KERNEL}");
     himal::shader::compose_str("both", &both).unwrap_or_else(|e| panic!("{e}"));
     // The check can fail: a call with the wrong arity is rejected.

@@ -3,8 +3,7 @@
 // (atmosphere/functions.glsl). Lengths in km, three wavelengths as straight
 // RGB (680, 550, 440 nm), tables per unit extraterrestrial solar irradiance.
 // Twin: crates/himal/src/passes/sky/bruneton/reference.rs.
-
-const ATMOSPHERE_PI: f32 = 3.14159265358979;
+#import math
 
 // Twin of AtmosphereGpuParams (11 x vec4f = 176 bytes).
 struct AtmosphereParams {
@@ -201,12 +200,12 @@ fn transmittance_to_sun(
 }
 
 fn rayleigh_phase_function(nu: f32) -> f32 {
-    return 3.0 / (16.0 * ATMOSPHERE_PI) * (1.0 + nu * nu);
+    return 3.0 / (16.0 * PI) * (1.0 + nu * nu);
 }
 
 // Cornette-Shanks phase function, as the reference.
 fn mie_phase_function(g: f32, nu: f32) -> f32 {
-    let k = 3.0 / (8.0 * ATMOSPHERE_PI) * (1.0 - g * g) / (2.0 + g * g);
+    let k = 3.0 / (8.0 * PI) * (1.0 - g * g) / (2.0 + g * g);
     return k * (1.0 + nu * nu) / pow(1.0 + g * g - 2.0 * g * nu, 1.5);
 }
 
@@ -401,6 +400,6 @@ fn bruneton_sky_radiance(
     }
     let e_ground = compute_direct_irradiance(atm, transmittance, table_sampler, r, mu_s)
         + irradiance_lookup(atm, irradiance, table_sampler, r, mu_s);
-    let l_ground = atm.ground_albedo.xyz * (e_ground * atm.ground_albedo.w / ATMOSPHERE_PI + atm.night_radiance.xyz);
+    let l_ground = atm.ground_albedo.xyz * (e_ground * atm.ground_albedo.w / PI + atm.night_radiance.xyz);
     return mix(sky, l_ground, smoothstep(0.0, atm.night_radiance.w, -dir.y));
 }

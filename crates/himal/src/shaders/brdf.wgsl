@@ -3,8 +3,8 @@
 // Anisotropic GGX D (Burley 2012), height-correlated anisotropic Smith V
 // (Heitz 2014), Schlick F, Lambert diffuse. t, b, n: right-handed orthonormal
 // shading frame (t = anisotropy x); v to the eye, l to the light.
+#import math
 
-const PI: f32 = 3.14159265358979;
 // alpha floor: glossiness 1 would make D a delta (see MIN_ALPHA in brdf.rs).
 const BRDF_MIN_ALPHA: f32 = 0.002;
 // n.v floor: normal-mapped normals facing away shade as grazing.
@@ -41,6 +41,15 @@ fn surface_from_material(albedo: vec3f, glossiness: f32, reflectance: f32, metal
         mix(vec3f(reflectance), albedo, metallic),
         alpha_xy(glossiness, anisotropy),
     );
+}
+
+// Isotropic GGX D = a^2 / (pi ((h.n)^2 (a^2 - 1) + 1)^2): the environment
+// filter's pdf (passes/envmap/filter.wgsl; twin: envmap/reference.rs `d_ggx`).
+// Not d_ggx_aniso(alpha, alpha): the same value, other rounding.
+fn d_ggx(n_o_h: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = n_o_h * n_o_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
 }
 
 // D = 1 / (pi ax ay ((h.t/ax)^2 + (h.b/ay)^2 + (h.n)^2)^2)

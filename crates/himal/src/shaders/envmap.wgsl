@@ -1,8 +1,7 @@
 // Environment maps (TECHNIQUES L4, M4): cube-face directions, GGX sampling
 // for the filtered importance sampling and the DFG table, and the M4
 // distorted reflection normal. Twin: passes/envmap/reference.rs.
-
-const ENVMAP_PI: f32 = 3.14159265358979;
+#import math
 
 // Unit direction through texel coordinate uv in [0,1]^2 (v down) of cube face
 // `face` (+X, -X, +Y, -Y, +Z, -Z), the Vulkan / D3D cube convention.
@@ -28,17 +27,10 @@ fn envmap_hammersley(i: u32, n: u32) -> vec2f {
 
 // Isotropic GGX half vector around +z, distributed as D(h) (h.z).
 fn envmap_sample_ggx(u: vec2f, alpha: f32) -> vec3f {
-    let phi = 2.0 * ENVMAP_PI * u.y;
+    let phi = TAU * u.y;
     let r = sqrt(saturate(u.x));
     let h = vec3f(alpha * r * cos(phi), alpha * r * sin(phi), sqrt(saturate(1.0 - u.x)));
     return normalize(h);
-}
-
-// Isotropic GGX distribution D(h).
-fn envmap_d_ggx(n_o_h: f32, alpha: f32) -> f32 {
-    let a2 = alpha * alpha;
-    let d = n_o_h * n_o_h * (a2 - 1.0) + 1.0;
-    return a2 / (ENVMAP_PI * d * d);
 }
 
 // An orthonormal basis (x, y) around unit n (Duff et al. 2017).

@@ -6,6 +6,7 @@
 // passes/forward/reference.rs `forward_shade_premultiplied`.
 #import brdf
 #import sh
+#import math
 
 fn forward_shade_premultiplied(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
         sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9,

@@ -37,9 +37,9 @@ fn anisotropy_from_khr(strength: f32, alpha: f32) -> f32 {
     return saturate((1.0 - a / alpha_t) / 0.9);
 }
 
-// The vertex tangent in world space; a mirroring model matrix flips
-// handedness, so its sign folds into w.
-fn gltf_world_tangent(o: Object, tangent: vec4f) -> vec4f {
+// The world tangent (ObjectVertex.tangent) with the vertex's sign w; a
+// mirroring model matrix flips handedness, so its sign folds into w.
+fn gltf_world_tangent(o: Object, world_tangent: vec3f, w: f32) -> vec4f {
     let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
-    return vec4f((o.model * vec4f(tangent.xyz, 0.0)).xyz, tangent.w * sign(det));
+    return vec4f(world_tangent, w * sign(det));
 }

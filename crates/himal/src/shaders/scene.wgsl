@@ -1,6 +1,7 @@
 // Scene data shared by passes that draw meshes (twin: renderer/scene_gpu.rs `ObjectGpu`),
 // and the vegetation functions those passes share: sway and alpha patterns
 // (docs/techniques/vegetation.md; card conventions in scene/vegetation.rs).
+#import math
 
 struct Object {
     model: mat4x4f,
@@ -33,6 +34,8 @@ fn foliage_sway_weight(o: Object, local: vec3f, uv: vec2f) -> f32 {
 // phase from the position, so neighbouring clumps sway out of step). Each
 // component stays within amplitude * weight.
 fn foliage_sway(o: Object, local: vec3f, uv: vec2f, rest: vec2f, t: f32) -> vec3f {
+    // Literals, not TAU: naga folds these abstract products in f64, and
+    // TAU * 1.1 (f32) rounds differently, moving the cards.
     let w1 = 6.2831853 * 0.4;
     let w2 = 6.2831853 * 1.1;
     let phase = dot(rest, vec2f(0.9, 0.6));
@@ -82,7 +85,7 @@ fn foliage_leaves_alpha(uv: vec2f) -> f32 {
     for (var i = 0u; i < 5u; i++) {
         let h = foliage_hash(seed * 16u + i + 7u);
         let c = vec2f(0.22 + 0.56 * foliage_unit(h, 0u), 0.22 + 0.56 * foliage_unit(h, 8u));
-        let a = 3.14159265 * foliage_unit(h, 16u);
+        let a = PI * foliage_unit(h, 16u);
         let d = p - c;
         let q = vec2f(d.x * cos(a) + d.y * sin(a), -d.x * sin(a) + d.y * cos(a));
         let size = vec2f(0.27, 0.13) * (0.8 + 0.4 * foliage_unit(h, 24u));

@@ -2,6 +2,7 @@
 // Twin of crates/himal/src/math/sh.rs: same basis on the direction's own
 // components, coefficient order L00, L1-1, L10, L11, L2-2, L2-1, L20, L21, L22.
 // Source: Ramamoorthi & Hanrahan 2001; Sloan, "Stupid SH tricks" 2008.
+#import math
 
 // rgb in xyz, w unused (Sh9Gpu on the CPU side).
 struct Sh9 {
@@ -41,5 +42,5 @@ fn sh9_eval_radiance_from_irradiance(sh: Sh9, d: vec3f) -> vec3f {
     let l1 = sh.c[1].xyz * y[1] + sh.c[2].xyz * y[2] + sh.c[3].xyz * y[3];
     let l2 = sh.c[4].xyz * y[4] + sh.c[5].xyz * y[5] + sh.c[6].xyz * y[6]
         + sh.c[7].xyz * y[7] + sh.c[8].xyz * y[8];
-    return l0 / 3.14159265 + l1 * (3.0 / (2.0 * 3.14159265)) + l2 * (4.0 / 3.14159265);
+    return l0 / PI + l1 * (3.0 / (2.0 * PI)) + l2 * (4.0 / PI);
 }

@@ -2,6 +2,7 @@
 // per-pixel rotated Poisson-disk filtering of hardware-compared bilinear taps,
 // the cascade choice, and the mask pass's parameters. CPU twin:
 // passes/shadows/reference.rs (`poisson_visibility`, `rotation_angle`).
+#import math
 
 // 16-tap Poisson disk in the unit circle (minimum distance ~0.3); the first
 // four are the outer ring, one per quadrant (early out, below).
@@ -47,7 +48,7 @@ struct ShadowMaskParams {
 // noise, Jimenez 2014). Keyed on the map's texel, not the screen pixel, so a
 // snapped map gives the same pattern at the same world point every frame.
 fn shadow_rotation_angle(cell: vec2f) -> f32 {
-    return 6.2831853 * fract(52.9829189 * fract(dot(cell, vec2f(0.06711056, 0.00583715))));
+    return TAU * fract(52.9829189 * fract(dot(cell, vec2f(0.06711056, 0.00583715))));
 }
 
 // Visibility in [0,1] at `uv` of layer `layer`: the mean of 16 bilinear

@@ -30,6 +30,12 @@ fn world_from_depth(view: View, uv: vec2f, depth: f32) -> vec3f {
     return p.xyz / p.w;
 }
 
+// World position at a fragment (`@builtin(position)`.xy, pixel centres)
+// with device depth `depth`: what the full-screen passes reconstruct.
+fn world_at_fragment(view: View, frag_xy: vec2f, depth: f32) -> vec3f {
+    return world_from_depth(view, frag_xy * view.viewport.zw, depth);
+}
+
 // Unit direction from the camera through the pixel at `uv` (works at depth 0 = infinity).
 fn view_ray(view: View, uv: vec2f) -> vec3f {
     let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0, 1.0);

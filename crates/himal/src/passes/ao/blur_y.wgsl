@@ -35,7 +35,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var n = 1.0;
     let d = textureLoad(depth, px, 0);
     if (STF && d > 0.0) {
-        let p = world_from_depth(view, (frag.xy) * view.viewport.zw, d);
+        let p = world_at_fragment(view, frag.xy, d);
         let prev_clip = view.prev_view_proj * vec4f(p, 1.0);
         let w_i = prev_clip.w;
         // Both matrices carry their frame's jitter: remove its change so a static

@@ -9,9 +9,7 @@
 // CPU twin: passes/ao/reference.rs `hbao`.
 #import view
 #import ao
-
-const TAU: f32 = 6.283185307;
-const HALF_PI: f32 = 1.570796327;
+#import math
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 @group(0) @binding(1) var depth: texture_depth_2d;

@@ -8,7 +8,9 @@
 // Colbert's +1 lod bias over-blurs rough mips (4.3% vs 1.5% error at
 // alpha 0.64 in tests/envmap.rs), so none is added. The estimate is weighted
 // by n.l (Karis 2013). Twin: reference.rs `filter_fis`.
+#import brdf
 #import envmap
+#import math
 
 struct FilterParams {
     // x: alpha, y: samples N, z: source face size w, w: source mip count
@@ -33,7 +35,7 @@ fn cs_filter(@builtin(global_invocation_id) id: vec3u) {
     let w = params.p.z;
     let max_lod = params.p.w - 1.0;
     let basis = envmap_basis(n);
-    let omega_p = 4.0 * ENVMAP_PI / (6.0 * w * w);
+    let omega_p = 4.0 * PI / (6.0 * w * w);
     var sum = vec3f(0.0);
     var weight = 0.0;
     for (var i = 0u; i < count; i++) {
@@ -42,7 +44,7 @@ fn cs_filter(@builtin(global_invocation_id) id: vec3u) {
         let l = 2.0 * dot(n, h) * h - n;
         let n_o_l = dot(n, l);
         if (n_o_l > 0.0) {
-            let pdf = envmap_d_ggx(h_local.z, alpha) * 0.25;
+            let pdf = d_ggx(h_local.z, alpha) * 0.25;
             let omega_s = 1.0 / (f32(count) * pdf + 1e-6);
             let lod = clamp(0.5 * log2(omega_s / omega_p), 0.0, max_lod);
             sum += textureSampleLevel(source, source_sampler, l, lod).rgb * n_o_l;

@@ -33,9 +33,8 @@ fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2i(frag.xy);
     let d = textureLoad(depth, px, 0);
-    let uv = frag.xy * view.viewport.zw;
     // A point on the pixel's ray (depth 1 = the near plane under reverse-Z).
-    let p = world_from_depth(view, uv, select(1.0, d, d > 0.0));
+    let p = world_at_fragment(view, frag.xy, select(1.0, d, d > 0.0));
     let v = normalize(view.camera_position.xyz - p);
     var radiance: vec3f;
     if (d <= 0.0) {

@@ -18,6 +18,7 @@
 #import sh
 #import envmap
 #import forward
+#import object_vertex
 
 struct Lighting {
     sun_direction: vec4f,
@@ -47,14 +48,14 @@ struct VertexOut {
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[in.object];
-    let world = o.model * vec4f(in.position, 1.0);
+    // The same call as textured.wgsl: the same clip position (@invariant).
+    let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;
     out.uv = in.uv;
-    // The same expression as textured.wgsl (view_proj carries the jitter).
-    out.clip = view.view_proj * world;
-    out.world = world.xyz;
-    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
-    out.tangent = gltf_world_tangent(o, in.tangent);
+    out.clip = v.clip;
+    out.world = v.world.xyz;
+    out.normal = v.normal;
+    out.tangent = gltf_world_tangent(o, v.tangent, in.tangent.w);
     out.color = in.color;
     out.surface = in.surface;
     return out;

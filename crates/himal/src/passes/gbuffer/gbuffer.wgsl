@@ -11,6 +11,7 @@
 #import view
 #import tangent_frame
 #import scene
+#import object_vertex
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -32,23 +33,18 @@ struct VertexOut {
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[in.object];
-    var world = o.model * vec4f(in.position, 1.0);
-    var prev_world = o.prev_model * vec4f(in.position, 1.0);
+    let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, VEGETATION, view.time.xy);
     var out: VertexOut;
     out.uv = in.uv;
     out.pattern = 0u;
     if (VEGETATION) {
-        // Sway at this frame's and the previous frame's time: motion vectors cover it.
-        world += vec4f(foliage_sway(o, in.position, in.uv, world.xz, view.time.x), 0.0);
-        prev_world += vec4f(foliage_sway(o, in.position, in.uv, prev_world.xz, view.time.y), 0.0);
         out.pattern = foliage_pattern(o);
     }
-    out.curr_clip = view.view_proj * world;
-    out.prev_clip = view.prev_view_proj * prev_world;
-    // view_proj already carries the frame's jitter (the AA contract).
-    out.clip = out.curr_clip;
-    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
-    out.tangent = vec4f((o.model * vec4f(in.tangent.xyz, 0.0)).xyz, in.tangent.w);
+    out.curr_clip = v.clip;
+    out.prev_clip = v.prev_clip;
+    out.clip = v.clip;
+    out.normal = v.normal;
+    out.tangent = vec4f(v.tangent, in.tangent.w);
     out.color = in.color;
     out.surface = in.surface;
     return out;

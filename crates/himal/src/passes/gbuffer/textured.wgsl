@@ -10,6 +10,7 @@
 #import tangent_frame
 #import scene
 #import gltf_material
+#import object_vertex
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -28,16 +29,14 @@ struct VertexOut {
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[in.object];
-    let world = o.model * vec4f(in.position, 1.0);
-    let prev_world = o.prev_model * vec4f(in.position, 1.0);
+    let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;
     out.uv = in.uv;
-    out.curr_clip = view.view_proj * world;
-    out.prev_clip = view.prev_view_proj * prev_world;
-    // view_proj already carries the frame's jitter (the AA contract).
-    out.clip = out.curr_clip;
-    out.normal = (o.normal_matrix * vec4f(in.normal, 0.0)).xyz;
-    out.tangent = gltf_world_tangent(o, in.tangent);
+    out.curr_clip = v.clip;
+    out.prev_clip = v.prev_clip;
+    out.clip = v.clip;
+    out.normal = v.normal;
+    out.tangent = gltf_world_tangent(o, v.tangent, in.tangent.w);
     out.color = in.color;
     out.surface = in.surface;
     return out;

@@ -24,6 +24,7 @@
 #import envmap
 #import sky_occlusion
 #import color
+#import math
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -139,8 +140,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (d <= 0.0) {
         discard;
     }
-    let uv = frag.xy * view.viewport.zw;
-    let p = world_from_depth(view, uv, d);
+    let p = world_at_fragment(view, frag.xy, d);
     let albedo_ao = textureLoad(gbuffer_albedo, px, 0);
     let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
     let m = textureLoad(gbuffer_material, px, 0);

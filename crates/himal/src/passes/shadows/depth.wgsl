@@ -6,6 +6,7 @@
 // G-buffer, so grass casts blades, not cards.
 
 #import scene
+#import object_vertex
 
 struct ShadowView {
     light_view_proj: mat4x4f,
@@ -18,7 +19,8 @@ struct ShadowView {
 
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> @builtin(position) vec4f {
-    return shadow.light_view_proj * (objects[object].model * vec4f(position, 1.0));
+    let o = objects[object];
+    return shadow.light_view_proj * object_world(o, o.model, position, vec2f(0.0), false, 0.0);
 }
 
 struct VegetationOut {
@@ -34,10 +36,8 @@ fn vs_vegetation(
     @builtin(instance_index) object: u32,
 ) -> VegetationOut {
     let o = objects[object];
-    var world = o.model * vec4f(position, 1.0);
-    world += vec4f(foliage_sway(o, position, uv, world.xz, shadow.time.x), 0.0);
     var out: VegetationOut;
-    out.clip = shadow.light_view_proj * world;
+    out.clip = shadow.light_view_proj * object_world(o, o.model, position, uv, true, shadow.time.x);
     out.uv = uv;
     out.pattern = foliage_pattern(o);
     return out;

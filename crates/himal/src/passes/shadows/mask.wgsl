@@ -66,9 +66,8 @@ struct Receiver {
 
 fn receiver(frag: vec4f, d: f32) -> Receiver {
     let px = vec2i(frag.xy);
-    let uv = frag.xy * view.viewport.zw;
     var r: Receiver;
-    r.p = world_from_depth(view, uv, d);
+    r.p = world_at_fragment(view, frag.xy, d);
     r.n = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)))[2];
     r.dist = dot(r.p - view.camera_position.xyz, params.camera_forward.xyz);
     return r;

@@ -34,7 +34,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let d = textureLoad(depth, px, 0);
         var tint = vec3f(0.0);
         if (d > 0.0) {
-            let p = world_from_depth(view, frag.xy * view.viewport.zw, d);
+            let p = world_at_fragment(view, frag.xy, d);
             let dist = dot(p - view.camera_position.xyz, params.camera_forward.xyz);
             switch shadow_map_index(params, dist) {
                 case 0: { tint = vec3f(1.0, 0.25, 0.25); }

@@ -5,6 +5,7 @@
 #import view
 #import sky
 #import atmosphere
+#import math
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> sky: SkyParams;
@@ -43,8 +44,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let dir = view_ray(view, in.clip.xy * view.viewport.zw);
     if (ENVIRONMENT) {
         let phi = atan2(dir.x, -dir.z) + ENV_ROTATION;
-        let u = fract(phi / 6.28318530718 + 0.5);
-        let v = acos(clamp(dir.y, -1.0, 1.0)) / 3.14159265359;
+        let u = fract(phi / TAU + 0.5);
+        let v = acos(clamp(dir.y, -1.0, 1.0)) / PI;
         return vec4f(textureSampleLevel(environment, environment_sampler, vec2f(u, v), 0.0).rgb, 1.0);
     }
     var c = sun_disk_radiance(sky, dir);

@@ -6,6 +6,7 @@
 // Bindings: sector (uniform SectorView), objects (as gbuffer).
 
 #import scene
+#import object_vertex
 
 struct SectorView {
     view_proj: mat4x4f,
@@ -21,7 +22,8 @@ struct HeightOut {
 
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> HeightOut {
-    let world = objects[object].model * vec4f(position, 1.0);
+    let o = objects[object];
+    let world = object_world(o, o.model, position, vec2f(0.0), false, 0.0);
     var out: HeightOut;
     out.clip = sector.view_proj * world;
     out.height = world.y;

@@ -31,8 +31,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (d <= 0.0) {
         return vec4f(0.0, 0.0, 0.0, 1.0);
     }
-    let uv = frag.xy * view.viewport.zw;
-    let p = world_from_depth(view, uv, d);
+    let p = world_at_fragment(view, frag.xy, d);
     let n = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)))[2];
     let sh = sky_occlusion_lookup(skyocc_table, skyocc_vis, skyocc_heights_load, skyocc_sampler, p, n);
     let bent = bent_normal_from_sh_visibility(n, sh);

@@ -12,6 +12,7 @@
 // blur, as the talk's blurred map; the sampled field stays sharp).
 // Twin: passes/skyocc/reference.rs `visibility_at`, `sector_visibility`.
 #import sky_occlusion
+#import math
 
 override RADIUS: f32 = 8.0;
 override STEPS: u32 = 8u;
@@ -48,7 +49,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let origin = job.origin.xy;
     let p = vec3f(origin.x + (f32(x.x) + 0.5) * TEXEL, h_raw + ORIGIN_LIFT, origin.y + (f32(x.y) + 0.5) * TEXEL);
     let noise = fract(52.982918 * fract(0.06711056 * f32(x.x) + 0.00583715 * f32(x.y)));
-    let angle = 6.28318530718 * noise;
+    let angle = TAU * noise;
     let s = sin(angle);
     let c = cos(angle);
     var count = 0u;

@@ -3,6 +3,7 @@
 // added to the running irradiance sum (ping-pong: previous -> out).
 // Twin: reference.rs `indirect_irradiance`.
 #import atmosphere
+#import math
 
 @group(0) @binding(0) var<uniform> atmosphere: AtmosphereParams;
 @group(0) @binding(1) var single_rayleigh: texture_3d<f32>;
@@ -25,8 +26,8 @@ fn cs_indirect_irradiance(@builtin(global_invocation_id) id: vec3u) {
     let r = r_mu_s.x;
     let mu_s = r_mu_s.y;
     let n = 32u;
-    let dphi = ATMOSPHERE_PI / f32(n);
-    let dtheta = ATMOSPHERE_PI / f32(n);
+    let dphi = PI / f32(n);
+    let dtheta = PI / f32(n);
     let omega_s = vec3f(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
     var sum = vec3f(0.0);
     for (var j = 0u; j < n / 2u; j++) {

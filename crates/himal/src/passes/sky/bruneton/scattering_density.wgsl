@@ -3,6 +3,7 @@
 // ground bounce of the previous order's irradiance), a DENSITY_SAMPLES x
 // 2 DENSITY_SAMPLES sphere quadrature. Twin: reference.rs `scattering_density`.
 #import atmosphere
+#import math
 
 @group(0) @binding(0) var<uniform> atmosphere: AtmosphereParams;
 @group(0) @binding(1) var transmittance_load: texture_2d<f32>;
@@ -43,8 +44,8 @@ fn cs_scattering_density(@builtin(global_invocation_id) id: vec3u) {
     let sun_y = sqrt(max(1.0 - sun_x * sun_x - c.mu_s * c.mu_s, 0.0));
     let omega_s = vec3f(sun_x, sun_y, c.mu_s);
     let n = DENSITY_SAMPLES;
-    let dphi = ATMOSPHERE_PI / f32(n);
-    let dtheta = ATMOSPHERE_PI / f32(n);
+    let dphi = PI / f32(n);
+    let dtheta = PI / f32(n);
     let rayleigh_k = atmosphere.rayleigh_scattering.xyz * rayleigh_density(atmosphere, c.r - bottom);
     let mie_k = atmosphere.mie_scattering.xyz * mie_density(atmosphere, c.r - bottom);
     var sum = vec3f(0.0);
@@ -69,7 +70,7 @@ fn cs_scattering_density(@builtin(global_invocation_id) id: vec3u) {
             if (ground) {
                 let ground_normal = normalize(vec3f(0.0, 0.0, c.r) + omega_i * distance_to_ground);
                 let e = irradiance_lookup(atmosphere, delta_irradiance, table_sampler, bottom, dot(ground_normal, omega_s));
-                incident += transmittance_to_ground * atmosphere.ground_albedo.xyz * (1.0 / ATMOSPHERE_PI) * e;
+                incident += transmittance_to_ground * atmosphere.ground_albedo.xyz * (1.0 / PI) * e;
             }
             let nu2 = dot(omega, omega_i);
             sum += incident * (rayleigh_k * rayleigh_phase_function(nu2)

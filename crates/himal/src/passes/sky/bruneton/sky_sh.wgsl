@@ -6,6 +6,7 @@
 // of reference.rs `CpuTables::sky_radiance`.
 #import atmosphere
 #import sh
+#import math
 
 @group(0) @binding(0) var<uniform> atmosphere: AtmosphereParams;
 @group(0) @binding(1) var transmittance_load: texture_2d<f32>;
@@ -26,7 +27,7 @@ var<workgroup> partial: array<array<vec3f, 9>, SH_THREADS>;
 fn cs_sky_sh(@builtin(local_invocation_index) tid: u32) {
     let row_count = arrayLength(&rows);
     let n_phi = 2u * row_count;
-    let dphi = 2.0 * ATMOSPHERE_PI / f32(n_phi);
+    let dphi = TAU / f32(n_phi);
     var acc: array<vec3f, 9>;
     for (var k = 0u; k < 9u; k++) {
         acc[k] = vec3f(0.0);
