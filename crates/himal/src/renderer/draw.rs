@@ -35,6 +35,16 @@ pub(super) fn prepare_view(
     }
 }
 
+/// What the CPU half of a frame hands to its GPU half.
+pub(super) struct FramePlan {
+    pub(super) format: wgpu::TextureFormat,
+    /// Projection jitter (px) of this frame.
+    jitter: [f32; 2],
+    view_proj: Mat4,
+    shadows: ShadowStats,
+    sky_occlusion: crate::passes::skyocc::SkyOccStats,
+}
+
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
 /// presents it without a read-back).
 pub struct DrawnFrame {
@@ -160,10 +170,16 @@ impl Renderer {
             .get(&(settings.width, settings.height, format))
     }
 
-    /// Renders one frame from `camera` into [`Renderer::output`] and waits for
-    /// the GPU timings; the image stays on the GPU.
-    pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
-        Self::validate(settings)?;
+    /// The CPU half of a frame, in order: output and history declarations,
+    /// sky light, probe choice, uniforms, and each technique's planning
+    /// (AO and buffer TAA parameters, shadow fits and culled draws, sky
+    /// occlusion sectors, forward sorting). [`Renderer::draw`] and
+    /// [`Renderer::describe_graph`] both run it.
+    pub(super) fn plan_frame(
+        &mut self,
+        camera: &Camera,
+        settings: &FrameSettings,
+    ) -> Result<FramePlan, Error> {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun, settings.sky_model)?;
@@ -299,6 +315,32 @@ impl Renderer {
             .passes
             .forward
             .sort(&self.res.scene, camera.position);
+        // Alpha BLEND objects draw far to near from this camera.
+        self.res
+            .passes
+            .forward
+            .sort(&self.res.scene, camera.position);
+        Ok(FramePlan {
+            format,
+            jitter,
+            view_proj,
+            shadows: shadow_stats,
+            sky_occlusion: skyocc_stats,
+        })
+    }
+
+    /// Renders one frame from `camera` into [`Renderer::output`] and waits for
+    /// the GPU timings; the image stays on the GPU.
+    pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
+        Self::validate(settings)?;
+        let size = (settings.width, settings.height);
+        let FramePlan {
+            format,
+            jitter,
+            view_proj,
+            shadows: shadow_stats,
+            sky_occlusion: skyocc_stats,
+        } = self.plan_frame(camera, settings)?;
         let Self {
             ctx,
             res,

@@ -433,32 +433,24 @@ impl Renderer {
         self.sky_light.as_ref().map(|(_, _, l)| l)
     }
 
-    /// The compiled pass list for these settings (`himal render --graph`).
+    /// The compiled pass list of the first frame with these settings from
+    /// a camera at the origin looking down -Z (`himal render --graph`): the
+    /// same planning as [`Renderer::draw`], nothing submitted.
     pub fn describe_graph(&mut self, settings: &FrameSettings) -> Result<String, Error> {
         Self::validate(settings)?;
         let size = (settings.width, settings.height);
-        let format = self.prepare_output(settings)?;
-        // Plan the shadow passes as a frame would (from a camera at the origin).
-        self.update_sky(&settings.sun, settings.sky_model)?;
-        if let Some((_, _, light)) = &self.sky_light {
-            let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
-            self.res.passes.shadows.update(
-                &self.ctx,
-                &self.res.scene,
-                &camera,
-                size.0 as f32 / size.1 as f32,
-                light.sun_direction,
-                settings.shadow_resolution,
-                Some(&settings.shadows),
-                settings.time_s,
-            );
-        }
+        let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
+        let format = self.plan_frame(&camera, settings)?.format;
         let inputs = self
             .res
             .inputs(&self.ctx, settings, format, self.frame_index)
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
-        Ok(frame::build(inputs, size, settings.view)?
-            .compile()?
-            .describe())
+        let listing = frame::build(inputs, size, settings.view)
+            .map_err(Error::from)
+            .and_then(|g| Ok(g.compile()?.describe()));
+        // Nothing ran: the planned sky-occlusion sectors and history stay unwritten.
+        self.res.history.discard();
+        self.res.passes.skyocc.invalidate();
+        listing
     }
 }

@@ -16,9 +16,10 @@ use crate::graph::{PassTimer, PassTiming};
 const MAGIC: &[u8; 8] = b"HIMALSKY";
 const VERSION: u32 = 1;
 
-/// Every shader whose change must invalidate a cached table.
-const SOURCES: [&str; 7] = [
-    "shaders/atmosphere.wgsl",
+/// The table shaders, whose change must invalidate a cached table; each is
+/// hashed composed, so the modules they import (atmosphere, math) are part
+/// of the key without being listed.
+const SOURCES: [&str; 6] = [
     "passes/sky/bruneton/transmittance.wgsl",
     "passes/sky/bruneton/direct_irradiance.wgsl",
     "passes/sky/bruneton/single_scattering.wgsl",
@@ -32,7 +33,8 @@ fn key(config: &AtmosphereConfig) -> u64 {
     bytes.extend(config.sizes.density_samples.to_le_bytes());
     bytes.extend(VERSION.to_le_bytes());
     for s in SOURCES {
-        bytes.extend(crate::shader::source(s).unwrap_or_default().as_bytes());
+        let composed = crate::shader::compose(s).map(|c| c.source);
+        bytes.extend(composed.unwrap_or_default().as_bytes());
     }
     fnv1a(&bytes)
 }
