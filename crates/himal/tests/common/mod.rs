@@ -94,6 +94,80 @@ pub fn ring(p: Vec3, radius: f32) -> impl Iterator<Item = Vec3> {
     })
 }
 
+/// Mean over `pixels` of the temporal standard deviation of channel 0
+/// (R) over `frames`.
+pub fn mean_temporal_std(frames: &[Vec<[f32; 4]>], pixels: &[usize]) -> f32 {
+    let n = frames.len() as f32;
+    let total: f32 = pixels
+        .iter()
+        .map(|&i| {
+            let mean = frames.iter().map(|f| f[i][0]).sum::<f32>() / n;
+            (frames.iter().map(|f| (f[i][0] - mean).powi(2)).sum::<f32>() / n).sqrt()
+        })
+        .sum();
+    total / pixels.len().max(1) as f32
+}
+
+/// `<model>/glTF/<file>` of the Khronos sample models (`shared/assets/gltf`).
+pub fn gltf_asset(model: &str, file: &str) -> PathBuf {
+    Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/assets/gltf"
+    ))
+    .join(model)
+    .join("glTF")
+    .join(file)
+}
+
+/// The `.gltf` file of sample model `model`.
+pub fn gltf_sample(model: &str) -> PathBuf {
+    gltf_asset(model, &format!("{model}.gltf"))
+}
+
+/// Standard base64 with padding (for `data:` URIs in generated glTF files).
+pub fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            out.push(if k <= c.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
+/// A GLB container of `json` and `bin`: header, JSON chunk (space-padded),
+/// BIN chunk (zero-padded).
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
 /// Deterministic pseudo-random numbers in [0, 1).
 pub struct Lcg(pub u64);
 impl Lcg {
