@@ -1,17 +1,9 @@
 //! `himal aa-patterns` prints the A5 table beside the talk's numbers.
 
-use std::process::Command;
+mod common;
 
 fn himal(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_himal"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    common::run(args, &[])
 }
 
 #[test]

@@ -1,24 +1,16 @@
 //! `himal prewarm`, `himal bake` and the post options from the command
 //! line (E1, L1, H2, H3).
 
-use std::process::Command;
+mod common;
 
+/// `himal` with the pipeline cache off unless `--cache` names one.
 fn himal(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_himal"))
-        .env("HIMAL_CACHE_DIR", "off")
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    common::run(args, &[("HIMAL_CACHE_DIR", "off".as_ref())])
 }
 
 #[test]
 fn render_after_prewarm_compiles_nothing() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-prewarm-{}", std::process::id()));
+    let dir = common::temp_path("cli-prewarm");
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_string_lossy().to_string();
     let (ok, out, err) = himal(&["prewarm", "--cache", &d]);
@@ -66,18 +58,13 @@ fn bad_post_options_are_rejected() {
             "sky tables huge",
         ),
     ] {
-        let (ok, _, err) = himal(args);
-        assert!(!ok, "{args:?} should fail");
-        assert!(
-            err.contains(needle),
-            "{args:?}: stderr lacks \"{needle}\":\n{err}"
-        );
+        common::assert_fails_with(args, &himal(args), needle);
     }
 }
 
 #[test]
 fn bake_writes_the_sky_tables_once() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-bake-{}", std::process::id()));
+    let dir = common::temp_path("cli-bake");
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_string_lossy().to_string();
     let (ok, out, err) = himal(&["bake", "--cache", &d]);

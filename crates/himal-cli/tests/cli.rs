@@ -1,29 +1,15 @@
 //! The `himal` program: bad input gives a non-zero exit and a clear message.
 
-use std::process::Command;
+mod common;
 
 fn himal(args: &[&str]) -> (bool, String, String) {
     // Tests never touch the user's pipeline cache.
-    let cache = std::env::temp_dir().join(format!("himal-cli-cache-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_himal"))
-        .env("HIMAL_CACHE_DIR", cache)
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    let cache = common::temp_path("cli-cache");
+    common::run(args, &[("HIMAL_CACHE_DIR", cache.as_os_str())])
 }
 
 fn fails_with(args: &[&str], needle: &str) {
-    let (ok, _, err) = himal(args);
-    assert!(!ok, "{args:?} should fail");
-    assert!(
-        err.contains(needle),
-        "{args:?}: stderr lacks \"{needle}\":\n{err}"
-    );
+    common::assert_fails_with(args, &himal(args), needle);
 }
 
 #[test]
@@ -62,7 +48,7 @@ fn unwritable_output_names_the_file() {
 
 #[test]
 fn malformed_scene_names_file_and_line() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-test-{}", std::process::id()));
+    let dir = common::temp_path("cli-test");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("broken.toml");
     std::fs::write(
@@ -96,7 +82,7 @@ fn graph_lists_passes_in_order() {
 
 #[test]
 fn renders_a_png() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-png-{}", std::process::id()));
+    let dir = common::temp_path("cli-png");
     let path = dir.join("f.png");
     let p = path.to_string_lossy().to_string();
     let (ok, _, err) = himal(&[
@@ -115,7 +101,7 @@ fn renders_a_png() {
 
 #[test]
 fn time_lapse_writes_a_day_sequence() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-lapse-{}", std::process::id()));
+    let dir = common::temp_path("cli-lapse");
     let p = dir.join("day.png").to_string_lossy().to_string();
     let (ok, _, err) = himal(&[
         "render",
@@ -146,7 +132,7 @@ fn time_lapse_writes_a_day_sequence() {
 
 #[test]
 fn env_lights_the_demo_with_an_hdr_image() {
-    let dir = std::env::temp_dir().join(format!("himal-cli-env-{}", std::process::id()));
+    let dir = common::temp_path("cli-env");
     let p = dir.join("env.png").to_string_lossy().to_string();
     let venice = concat!(
         env!("CARGO_MANIFEST_DIR"),

@@ -7,22 +7,13 @@
 
 mod common;
 
-use common::renderer;
+use common::{renderer, scene_and_camera};
 use glam::Vec3;
 use himal::passes::aa::{AaBuffers, AaMode, TemporalTuning};
 use himal::passes::ao::{AoSettings, AoView};
 use himal::passes::debug::DebugView;
-use himal::scene::{Camera, Scene};
+use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
-
-fn load(name: &str) -> (Scene, Camera) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/scenes")
-        .join(name);
-    let scene = Scene::load(&path).expect("test scene");
-    let camera = scene.camera("main").expect("camera main").clone();
-    (scene, camera)
-}
 
 fn ao_settings(scene: &Scene, size: (u32, u32), aa: AaMode, ao: AoSettings) -> FrameSettings {
     let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
@@ -39,31 +30,20 @@ fn ao_settings(scene: &Scene, size: (u32, u32), aa: AaMode, ao: AoSettings) -> F
 /// `warm..frames` of a static camera (time frozen: the grass does not sway).
 fn static_ao_std(aa: AaMode, ao: AoSettings, buffers: AaBuffers, size: (u32, u32)) -> f32 {
     let (warm, frames) = (8, 20);
-    let (scene, mut camera) = load("grass_patch.toml");
+    let (scene, mut camera) = scene_and_camera("grass_patch", "main");
     // The O2 flicker test's distance: blades of one or two pixels.
     camera.position -= camera.forward * camera.position.length();
     let mut r = renderer(&scene);
     let mut s = ao_settings(&scene, size, aa, ao);
     s.aa_buffers = buffers;
     let images: Vec<Vec<[f32; 4]>> = (0..frames)
-        .map(|_| {
-            let img = r.render(&camera, &s).expect("frame").image;
-            img.to_rgba_f32().expect("float image")
-        })
+        .map(|_| common::render_rgba(&mut r, &camera, &s))
         .collect();
     let images = &images[warm as usize..];
-    let n = images.len() as f32;
     let pixels: Vec<usize> = (0..images[0].len())
         .filter(|&i| images[0][i][1] < 1000.0)
         .collect();
-    let total: f32 = pixels
-        .iter()
-        .map(|&i| {
-            let mean = images.iter().map(|f| f[i][0]).sum::<f32>() / n;
-            (images.iter().map(|f| (f[i][0] - mean).powi(2)).sum::<f32>() / n).sqrt()
-        })
-        .sum();
-    total / pixels.len().max(1) as f32
+    common::mean_temporal_std(images, &pixels)
 }
 
 #[test]
@@ -94,14 +74,13 @@ fn ao_does_not_wobble_under_jitter() {
 /// the slow sideways motion of `tests/aa_frame.rs` (aa_edges.toml, 128x128,
 /// 0.1 px per frame) after 8 warm-up frames.
 fn slow_motion_std(s: &FrameSettings, channels: &[usize]) -> (f32, f32) {
-    let (scene, camera) = load("aa_edges.toml");
+    let (scene, camera) = scene_and_camera("aa_edges", "main");
     let mut r = renderer(&scene);
     let images: Vec<Vec<[f32; 4]>> = (0..40)
         .map(|i| {
             let mut cam = camera.clone();
             cam.position += Vec3::new(0.0034 * i as f32, 0.0, 0.0);
-            let img = r.render(&cam, s).expect("frame").image;
-            img.to_rgba_f32().expect("float image")
+            common::render_rgba(&mut r, &cam, s)
         })
         .collect();
     let images = &images[8..];
@@ -132,7 +111,7 @@ fn slow_motion_settings(
     buffers: AaBuffers,
     tuning: TemporalTuning,
 ) -> FrameSettings {
-    let (scene, _) = load("aa_edges.toml");
+    let (scene, _) = scene_and_camera("aa_edges", "main");
     let mut s = ao_settings(&scene, (128, 128), AaMode::Hraa, AoSettings::default());
     s.view = view;
     s.aa_buffers = buffers;

@@ -18,10 +18,7 @@ const N: u32 = 128;
 const SS: u32 = 16;
 
 fn load() -> (Scene, Camera) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/aa_edges.toml");
-    let scene = Scene::load(&path).expect("aa_edges.toml");
-    let camera = scene.camera("main").expect("camera main").clone();
-    (scene, camera)
+    common::scene_and_camera("aa_edges", "main")
 }
 
 fn settings(scene: &Scene, size: u32, aa: AaMode) -> FrameSettings {
@@ -203,10 +200,7 @@ fn hraa_is_temporally_stable_under_slow_motion() {
 /// minus the same mean over floor the ball never touched (the two images
 /// differ there by their anti-aliasing alone). Returns (energy, trail pixels).
 fn trail_energy(tuning: himal::passes::aa::TemporalTuning) -> (f32, f32) {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/aa_ghosting.toml");
-    let scene = Scene::load(&path).expect("aa_ghosting.toml");
-    let camera = scene.camera("main").expect("camera main").clone();
+    let (scene, camera) = common::scene_and_camera("aa_ghosting", "main");
     let mut r = renderer(&scene);
     let frames = 16;
     // 0.1 s per frame: the ball moves 10 cm (about 2 px) per frame.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{pixel_ray, renderer};
+use common::{pixel_ray, render_rgba as render, renderer};
 use glam::{IVec2, Vec3};
 use himal::passes::ao::reference::{self as twin, Image, StfView};
 use himal::passes::ao::{AoMode, AoSettings, AoUniform, AoView};
@@ -13,65 +13,7 @@ use himal::scene::{Camera, Scene};
 use himal::{FrameSettings, Renderer, ViewBuffer};
 use himal_reference::ao::{Shape, ambient_occlusion, trace};
 
-/// A 0.5 m sphere resting on a plane.
-const SPHERE_ON_PLANE: &str = r#"
-[sun]
-time = "12:00"
-
-[[material]]
-name = "grey"
-albedo_linear = [0.5, 0.5, 0.5]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "grey"
-size = [60.0, 60.0]
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "grey"
-radius = 0.5
-segments = 96
-position = [0.0, 0.5, 0.0]
-
-[[camera]]
-name = "main"
-position = [0.0, 1.6, 2.6]
-target = [0.0, 0.25, 0.0]
-fov_y = 50.0
-"#;
-
-/// A 2 x 1 x 2 m box on a plane: a step with two inner corners in view.
-const BOX_CORNER: &str = r#"
-[sun]
-time = "12:00"
-
-[[material]]
-name = "grey"
-albedo_linear = [0.5, 0.5, 0.5]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "grey"
-size = [60.0, 60.0]
-
-[[object]]
-name = "block"
-primitive = "box"
-material = "grey"
-size = [2.0, 1.0, 2.0]
-position = [0.0, 0.5, 0.0]
-
-[[camera]]
-name = "main"
-position = [2.8, 2.2, 3.4]
-target = [0.6, 0.3, 0.8]
-fov_y = 55.0
-"#;
-
+/// The analytic shapes of `scenes/ao_sphere_on_plane.toml`.
 fn sphere_shapes() -> Vec<Shape> {
     vec![
         Shape::Plane {
@@ -85,6 +27,7 @@ fn sphere_shapes() -> Vec<Shape> {
     ]
 }
 
+/// The analytic shapes of `scenes/ao_box_corner.toml`.
 fn box_shapes() -> Vec<Shape> {
     vec![
         Shape::Plane {
@@ -98,11 +41,9 @@ fn box_shapes() -> Vec<Shape> {
     ]
 }
 
-fn load(text: &str) -> (Scene, Camera) {
-    let scene =
-        Scene::from_toml_str(text, "ao test scene", std::path::Path::new(".")).expect("scene");
-    let camera = scene.camera("main").expect("camera").clone();
-    (scene, camera)
+/// `scenes/<name>.toml` and its camera `main`.
+fn load(name: &str) -> (Scene, Camera) {
+    common::scene_and_camera(name, "main")
 }
 
 fn ao_settings(mode: AoMode) -> AoSettings {
@@ -126,15 +67,6 @@ fn frame_settings(
     s.view = view;
     s.raw = true;
     s
-}
-
-/// One frame of `view` as raw floats.
-fn render(r: &mut Renderer, camera: &Camera, s: &FrameSettings) -> Vec<[f32; 4]> {
-    r.render(camera, s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("float image")
 }
 
 fn uniform(s: &FrameSettings, camera: &Camera) -> AoUniform {
@@ -172,7 +104,7 @@ fn diff_stats(pairs: impl Iterator<Item = (f32, f32)>) -> (f32, f32) {
 
 #[test]
 fn hbao_and_continuity_match_the_cpu_twin() {
-    let (scene, camera) = load(SPHERE_ON_PLANE);
+    let (scene, camera) = load("ao_sphere_on_plane");
     let mut r = renderer(&scene);
     let size = (96, 64);
     let s = frame_settings(
@@ -216,7 +148,7 @@ fn hbao_and_continuity_match_the_cpu_twin() {
 
 #[test]
 fn stability_mask_is_the_dilated_continuity_mask() {
-    let (scene, camera) = load(SPHERE_ON_PLANE);
+    let (scene, camera) = load("ao_sphere_on_plane");
     let mut r = renderer(&scene);
     let size = (96, 64);
     let mut s = frame_settings(
@@ -246,7 +178,7 @@ fn stability_mask_is_the_dilated_continuity_mask() {
 }
 
 fn check_blur(adaptive: bool) -> (f32, f32) {
-    let (scene, camera) = load(SPHERE_ON_PLANE);
+    let (scene, camera) = load("ao_sphere_on_plane");
     let mut r = renderer(&scene);
     let size = (96, 64);
     let ao = AoSettings {
@@ -285,7 +217,7 @@ fn pack_and_blur_match_the_cpu_twin() {
 
 #[test]
 fn temporal_filter_matches_the_cpu_twin() {
-    let (scene, camera1) = load(SPHERE_ON_PLANE);
+    let (scene, camera1) = load("ao_sphere_on_plane");
     let size = (96, 64);
     let mut camera2 = camera1.clone();
     camera2.position += Vec3::new(0.03, 0.0, -0.02);
@@ -349,7 +281,7 @@ fn temporal_filter_matches_the_cpu_twin() {
 
 #[test]
 fn camera_cut_clears_the_history() {
-    let (scene, camera) = load(SPHERE_ON_PLANE);
+    let (scene, camera) = load("ao_sphere_on_plane");
     let mut r = renderer(&scene);
     let s = frame_settings(
         &scene,
@@ -369,8 +301,8 @@ fn camera_cut_clears_the_history() {
 
 /// Mean |blurred HBAO - ray-traced AO| over the pixels with geometry, and
 /// the same over the occluded pixels (reference AO < 0.95).
-fn accuracy(text: &str, shapes: &[Shape]) -> (f32, f32, usize) {
-    let (scene, camera) = load(text);
+fn accuracy(name: &str, shapes: &[Shape]) -> (f32, f32, usize) {
+    let (scene, camera) = load(name);
     let mut r = renderer(&scene);
     let size = (128, 128);
     let s = frame_settings(
@@ -403,8 +335,8 @@ fn accuracy(text: &str, shapes: &[Shape]) -> (f32, f32, usize) {
 
 #[test]
 fn blurred_hbao_is_close_to_ray_traced_ao() {
-    let (sphere, sphere_occ, n1) = accuracy(SPHERE_ON_PLANE, &sphere_shapes());
-    let (corner, corner_occ, n2) = accuracy(BOX_CORNER, &box_shapes());
+    let (sphere, sphere_occ, n1) = accuracy("ao_sphere_on_plane", &sphere_shapes());
+    let (corner, corner_occ, n2) = accuracy("ao_box_corner", &box_shapes());
     eprintln!(
         "MAE sphere {sphere:.4} (occluded {sphere_occ:.4}, {n1} px), box {corner:.4} (occluded {corner_occ:.4}, {n2} px)"
     );

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{pixel_ray, renderer};
+use common::{pixel_ray, renderer, scene_and_camera};
 use glam::Vec3;
 use himal::passes::ao::{AoMode, AoSettings, AoView};
 use himal::scene::{Camera, Scene};
@@ -13,15 +13,6 @@ use himal::{FrameSettings, ViewBuffer};
 use himal_reference::ao::{Shape, ambient_occlusion, trace};
 
 const FPS: f32 = 30.0;
-
-fn load(name: &str) -> (Scene, Camera) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/scenes")
-        .join(name);
-    let scene = Scene::load(&path).expect("test scene");
-    let camera = scene.camera("main").expect("camera main").clone();
-    (scene, camera)
-}
 
 fn settings(scene: &Scene, size: (u32, u32), ao: AoSettings) -> FrameSettings {
     let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
@@ -46,11 +37,7 @@ fn sequence(
     (0..frames)
         .map(|i| {
             s.time_s = i as f32 / FPS;
-            r.render(&camera_at(i), &s)
-                .expect("frame")
-                .image
-                .to_rgba_f32()
-                .expect("float image")
+            common::render_rgba(&mut r, &camera_at(i), &s)
         })
         .collect()
 }
@@ -58,21 +45,12 @@ fn sequence(
 /// Mean over `pixels` of the temporal standard deviation of AO.
 fn mean_temporal_std(frames: &[Vec<[f32; 4]>], pixels: &[usize]) -> f32 {
     // The first N_max frames fill the cleared history; flicker is measured after.
-    let frames = &frames[8..];
-    let n = frames.len() as f32;
-    let total: f32 = pixels
-        .iter()
-        .map(|&i| {
-            let mean = frames.iter().map(|f| f[i][0]).sum::<f32>() / n;
-            (frames.iter().map(|f| (f[i][0] - mean).powi(2)).sum::<f32>() / n).sqrt()
-        })
-        .sum();
-    total / pixels.len().max(1) as f32
+    common::mean_temporal_std(&frames[8..], pixels)
 }
 
 #[test]
 fn selective_filter_removes_grass_flicker() {
-    let (scene, mut camera) = load("grass_patch.toml");
+    let (scene, mut camera) = scene_and_camera("grass_patch", "main");
     // Twice the scene camera's distance: blades of 1-2 pixels and less, the talk's flicker case.
     camera.position -= camera.forward * camera.position.length();
     let size = (400, 250);
@@ -234,7 +212,7 @@ fn sphere_centre(t: f32) -> Vec3 {
 
 #[test]
 fn selective_filter_does_not_trail_behind_moving_objects() {
-    let (scene, camera) = load("moving_sphere.toml");
+    let (scene, camera) = scene_and_camera("moving_sphere", "main");
     // The talk's L = 0.1 m classifies the ground as continuous only where
     // neighbouring AO texels are closer than 10 cm: 640 px wide here.
     let size = (640, 480);

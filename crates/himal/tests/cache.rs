@@ -3,66 +3,30 @@
 //! nothing; a corrupted or incompatible cache file is detected, ignored
 //! (with a warning) and rebuilt. Each test uses its own temporary directory.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+mod common;
+
+use himal::gpu::GpuContext;
 use himal::gpu::cache::{LoadStatus, cache_file};
-use himal::gpu::{GpuContext, GpuOptions};
 use himal::scene::Scene;
 use himal::{FrameSettings, Renderer};
 
-const SCENE: &str = r#"
-[sun]
-time = "10:30"
-latitude = 45.0
-day_of_year = 172
-turbidity = 3.0
-
-[[material]]
-name = "test"
-albedo_linear = [0.6, 0.3, 0.2]
-glossiness = 0.7
-reflectance = 0.04
-metallic = 0.0
-anisotropy = 0.0
-ao = 1.0
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "test"
-radius = 1.0
-segments = 16
-position = [0.0, 0.0, 0.0]
-
-[[camera]]
-name = "front"
-position = [0.0, 0.6, 4.0]
-target = [0.0, 0.0, 0.0]
-fov_y = 35.0
-"#;
-
-/// A fresh, empty directory under the system temp dir.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("himal-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
 /// A new context (as a new process would have) with the cache in `dir` opened.
 fn context(dir: &Path) -> (GpuContext, LoadStatus) {
-    let ctx = GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)");
+    let ctx = common::context();
     let status = ctx.open_pipeline_cache(dir);
     (ctx, status)
 }
 
+/// The lit sphere of `scenes/lit_sphere.toml`, coarsely tessellated.
 fn scene() -> Scene {
-    Scene::from_toml_str(SCENE, "ball.toml", Path::new(".")).expect("scene")
+    common::scene_with("lit_sphere", &[("segments = 128", "segments = 16")])
 }
 
 #[test]
 fn after_prewarm_a_16_frame_sequence_compiles_nothing() {
-    let dir = temp_dir("cache-prewarm");
+    let dir = common::temp_dir("cache-prewarm");
     let scene = scene();
     let (ctx, status) = context(&dir);
     assert!(matches!(status, LoadStatus::Missing(_)), "{status:?}");
@@ -116,7 +80,7 @@ fn after_prewarm_a_16_frame_sequence_compiles_nothing() {
 
 #[test]
 fn corrupted_or_foreign_cache_is_ignored_and_rebuilt() {
-    let dir = temp_dir("cache-corrupt");
+    let dir = common::temp_dir("cache-corrupt");
     let scene = scene();
     let (ctx, _) = context(&dir);
     let path = cache_file(&dir, &ctx.adapter.get_info());
@@ -177,12 +141,9 @@ fn corrupted_or_foreign_cache_is_ignored_and_rebuilt() {
 fn prewarm_covers_the_material_types_of_the_scene() {
     // E1's material-type axis: a scene with vegetation pre-warms the
     // vegetation G-buffer permutation, one without does not.
-    let grass =
-        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/grass_patch.toml"))
-            .expect("grass scene");
+    let grass = common::scene("grass_patch");
     let count = |scene: &Scene| {
-        let ctx = GpuContext::new(&GpuOptions::default()).expect("GPU");
-        let mut r = Renderer::new(ctx, scene).expect("renderer");
+        let mut r = common::renderer(scene);
         r.prewarm().expect("prewarm");
         r.context().pipelines.len()
     };

@@ -8,7 +8,6 @@ use std::path::Path;
 
 use glam::Vec3;
 use himal::scene::{EnvironmentDesc, EnvironmentImage, Scene};
-use himal::{FrameSettings, ViewBuffer};
 
 const VENICE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -85,16 +84,9 @@ fov_y = 70
     let env = EnvironmentImage::load(&desc).expect("load");
     let camera = scene.camera("main").expect("camera").clone();
     let size = (96u32, 64u32);
-    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
-    s.view = "lighting".parse::<ViewBuffer>().expect("view");
-    s.raw = true;
+    let s = common::raw_settings(&scene, size, "lighting");
     let mut r = common::renderer(&scene);
-    let img = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("rgba");
+    let img = common::render_rgba(&mut r, &camera, &s);
     let mut worst = 0.0f32;
     let mut sum = 0.0f32;
     for y in 0..size.1 {

@@ -4,6 +4,8 @@
 //! brute-force 16k-sample reference and against the CPU twin, and M4 on
 //! the GPU against the CPU.
 
+mod common;
+
 use glam::{Vec2, Vec3};
 use himal::gpu::testing::{run_compute, shared_context};
 use himal::gpu::{GpuContext, read_texture};
@@ -219,65 +221,12 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     assert!(worst < 1e-5, "{worst}");
 }
 
-const PROBE_SCENE: &str = r#"
-[sun]
-time = "12:00"
-latitude = 45.0
-day_of_year = 172
-turbidity = 3.0
-
-[[material]]
-name = "ground"
-albedo_linear = [0.3, 0.35, 0.2]
-glossiness = 0.3
-reflectance = 0.04
-
-[[material]]
-name = "red"
-albedo_linear = [0.7, 0.1, 0.1]
-glossiness = 0.6
-reflectance = 0.04
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "ground"
-size = [40, 40]
-
-[[object]]
-name = "box"
-primitive = "box"
-material = "red"
-size = [1, 2, 1]
-position = [3, 1, 0.5]
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "red"
-radius = 0.8
-position = [-0.5, 0.8, -3]
-
-[[probe]]
-position = [0, 1.2, 0]
-
-[[camera]]
-name = "main"
-position = [0, 1.5, 6]
-target = [0, 1, 0]
-"#;
-
 #[test]
 fn relit_probe_faces_equal_the_lighting_pass_seen_from_the_probe() {
     use himal::passes::envmap::probe::face_camera;
-    use himal::scene::Scene;
-    use himal::{FrameSettings, Renderer, ViewBuffer};
-    let scene =
-        Scene::from_toml_str(PROBE_SCENE, "probe.toml", std::path::Path::new(".")).expect("scene");
-    let new_renderer = || {
-        let ctx = GpuContext::new(&himal::gpu::GpuOptions::default()).expect("GPU");
-        Renderer::new(ctx, &scene).expect("renderer")
-    };
+    use himal::{FrameSettings, ViewBuffer};
+    let scene = common::scene("envmap_probe");
+    let new_renderer = || common::renderer(&scene);
     let size = 128u32;
     let base = |w, h| {
         let mut s = FrameSettings::new(w, h, scene.sun.clone());
@@ -303,12 +252,7 @@ fn relit_probe_faces_equal_the_lighting_pass_seen_from_the_probe() {
         s.view = "lighting".parse::<ViewBuffer>().expect("view");
         s.raw = true;
         s.environment_probes = false;
-        let direct = direct_renderer
-            .render(&face_camera(probe, face), &s)
-            .expect("frame")
-            .image
-            .to_rgba_f32()
-            .expect("float image");
+        let direct = common::render_rgba(&mut direct_renderer, &face_camera(probe, face), &s);
         let n = size as usize;
         for y in 0..n {
             for x in 0..n {
@@ -337,25 +281,15 @@ fn environment_views_read_the_filtered_cube_like_lighting() {
     use glam::{Mat4, Vec4};
     use himal::math::brdf::perceptual_roughness_from_glossiness;
     use himal::passes::envmap::reference::sample_lod;
-    use himal::scene::Scene;
-    use himal::{FrameSettings, Renderer, ViewBuffer};
-    let scene =
-        Scene::from_toml_str(PROBE_SCENE, "probe.toml", std::path::Path::new(".")).expect("scene");
-    let ctx = GpuContext::new(&himal::gpu::GpuOptions::default()).expect("GPU");
-    let mut r = Renderer::new(ctx, &scene).expect("renderer");
-    let camera = scene.camera("main").expect("camera");
+    let (scene, camera) = common::scene_and_camera("envmap_probe", "main");
+    let camera = &camera;
+    let mut r = common::renderer(&scene);
     let (w, h) = (64u32, 48u32);
     let mut raw = |name: &str| {
-        let mut s = FrameSettings::new(w, h, scene.sun.clone());
+        let mut s = common::raw_settings(&scene, (w, h), name);
         s.shadow_resolution = 0;
         s.ao.mode = himal::passes::ao::AoMode::Off;
-        s.view = name.parse::<ViewBuffer>().expect("view");
-        s.raw = true;
-        r.render(camera, &s)
-            .expect("frame")
-            .image
-            .to_rgba_f32()
-            .expect("float image")
+        common::render_rgba(&mut r, camera, &s)
     };
     let (mirror, probe) = (raw("env-mirror"), raw("env-probe"));
     let (normal, depth, gloss, aniso) = (

@@ -148,7 +148,7 @@ fn quads_gltf(name: &str, quads: &[((f32, f32), String)]) -> PathBuf {
         bin.extend([0.0f32, 0.0, 1.0].iter().flat_map(|c| c.to_le_bytes()));
     }
     bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
-    let b64 = base64(&bin);
+    let b64 = common::base64(&bin);
     let nodes: Vec<String> = quads
         .iter()
         .enumerate()
@@ -175,24 +175,6 @@ fn quads_gltf(name: &str, quads: &[((f32, f32), String)]) -> PathBuf {
         std::env::temp_dir().join(format!("himal-forward-{}-{name}.gltf", std::process::id()));
     std::fs::write(&path, json).expect("write temporary glTF");
     path
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 const SIZE: u32 = 64;

@@ -2,48 +2,18 @@
 //! sphere against the CPU twin of the lighting pass, tone mapping against
 //! its CPU twin, and determinism.
 
-use std::path::Path;
-
 mod common;
 
-use common::{environment_specular, lighting_params, pixel_ray, renderer};
+use common::{
+    environment_specular, lighting_params, pixel_ray, raw_settings, render_rgba, renderer,
+    scene_and_camera,
+};
 use glam::Vec3;
 use himal::math::brdf::Material;
 use himal::passes::lighting::reference::shade;
 use himal::passes::post::reference::{log_average_luminance, reinhard};
 use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
-
-const SPHERE_SCENE: &str = r#"
-[sun]
-time = "10:30"
-latitude = 45.0
-day_of_year = 172
-turbidity = 3.0
-
-[[material]]
-name = "test"
-albedo_linear = [0.6, 0.3, 0.2]
-glossiness = 0.7
-reflectance = 0.04
-metallic = 0.0
-anisotropy = 0.0
-ao = 1.0
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "test"
-radius = 1.0
-segments = 128
-position = [0.0, 0.0, 0.0]
-
-[[camera]]
-name = "front"
-position = [0.0, 0.6, 4.0]
-target = [0.0, 0.0, 0.0]
-fov_y = 35.0
-"#;
 
 fn q8(v: f32) -> f32 {
     (v.clamp(0.0, 1.0) * 255.0).round() / 255.0
@@ -68,17 +38,13 @@ fn q8_srgb(v: f32) -> f32 {
 /// filtered cube (L4) instead of SH along the reflection vector.
 /// Returns (mean, worst) relative error.
 fn lit_sphere_errors(env: bool) -> (f32, f32) {
-    let scene = Scene::from_toml_str(SPHERE_SCENE, "sphere.toml", Path::new(".")).expect("scene");
-    let camera = scene.camera("front").expect("camera").clone();
+    let (scene, camera) = scene_and_camera("lit_sphere", "front");
     let (w, h) = (96u32, 96u32);
-    let mut settings = FrameSettings::new(w, h, scene.sun.clone());
-    settings.view = "lighting".parse::<ViewBuffer>().expect("view");
-    settings.raw = true;
+    let mut settings = raw_settings(&scene, (w, h), "lighting");
     settings.aerial_extinction = 0.0;
     settings.environment_specular = env;
     let mut r = renderer(&scene);
-    let frame = r.render(&camera, &settings).expect("frame");
-    let gpu = frame.image.to_rgba_f32().expect("float image");
+    let gpu = render_rgba(&mut r, &camera, &settings);
 
     let mut light = lighting_params(&scene);
     if env {
@@ -152,19 +118,10 @@ fn lit_sphere_with_environment_specular_matches_cpu_twin() {
 
 #[test]
 fn tone_mapping_matches_cpu_log_average_and_reinhard() {
-    let scene = Scene::from_toml_str(SPHERE_SCENE, "sphere.toml", Path::new(".")).expect("scene");
-    let camera = scene.camera("front").expect("camera").clone();
+    let (scene, camera) = scene_and_camera("lit_sphere", "front");
     let (w, h) = (80u32, 48u32);
     let mut r = renderer(&scene);
-    let mut hdr_settings = FrameSettings::new(w, h, scene.sun.clone());
-    hdr_settings.view = "lighting".parse().expect("view");
-    hdr_settings.raw = true;
-    let hdr = r
-        .render(&camera, &hdr_settings)
-        .expect("hdr")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let hdr = render_rgba(&mut r, &camera, &raw_settings(&scene, (w, h), "lighting"));
     let mut settings = FrameSettings::new(w, h, scene.sun.clone());
     settings.bloom.enabled = false; // the CPU twin here is Reinhard alone
     let ldr = r.render(&camera, &settings).expect("final").image;
@@ -213,8 +170,7 @@ fn same_command_gives_same_bytes() {
 
 #[test]
 fn every_debug_view_renders() {
-    let scene = Scene::from_toml_str(SPHERE_SCENE, "sphere.toml", Path::new(".")).expect("scene");
-    let camera = scene.camera("front").expect("camera").clone();
+    let (scene, camera) = scene_and_camera("lit_sphere", "front");
     let mut r = renderer(&scene);
     for name in ViewBuffer::NAMES {
         for raw in [false, true] {

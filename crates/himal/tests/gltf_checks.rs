@@ -8,38 +8,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 use himal::scene::{Camera, Scene};
-
-fn sample(model: &str) -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/assets/gltf"
-    ))
-    .join(model)
-    .join("glTF")
-    .join(format!("{model}.gltf"))
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            out.push(if k <= c.len() {
-                A[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
-}
 
 /// A 3 x 3 m quad (local normal +Z, TANGENT +X) turned by `rotation`, white
 /// metal of roughness 0.2 with KHR_materials_anisotropy; a temporary file.
@@ -75,7 +47,7 @@ fn anisotropic_quad(name: &str, rotation: Quat, strength: f32, angle: f32) -> Pa
   {{"bufferView":1,"componentType":5126,"count":4,"type":"VEC3"}},{{"bufferView":2,"componentType":5126,"count":4,"type":"VEC4"}},
   {{"bufferView":3,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
         bin.len(),
-        base64(&bin)
+        common::base64(&bin)
     );
     let path =
         std::env::temp_dir().join(format!("himal-checks-{}-{name}.gltf", std::process::id()));
@@ -205,7 +177,7 @@ fn screen_axes(camera: &Camera) -> (Vec3, Vec3) {
 
 #[test]
 fn corrected_anisotropy_bands_store_the_plain_bands_direction() {
-    let scene = Scene::from_gltf(&sample("AnisotropyRotationTest")).expect("model");
+    let scene = Scene::from_gltf(&common::gltf_sample("AnisotropyRotationTest")).expect("model");
     let camera = scene.camera("default").expect("camera").clone();
     let size = 256;
     let v = common::raw_views(&scene, &camera, size, &["tangent", "depth"]);
@@ -340,7 +312,7 @@ fn normal_mapped_bumps_tilt_outward_in_both_tangent_tests() {
     let mut report = Vec::new();
     // (model, domes in 5 rows, geometric and normal-mapped)
     for (model, count) in [("NormalTangentTest", 30), ("NormalTangentMirrorTest", 40)] {
-        let scene = Scene::from_gltf(&sample(model)).expect("model");
+        let scene = Scene::from_gltf(&common::gltf_sample(model)).expect("model");
         let camera = scene.camera("default").expect("camera").clone();
         let v = common::raw_views(&scene, &camera, size, &["normal", "depth"]);
         let domes = dome_tilts(&v[0], &v[1], size, &camera);
@@ -359,7 +331,7 @@ fn normal_mapped_bumps_tilt_outward_in_both_tangent_tests() {
     // the normal-mapped domes of NormalTangentTest tilt inward along their
     // bitangent (screen up or right, the rows' UV layouts differ); the
     // geometric domes do not change.
-    let mut scene = Scene::from_gltf(&sample("NormalTangentTest")).expect("model");
+    let mut scene = Scene::from_gltf(&common::gltf_sample("NormalTangentTest")).expect("model");
     for m in &mut scene.meshes {
         for v in &mut m.vertices {
             v.tangent[3] = -v.tangent[3];

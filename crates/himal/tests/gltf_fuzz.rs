@@ -3,41 +3,15 @@
 //! error naming the file; nothing panics. The stable, bounded twin of the
 //! `cargo fuzz` target `fuzz/fuzz_targets/gltf_import.rs` (docs/gltf.md).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use himal::math::sampling::Pcg32;
 use himal::scene::gltf::load_from_bytes;
 
 fn orientation_test() -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/assets/gltf/OrientationTest/glTF/OrientationTest.gltf"
-    ))
-    .to_path_buf()
-}
-
-/// A .glb of `json` (its one buffer made the BIN chunk) and `bin`.
-fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-    let mut json = json.as_bytes().to_vec();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+    common::gltf_sample("OrientationTest")
 }
 
 /// Loads `bytes` as `name`; panics (with the case) on a panic or an error
@@ -72,7 +46,7 @@ fn mutated_inputs_are_errors_or_models_never_panics() {
     // The same document with its buffer in a BIN chunk.
     let glb_json = json.replace(", \n            \"uri\" : \"OrientationTest.bin\"", "");
     assert_ne!(glb_json, json, "the buffer URI was not found");
-    let glb_bytes = glb(&glb_json, &bin);
+    let glb_bytes = common::glb(&glb_json, &bin);
     let glb_path = path.with_file_name("mutated.glb");
     assert!(check(&path, json.as_bytes(), "json as is"));
     assert!(check(&glb_path, &glb_bytes, "glb as is"));

@@ -1,19 +1,9 @@
 //! glTF import: counts against the Khronos sample files, tangents, bad input.
 
-use std::path::{Path, PathBuf};
+mod common;
 
 use glam::Vec3;
 use himal::scene::gltf::{self, AlphaMode};
-
-fn asset(model: &str, file: &str) -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/assets/gltf"
-    ))
-    .join(model)
-    .join("glTF")
-    .join(file)
-}
 
 /// (model, file, meshes, primitives, materials, textures, images, objects),
 /// counted from the JSON independently of the loader (materials: the
@@ -116,7 +106,8 @@ const MODELS: [Counts; 9] = [
 #[test]
 fn every_sample_model_loads_with_the_files_counts() {
     for (model, file, meshes, prims, mats, tex, imgs, objects) in MODELS {
-        let a = gltf::load(&asset(model, file)).unwrap_or_else(|e| panic!("{model}: {e}"));
+        let a =
+            gltf::load(&common::gltf_asset(model, file)).unwrap_or_else(|e| panic!("{model}: {e}"));
         let got = (
             a.gltf_meshes,
             a.gltf_primitives,
@@ -155,7 +146,11 @@ fn every_sample_model_loads_with_the_files_counts() {
 
 #[test]
 fn materials_map_metal_rough_alpha_and_anisotropy() {
-    let a = gltf::load(&asset("AlphaBlendModeTest", "AlphaBlendModeTest.gltf")).unwrap();
+    let a = gltf::load(&common::gltf_asset(
+        "AlphaBlendModeTest",
+        "AlphaBlendModeTest.gltf",
+    ))
+    .unwrap();
     let modes: Vec<AlphaMode> = a.pbr.materials.iter().map(|m| m.alpha_mode).collect();
     assert!(modes.contains(&AlphaMode::Blend) && modes.contains(&AlphaMode::Opaque));
     // The file's cut-offs: default 0.5 plus explicit 0.25 and 0.75.
@@ -165,7 +160,7 @@ fn materials_map_metal_rough_alpha_and_anisotropy() {
             "{modes:?} lacks cut-off {cutoff}"
         );
     }
-    let s = gltf::load(&asset(
+    let s = gltf::load(&common::gltf_asset(
         "AnisotropyStrengthTest",
         "AnisotropyStrengthTest.gltf",
     ))
@@ -180,7 +175,7 @@ fn materials_map_metal_rough_alpha_and_anisotropy() {
         strengths.contains(&0.0) && strengths.contains(&1.0),
         "{strengths:?}"
     );
-    let r = gltf::load(&asset(
+    let r = gltf::load(&common::gltf_asset(
         "AnisotropyRotationTest",
         "AnisotropyRotationTest.gltf",
     ))
@@ -206,7 +201,7 @@ fn materials_map_metal_rough_alpha_and_anisotropy() {
     );
     // Roughness 0.1 -> glossiness 0.9 (the inverse of M1's 1 - glossiness).
     assert!((r.pbr.materials[0].glossiness() - 0.9).abs() < 1e-6);
-    let h = gltf::load(&asset("DamagedHelmet", "DamagedHelmet.gltf")).unwrap();
+    let h = gltf::load(&common::gltf_asset("DamagedHelmet", "DamagedHelmet.gltf")).unwrap();
     let m = &h.pbr.materials[0];
     assert_eq!(m.texture_count(), 5);
     assert!(m.emissive.max_element() > 0.0);
@@ -232,7 +227,7 @@ fn anisotropy_mapping_matches_the_extension_ratio() {
 /// exporter supplied (same algorithm), including the mirrored half's sign.
 #[test]
 fn generated_tangents_match_the_supplied_ones() {
-    let path = asset("NormalTangentMirrorTest", "NormalTangentMirrorTest.gltf");
+    let path = common::gltf_asset("NormalTangentMirrorTest", "NormalTangentMirrorTest.gltf");
     let text = std::fs::read_to_string(&path).unwrap();
     // The same file with TANGENT removed from the attributes.
     let stripped = text.replace("\"TANGENT\"", "\"_TANGENT\"");
@@ -281,8 +276,12 @@ fn load_err(name: &str, bytes: &[u8]) -> String {
 
 #[test]
 fn bad_input_is_an_error_naming_file_and_problem() {
-    let orig = std::fs::read_to_string(asset("OrientationTest", "OrientationTest.gltf")).unwrap();
-    let bin = std::fs::read(asset("OrientationTest", "OrientationTest.bin")).unwrap();
+    let orig = std::fs::read_to_string(common::gltf_asset(
+        "OrientationTest",
+        "OrientationTest.gltf",
+    ))
+    .unwrap();
+    let bin = std::fs::read(common::gltf_asset("OrientationTest", "OrientationTest.bin")).unwrap();
     // Invalid JSON.
     let e = load_err("broken.gltf", &orig.as_bytes()[..orig.len() / 2]);
     assert!(e.contains("not valid glTF"), "{e}");
@@ -290,7 +289,7 @@ fn bad_input_is_an_error_naming_file_and_problem() {
     let e = load_err("nobin.gltf", orig.as_bytes());
     assert!(e.contains("OrientationTest.bin"), "{e}");
     // A GLB: the same JSON with the BIN chunk; then truncated.
-    let glb = make_glb(
+    let glb = common::glb(
         &orig.replace("\"uri\" : \"OrientationTest.bin\"", "\"name\" : \"bin\""),
         &bin,
     );
@@ -304,7 +303,7 @@ fn bad_input_is_an_error_naming_file_and_problem() {
     // A short BIN chunk: the declared buffer length does not fit.
     let e = load_err(
         "short.glb",
-        &make_glb(
+        &common::glb(
             &orig.replace("\"uri\" : \"OrientationTest.bin\"", "\"name\" : \"bin\""),
             &bin[..bin.len() / 2],
         ),
@@ -335,28 +334,4 @@ fn bad_input_is_an_error_naming_file_and_problem() {
     std::fs::write(dir.join("range.gltf"), &text).unwrap();
     let e = gltf::load(&dir.join("range.gltf")).unwrap_err().to_string();
     assert!(e.contains("range.gltf") && e.contains("runs past"), "{e}");
-}
-
-/// A GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
-fn make_glb(json: &str, bin: &[u8]) -> Vec<u8> {
-    let mut j = json.as_bytes().to_vec();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while !b.len().is_multiple_of(4) {
-        b.push(0);
-    }
-    let total = 12 + 8 + j.len() + 8 + b.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((b.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(&b);
-    out
 }

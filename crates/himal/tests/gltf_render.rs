@@ -21,16 +21,6 @@ const MODELS: [&str; 9] = [
     "TextureSettingsTest",
 ];
 
-fn model_path(model: &str) -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/assets/gltf"
-    ))
-    .join(model)
-    .join("glTF")
-    .join(format!("{model}.gltf"))
-}
-
 fn golden_path(model: &str) -> PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/goldens/gltf"))
         .join(format!("{model}.png"))
@@ -38,7 +28,7 @@ fn golden_path(model: &str) -> PathBuf {
 
 /// RGB of the final frame, 8-bit sRGB as written to PNG.
 fn render(model: &str) -> (u32, u32, Vec<u8>) {
-    let scene = Scene::from_gltf(&model_path(model)).expect("model");
+    let scene = Scene::from_gltf(&common::gltf_sample(model)).expect("model");
     let camera = scene.camera("default").expect("auto-framed camera").clone();
     let settings = FrameSettings::new(256, 256, scene.sun.clone());
     let mut r = common::renderer(&scene);
@@ -94,7 +84,7 @@ fn sample_models_match_their_goldens() {
 /// -0.5, so the albedo the G-buffer stores keeps more texture detail.
 #[test]
 fn temporal_aa_biases_texture_mips() {
-    let scene = Scene::from_gltf(&model_path("DamagedHelmet")).expect("model");
+    let scene = Scene::from_gltf(&common::gltf_sample("DamagedHelmet")).expect("model");
     let camera = scene.camera("default").expect("camera").clone();
     let mut r = common::renderer(&scene);
     let mut detail = |aa| {

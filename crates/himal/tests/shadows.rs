@@ -4,63 +4,20 @@
 //! renders (shadows on and off) and the CPU twin of the sun term:
 //! `vis = 1 - (L_off - L_on) / sun_term`.
 
-use std::path::Path;
-
 mod common;
 
-use common::{lighting_params, pixel_ray, renderer};
+use common::{lighting_params, pixel_ray, raw_settings, render_rgba, renderer, ring, scene_with};
 use glam::Vec3;
-use himal::FrameSettings;
 use himal::math::brdf::Material;
 use himal::passes::lighting::reference::shade;
 use himal::passes::shadows::ShadowMode;
-use himal::scene::Scene;
 
-fn scene(time: &str) -> String {
-    format!(
-        r#"
-[sun]
-time = "{time}"
-latitude = 45.0
-day_of_year = 172
+/// The box of `scenes/shadow_box.toml`.
+const BOX: (Vec3, Vec3) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 6.0, 1.0));
 
-[[material]]
-name = "white"
-albedo_linear = [0.7, 0.7, 0.7]
-glossiness = 0.1
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "white"
-size = [40.0, 40.0]
-
-[[object]]
-name = "box"
-primitive = "box"
-material = "white"
-size = [2.0, 6.0, 2.0]
-position = [0.0, 3.0, 0.0]
-
-[[camera]]
-name = "top"
-position = [0.0, 24.0, 0.0]
-forward = [0.0, -1.0, 0.0]
-up = [0.0, 0.0, -1.0]
-fov_y = 60.0
-"#
-    )
-}
-
-/// Does the ray from `p` toward `d` hit the box [-1,0,-1]..[1,6,1]?
+/// Does the ray from `p` toward `d` hit the box?
 fn hits_box(p: Vec3, d: Vec3) -> bool {
-    let (lo, hi) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 6.0, 1.0));
-    let inv = d.recip();
-    let t0 = (lo - p) * inv;
-    let t1 = (hi - p) * inv;
-    let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element();
-    far >= near.max(1e-4)
+    common::hits_box(p, d, BOX, f32::INFINITY)
 }
 
 #[test]
@@ -74,13 +31,11 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
         .into_iter()
         .flat_map(|t| variants.map(|v| (t, v)))
     {
-        let text = scene(time);
-        let scene = Scene::from_toml_str(&text, "shadow_box.toml", Path::new(".")).expect("scene");
+        let time_of_day = format!("time = \"{time}\"");
+        let scene = scene_with("shadow_box", &[("time = \"12:00\"", &time_of_day)]);
         let camera = scene.camera("top").expect("camera").clone();
         let mut r = renderer(&scene);
-        let mut s = FrameSettings::new(w, h, scene.sun.clone());
-        s.view = "lighting".parse().expect("view");
-        s.raw = true;
+        let mut s = raw_settings(&scene, (w, h), "lighting");
         s.aerial_extinction = 0.0;
         s.shadows.mode = mode;
         s.shadows.max_distance = max_distance;
@@ -89,12 +44,7 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
         assert_eq!(frame.shadows.static_shown, mode == ShadowMode::CsmStatic);
         let on = frame.image.to_rgba_f32().expect("f32");
         s.shadow_resolution = 0;
-        let off = r
-            .render(&camera, &s)
-            .expect("off")
-            .image
-            .to_rgba_f32()
-            .expect("f32");
+        let off = render_rgba(&mut r, &camera, &s);
 
         let light = lighting_params(&scene);
         let m = Material {
@@ -121,11 +71,7 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
                 }
                 // Away from penumbrae: every point within 0.15 m agrees.
                 let cpu_lit = !hits_box(p, light.sun_direction);
-                let stable = (0..8).all(|k| {
-                    let a = k as f32 * std::f32::consts::TAU / 8.0;
-                    let o = p + Vec3::new(a.cos(), 0.0, a.sin()) * 0.15;
-                    hits_box(o, light.sun_direction) != cpu_lit
-                });
+                let stable = ring(p, 0.15).all(|o| hits_box(o, light.sun_direction) != cpu_lit);
                 if !stable {
                     continue;
                 }

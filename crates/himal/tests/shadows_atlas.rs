@@ -2,19 +2,11 @@
 //! overlap and stay inside the atlas, more important lights never get
 //! smaller tiles, and tiles stay put while lights move a little.
 
+mod common;
+
+use common::Lcg;
 use glam::Vec3;
 use himal::passes::shadows::atlas::{AtlasAllocator, AtlasRequest, AtlasTile, importance};
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 fn random_requests(rng: &mut Lcg, n: usize) -> Vec<AtlasRequest> {
     (0..n)

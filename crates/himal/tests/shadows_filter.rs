@@ -2,6 +2,9 @@
 //! twin (`passes/shadows/reference.rs`) on a tiny 16x16 depth map, and the
 //! disk rotation hash against its twin.
 
+mod common;
+
+use common::Lcg;
 use glam::Vec2;
 use himal::gpu::pipeline::Program;
 use himal::gpu::testing::shared_context;
@@ -38,18 +41,6 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     );
 }
 "#;
-
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 #[test]
 fn poisson_filter_matches_the_cpu_twin() {

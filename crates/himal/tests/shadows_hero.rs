@@ -2,46 +2,12 @@
 //! with cascades too coarse for it. The mask (R) against CPU ray casting,
 //! with and without the hero map.
 
-use std::path::Path;
-
 mod common;
 
-use common::{lighting_params, pixel_ray, renderer};
+use common::{
+    lighting_params, pixel_ray, raw_settings, render_rgba, renderer, ring, scene_and_camera,
+};
 use glam::Vec3;
-use himal::FrameSettings;
-use himal::scene::Scene;
-
-const SCENE: &str = r#"
-[sun]
-time = "14:00"
-latitude = 45.0
-day_of_year = 172
-
-[[material]]
-name = "white"
-albedo_linear = [0.7, 0.7, 0.7]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "white"
-size = [40.0, 40.0]
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "white"
-radius = 0.5
-position = [0.0, 1.2, 0.0]
-orbit = { radius = 1.0, period = 8.0, phase = 0 }
-
-[[camera]]
-name = "top"
-position = [0.0, 8.0, 0.0]
-forward = [0.0, -1.0, 0.0]
-up = [0.0, 0.0, -1.0]
-fov_y = 50.0
-"#;
 
 fn hits_sphere(p: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
     let oc = p - c;
@@ -52,8 +18,7 @@ fn hits_sphere(p: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
 
 /// (shadowed pixels agreeing, shadowed pixels) away from penumbrae.
 fn agreement(hero: bool) -> (usize, usize) {
-    let scene = Scene::from_toml_str(SCENE, "hero.toml", Path::new(".")).expect("scene");
-    let camera = scene.camera("top").expect("camera").clone();
+    let (scene, camera) = scene_and_camera("shadow_hero", "top");
     let ball = scene
         .objects
         .iter()
@@ -63,18 +28,11 @@ fn agreement(hero: bool) -> (usize, usize) {
     let sun = lighting_params(&scene).sun_direction;
     let mut r = renderer(&scene);
     let size = 128;
-    let mut s = FrameSettings::new(size, size, scene.sun.clone());
-    s.view = "shadow-mask".parse().expect("view");
-    s.raw = true;
+    let mut s = raw_settings(&scene, (size, size), "shadow-mask");
     // 128² cascades: coarse for a 1 m ball (texels of tens of cm, bias of two).
     s.shadow_resolution = 128;
     s.shadows.hero_resolution = if hero { 256 } else { 0 };
-    let mask = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let mask = render_rgba(&mut r, &camera, &s);
     let (mut ok, mut n) = (0, 0);
     for y in 0..size {
         for x in 0..size {
@@ -85,11 +43,7 @@ fn agreement(hero: bool) -> (usize, usize) {
             let p = camera.position + d * (-camera.position.y / d.y);
             let lit = !hits_sphere(p, sun, center, 0.5);
             // Away from penumbrae: every point within 5 cm agrees.
-            let stable = (0..8).all(|k| {
-                let a = k as f32 * std::f32::consts::TAU / 8.0;
-                let o = p + Vec3::new(a.cos(), 0.0, a.sin()) * 0.05;
-                hits_sphere(o, sun, center, 0.5) != lit
-            });
+            let stable = ring(p, 0.05).all(|o| hits_sphere(o, sun, center, 0.5) != lit);
             if !stable || lit {
                 continue;
             }

@@ -4,80 +4,26 @@
 //! second as their ranges overlap); the lights' shading against the CPU
 //! twin in `passes/lighting/reference.rs`.
 
-use std::path::Path;
-
 mod common;
 
-use common::{pixel_ray, renderer};
+use common::{
+    parse_scene, pixel_ray, raw_settings, render_rgba, renderer, ring, scene_and_camera,
+    scene_text_with,
+};
 use glam::Vec3;
-use himal::FrameSettings;
-use himal::scene::Scene;
 
-const SCENE: &str = r#"
-[sun]
-time = "12:00"
-
-[[material]]
-name = "white"
-albedo_linear = [0.7, 0.7, 0.7]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "white"
-size = [40.0, 40.0]
-
-[[object]]
-name = "box"
-primitive = "box"
-material = "white"
-size = [2.0, 2.0, 2.0]
-position = [0.0, 1.0, 0.0]
-
-[[light]]
-name = "lamp"
-kind = "point"
-position = [3.0, 3.0, 1.0]
-intensity = 500.0
-range = 25.0
-
-[[light]]
-name = "spot"
-kind = "spot"
-position = [-4.0, 5.0, -2.0]
-direction = [0.6, -1.0, 0.3]
-outer_angle = 50.0
-inner_angle = 40.0
-intensity = 800.0
-range = 25.0
-
-[[camera]]
-name = "top"
-position = [0.0, 16.0, 0.0]
-forward = [0.0, -1.0, 0.0]
-up = [0.0, 0.0, -1.0]
-fov_y = 60.0
-"#;
-
+/// Does the segment from `p` to `to` cross the box of `scenes/shadow_local.toml`?
 fn hits_box(p: Vec3, to: Vec3) -> bool {
-    let (lo, hi) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
-    let d = to - p;
-    let inv = d.recip();
-    let (t0, t1) = ((lo - p) * inv, (hi - p) * inv);
-    let near = t0.min(t1).max_element().max(1e-4);
-    let far = t0.max(t1).min_element().min(1.0);
-    far >= near
+    let box_ = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
+    common::hits_box(p, to - p, box_, 1.0)
 }
 
 #[test]
 fn local_light_shadows_agree_with_ray_casting() {
-    let scene = Scene::from_toml_str(SCENE, "local.toml", Path::new(".")).expect("scene");
-    let camera = scene.camera("top").expect("camera").clone();
+    let (scene, camera) = scene_and_camera("shadow_local", "top");
     let mut r = renderer(&scene);
     let size = 128;
-    let mut s = FrameSettings::new(size, size, scene.sun.clone());
-    s.view = "shadow-mask".parse().expect("view");
-    s.raw = true;
+    let mut s = raw_settings(&scene, (size, size), "shadow-mask");
     s.shadows.atlas_resolution = 4096;
     let frame = r.render(&camera, &s).expect("frame");
     // The camera is inside both ranges: importance 1, the largest tiles.
@@ -99,10 +45,7 @@ fn local_light_shadows_agree_with_ray_casting() {
                     continue;
                 }
                 let lit = !hits_box(p, light.position);
-                let stable = (0..8).all(|k| {
-                    let a = k as f32 * std::f32::consts::TAU / 8.0;
-                    hits_box(p + Vec3::new(a.cos(), 0.0, a.sin()) * 0.12, light.position) != lit
-                });
+                let stable = ring(p, 0.12).all(|o| hits_box(o, light.position) != lit);
                 if !stable {
                     continue;
                 }
@@ -145,30 +88,17 @@ fn without_lights(text: &str) -> String {
 fn local_lighting_matches_the_cpu_twin() {
     use himal::math::brdf::Material;
     use himal::passes::lighting::reference::shade_local;
-    let night = SCENE.replace("time = \"12:00\"", "time = \"00:30\"");
-    let lit = Scene::from_toml_str(&night, "local.toml", Path::new(".")).expect("scene");
-    let dark =
-        Scene::from_toml_str(&without_lights(&night), "dark.toml", Path::new(".")).expect("scene");
+    let night = scene_text_with("shadow_local", &[("time = \"12:00\"", "time = \"00:30\"")]);
+    let lit = parse_scene(&night, "shadow_local.toml");
+    let dark = parse_scene(&without_lights(&night), "dark.toml");
     let camera = lit.camera("top").expect("camera").clone();
     let size = 96;
-    let mut s = FrameSettings::new(size, size, lit.sun.clone());
-    s.view = "lighting".parse().expect("view");
-    s.raw = true;
+    let mut s = raw_settings(&lit, (size, size), "lighting");
     s.aerial_extinction = 0.0;
     // Unshadowed on both sides: the difference is the lights' term alone.
     s.shadow_resolution = 0;
-    let on = renderer(&lit)
-        .render(&camera, &s)
-        .expect("lit")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
-    let off = renderer(&dark)
-        .render(&camera, &s)
-        .expect("dark")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let on = render_rgba(&mut renderer(&lit), &camera, &s);
+    let off = render_rgba(&mut renderer(&dark), &camera, &s);
     let m = Material {
         albedo: glam::Vec3::splat(0.7),
         glossiness: 0.5,

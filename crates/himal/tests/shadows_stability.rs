@@ -4,66 +4,28 @@
 //! frame k sees the ground point of pixel x + 1 of frame k - 1; flicker is
 //! the mean change of the mask at the same ground point between frames.
 
-use std::path::Path;
-
 mod common;
 
-use common::{pixel_ray, renderer};
+use common::{pixel_ray, raw_settings, renderer, scene_and_camera};
 use glam::Vec3;
-use himal::FrameSettings;
-use himal::scene::{Camera, Scene};
-
-const SCENE: &str = r#"
-[sun]
-time = "16:30"
-latitude = 45.0
-day_of_year = 172
-
-[[material]]
-name = "white"
-albedo_linear = [0.7, 0.7, 0.7]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "white"
-size = [80.0, 80.0]
-
-[[object]]
-name = "box"
-primitive = "box"
-material = "white"
-size = [2.0, 6.0, 2.0]
-position = [0.0, 3.0, 0.0]
-
-[[camera]]
-name = "top"
-position = [-4.0, 24.0, 0.0]
-forward = [0.0, -1.0, 0.0]
-up = [0.0, 0.0, -1.0]
-fov_y = 60.0
-"#;
+use himal::scene::Camera;
 
 const SIZE: u32 = 96;
 const FRAMES: usize = 32;
 
+/// Does the ray from `p` toward `d` hit the box of `scenes/shadow_stability.toml`?
 fn hits_box(p: Vec3, d: Vec3) -> bool {
-    let (lo, hi) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 6.0, 1.0));
-    let inv = d.recip();
-    let (t0, t1) = ((lo - p) * inv, (hi - p) * inv);
-    t0.max(t1).min_element() >= t0.min(t1).max_element().max(1e-4)
+    let box_ = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 6.0, 1.0));
+    common::hits_box(p, d, box_, f32::INFINITY)
 }
 
 /// Mean |Δmask| at the same ground point between consecutive frames over
 /// the pixels on shadow edges, and
 /// the cascade texel (m) and camera step (m).
 fn flicker(snap: bool) -> (f64, f32, f32) {
-    let scene = Scene::from_toml_str(SCENE, "stability.toml", Path::new(".")).expect("scene");
-    let camera0 = scene.camera("top").expect("camera").clone();
+    let (scene, camera0) = scene_and_camera("shadow_stability", "top");
     let mut r = renderer(&scene);
-    let mut s = FrameSettings::new(SIZE, SIZE, scene.sun.clone());
-    s.view = "shadow-mask".parse().expect("view");
-    s.raw = true;
+    let mut s = raw_settings(&scene, (SIZE, SIZE), "shadow-mask");
     // Coarse cascades so that one pixel (0.29 m) is about half a texel.
     s.shadow_resolution = 128;
     s.shadows.snap = snap;

@@ -2,7 +2,6 @@
 //! saves over a camera path through a field of boxes (GPU frames).
 
 use std::fmt::Write;
-use std::path::Path;
 
 mod common;
 
@@ -11,7 +10,7 @@ use glam::Vec3;
 use himal::FrameSettings;
 use himal::passes::shadows::ShadowMode;
 use himal::passes::shadows::static_map::StaticMapState;
-use himal::scene::{Aabb, Scene};
+use himal::scene::Aabb;
 
 #[test]
 fn static_map_fills_in_capped_slices_and_follows_the_sun() {
@@ -55,40 +54,10 @@ fn static_map_fills_in_capped_slices_and_follows_the_sun() {
     assert_eq!(fills, 10);
 }
 
-/// A 1 km plane with a 12x12 grid of houses 40 m apart and one orbiting ball.
+/// `scenes/shadow_field.toml` (a 1 km plane, one orbiting ball) with a 12x12
+/// grid of houses 40 m apart.
 fn field() -> String {
-    let mut s = String::from(
-        r#"
-[sun]
-time = "15:00"
-latitude = 45.0
-day_of_year = 172
-
-[[material]]
-name = "white"
-albedo_linear = [0.7, 0.7, 0.7]
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "white"
-size = [1000.0, 1000.0]
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "white"
-radius = 1.0
-position = [0.0, 1.5, -10.0]
-orbit = { radius = 3.0, period = 8.0, phase = 0 }
-
-[[camera]]
-name = "walk"
-position = [-230.0, 2.0, -230.0]
-forward = [1.0, -0.05, 1.0]
-fov_y = 60.0
-"#,
-    );
+    let mut s = common::scene_text("shadow_field");
     for z in 0..12 {
         let _ = write!(
             s,
@@ -102,7 +71,7 @@ fov_y = 60.0
 #[test]
 fn static_map_saves_shadow_draws_on_a_camera_path() {
     let text = field();
-    let scene = Scene::from_toml_str(&text, "field.toml", Path::new(".")).expect("scene");
+    let scene = common::parse_scene(&text, "shadow_field.toml");
     let camera = scene.camera("walk").expect("camera").clone();
     let mut totals = Vec::new();
     for mode in [ShadowMode::Csm, ShadowMode::CsmStatic] {

@@ -18,7 +18,6 @@ use himal::passes::sky::bruneton::{
 };
 use himal::passes::sky::{SkyModel, sun_position};
 use himal::scene::Scene;
-use himal::{FrameSettings, ViewBuffer};
 
 fn test_config() -> AtmosphereConfig {
     AtmosphereConfig::earth(TableSizes::TEST)
@@ -264,19 +263,12 @@ fn sky_pass_and_capture_match_the_cpu_lookup() {
     let scene = Scene::from_toml_str(SKY_SCENE, "sky.toml", Path::new(".")).expect("scene");
     let camera = scene.camera("main").expect("camera").clone();
     let size = (64u32, 48u32);
-    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
-    s.view = "lighting".parse::<ViewBuffer>().expect("view");
-    s.raw = true;
+    let mut s = common::raw_settings(&scene, size, "lighting");
     s.sky_model = SkyModel::Bruneton;
     let mut r = common::renderer(&scene);
     let t = BrunetonTables::compute_with(r.context(), test_config(), None).expect("tables");
     r.set_bruneton_tables(t.0).expect("set tables");
-    let img = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("rgba");
+    let img = common::render_rgba(&mut r, &camera, &s);
     let ctx = r.context();
     let cpu = CpuTables::read(ctx, r.bruneton_tables().expect("tables")).expect("read-back");
     let sun = r.sky_light().expect("sky light").sun_direction;

@@ -5,9 +5,7 @@
 
 mod common;
 
-use std::path::Path;
-
-use common::{environment_specular, lighting_params, pixel_ray, renderer};
+use common::{environment_specular, lighting_params, pixel_ray, render_rgba, renderer};
 use glam::{IVec2, Vec2, Vec3};
 use himal::gpu::testing::shared_context;
 use himal::gpu_scene::SceneGpu;
@@ -19,68 +17,17 @@ use himal::passes::skyocc::{SectorReadback, SkyOccPass, SkyOccView};
 use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
 
-/// Sun, a grey material and a 200 m ground plane at y = 0 around sector (0, 0).
-const GROUND: &str = r#"
-[sun]
-time = "10:00"
-
-[[material]]
-name = "grey"
-albedo_linear = [0.5, 0.5, 0.5]
-glossiness = 0.4
-reflectance = 0.04
-metallic = 0.0
-anisotropy = 0.0
-ao = 1.0
-
-[[object]]
-name = "ground"
-primitive = "plane"
-material = "grey"
-size = [200.0, 200.0]
-position = [32.0, 0.0, 32.0]
-
-"#;
-
-/// On [`GROUND`]: a canyon 6 m wide between two 5 m plateaus (x 10..20 and
-/// 26..36); a 1 m thick, 4 m high wall at x 46..47; all from z 8 to 56,
-/// inside sector (0, 0).
-const CANYON_AND_WALL: &str = r#"
-[[object]]
-name = "plateau_west"
-primitive = "box"
-material = "grey"
-size = [10.0, 5.0, 48.0]
-position = [15.0, 2.5, 32.0]
-
-[[object]]
-name = "plateau_east"
-primitive = "box"
-material = "grey"
-size = [10.0, 5.0, 48.0]
-position = [31.0, 2.5, 32.0]
-
-[[object]]
-name = "wall"
-primitive = "box"
-material = "grey"
-size = [1.0, 4.0, 48.0]
-position = [46.5, 2.0, 32.0]
-
-[[camera]]
-name = "main"
-position = [54.0, 6.0, 44.0]
-target = [40.0, 0.0, 30.0]
-fov_y = 60.0
-"#;
-
-/// [`GROUND`] plus `objects` (scene text) as a scene.
+/// `scenes/skyocc_ground.toml` plus the objects of `scenes/<objects>.toml`.
 fn scene_on_ground(objects: &str) -> Scene {
-    let text = format!("{GROUND}\n{objects}");
-    Scene::from_toml_str(&text, "ground.toml", Path::new(".")).expect("scene")
+    let text = format!(
+        "{}\n{}",
+        common::scene_text("skyocc_ground"),
+        common::scene_text(objects)
+    );
+    common::parse_scene(&text, &format!("skyocc_ground.toml + {objects}.toml"))
 }
 
-/// The analytic height of [`CANYON_AND_WALL`].
+/// The analytic height of `scenes/skyocc_canyon_and_wall.toml`.
 fn canyon_height(x: f32, z: f32) -> f32 {
     if !(8.0..=56.0).contains(&z) {
         return 0.0;
@@ -95,7 +42,7 @@ fn canyon_height(x: f32, z: f32) -> f32 {
 }
 
 fn scene() -> Scene {
-    scene_on_ground(CANYON_AND_WALL)
+    scene_on_ground("skyocc_canyon_and_wall")
 }
 
 /// Twin inputs: bumpy sloped terrain with a pit, and the raw image of that
@@ -261,11 +208,11 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
     assert_eq!(gpu.sky_occlusion.rendered, gpu.sky_occlusion.wanted);
     let img = gpu.image.to_rgba_f32().expect("f32");
     s.sky_occlusion = false;
-    let open = raw_frame(&mut r, &camera, &s);
+    let open = render_rgba(&mut r, &camera, &s);
     // Bent normals off (`--bent-normals off`): the same visibility along n.
     s.sky_occlusion = true;
     s.bent_normals = false;
-    let unbent = raw_frame(&mut r, &camera, &s);
+    let unbent = render_rgba(&mut r, &camera, &s);
     s.bent_normals = true;
     s.sky_occlusion = false;
     let bent_changed = img
@@ -281,9 +228,9 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
     assert!(bent_changed > 200, "{bent_changed}");
     // The same two frames with the environment specular (L3 normalisation).
     s.environment_specular = true;
-    let open_env = raw_frame(&mut r, &camera, &s);
+    let open_env = render_rgba(&mut r, &camera, &s);
     s.sky_occlusion = true;
-    let occluded_env = raw_frame(&mut r, &camera, &s);
+    let occluded_env = render_rgba(&mut r, &camera, &s);
     let ctx = r.context();
     let sector = r
         .sky_occlusion()
@@ -436,43 +383,13 @@ fn lighting_with_sky_occlusion_matches_cpu_twin() {
     assert!(worst_l3 < 0.02, "L3 ratio worst {worst_l3}");
 }
 
-/// One frame's raw (float) output.
-fn raw_frame(
-    r: &mut himal::Renderer,
-    camera: &himal::scene::Camera,
-    s: &FrameSettings,
-) -> Vec<[f32; 4]> {
-    r.render(camera, s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32")
-}
-
-/// On [`GROUND`]: a 20 m wall at 30 degrees to the texel grid.
-const ROTATED_WALL: &str = r#"
-[[object]]
-name = "wall"
-primitive = "box"
-material = "grey"
-size = [20.0, 4.0, 0.5]
-position = [32.0, 2.0, 32.0]
-rotation = [0.0, 30.0, 0.0]
-
-[[camera]]
-name = "main"
-position = [38.5, 2.0, 43.3]
-target = [32.0, 2.0, 32.0]
-fov_y = 60.0
-"#;
-
 /// `--view sky-visibility` along a wall that is not aligned with the texels:
 /// the fade must not step from texel to texel (the streaks of a nearest,
 /// object-top fade height). Measures the mean second difference along
 /// image rows on the wall.
 #[test]
 fn sky_visibility_is_smooth_along_a_rotated_wall() {
-    let scene = scene_on_ground(ROTATED_WALL);
+    let scene = scene_on_ground("skyocc_rotated_wall");
     let camera = scene.camera("main").expect("camera").clone();
     let (w, h) = (160u32, 96u32);
     let mut r = renderer(&scene);
@@ -480,7 +397,7 @@ fn sky_visibility_is_smooth_along_a_rotated_wall() {
     s.view = ViewBuffer::SkyOcc(SkyOccView::Visibility);
     s.raw = true;
     s.sky_occlusion = true;
-    let img = raw_frame(&mut r, &camera, &s);
+    let img = render_rgba(&mut r, &camera, &s);
     // Wall pixels: the ray meets the facing side's plane inside the wall,
     // 0.3 m from its edges.
     let (centre, yaw) = (Vec3::new(32.0, 2.0, 32.0), 30f32.to_radians());
@@ -514,30 +431,12 @@ fn sky_visibility_is_smooth_along_a_rotated_wall() {
     assert!(roughness < 6e-4, "{roughness}");
 }
 
-/// On [`GROUND`]: a static pillar and a moving cart, both 3 m tall.
-const PILLAR_AND_CART: &str = r#"
-[[object]]
-name = "pillar"
-primitive = "box"
-material = "grey"
-size = [2.0, 3.0, 2.0]
-position = [20.0, 1.5, 20.0]
-
-[[object]]
-name = "cart"
-primitive = "box"
-material = "grey"
-size = [2.0, 3.0, 2.0]
-position = [40.0, 1.5, 40.0]
-orbit = { radius = 2.0, period = 10.0, phase = 0 }
-"#;
-
 /// Moving objects stay out of the height field: a sector is rendered once,
 /// and their footprint would stay where they were at that moment.
 #[test]
 fn height_field_holds_static_geometry_only() {
     let ctx = shared_context().expect("GPU");
-    let scene = scene_on_ground(PILLAR_AND_CART);
+    let scene = scene_on_ground("skyocc_pillar_and_cart");
     let gpu_scene = SceneGpu::upload(ctx, &scene).expect("upload");
     let mut pass = SkyOccPass::new(ctx, &scene).expect("pass");
     let sector = pass

@@ -4,27 +4,18 @@
 //! grass cards and of their shadows against CPU ray casting.
 //! Measured numbers: `cargo test --release -p himal --test vegetation -- --nocapture`.
 
-use std::path::Path;
-
 mod common;
 
-use common::{lighting_params, pixel_ray, renderer};
+use common::{lighting_params, pixel_ray, raw_settings, render_rgba, renderer};
 use glam::{Mat4, Vec2, Vec3};
+use himal::FrameSettings;
+use himal::gpu::read_buffer;
 use himal::gpu::testing::run_compute;
-use himal::gpu::{GpuContext, GpuOptions, read_buffer};
 use himal::gpu_scene::uniforms::ViewUniform;
 use himal::gpu_scene::{ObjectGpu, SceneGpu};
 use himal::math::brdf::Material;
 use himal::passes::lighting::reference::shade;
 use himal::scene::{AlphaPattern, Camera, Mesh, Object, Scene, vegetation};
-use himal::{FrameSettings, ViewBuffer};
-
-const GRASS_PATCH: &str = include_str!("scenes/grass_patch.toml");
-const MOVING_SPHERE: &str = include_str!("scenes/moving_sphere.toml");
-
-fn load(text: &str, name: &str) -> Scene {
-    Scene::from_toml_str(text, name, Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
-}
 
 fn struct_layout(module: &naga::Module, name: &str) -> u32 {
     for (_, ty) in module.types.iter() {
@@ -118,7 +109,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
 
 #[test]
 fn orbit_follows_its_formula_and_prev_model_is_the_last_model() {
-    let scene = load(MOVING_SPHERE, "moving_sphere.toml");
+    let scene = common::scene("moving_sphere");
     let (index, sphere) = scene
         .objects
         .iter()
@@ -145,7 +136,7 @@ fn orbit_follows_its_formula_and_prev_model_is_the_last_model() {
         );
     }
 
-    let ctx = GpuContext::new(&GpuOptions::default()).expect("adapter");
+    let ctx = common::context();
     let gpu = SceneGpu::upload(&ctx, &scene).expect("upload");
     assert_eq!(gpu.animated.len(), 1);
     let read = |gpu: &SceneGpu| -> Vec<ObjectGpu> {
@@ -186,15 +177,12 @@ fn ray_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> Option<f32> {
 }
 
 fn motion_settings(scene: &Scene, size: (u32, u32)) -> FrameSettings {
-    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
-    s.view = ViewBuffer::Debug(himal::passes::debug::DebugView::Motion);
-    s.raw = true;
-    s
+    raw_settings(scene, size, "motion")
 }
 
 #[test]
 fn moving_sphere_motion_vectors_match_its_projected_displacement() {
-    let scene = load(MOVING_SPHERE, "moving_sphere.toml");
+    let scene = common::scene("moving_sphere");
     let camera = scene.camera("main").expect("camera").clone();
     let sphere = scene
         .objects
@@ -207,19 +195,9 @@ fn moving_sphere_motion_vectors_match_its_projected_displacement() {
     // Frame 1 at t0; frame 2 a quarter second later (26 cm along the path).
     let (t0, t1) = (1.0f32, 1.25f32);
     s.time_s = t0;
-    let first = r
-        .render(&camera, &s)
-        .expect("frame 1")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let first = render_rgba(&mut r, &camera, &s);
     s.time_s = t1;
-    let mv = r
-        .render(&camera, &s)
-        .expect("frame 2")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let mv = render_rgba(&mut r, &camera, &s);
     // The first frame has no previous time: no motion anywhere.
     let first_max = first
         .iter()
@@ -285,13 +263,16 @@ fn moving_sphere_motion_vectors_match_its_projected_displacement() {
     assert!(worst_ground < 1e-4, "ground motion {worst_ground} px");
 }
 
-/// The grass patch with its sway turned off (exact card geometry) and `density`.
-fn still_grass(density: &str, camera: &str) -> Scene {
-    let text = GRASS_PATCH
-        .replace("sway = 0.02", "sway = 0.0")
-        .replace("density = 60.0", &format!("density = {density}"));
-
-    load(&format!("{text}\n{camera}"), "grass_patch.toml")
+/// The grass patch with its sway turned off (exact card geometry) and
+/// `density`, plus the `[[camera]]` of `scenes/<camera>.toml` if given.
+fn still_grass(density: &str, camera: Option<&str>) -> Scene {
+    let density = format!("density = {density}");
+    let text = common::scene_text_with(
+        "grass_patch",
+        &[("sway = 0.02", "sway = 0.0"), ("density = 60.0", &density)],
+    );
+    let camera = camera.map(common::scene_text).unwrap_or_default();
+    common::parse_scene(&format!("{text}\n{camera}"), "grass_patch.toml")
 }
 
 /// World-space triangles of an object's mesh with their vertex uvs.
@@ -354,20 +335,13 @@ fn grass_cards(scene: &Scene) -> Cards {
 
 #[test]
 fn grass_cards_are_alpha_tested_like_the_cpu_ray_cast() {
-    let scene = still_grass("60.0", "");
+    let scene = still_grass("60.0", None);
     let camera = scene.camera("main").expect("camera").clone();
     let cards = grass_cards(&scene);
     let size = (192u32, 108u32);
     let mut r = renderer(&scene);
-    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
-    s.view = "albedo".parse().expect("view");
-    s.raw = true;
-    let albedo = r
-        .render(&camera, &s)
-        .expect("frame")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let s = raw_settings(&scene, size, "albedo");
+    let albedo = render_rgba(&mut r, &camera, &s);
     // [card pixels, GPU discarded, CPU discarded, agree]
     let (mut card_px, mut gpu_gone, mut cpu_gone, mut agree) = (0, 0, 0, 0);
     for y in 0..size.1 {
@@ -406,42 +380,21 @@ fn grass_cards_are_alpha_tested_like_the_cpu_ray_cast() {
     assert!((g - c).abs() < 0.01, "GPU {g} vs CPU {c}");
 }
 
-const TOP_CAMERA: &str = r#"
-[[camera]]
-name = "top"
-position = [0.3, 4.0, 0.3]
-forward = [0.0, -1.0, 0.0]
-up = [0.0, 0.0, -1.0]
-fov_y = 40.0
-"#;
-
 #[test]
 fn grass_shadows_are_blades_not_cards() {
     // Sparse grass: most shadow rays cross one card, so the footprint shows the pattern.
-    let scene = still_grass("6.0", TOP_CAMERA);
+    let scene = still_grass("6.0", Some("grass_top_camera"));
     let camera = scene.camera("top").expect("camera").clone();
     let cards = grass_cards(&scene);
     let light = lighting_params(&scene);
     let size = (192u32, 192u32);
     let mut r = renderer(&scene);
-    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
-    s.view = "lighting".parse().expect("view");
-    s.raw = true;
+    let mut s = raw_settings(&scene, size, "lighting");
     s.aerial_extinction = 0.0;
     s.shadow_resolution = 4096;
-    let on = r
-        .render(&camera, &s)
-        .expect("on")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let on = render_rgba(&mut r, &camera, &s);
     s.shadow_resolution = 0;
-    let off = r
-        .render(&camera, &s)
-        .expect("off")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let off = render_rgba(&mut r, &camera, &s);
     let soil = Material {
         albedo: Vec3::new(0.42, 0.36, 0.28).map(|c| ((c + 0.055) / 1.055).powf(2.4)),
         glossiness: 0.2,
@@ -493,7 +446,7 @@ fn grass_shadows_are_blades_not_cards() {
 
 #[test]
 fn swaying_grass_has_small_bounded_motion_vectors() {
-    let scene = load(GRASS_PATCH, "grass_patch.toml");
+    let scene = common::scene("grass_patch");
     let camera = scene.camera("main").expect("camera").clone();
     let grass = scene
         .objects
@@ -508,19 +461,9 @@ fn swaying_grass_has_small_bounded_motion_vectors() {
     s.time_s = 2.0;
     r.render(&camera, &s).expect("frame 1");
     s.time_s = 2.0 + dt;
-    let mv = r
-        .render(&camera, &s)
-        .expect("frame 2")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let mv = render_rgba(&mut r, &camera, &s);
     s.view = "albedo".parse().expect("view");
-    let albedo = r
-        .render(&camera, &s)
-        .expect("albedo")
-        .image
-        .to_rgba_f32()
-        .expect("f32");
+    let albedo = render_rgba(&mut r, &camera, &s);
     // Bound: each horizontal component moves at most amplitude * (0.7 w1 + 0.3 w2)
     // per second (weight <= 1), projected at the nearest grass (the patch's
     // nearest corner seen from the camera, >= 2.9 m; the focal length in pixels).

@@ -2,17 +2,201 @@
 // Each test binary uses a subset of these helpers.
 #![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
+
 use glam::{Vec3, Vec4};
-use himal::Renderer;
 use himal::gpu::{GpuContext, GpuOptions};
 use himal::passes::lighting::reference::LightingParams;
 use himal::passes::sky::SkyLight;
 use himal::scene::{Camera, Scene};
+use himal::{FrameSettings, Renderer};
 
-/// A renderer on the adapter present (lavapipe in CI).
+/// `tests/scenes/`, where the shared test scenes live.
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes")
+}
+
+/// Text of `tests/scenes/<name>.toml`.
+pub fn scene_text(name: &str) -> String {
+    let path = scenes_dir().join(format!("{name}.toml"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// `tests/scenes/<name>.toml` with `overrides` applied: each `(from, to)`
+/// replaces text that must occur exactly once in the file, so an override
+/// that no longer matches fails instead of silently doing nothing.
+pub fn scene_text_with(name: &str, overrides: &[(&str, &str)]) -> String {
+    let mut text = scene_text(name);
+    for (from, to) in overrides {
+        let n = text.matches(from).count();
+        assert_eq!(n, 1, "override {from:?} occurs {n} times in {name}.toml");
+        text = text.replace(from, to);
+    }
+    text
+}
+
+/// Scene text parsed; `origin` names it in error messages.
+pub fn parse_scene(text: &str, origin: &str) -> Scene {
+    Scene::from_toml_str(text, origin, &scenes_dir()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `tests/scenes/<name>.toml`, parsed.
+pub fn scene(name: &str) -> Scene {
+    scene_with(name, &[])
+}
+
+/// `tests/scenes/<name>.toml` with `overrides` (see [`scene_text_with`]).
+pub fn scene_with(name: &str, overrides: &[(&str, &str)]) -> Scene {
+    parse_scene(&scene_text_with(name, overrides), &format!("{name}.toml"))
+}
+
+/// `tests/scenes/<name>.toml` and its camera `camera`.
+pub fn scene_and_camera(name: &str, camera: &str) -> (Scene, Camera) {
+    let scene = scene(name);
+    let camera = scene.camera(camera).expect("camera").clone();
+    (scene, camera)
+}
+
+/// Settings for a raw frame (no post-processing) of debug view `view`,
+/// `size` pixels, lit by the scene's sun.
+pub fn raw_settings(scene: &Scene, size: (u32, u32), view: &str) -> FrameSettings {
+    let mut s = FrameSettings::new(size.0, size.1, scene.sun.clone());
+    s.view = view.parse().expect("view");
+    s.raw = true;
+    s
+}
+
+/// One frame of `s` as RGBA floats.
+pub fn render_rgba(r: &mut Renderer, camera: &Camera, s: &FrameSettings) -> Vec<[f32; 4]> {
+    r.render(camera, s)
+        .expect("frame")
+        .image
+        .to_rgba_f32()
+        .expect("rgba")
+}
+
+/// Does the ray (or, with `t_max` 1, the segment) `p + t d`, 1e-4 <= t <=
+/// `t_max`, meet the axis-aligned box `lo`..`hi`?
+pub fn hits_box(p: Vec3, d: Vec3, (lo, hi): (Vec3, Vec3), t_max: f32) -> bool {
+    let inv = d.recip();
+    let (t0, t1) = ((lo - p) * inv, (hi - p) * inv);
+    let near = t0.min(t1).max_element().max(1e-4);
+    let far = t0.max(t1).min_element().min(t_max);
+    far >= near
+}
+
+/// Eight points on the horizontal circle of `radius` around `p` (to ask
+/// whether a pixel is away from a penumbra: all of them agree with it).
+pub fn ring(p: Vec3, radius: f32) -> impl Iterator<Item = Vec3> {
+    (0..8).map(move |k| {
+        let a = k as f32 * std::f32::consts::TAU / 8.0;
+        p + Vec3::new(a.cos(), 0.0, a.sin()) * radius
+    })
+}
+
+/// Mean over `pixels` of the temporal standard deviation of channel 0
+/// (R) over `frames`.
+pub fn mean_temporal_std(frames: &[Vec<[f32; 4]>], pixels: &[usize]) -> f32 {
+    let n = frames.len() as f32;
+    let total: f32 = pixels
+        .iter()
+        .map(|&i| {
+            let mean = frames.iter().map(|f| f[i][0]).sum::<f32>() / n;
+            (frames.iter().map(|f| (f[i][0] - mean).powi(2)).sum::<f32>() / n).sqrt()
+        })
+        .sum();
+    total / pixels.len().max(1) as f32
+}
+
+/// `<model>/glTF/<file>` of the Khronos sample models (`shared/assets/gltf`).
+pub fn gltf_asset(model: &str, file: &str) -> PathBuf {
+    Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/assets/gltf"
+    ))
+    .join(model)
+    .join("glTF")
+    .join(file)
+}
+
+/// The `.gltf` file of sample model `model`.
+pub fn gltf_sample(model: &str) -> PathBuf {
+    gltf_asset(model, &format!("{model}.gltf"))
+}
+
+/// Standard base64 with padding (for `data:` URIs in generated glTF files).
+pub fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            out.push(if k <= c.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
+/// A GLB container of `json` and `bin`: header, JSON chunk (space-padded),
+/// BIN chunk (zero-padded).
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// Deterministic pseudo-random numbers in [0, 1).
+pub struct Lcg(pub u64);
+impl Lcg {
+    pub fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A new context on the adapter present (lavapipe in CI), as a new process
+/// would have it.
+pub fn context() -> GpuContext {
+    GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)")
+}
+
+/// A renderer on a new context.
 pub fn renderer(scene: &Scene) -> Renderer {
-    let ctx = GpuContext::new(&GpuOptions::default()).expect("a GPU adapter (lavapipe in CI)");
-    Renderer::new(ctx, scene).expect("renderer")
+    Renderer::new(context(), scene).expect("renderer")
+}
+
+/// A fresh, empty directory `himal-<name>-<pid>` under the system temp dir.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("himal-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
 }
 
 /// Raw debug views (`lighting`, `normal`, `tangent`, `depth`, ...) of
@@ -22,15 +206,9 @@ pub fn raw_views(scene: &Scene, camera: &Camera, size: u32, names: &[&str]) -> V
     names
         .iter()
         .map(|name| {
-            let mut s = himal::FrameSettings::new(size, size, scene.sun.clone());
-            s.view = name.parse().expect("view");
-            s.raw = true;
+            let mut s = raw_settings(scene, (size, size), name);
             s.aa = himal::passes::aa::AaMode::None;
-            r.render(camera, &s)
-                .expect("frame")
-                .image
-                .to_rgba_f32()
-                .expect("rgba")
+            render_rgba(&mut r, camera, &s)
         })
         .collect()
 }
