@@ -16,23 +16,17 @@ const W: usize = 24;
 const H: usize = 20;
 
 fn texture(ctx: &GpuContext, format: wgpu::TextureFormat) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.aa_buffers"),
-        size: wgpu::Extent3d {
-            width: W as u32,
-            height: H as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    himal::gpu::texture_2d(
+        &ctx.device,
+        "test.aa_buffers",
+        (W as u32, H as u32),
+        1,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
+        wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_DST
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    )
 }
 
 /// Uploads `plane` as f16 texels and returns it rounded as the GPU holds it.

@@ -22,23 +22,17 @@ fn texture(
     bytes: &[u8],
     bpp: u32,
 ) -> wgpu::Texture {
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.smaa"),
-        size: wgpu::Extent3d {
-            width: w as u32,
-            height: h as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    let t = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.smaa",
+        (w as u32, h as u32),
+        1,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
+        wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_DST
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    );
     if !bytes.is_empty() {
         ctx.queue.write_texture(
             t.as_image_copy(),

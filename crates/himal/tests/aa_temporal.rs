@@ -16,23 +16,17 @@ const H: usize = 20;
 const SRGB: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 fn texture(ctx: &GpuContext, format: wgpu::TextureFormat, bytes: &[u8], bpp: u32) -> wgpu::Texture {
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.aa"),
-        size: wgpu::Extent3d {
-            width: W as u32,
-            height: H as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    let t = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.aa",
+        (W as u32, H as u32),
+        1,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
+        wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_DST
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    );
     if !bytes.is_empty() {
         ctx.queue.write_texture(
             t.as_image_copy(),

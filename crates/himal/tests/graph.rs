@@ -152,20 +152,14 @@ fn graph_executes_clear_and_copy_and_skips_culled_pass() {
 #[test]
 fn imported_texture_without_needed_usage_is_an_error() {
     let (device, _queue) = device();
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("history"),
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let texture = himal::gpu::texture_2d(
+        device,
+        "history",
+        (4, 4),
+        1,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let mut g = FrameGraph::new();
     let h = g.import_texture("history", &texture);
     g.mark_output(h);

@@ -57,22 +57,16 @@ fn blit(ctx: &GpuContext, scale: f32, offset: f32) -> Blit {
 }
 
 fn output(ctx: &GpuContext) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("out"),
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+    himal::gpu::texture_2d(
+        &ctx.device,
+        "out",
+        (4, 4),
+        1,
+        FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    })
+    )
 }
 
 /// The first pixel of `t` after `graph` ran.

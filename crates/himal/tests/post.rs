@@ -41,23 +41,17 @@ fn quantize(img: &Image) -> Image {
 
 /// An Rgba16Float texture holding `img` (sampled, render target, copy).
 fn upload(ctx: &GpuContext, img: &Image) -> wgpu::Texture {
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.hdr"),
-        size: wgpu::Extent3d {
-            width: img.width,
-            height: img.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: HDR_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
+    let texture = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.hdr",
+        (img.width, img.height),
+        1,
+        HDR_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_DST
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    );
     let texels: Vec<f16> = img
         .pixels
         .iter()

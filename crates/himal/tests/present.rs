@@ -34,20 +34,14 @@ fn frame_texture(ctx: &himal::gpu::GpuContext, texels: &[[u8; 4]]) -> wgpu::Text
 }
 
 fn target(ctx: &himal::gpu::GpuContext, format: wgpu::TextureFormat) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.swapchain"),
-        size: wgpu::Extent3d {
-            width: W,
-            height: H,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    himal::gpu::texture_2d(
+        &ctx.device,
+        "test.swapchain",
+        (W, H),
+        1,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    )
 }
 
 #[test]

@@ -52,20 +52,14 @@ fn poisson_filter_matches_the_cpu_twin() {
         .map(|_| ((rng.next() * 16.0).floor() / 16.0 * 65535.0).round() as u16)
         .collect();
     let depth: Vec<f32> = stored.iter().map(|&s| s as f32 / 65535.0).collect();
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test.depth"),
-        size: wgpu::Extent3d {
-            width: N,
-            height: N,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth16Unorm,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let texture = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.depth",
+        (N, N),
+        1,
+        wgpu::TextureFormat::Depth16Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
     ctx.queue.write_texture(
         texture.as_image_copy(),
         bytemuck::cast_slice(&stored),

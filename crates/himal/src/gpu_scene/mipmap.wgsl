@@ -3,14 +3,10 @@
 // levels are decoded by the sampler and re-encoded by the target view, so
 // the average is taken in linear light.
 #import view
+#import fullscreen
 
 @group(0) @binding(0) var source: texture_2d<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -5,6 +5,7 @@
 // CPU twin: present/reference.rs `compose`.
 #import view
 #import color
+#import fullscreen
 
 struct PresentParams {
     overlay_origin: vec2u,
@@ -19,11 +20,6 @@ struct PresentParams {
 @group(0) @binding(0) var<uniform> params: PresentParams;
 @group(0) @binding(1) var frame_load: texture_2d<f32>;
 @group(0) @binding(2) var overlay_load: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) position: vec4f) -> @location(0) vec4f {

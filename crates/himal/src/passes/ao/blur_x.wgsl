@@ -3,15 +3,11 @@
 // Kernel: shaders/ao.wgsl `ao_cross_bilateral`. CPU twin: reference.rs `blur`.
 #import view
 #import ao
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 @group(0) @binding(1) var packed: texture_2d<f32>;
 @group(0) @binding(2) var linear_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -11,6 +11,7 @@
 // CPU twin: reference.rs `temporal_filter`.
 #import view
 #import ao
+#import fullscreen
 
 override STF: bool = true;
 
@@ -21,11 +22,6 @@ override STF: bool = true;
 @group(0) @binding(4) var stability_load: texture_2d<f32>;
 @group(0) @binding(5) var history: texture_2d<f32>;
 @group(0) @binding(6) var linear_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

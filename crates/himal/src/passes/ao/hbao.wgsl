@@ -10,15 +10,11 @@
 #import view
 #import ao
 #import math
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var jitter_load: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 // View-space position of AO texel q: the full-res depth sample at q * scale (clamped to the screen).
 fn texel_position(q: vec2i) -> vec3f {

@@ -4,16 +4,12 @@
 // CPU twin: reference.rs `pack`.
 #import view
 #import ao
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var hbao: texture_2d<f32>;
 @group(0) @binding(3) var linear_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -4,14 +4,10 @@
 // Bindings: params, hbao_load (ao.hbao output). CPU twin: reference.rs `dilate_stability`.
 #import view
 #import ao
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 @group(0) @binding(1) var hbao_load: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -6,6 +6,7 @@
 #import view
 #import color
 #import ao
+#import fullscreen
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -14,11 +15,6 @@ override DISPLAY: bool = true;
 @group(0) @binding(1) var ao: texture_2d<f32>;
 @group(0) @binding(2) var hbao_load: texture_2d<f32>;
 @group(0) @binding(3) var stability_load: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -8,6 +8,7 @@
 #import color
 #import tangent_frame
 #import post
+#import fullscreen
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -23,11 +24,6 @@ override DISPLAY: bool = true;
 @group(0) @binding(8) var<uniform> post: Post;
 @group(0) @binding(9) var bloom: texture_2d<f32>;
 @group(0) @binding(10) var bloom_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 // Display value v in [0,1] stored as-is by the sRGB target.
 fn shown(v: vec3f) -> vec4f {

@@ -143,22 +143,16 @@ impl EnvMapPass {
                 }
             })
             .collect();
-        let dfg = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("envmap.dfg"),
-            size: wgpu::Extent3d {
-                width: DFG_SIZE,
-                height: DFG_SIZE,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ENVMAP_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+        let dfg = crate::gpu::texture_2d(
+            device,
+            "envmap.dfg",
+            (DFG_SIZE, DFG_SIZE),
+            1,
+            ENVMAP_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        );
         let pass = Self {
             size,
             capture: capture_program.compute_pipeline(ctx, "cs_capture", &[])?,

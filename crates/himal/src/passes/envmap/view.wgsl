@@ -11,6 +11,7 @@
 #import brdf
 #import envmap
 #import post
+#import fullscreen
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -23,11 +24,6 @@ override DISPLAY: bool = true;
 @group(0) @binding(5) var env_sampler: sampler;
 @group(0) @binding(6) var<storage, read> exposure: vec4f;
 @group(0) @binding(7) var<uniform> post: Post;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -25,6 +25,7 @@
 #import sky_occlusion
 #import color
 #import math
+#import fullscreen
 
 struct Lighting {
     // xyz: unit vector towards the sun
@@ -126,11 +127,6 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: 
     }
     c += s.diffuse_albedo * e_n * (ao / PI);
     return c;
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
 }
 
 @fragment

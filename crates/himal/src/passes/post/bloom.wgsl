@@ -12,6 +12,7 @@
 #import view
 #import color
 #import post
+#import fullscreen
 
 override OFFSET: f32 = 0.0;
 
@@ -19,11 +20,6 @@ override OFFSET: f32 = 0.0;
 @group(0) @binding(1) var<storage, read> exposure: vec4f;
 @group(0) @binding(2) var src: texture_2d<f32>;
 @group(0) @binding(3) var src_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 fn tap(p: vec2f, inv_size: vec2f) -> vec3f {
     return textureSampleLevel(src, src_sampler, p * inv_size, 0.0).rgb;

@@ -10,6 +10,7 @@
 #import view
 #import color
 #import post
+#import fullscreen
 
 override BLOOM: bool = false;
 override WHITE_POINT: bool = false;
@@ -19,11 +20,6 @@ override WHITE_POINT: bool = false;
 @group(0) @binding(2) var<storage, read> exposure: vec4f;
 @group(0) @binding(3) var bloom: texture_2d<f32>;
 @group(0) @binding(4) var bloom_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 fn reinhard(c: vec3f, scale: f32) -> vec3f {
     let l_w = luminance(c) * scale;

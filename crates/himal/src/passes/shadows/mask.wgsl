@@ -9,6 +9,7 @@
 #import view
 #import tangent_frame
 #import shadow
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> params: ShadowMaskParams;
@@ -51,11 +52,6 @@ fn local_visibility(l: LocalLight, r: Receiver) -> f32 {
     let cell = floor(uv * vec2f(textureDimensions(atlas)));
     return shadow_poisson_visibility(atlas, shadow_sampler, 0, uv, ndc.z, params.filter_params.x,
                                      shadow_rotation_angle(cell));
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
 }
 
 struct Receiver {

@@ -7,6 +7,7 @@
 #import view
 #import color
 #import shadow
+#import fullscreen
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -15,11 +16,6 @@ override DISPLAY: bool = true;
 @group(0) @binding(1) var<uniform> params: ShadowMaskParams;
 @group(0) @binding(2) var depth: texture_depth_2d;
 @group(0) @binding(3) var mask: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

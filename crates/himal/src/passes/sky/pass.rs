@@ -131,20 +131,14 @@ impl SkyPass {
         let mut spec = RenderSpec::fullscreen("sky", &targets);
         spec.depth_stencil = Some(sky_depth_test());
         let pipeline = program.render_pipeline(ctx, &spec)?;
-        let placeholder = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("sky.environment.off"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let placeholder = crate::gpu::texture_2d(
+            &ctx.device,
+            "sky.environment.off",
+            (1, 1),
+            1,
+            wgpu::TextureFormat::Rgba16Float,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         Ok(Self {
             program,
             pipeline,

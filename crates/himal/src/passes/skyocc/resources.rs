@@ -36,20 +36,7 @@ fn texture(
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: layers,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
+    crate::gpu::texture_2d(&ctx.device, label, (size, size), layers, format, usage)
 }
 
 /// A view of every layer as a 2D array (also for single-layer textures).
@@ -121,20 +108,14 @@ impl PoolTextures {
         let vis = texture(ctx, "skyocc.vis", size, layers, VIS_FORMAT, usage);
         let heights = texture(ctx, "skyocc.heights", size, layers, HEIGHTS_FORMAT, usage);
         let n = super::pool::TABLE_SIZE as u32;
-        let table = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("skyocc.table"),
-            size: wgpu::Extent3d {
-                width: n,
-                height: n,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TABLE_FORMAT,
-            usage: U::TEXTURE_BINDING | U::COPY_DST,
-            view_formats: &[],
-        });
+        let table = crate::gpu::texture_2d(
+            &ctx.device,
+            "skyocc.table",
+            (n, n),
+            1,
+            TABLE_FORMAT,
+            U::TEXTURE_BINDING | U::COPY_DST,
+        );
         let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("skyocc.sampler"),
             mag_filter: wgpu::FilterMode::Linear,

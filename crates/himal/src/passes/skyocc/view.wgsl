@@ -7,6 +7,7 @@
 #import color
 #import tangent_frame
 #import sky_occlusion
+#import fullscreen
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -18,11 +19,6 @@ override DISPLAY: bool = true;
 @group(0) @binding(4) var skyocc_vis: texture_2d_array<f32>;
 @group(0) @binding(5) var skyocc_heights_load: texture_2d_array<f32>;
 @group(0) @binding(6) var skyocc_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {

@@ -5,15 +5,11 @@
 // wins. Colour is sampled bilinearly in linear space (sRGB texture).
 // CPU twin: smaa/reference.rs.
 #import view
+#import fullscreen
 
 @group(0) @binding(0) var color: texture_2d<f32>;
 @group(0) @binding(1) var weights_tex: texture_2d<f32>;
 @group(0) @binding(2) var linear_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 fn smaa_weights_at(p: vec2i) -> vec4f {
     let q = clamp(p, vec2i(0), vec2i(textureDimensions(weights_tex)) - 1);

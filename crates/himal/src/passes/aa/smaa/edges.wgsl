@@ -10,6 +10,7 @@
 #import view
 #import color
 #import tangent_frame
+#import fullscreen
 
 override THRESHOLD: f32 = 0.1;
 override PREDICATION: bool = true;
@@ -25,11 +26,6 @@ const LOCAL_CONTRAST_ADAPTATION: f32 = 2.0;
 @group(0) @binding(0) var color: texture_2d<f32>;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var gbuffer_frame: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 fn smaa_clamp(p: vec2i) -> vec2i {
     return clamp(p, vec2i(0), vec2i(textureDimensions(color)) - 1);

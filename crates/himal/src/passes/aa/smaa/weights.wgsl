@@ -16,6 +16,7 @@
 // where the line ends in a corner, so sharp corners stay sharp.
 // Output: RG = top edge weights, BA = left edge weights. CPU twin: smaa/reference.rs.
 #import view
+#import fullscreen
 
 override MAX_SEARCH_STEPS: f32 = 8.0;
 // Subsample indices of SMAA T2x (0 for 1x): area table for horizontal / vertical edges.
@@ -39,11 +40,6 @@ const SEARCHTEX_PACKED_SIZE: vec2f = vec2f(64.0, 16.0);
 @group(0) @binding(2) var search_tex: texture_2d<f32>;
 @group(0) @binding(3) var linear_sampler: sampler;
 @group(0) @binding(4) var point_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 fn smaa_edges_at(tc: vec2f) -> vec2f {
     return textureSampleLevel(edges_tex, linear_sampler, tc, 0.0).rg;

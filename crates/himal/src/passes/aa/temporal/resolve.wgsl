@@ -15,6 +15,7 @@
 // CPU twin: temporal/reference.rs.
 #import view
 #import aa
+#import fullscreen
 
 override MODE: u32 = 2u;
 // The motion input is aa.taa_motion's stabilised jitter-free motion.
@@ -30,11 +31,6 @@ override JITTER_FREE_MOTION: bool = false;
 struct ResolveOut {
     @location(0) color: vec4f,
     @location(1) motion: vec2f,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
 }
 
 fn aa_load(t: texture_2d<f32>, p: vec2i) -> vec3f {

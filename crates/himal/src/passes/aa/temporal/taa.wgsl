@@ -10,6 +10,7 @@
 #import view
 #import color
 #import aa
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AaParams;
 @group(0) @binding(1) var input: texture_2d<f32>;
@@ -21,11 +22,6 @@
 struct TaaOut {
     @location(0) history: vec4f,
     @location(1) color: vec4f,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
 }
 
 @fragment

@@ -12,6 +12,7 @@
 // CPU twin: temporal/reference.rs `taa_ao`.
 #import view
 #import aa
+#import fullscreen
 
 override JITTER_FREE_MOTION: bool = false;
 
@@ -24,11 +25,6 @@ override JITTER_FREE_MOTION: bool = false;
 struct TaaAoOut {
     @location(0) ao: vec4f,
     @location(1) history: vec4f,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
 }
 
 @fragment

@@ -10,16 +10,12 @@
 // CPU twin: temporal/reference.rs `taa_motion`.
 #import view
 #import aa
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AaParams;
 @group(0) @binding(1) var motion: texture_2d<f32>;
 @group(0) @binding(2) var history: texture_2d<f32>;
 @group(0) @binding(3) var linear_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec2f {

@@ -5,14 +5,10 @@
 // CPU twin: temporal/reference.rs.
 #import view
 #import aa
+#import fullscreen
 
 @group(0) @binding(0) var<uniform> params: AaParams;
 @group(0) @binding(1) var input: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
-    return fullscreen_clip(i);
-}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
