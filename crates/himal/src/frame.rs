@@ -61,6 +61,35 @@ pub struct Passes {
     pub debug: DebugPass,
 }
 
+impl Passes {
+    /// Every pass of the frame, its pipelines fetched for `scene`'s lights,
+    /// probes and sky-occlusion extent; output passes write `DISPLAY_FORMAT`.
+    pub fn new(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<Self, GpuError> {
+        use crate::passes::envmap::ENVMAP_SIZE;
+        use crate::settings::DISPLAY_FORMAT;
+        Ok(Self {
+            shadows: ShadowPass::new(ctx, scene)?,
+            gbuffer: GBufferPass::new(ctx)?,
+            ao: AoPass::new(ctx)?,
+            envmap: EnvMapPass::new(ctx, ENVMAP_SIZE)?,
+            env_view: EnvViewPass::new(ctx)?,
+            probes: ProbeSet::new(ctx, &scene.probes, ENVMAP_SIZE)?,
+            lighting: LightingPass::new(ctx)?,
+            sky: SkyPass::new(ctx)?,
+            skyocc: SkyOccPass::new(ctx, scene)?,
+            forward: ForwardPass::new(ctx)?,
+            luminance: LuminancePass::new(ctx)?,
+            adapt: AdaptPass::new(ctx)?,
+            bloom: BloomPass::new(ctx)?,
+            tonemap: TonemapPass::new(ctx, DISPLAY_FORMAT)?,
+            smaa: SmaaPass::new(ctx, DISPLAY_FORMAT)?,
+            temporal: TemporalPass::new(ctx, DISPLAY_FORMAT)?,
+            aa_buffers: BufferTaaPass::new(ctx)?,
+            debug: DebugPass::new(ctx)?,
+        })
+    }
+}
+
 /// What the frame reads that outlives it.
 pub struct FrameInputs<'a> {
     pub ctx: &'a GpuContext,

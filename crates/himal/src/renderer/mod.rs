@@ -17,17 +17,13 @@ use crate::gpu_scene::SceneGpu;
 use crate::gpu_scene::uniforms::{LightingUniform, ViewUniform};
 use crate::graph::{History, PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
-use crate::passes::ao::{AoMode, AoPass, AoUniform};
-use crate::passes::debug::DebugPass;
-use crate::passes::envmap::probe::ProbeSet;
-use crate::passes::envmap::{ENVMAP_SIZE, EnvMapPass, EnvViewPass};
-use crate::passes::gbuffer::{GBufferKey, GBufferPass};
-use crate::passes::lighting::{LightingKey, LightingPass};
-use crate::passes::post::{
-    AdaptPass, BloomPass, BloomSettings, LuminanceBuffers, LuminancePass, TonemapPass,
-};
-use crate::passes::shadows::{ShadowPass, ShadowStats};
-use crate::passes::sky::{SkyGpuParams, SkyLight, SkyModel, SkyPass};
+use crate::passes::ao::{AoMode, AoUniform};
+use crate::passes::envmap::EnvMapPass;
+use crate::passes::gbuffer::GBufferKey;
+use crate::passes::lighting::LightingKey;
+use crate::passes::post::{BloomSettings, LuminanceBuffers};
+use crate::passes::shadows::ShadowStats;
+use crate::passes::sky::{SkyGpuParams, SkyLight, SkyModel};
 use crate::scene::{Camera, Scene, SunDesc};
 pub use crate::settings::{
     DEFAULT_SHADOW_RESOLUTION, DISPLAY_FORMAT, FrameSettings, RAW_FORMAT, ViewBuffer,
@@ -134,26 +130,7 @@ struct SunKey(f32, f32, u32, f32);
 impl Renderer {
     /// Creates every pipeline and uploads the scene.
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
-        let mut passes = Passes {
-            shadows: ShadowPass::new(&ctx, scene)?,
-            gbuffer: GBufferPass::new(&ctx)?,
-            ao: AoPass::new(&ctx)?,
-            envmap: EnvMapPass::new(&ctx, ENVMAP_SIZE)?,
-            env_view: EnvViewPass::new(&ctx)?,
-            probes: ProbeSet::new(&ctx, &scene.probes, ENVMAP_SIZE)?,
-            lighting: LightingPass::new(&ctx)?,
-            sky: SkyPass::new(&ctx)?,
-            skyocc: crate::passes::skyocc::SkyOccPass::new(&ctx, scene)?,
-            forward: crate::passes::forward::ForwardPass::new(&ctx)?,
-            luminance: LuminancePass::new(&ctx)?,
-            adapt: AdaptPass::new(&ctx)?,
-            bloom: BloomPass::new(&ctx)?,
-            tonemap: TonemapPass::new(&ctx, DISPLAY_FORMAT)?,
-            smaa: crate::passes::aa::SmaaPass::new(&ctx, DISPLAY_FORMAT)?,
-            temporal: crate::passes::aa::TemporalPass::new(&ctx, DISPLAY_FORMAT)?,
-            aa_buffers: crate::passes::aa::BufferTaaPass::new(&ctx)?,
-            debug: DebugPass::new(&ctx)?,
-        };
+        let mut passes = Passes::new(&ctx, scene)?;
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
         passes.forward.prepare(&ctx, &scene_gpu)?;
         for key in GBufferKey::for_scene(&scene_gpu, false) {
