@@ -7,7 +7,7 @@
 use himal::gpu::GpuContext;
 use himal::gpu::pipeline::{Program, RenderSpec, target, uniform_buffer};
 use himal::gpu::testing::shared_context;
-use himal::graph::{Fallback, FrameGraph, GraphError, History, TextureDesc, TexturePool};
+use himal::graph::{Fallback, FrameGraph, GraphError, History, Node, TextureDesc, TexturePool};
 
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
@@ -76,6 +76,26 @@ fn run(ctx: &GpuContext, graph: FrameGraph<'_>, t: &wgpu::Texture) -> [u8; 4] {
     [px.bytes[0], px.bytes[1], px.bytes[2], px.bytes[3]]
 }
 
+/// The blit node into `out` with `scale` and `view` bound; `rest` binds the others.
+fn blit_graph<'a>(
+    b: &'a Blit,
+    out: &'a wgpu::Texture,
+    rest: &dyn for<'g> Fn(Node<'g, 'a>) -> Node<'g, 'a>,
+) -> FrameGraph<'a> {
+    let mut g = FrameGraph::new();
+    let o = g.import_texture("out", out);
+    let node = g
+        .fullscreen("test.blit", &b.program)
+        .pipeline(Ok(b.pipeline.clone()))
+        .uniform("scale", &b.scale)
+        .uniform("view", &b.view);
+    let o = rest(node)
+        .color(o, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
+        .draw();
+    g.mark_output(o);
+    g
+}
+
 fn compile_error(graph: FrameGraph<'_>) -> String {
     match graph.compile() {
         Ok(_) => panic!("a node with mismatched bindings compiled"),
@@ -89,72 +109,37 @@ fn node_bindings_must_match_the_shader() {
     let b = blit(ctx, 1.0, 0.0);
     let out = output(ctx);
 
+    fn white<'g, 'a>(n: Node<'g, 'a>) -> Node<'g, 'a> {
+        n.optional("src", None, Fallback::White)
+    }
+
     // A name the shader does not have.
-    let mut g = FrameGraph::new();
-    let o = g.import_texture("out", &out);
-    g.fullscreen("test.blit", &b.program)
-        .pipeline(Ok(b.pipeline.clone()))
-        .uniform("scale", &b.scale)
-        .uniform("view", &b.view)
-        .optional("src", None, Fallback::White)
-        .sampler("src_sampler", &b.sampler)
-        .sampler("srcc_sampler", &b.sampler)
-        .color(o, wgpu::LoadOp::Load)
-        .draw();
-    g.mark_output(o);
-    let e = compile_error(g);
+    let e = compile_error(blit_graph(&b, &out, &|n| {
+        white(n)
+            .sampler("src_sampler", &b.sampler)
+            .sampler("srcc_sampler", &b.sampler)
+    }));
     assert!(
         e.contains("test.blit") && e.contains("\"srcc_sampler\""),
         "{e}"
     );
-
     // A binding nobody gave.
-    let mut g = FrameGraph::new();
-    let o = g.import_texture("out", &out);
-    g.fullscreen("test.blit", &b.program)
-        .pipeline(Ok(b.pipeline.clone()))
-        .uniform("scale", &b.scale)
-        .uniform("view", &b.view)
-        .optional("src", None, Fallback::White)
-        .color(o, wgpu::LoadOp::Load)
-        .draw();
-    g.mark_output(o);
-    let e = compile_error(g);
+    let e = compile_error(blit_graph(&b, &out, &white));
     assert!(
         e.contains("test.blit") && e.contains("\"src_sampler\"") && e.contains("not bound"),
         "{e}"
     );
-
     // The wrong kind: a buffer where the shader samples a texture.
-    let mut g = FrameGraph::new();
-    let o = g.import_texture("out", &out);
-    g.fullscreen("test.blit", &b.program)
-        .pipeline(Ok(b.pipeline.clone()))
-        .uniform("scale", &b.scale)
-        .uniform("view", &b.view)
-        .uniform("src", &b.scale)
-        .sampler("src_sampler", &b.sampler)
-        .color(o, wgpu::LoadOp::Load)
-        .draw();
-    g.mark_output(o);
-    let e = compile_error(g);
+    let e = compile_error(blit_graph(&b, &out, &|n| {
+        n.uniform("src", &b.scale)
+            .sampler("src_sampler", &b.sampler)
+    }));
     assert!(
         e.contains("\"src\"") && e.contains("a texture, given a buffer"),
         "{e}"
     );
-
     // Matching bindings run: white fallback x 1 + 0.
-    let mut g = FrameGraph::new();
-    let o = g.import_texture("out", &out);
-    g.fullscreen("test.blit", &b.program)
-        .pipeline(Ok(b.pipeline.clone()))
-        .uniform("scale", &b.scale)
-        .uniform("view", &b.view)
-        .optional("src", None, Fallback::White)
-        .sampler("src_sampler", &b.sampler)
-        .color(o, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
-        .draw();
-    g.mark_output(o);
+    let g = blit_graph(&b, &out, &|n| white(n).sampler("src_sampler", &b.sampler));
     assert_eq!(run(ctx, g, &out), [255; 4]);
 }
 
