@@ -13,6 +13,25 @@ use crate::scene::{Object, Scene, Vertex};
 pub mod textures;
 pub mod uniforms;
 
+/// Bounds culling, the one CPU selection of draws by their object's box:
+/// the draws of `draws` whose object has a box in `bounds` that `keep`
+/// (object index, box) accepts. Used by the shadow cascades, the local
+/// lights' projectors and atlas, and the sky-occlusion sectors.
+pub fn cull<'d, I>(
+    draws: I,
+    bounds: &'d [crate::scene::Aabb],
+    keep: impl Fn(usize, &crate::scene::Aabb) -> bool + 'd,
+) -> impl Iterator<Item = Draw> + 'd
+where
+    I: IntoIterator<Item = &'d Draw>,
+    I::IntoIter: 'd,
+{
+    draws.into_iter().filter_map(move |d| {
+        let i = d.object as usize;
+        bounds.get(i).filter(|b| keep(i, b)).map(|_| d.clone())
+    })
+}
+
 /// Twin of `Object` in `shaders/scene.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

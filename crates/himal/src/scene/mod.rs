@@ -193,6 +193,24 @@ impl Aabb {
     }
 
     /// Full size along each axis (`max - min`), not the half size.
+    /// Whether the boxes share a point (touching counts).
+    pub fn overlaps(&self, other: &Aabb) -> bool {
+        !self.max.cmplt(other.min).any() && !self.min.cmpgt(other.max).any()
+    }
+
+    /// Whether all eight corners lie beyond one clip plane of `view_proj`
+    /// (reverse-Z, 0 <= z <= w): then nothing of the box can be seen.
+    pub fn outside_clip(&self, view_proj: Mat4) -> bool {
+        let clip = self.corners().map(|c| view_proj * c.extend(1.0));
+        let all = |f: &dyn Fn(&glam::Vec4) -> bool| clip.iter().all(f);
+        all(&|c| c.x < -c.w)
+            || all(&|c| c.x > c.w)
+            || all(&|c| c.y < -c.w)
+            || all(&|c| c.y > c.w)
+            || all(&|c| c.z < 0.0)
+            || all(&|c| c.z > c.w)
+    }
+
     pub fn extent(&self) -> Vec3 {
         self.max - self.min
     }

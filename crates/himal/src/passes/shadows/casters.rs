@@ -1,7 +1,7 @@
 //! Shadow casters on the CPU: per-object bounds, which objects are static
 //! (S2) and the per-map draw lists culled against a sun view.
 
-use crate::gpu_scene::Draw;
+use crate::gpu_scene::{Draw, cull};
 use crate::scene::{Aabb, Object, Scene};
 
 use super::cascades::ShadowFit;
@@ -70,8 +70,8 @@ impl Casters {
         }
     }
 
-    fn is_static(&self, d: &Draw) -> bool {
-        !self.moving.get(d.object as usize).copied().unwrap_or(true)
+    fn is_static(&self, object: usize) -> bool {
+        !self.moving.get(object).copied().unwrap_or(true)
     }
 
     /// Appends to `out` the draws of `opaque` / `vegetation` that may cast
@@ -84,16 +84,9 @@ impl Casters {
         keep: impl Fn(bool) -> bool,
         out: &mut DrawLists,
     ) {
-        let take = |d: &&Draw| {
-            keep(self.is_static(d))
-                && self
-                    .bounds
-                    .get(d.object as usize)
-                    .is_some_and(|b| fit.may_cast(b))
-        };
-        out.opaque.extend(opaque.iter().filter(take).cloned());
-        out.vegetation
-            .extend(vegetation.iter().filter(take).cloned());
+        let take = |i: usize, b: &Aabb| keep(self.is_static(i)) && fit.may_cast(b);
+        out.opaque.extend(cull(opaque, &self.bounds, take));
+        out.vegetation.extend(cull(vegetation, &self.bounds, take));
     }
 
     /// Appends the draws whose bounds overlap `region` (a light's reach),
@@ -107,15 +100,9 @@ impl Casters {
         max_extent: f32,
         out: &mut DrawLists,
     ) {
-        let take = |d: &&Draw| {
-            self.bounds.get(d.object as usize).is_some_and(|b| {
-                !b.max.cmplt(region.min).any()
-                    && !b.min.cmpgt(region.max).any()
-                    && b.extent().max_element() <= max_extent
-            })
-        };
-        out.opaque.extend(opaque.iter().filter(take).cloned());
-        out.vegetation
-            .extend(vegetation.iter().filter(take).cloned());
+        let take =
+            |_: usize, b: &Aabb| b.overlaps(region) && b.extent().max_element() <= max_extent;
+        out.opaque.extend(cull(opaque, &self.bounds, take));
+        out.vegetation.extend(cull(vegetation, &self.bounds, take));
     }
 }

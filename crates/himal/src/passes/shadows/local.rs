@@ -202,21 +202,10 @@ pub fn plan(
 /// (not all eight corners beyond one clip plane): a cube face sees about a
 /// sixth of the light's sphere.
 fn cull_frustum(lists: &DrawLists, casters: &Casters, view_proj: Mat4) -> DrawLists {
-    let inside = |d: &&crate::gpu_scene::Draw| {
-        let Some(b) = casters.bounds.get(d.object as usize) else {
-            return false;
-        };
-        let clip = b.corners().map(|c| view_proj * c.extend(1.0));
-        let all = |f: &dyn Fn(&glam::Vec4) -> bool| clip.iter().all(f);
-        !(all(&|c| c.x < -c.w)
-            || all(&|c| c.x > c.w)
-            || all(&|c| c.y < -c.w)
-            || all(&|c| c.y > c.w)
-            || all(&|c| c.z < 0.0)
-            || all(&|c| c.z > c.w))
-    };
+    let inside = |_: usize, b: &crate::scene::Aabb| !b.outside_clip(view_proj);
+    let bounds = &casters.bounds;
     DrawLists {
-        opaque: lists.opaque.iter().filter(inside).cloned().collect(),
-        vegetation: lists.vegetation.iter().filter(inside).cloned().collect(),
+        opaque: crate::gpu_scene::cull(&lists.opaque, bounds, inside).collect(),
+        vegetation: crate::gpu_scene::cull(&lists.vegetation, bounds, inside).collect(),
     }
 }

@@ -256,23 +256,17 @@ impl SkyOccPass {
             let origin = Self::render_origin(sector);
             // Static geometry only: a moving object's footprint would stay
             // where it was when the sector was rendered.
-            let inside = |d: &&Draw| {
-                let i = d.object as usize;
-                self.moving.get(i) == Some(&false)
-                    && self.bounds.get(i).is_some_and(|b| {
-                        b.max.x >= origin.x
-                            && b.min.x <= origin.x + w
-                            && b.max.z >= origin.y
-                            && b.min.z <= origin.y + w
-                    })
+            let region = Aabb {
+                min: glam::Vec3::new(origin.x, f32::NEG_INFINITY, origin.y),
+                max: glam::Vec3::new(origin.x + w, f32::INFINITY, origin.y + w),
             };
-            let draws: Vec<Draw> = scene
+            let inside =
+                |i: usize, b: &Aabb| self.moving.get(i) == Some(&false) && b.overlaps(&region);
+            let all = scene
                 .draws_opaque
                 .iter()
-                .chain(scene.draws_textured.iter().map(|(d, _)| d))
-                .filter(inside)
-                .cloned()
-                .collect();
+                .chain(scene.draws_textured.iter().map(|(d, _)| d));
+            let draws: Vec<Draw> = crate::gpu_scene::cull(all, &self.bounds, inside).collect();
             let ground_draws = draws
                 .iter()
                 .filter(|d| self.ground.get(d.object as usize) == Some(&true))
