@@ -120,18 +120,25 @@ pub fn view_pipeline(
     program.render_pipeline(ctx, &spec)
 }
 
-/// The pipeline of a debug view into the format of `output`.
-pub fn view_pipeline_for(
+/// A debug view's full-screen node `id` drawing view `view_id` of
+/// `program` into `output` (cleared to black), its pipeline picked by the
+/// output's format; the caller binds what the view reads and draws.
+pub fn view_node<'g, 'a>(
     ctx: &GpuContext,
-    graph: &FrameGraph<'_>,
-    program: &Program,
-    label: &str,
+    graph: &'g mut FrameGraph<'a>,
+    program: &'a Program,
+    id: &str,
     view_id: u32,
     output: TextureHandle,
-) -> Result<wgpu::RenderPipeline, GpuError> {
-    let format = graph
-        .texture_desc(output)
-        .map(|d| d.format)
-        .ok_or_else(|| GpuError::Other(format!("{label}: the output is not in this graph")))?;
-    view_pipeline(ctx, program, label, view_id, format)
+) -> Node<'g, 'a> {
+    let pipeline = match graph.texture_desc(output) {
+        Some(d) => view_pipeline(ctx, program, id, view_id, d.format),
+        None => Err(GpuError::Other(format!(
+            "{id}: the output is not in this graph"
+        ))),
+    };
+    graph
+        .fullscreen(id, program)
+        .pipeline(pipeline)
+        .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
 }

@@ -18,7 +18,7 @@ pub use settings::{AoMode, AoSettings, AoUniform, AoView, jitter_4x4};
 use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{Fallback, FrameGraph, History, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{Step, clear_target, view_pipeline_for};
+use crate::passes::common::{Step, clear_target, view_node};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -283,7 +283,7 @@ impl AoPass {
         targets: AoTargets,
         output: TextureHandle,
     ) -> TextureHandle {
-        let pipeline = view_pipeline_for(
+        let node = view_node(
             ctx,
             graph,
             &self.view_program,
@@ -297,14 +297,10 @@ impl AoPass {
             AoView::Stability => (None, None, Some(targets.stability)),
         };
         // The view reads one buffer; the others are unused by its permutation.
-        graph
-            .fullscreen("ao.view", &self.view_program)
-            .pipeline(pipeline)
-            .uniform("params", &self.params)
+        node.uniform("params", &self.params)
             .optional("ao", ao, Fallback::Black)
             .optional("hbao_load", raw, Fallback::Black)
             .optional("stability_load", stability, Fallback::Black)
-            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }
 }

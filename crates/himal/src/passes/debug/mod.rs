@@ -4,7 +4,7 @@
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, Fallback, FrameGraph, TextureHandle};
-use crate::passes::common::{view_pipeline, view_pipeline_for};
+use crate::passes::common::{view_node, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -61,11 +61,8 @@ impl DebugPass {
         output: TextureHandle,
     ) -> TextureHandle {
         let id = view_kind as u32;
-        let pipeline = view_pipeline_for(ctx, graph, &self.program, "debug.view", id, output);
-        graph
-            .fullscreen("debug.view", &self.program)
-            .pipeline(pipeline)
-            .read("gbuffer_albedo", gbuffer.albedo)
+        let node = view_node(ctx, graph, &self.program, "debug.view", id, output);
+        node.read("gbuffer_albedo", gbuffer.albedo)
             .read("gbuffer_frame", gbuffer.frame)
             .read("gbuffer_material", gbuffer.material)
             .read("motion", gbuffer.motion)
@@ -75,7 +72,6 @@ impl DebugPass {
             .uniform("post", post.post)
             .optional("bloom", post.bloom, Fallback::Black)
             .sampler("bloom_sampler", post.sampler)
-            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }
 }

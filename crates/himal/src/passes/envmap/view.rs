@@ -4,7 +4,7 @@
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, FrameGraph, TextureHandle};
-use crate::passes::common::{view_pipeline, view_pipeline_for};
+use crate::passes::common::{view_node, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::post::PostInputs;
 
@@ -51,7 +51,7 @@ impl EnvViewPass {
         post: PostInputs<'a>,
         output: TextureHandle,
     ) -> TextureHandle {
-        let pipeline = view_pipeline_for(
+        let node = view_node(
             ctx,
             graph,
             &self.program,
@@ -59,17 +59,13 @@ impl EnvViewPass {
             kind as u32,
             output,
         );
-        graph
-            .fullscreen("envmap.view", &self.program)
-            .pipeline(pipeline)
-            .read("gbuffer_frame", gbuffer.frame)
+        node.read("gbuffer_frame", gbuffer.frame)
             .read("gbuffer_material", gbuffer.material)
             .read("depth", gbuffer.depth)
             .read_cube("env_specular", env)
             .sampler("env_sampler", &envmap.sampler)
             .read_buffer("exposure", post.exposure, BufferAccess::StorageRead)
             .uniform("post", post.post)
-            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }
 }

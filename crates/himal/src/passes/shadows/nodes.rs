@@ -2,7 +2,7 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::passes::common::view_pipeline_for;
+use crate::passes::common::view_node;
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
@@ -264,15 +264,10 @@ impl ShadowPass {
         output: TextureHandle,
     ) -> TextureHandle {
         let id = kind.id();
-        let pipeline =
-            view_pipeline_for(ctx, graph, &self.view_program, "shadows.view", id, output);
-        graph
-            .fullscreen("shadows.view", &self.view_program)
-            .pipeline(pipeline)
-            .uniform("params", &self.params)
+        let node = view_node(ctx, graph, &self.view_program, "shadows.view", id, output);
+        node.uniform("params", &self.params)
             .read("depth", depth)
             .read("mask", mask)
-            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }
 }

@@ -22,7 +22,7 @@ use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu};
 use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
-use crate::passes::common::{view_pipeline, view_pipeline_for};
+use crate::passes::common::{view_node, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::{Aabb, Camera, Scene};
 use pool::{Sector, SectorPool, visible_sectors};
@@ -510,18 +510,14 @@ impl SkyOccPass {
         output: TextureHandle,
     ) -> TextureHandle {
         let id = kind as u32;
-        let pipeline = view_pipeline_for(ctx, graph, &self.view_program, "skyocc.view", id, output);
+        let node = view_node(ctx, graph, &self.view_program, "skyocc.view", id, output);
         let b = self.bindings();
-        graph
-            .fullscreen("skyocc.view", &self.view_program)
-            .pipeline(pipeline)
-            .read("gbuffer_frame", gbuffer.frame)
+        node.read("gbuffer_frame", gbuffer.frame)
             .read("depth", gbuffer.depth)
             .external("skyocc_table", b.table)
             .read_array("skyocc_vis", frame.vis)
             .read_array("skyocc_heights_load", frame.heights)
             .sampler("skyocc_sampler", b.sampler)
-            .color(output, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }
 
