@@ -1,6 +1,7 @@
 //! Declare-and-bind nodes and named history on the adapter (lavapipe in CI):
 //! a node whose bindings disagree with its shader fails to compile with the
-//! pass and the binding named; optional inputs bind the graph's fallbacks;
+//! pass and the binding named; optional inputs bind the graph's fallbacks
+//! (a colour or a far-plane depth array, each only where it fits);
 //! frame constants bind themselves; pass errors stop the frame; history
 //! rings rotate, count valid frames, reset and report their memory.
 
@@ -195,6 +196,69 @@ fn optional_inputs_and_frame_constants_bind_themselves() {
     g.mark_output(o);
     let px = run(ctx, g, &out);
     assert_eq!(px[0], 89, "{px:?}");
+}
+
+/// Shadow-map style: out = comparison of 0.5 against `map` (a depth array).
+const SHADOW: &str = r#"
+@group(0) @binding(0) var map: texture_depth_2d_array;
+@group(0) @binding(1) var cmp: sampler_comparison;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_main(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureSampleCompareLevel(map, cmp, vec2<f32>(0.5, 0.5), 0, 0.5));
+}
+"#;
+
+#[test]
+fn an_absent_shadow_map_binds_the_far_plane_and_fallbacks_must_fit() {
+    let ctx = shared_context().expect("GPU (lavapipe)");
+    let program = Program::from_source(ctx, "test/shadow.wgsl", SHADOW).expect("program");
+    let targets = [target(FORMAT)];
+    let pipeline = program
+        .render_pipeline(ctx, &RenderSpec::fullscreen("test.shadow", &targets))
+        .expect("pipeline");
+    let cmp = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let out = output(ctx);
+    let graph = |fallback| {
+        let mut g = FrameGraph::new();
+        let o = g.import_texture("out", &out);
+        let o = g
+            .fullscreen("test.shadow", &program)
+            .pipeline(Ok(pipeline.clone()))
+            .optional_array("map", None, fallback)
+            .sampler("cmp", &cmp)
+            .color(o, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
+            .draw();
+        g.mark_output(o);
+        g
+    };
+    // 0.5 <= 1.0 (the far plane): fully lit.
+    assert_eq!(run(ctx, graph(Fallback::DepthFar), &out), [255; 4]);
+    // A colour fallback where the shader reads a depth array is refused by name.
+    let e = compile_error(graph(Fallback::White));
+    assert!(
+        e.contains("test.shadow") && e.contains("\"map\"") && e.contains("colour fallback"),
+        "{e}"
+    );
+    // And the depth fallback where the shader samples a colour texture.
+    let b = blit(ctx, 1.0, 0.0);
+    let e = compile_error(blit_graph(&b, &out, &|n| {
+        n.optional("src", None, Fallback::DepthFar)
+            .sampler("src_sampler", &b.sampler)
+    }));
+    assert!(
+        e.contains("\"src\"") && e.contains("depth-array fallback"),
+        "{e}"
+    );
 }
 
 #[test]

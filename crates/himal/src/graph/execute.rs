@@ -22,6 +22,7 @@ pub struct PassContext<'e> {
     views: &'e [OnceCell<wgpu::TextureView>],
     buffers: &'e [Option<&'e wgpu::Buffer>],
     fallbacks: &'e [&'e wgpu::TextureView],
+    zero_buffer: &'e wgpu::Buffer,
 }
 
 impl<'e> PassContext<'e> {
@@ -81,6 +82,11 @@ impl<'e> PassContext<'e> {
     /// The graph's constant texture for an absent optional input.
     pub fn fallback(&self, f: super::Fallback) -> &'e wgpu::TextureView {
         self.fallbacks[f.index()]
+    }
+
+    /// The graph's buffer of zeros for an absent optional buffer input.
+    pub fn zero_buffer(&self) -> &'e wgpu::Buffer {
+        self.zero_buffer
     }
 
     /// # Panics
@@ -190,6 +196,7 @@ impl CompiledGraph<'_> {
         let names: Vec<&str> = self.resources.iter().map(|r| r.name.as_str()).collect();
 
         let fallbacks = pool.fallback_views();
+        let zero_buffer = pool.zero_buffer(device);
         let query = timer.as_ref().map(|t| t.query_set());
         for (i, (f, pass)) in self.closures.into_iter().zip(&self.passes).enumerate() {
             if let Some(q) = query {
@@ -207,6 +214,7 @@ impl CompiledGraph<'_> {
                 views: &views,
                 buffers: &buffers,
                 fallbacks: &fallbacks,
+                zero_buffer,
             };
             let result = f(&mut ctx);
             encoder.pop_debug_group();

@@ -29,10 +29,20 @@ pub enum Fallback {
     White,
     /// (0, 0, 0, 0): no contribution.
     Black,
+    /// A one-layer `Depth32Float` array at the far plane (1.0): an absent
+    /// shadow map, nothing occludes.
+    DepthFar,
+    /// A 1x1x1 3D texture of zeros (an absent lookup table).
+    Black3d,
 }
 
 impl Fallback {
-    pub const ALL: [Fallback; 2] = [Fallback::White, Fallback::Black];
+    pub const ALL: [Fallback; 4] = [
+        Fallback::White,
+        Fallback::Black,
+        Fallback::DepthFar,
+        Fallback::Black3d,
+    ];
 
     pub(crate) fn index(self) -> usize {
         self as usize
@@ -41,7 +51,7 @@ impl Fallback {
     pub(crate) fn value(self) -> wgpu::Color {
         match self {
             Fallback::White => wgpu::Color::WHITE,
-            Fallback::Black => wgpu::Color::TRANSPARENT,
+            Fallback::Black | Fallback::DepthFar | Fallback::Black3d => wgpu::Color::TRANSPARENT,
         }
     }
 }
@@ -58,12 +68,23 @@ enum Source<'a> {
     /// Owned outside the graph: uniforms, persistent views, samplers.
     External(wgpu::BindingResource<'a>),
     Fallback(Fallback),
+    /// The graph's buffer of zeros ([`ZERO_BUFFER_BYTES`]) for an absent
+    /// uniform or read-only storage input.
+    ZeroBuffer,
 }
+
+/// Size of the graph's buffer of zeros (an absent optional buffer binding
+/// may need at most this many bytes).
+pub const ZERO_BUFFER_BYTES: u64 = 4096;
 
 impl Source<'_> {
     fn kind(&self) -> &'static str {
         match self {
-            Source::Texture(..) | Source::Fallback(_) => "a texture",
+            Source::Texture(..) => "a texture",
+            Source::Fallback(Fallback::DepthFar) => "the depth-array fallback",
+            Source::Fallback(Fallback::Black3d) => "the 3D fallback",
+            Source::Fallback(_) => "a colour fallback",
+            Source::ZeroBuffer => "the zero buffer",
             Source::Storage(_) | Source::StorageView(..) => "a storage texture",
             Source::Buffer(_) => "a buffer",
             Source::External(wgpu::BindingResource::Sampler(_)) => "a sampler",
@@ -76,11 +97,47 @@ impl Source<'_> {
     fn fits(&self, ty: &wgpu::BindingType) -> bool {
         use wgpu::BindingType as B;
         match self {
-            Source::Texture(..) | Source::Fallback(_) => matches!(ty, B::Texture { .. }),
+            Source::Texture(..) => matches!(ty, B::Texture { .. }),
+            Source::Fallback(f) => match ty {
+                B::Texture {
+                    sample_type,
+                    view_dimension,
+                    ..
+                } => {
+                    let depth = matches!(sample_type, wgpu::TextureSampleType::Depth);
+                    match f {
+                        Fallback::DepthFar => {
+                            depth && *view_dimension == wgpu::TextureViewDimension::D2Array
+                        }
+                        Fallback::White | Fallback::Black => {
+                            !depth && *view_dimension == wgpu::TextureViewDimension::D2
+                        }
+                        Fallback::Black3d => {
+                            !depth && *view_dimension == wgpu::TextureViewDimension::D3
+                        }
+                    }
+                }
+                _ => false,
+            },
             Source::Storage(_) | Source::StorageView(..) => {
                 matches!(ty, B::StorageTexture { .. })
             }
             Source::Buffer(_) => matches!(ty, B::Buffer { .. }),
+            Source::ZeroBuffer => match ty {
+                B::Buffer {
+                    ty: buffer,
+                    min_binding_size,
+                    ..
+                } => {
+                    let read_only = matches!(
+                        buffer,
+                        wgpu::BufferBindingType::Uniform
+                            | wgpu::BufferBindingType::Storage { read_only: true }
+                    );
+                    read_only && min_binding_size.is_none_or(|n| n.get() <= ZERO_BUFFER_BYTES)
+                }
+                _ => false,
+            },
             Source::External(r) => match r {
                 wgpu::BindingResource::Sampler(_) => matches!(ty, B::Sampler(_)),
                 wgpu::BindingResource::TextureView(_) => {
@@ -146,6 +203,11 @@ impl<'a> FrameGraph<'a> {
     /// named and the node does not bind it (view, lighting, sky).
     pub fn set_frame_constants(&mut self, constants: &[(&'static str, &'a wgpu::Buffer)]) {
         self.frame_constants = constants.to_vec();
+    }
+
+    /// The frame constants now in force.
+    pub fn frame_constants(&self) -> Vec<(&'static str, &'a wgpu::Buffer)> {
+        self.frame_constants.clone()
     }
 
     fn node(&mut self, id: &str, program: &'a Program, form: Form) -> Node<'_, 'a> {
@@ -249,6 +311,46 @@ impl<'g, 'a> Node<'g, 'a> {
         }
     }
 
+    /// A texture owned outside the graph that a permutation may not read:
+    /// `None` binds the graph's `fallback`.
+    pub fn optional_external(
+        self,
+        name: &str,
+        view: Option<&'a wgpu::TextureView>,
+        fallback: Fallback,
+    ) -> Self {
+        match view {
+            Some(v) => self.external(name, v),
+            None => self.bind(name, Source::Fallback(fallback)),
+        }
+    }
+
+    /// A uniform or read-only storage buffer owned outside the graph that a
+    /// permutation may not read: `None` binds the graph's buffer of zeros.
+    pub fn optional_buffer(self, name: &str, buffer: Option<&'a wgpu::Buffer>) -> Self {
+        match buffer {
+            Some(b) => self.uniform(name, b),
+            None => self.bind(name, Source::ZeroBuffer),
+        }
+    }
+
+    /// [`Node::optional`] for a 2D-array binding (shadow maps): `h` is
+    /// bound as an array of all its layers.
+    pub fn optional_array(
+        mut self,
+        name: &str,
+        h: Option<TextureHandle>,
+        fallback: Fallback,
+    ) -> Self {
+        match h {
+            Some(h) => self.read_array(name, h),
+            None => {
+                self = self.bind(name, Source::Fallback(fallback));
+                self
+            }
+        }
+    }
+
     /// Orders this node after the writer of `h` without binding it (a
     /// persistent resource bound with [`Node::external`]).
     pub fn after(mut self, h: TextureHandle) -> Self {
@@ -256,7 +358,8 @@ impl<'g, 'a> Node<'g, 'a> {
         self
     }
 
-    /// A uniform or storage buffer owned outside the graph.
+    /// A buffer owned outside the graph (uniform or storage: object
+    /// transforms, parameters).
     pub fn uniform(self, name: &str, buffer: &'a wgpu::Buffer) -> Self {
         self.bind(name, Source::External(buffer.as_entire_binding()))
     }
@@ -483,6 +586,11 @@ impl<'g, 'a> Node<'g, 'a> {
         }
         let written = Written {
             colors: self.colors.iter().map(|c| c.target).collect(),
+            depth: self
+                .depth
+                .as_ref()
+                .filter(|d| d.ops.is_some())
+                .map(|d| d.target),
             storage: self
                 .bindings
                 .iter()
@@ -622,6 +730,8 @@ impl<'g, 'a> Node<'g, 'a> {
 /// The versions a finished node wrote, in declaration order.
 pub struct Written {
     pub colors: Vec<TextureHandle>,
+    /// The written depth attachment's new version.
+    pub depth: Option<TextureHandle>,
     pub storage: Vec<TextureHandle>,
     pub buffers: Vec<BufferHandle>,
 }
@@ -678,6 +788,7 @@ fn resolve<'r>(ctx: &PassContext<'r>, source: &'r Source<'_>) -> Result<Resolved
         }
         Source::External(r) => Resolved::Resource(r.clone()),
         Source::Fallback(f) => Resolved::View(ctx.fallback(*f)),
+        Source::ZeroBuffer => Resolved::Resource(ctx.zero_buffer().as_entire_binding()),
     })
 }
 

@@ -26,6 +26,8 @@ pub struct TexturePool {
     /// Set once a frame that recorded their clears finished recording; until
     /// then every execute records them (a failed frame is never submitted).
     fallbacks_cleared: std::cell::Cell<bool>,
+    /// [`super::node::ZERO_BUFFER_BYTES`] of zeros (wgpu zero-initialises it).
+    zero_buffer: std::cell::OnceCell<wgpu::Buffer>,
 }
 
 impl TexturePool {
@@ -64,10 +66,15 @@ impl TexturePool {
                 .map(|f| fallback_texture(device, *f))
                 .collect();
         }
-        for (f, (_, view)) in Fallback::ALL.iter().zip(&self.fallbacks) {
+        for (f, (texture, view)) in Fallback::ALL.iter().zip(&self.fallbacks) {
+            if *f == Fallback::Black3d {
+                continue; // zero-initialised by wgpu; not a render target
+            }
+            let depth = *f == Fallback::DepthFar;
+            let attachment = depth.then(|| texture.create_view(&Default::default()));
             encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("himal.fallback.clear"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                color_attachments: &[(!depth).then(|| wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
@@ -76,12 +83,33 @@ impl TexturePool {
                         store: wgpu::StoreOp::Store,
                     },
                 })],
-                depth_stencil_attachment: None,
+                depth_stencil_attachment: attachment.as_ref().map(|view| {
+                    wgpu::RenderPassDepthStencilAttachment {
+                        view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }
+                }),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
         }
+    }
+
+    /// The buffer of zeros bound for absent optional buffers.
+    pub(crate) fn zero_buffer(&self, device: &wgpu::Device) -> &wgpu::Buffer {
+        self.zero_buffer.get_or_init(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("himal.fallback.zeros"),
+                size: super::node::ZERO_BUFFER_BYTES,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        })
     }
 
     /// Views of the fallback textures, in `Fallback::ALL` order.
@@ -183,14 +211,43 @@ impl TexturePool {
 
 /// A 1x1 fallback texture (cleared to its value by the first frame).
 fn fallback_texture(device: &wgpu::Device, f: Fallback) -> (wgpu::Texture, wgpu::TextureView) {
+    if f == Fallback::Black3d {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("himal.fallback.Black3d"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        return (texture, view);
+    }
+    let format = match f {
+        Fallback::DepthFar => wgpu::TextureFormat::Depth32Float,
+        Fallback::White | Fallback::Black | Fallback::Black3d => wgpu::TextureFormat::Rgba8Unorm,
+    };
     let texture = crate::gpu::texture_2d(
         device,
         &format!("himal.fallback.{f:?}"),
         (1, 1),
         1,
-        wgpu::TextureFormat::Rgba8Unorm,
+        format,
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
     );
-    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    let dimension = match f {
+        Fallback::DepthFar => Some(wgpu::TextureViewDimension::D2Array),
+        Fallback::White | Fallback::Black | Fallback::Black3d => None,
+    };
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension,
+        ..Default::default()
+    });
     (texture, view)
 }
