@@ -1,7 +1,9 @@
-//! The whole frame, top to bottom, in one place to read.
+//! The whole frame, top to bottom, in one place to read: [`plan`] (each
+//! technique's CPU half) and [`build`] (the graph).
 //!
 //! ```text
-//! envmap.capture | envmap.probeN.* ─> envmap.mips ─> envmap.filter ──────────────┐ (when the sky changed)
+//! skyocc.heightfieldN/groundN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
+//! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static, shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
 //!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
@@ -18,11 +20,13 @@
 //! Passes that reach no output are culled by the graph (tone mapping when a
 //! debug view is shown).
 
+use glam::{Mat4, Vec3};
+
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::SceneGpu;
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
-use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets};
+use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
@@ -33,10 +37,11 @@ use crate::passes::post::{
     AdaptPass, BloomInputs, BloomPass, LuminanceBuffers, LuminancePass, PostFrame, PostInputs,
     TonemapPass,
 };
-use crate::passes::shadows::ShadowPass;
+use crate::passes::shadows::{ShadowPass, ShadowStats};
 use crate::passes::sky::SkyPass;
-use crate::passes::skyocc::SkyOccPass;
-use crate::settings::ViewBuffer;
+use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
+use crate::scene::Camera;
+use crate::settings::{FrameSettings, ViewBuffer};
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
@@ -87,6 +92,70 @@ impl Passes {
             aa_buffers: BufferTaaPass::new(ctx)?,
             debug: DebugPass::new(ctx)?,
         })
+    }
+}
+
+/// What each technique's CPU planning reads from the renderer this frame.
+pub struct PlanInputs<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a SceneGpu,
+    pub settings: &'a FrameSettings,
+    pub camera: &'a Camera,
+    /// Jittered projection (A2) and the frame's and last frame's jitter (px).
+    pub proj: Mat4,
+    pub jitter: [f32; 2],
+    pub prev_jitter: [f32; 2],
+    pub sun_direction: Vec3,
+    pub history: &'a History,
+}
+
+/// What the CPU half measured.
+pub struct Planned {
+    pub shadows: ShadowStats,
+    pub sky_occlusion: SkyOccStats,
+}
+
+/// The CPU half of the frame: each technique's planning (parameters,
+/// culling, atlas layout, sector jobs, sorting), in frame order.
+/// [`crate::Renderer::draw`], `describe_graph` and the bench all run it
+/// before [`build`].
+pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
+    let (ctx, scene, settings, camera) = (p.ctx, p.scene, p.settings, p.camera);
+    let (jitter, prev_jitter) = (p.jitter, p.prev_jitter);
+    let size = (settings.width, settings.height);
+    let aspect = size.0 as f32 / size.1 as f32;
+    // B1: reconstruction from depth and reprojection with this jitter.
+    let ao = AoUniform::new(&settings.ao, p.proj, camera.near, size);
+    passes
+        .ao
+        .update(&ctx.queue, &ao.with_jitter(jitter, prev_jitter));
+    // A3 on the AO and the motion vectors.
+    if settings.aa_buffers.any() {
+        let tuning = &settings.aa_tuning;
+        (passes.aa_buffers).update(&ctx.queue, jitter, prev_jitter, p.history, tuning);
+    }
+    // S1-S4: cascade fits, static slice, hero, atlas; culled caster lists.
+    let shadows = passes.shadows.update(
+        ctx,
+        scene,
+        camera,
+        aspect,
+        p.sun_direction,
+        settings.shadow_resolution,
+        Some(&settings.shadows),
+        settings.time_s,
+    );
+    // L2: the sectors the camera wants; jobs for the ones not resident.
+    let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+    if settings.sky_occlusion_every_frame {
+        passes.skyocc.invalidate();
+    }
+    let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
+    // Alpha BLEND objects draw far to near from this camera.
+    passes.forward.sort(scene, camera.position);
+    Planned {
+        shadows,
+        sky_occlusion,
     }
 }
 
@@ -153,8 +222,8 @@ pub fn build<'a>(
     let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
     g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
-    let gbuffer = passes.gbuffer.add(&mut g, size, view, scene, mip_bias);
-    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, view, scene);
+    let gbuffer = passes.gbuffer.add(ctx, &mut g, size, scene, mip_bias);
+    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, scene);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {
@@ -199,24 +268,13 @@ pub fn build<'a>(
     // L2: new sectors' height fields and SH2 visibility (side effect: the pool).
     let skyocc = passes.skyocc.add(&mut g, scene);
     let env = match probe {
-        Some((index, capture)) if passes.envmap.dirty => {
-            // L3: relight the probe's G-buffer cube face by face with the
-            // lighting and sky passes (sun unshadowed, sky unoccluded).
-            let probes = &passes.probes;
-            let size = (probes.size, probes.size);
-            let mut source = passes.envmap.import_source(&mut g);
-            let env_before = g.import_texture("envmap.filtered.before", passes.envmap.filtered());
-            for face in 0..6 {
-                g.set_pass_prefix(Some(format!("envmap.probe{index}.face{face}")));
-                let view = &probes.probes[index].faces[face].view;
-                g.set_frame_constants(&[("view", view), ("lighting", lighting), ("sky", sky)]);
-                let stored = if capture {
-                    let fresh = passes.gbuffer.add(&mut g, size, view, scene, false);
-                    probes.add_store(&mut g, index, face, fresh)
-                } else {
-                    probes.import_face(&mut g, index, face)
-                };
-                let relight = LightingInputs {
+        // L3: the probe's G-buffer cube relit with the lighting and sky
+        // passes (sun unshadowed, sky unoccluded), then mipped and filtered.
+        Some(probe) if passes.envmap.dirty => {
+            let edge = (passes.probes.size, passes.probes.size);
+            let gbuffer = |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, false);
+            let relight = |g: &mut FrameGraph<'a>, stored: GBuffer, env_before| {
+                let inputs = LightingInputs {
                     shadow_mask: None,
                     ao: None,
                     lights: &passes.shadows.local_lights,
@@ -226,13 +284,13 @@ pub fn build<'a>(
                     skyocc_frame: skyocc,
                     key: LightingKey::RELIGHT,
                 };
-                let hdr = passes.lighting.add(ctx, &mut g, size, stored, relight);
-                let hdr = passes.sky.add(&mut g, hdr, stored.depth, Some(sky_no_disk));
-                source = probes.add_mirror(&mut g, face, hdr, source);
-            }
-            g.set_pass_prefix(None);
-            g.set_frame_constants(&constants);
-            passes.envmap.add_mips_and_filter(&mut g, source)
+                let hdr = passes.lighting.add(ctx, g, edge, stored, inputs);
+                passes.sky.add(g, hdr, stored.depth, Some(sky_no_disk))
+            };
+            let envmap = &passes.envmap;
+            passes
+                .probes
+                .add_relight(&mut g, envmap, probe, gbuffer, relight)
         }
         // L1: the Bruneton sky is captured by the sky pass from its tables.
         _ if passes.envmap.dirty && !passes.envmap.fixed_source && passes.sky.draws_bruneton() => {
@@ -259,13 +317,11 @@ pub fn build<'a>(
     let hdr = passes.sky.add(&mut g, hdr, gbuffer.depth, None);
     // glTF emission and alpha BLEND surfaces (passes/forward).
     let forward = ForwardInputs {
-        view,
-        lighting,
         scene,
         envmap: &passes.envmap,
         env,
     };
-    let hdr = passes.forward.add(&mut g, hdr, gbuffer.depth, forward);
+    let hdr = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let measured = passes.luminance.add(&mut g, hdr, size, luminance);
     let exposure = if post.adaptation {
         passes

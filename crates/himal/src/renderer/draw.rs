@@ -82,10 +82,6 @@ impl Renderer {
         if settings.ao.mode == AoMode::HbaoStf {
             crate::passes::ao::declare_history(history, device, size);
         }
-        let passes = &mut self.res.passes;
-        for key in GBufferKey::for_scene(&self.res.scene, settings.aa.temporal()) {
-            passes.gbuffer.prepare(&self.ctx, key)?;
-        }
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));
         }
@@ -244,15 +240,6 @@ impl Renderer {
         } else {
             jitter
         };
-        self.res.passes.ao.update(
-            &self.ctx.queue,
-            &AoUniform::new(&settings.ao, proj, camera.near, size).with_jitter(jitter, prev_jitter),
-        );
-        if settings.aa_buffers.any() {
-            let (queue, tuning) = (&self.ctx.queue, &settings.aa_tuning);
-            let buffers = &self.res.passes.aa_buffers;
-            buffers.update(queue, jitter, prev_jitter, &self.res.history, tuning);
-        }
         let Some((_, _, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
@@ -287,45 +274,30 @@ impl Renderer {
                 if settings.bent_normals { 1.0 } else { 0.0 },
             ),
         );
-        let shadow_stats = self.res.passes.shadows.update(
-            &self.ctx,
-            &self.res.scene,
-            camera,
-            aspect,
-            light.sun_direction,
-            settings.shadow_resolution,
-            Some(&settings.shadows),
-            settings.time_s,
-        );
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
-        let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
-        if settings.sky_occlusion_every_frame {
-            self.res.passes.skyocc.invalidate();
-        }
-        let skyocc_stats =
-            self.res
-                .passes
-                .skyocc
-                .update(&self.ctx, &self.res.scene, camera, aspect, skyocc_on);
-
-        // Alpha BLEND objects draw far to near from this camera.
-        self.res
-            .passes
-            .forward
-            .sort(&self.res.scene, camera.position);
-        // Alpha BLEND objects draw far to near from this camera.
-        self.res
-            .passes
-            .forward
-            .sort(&self.res.scene, camera.position);
+        let sun_direction = light.sun_direction;
+        let planned = frame::plan(
+            &mut self.res.passes,
+            frame::PlanInputs {
+                ctx: &self.ctx,
+                scene: &self.res.scene,
+                settings,
+                camera,
+                proj,
+                jitter,
+                prev_jitter,
+                sun_direction,
+                history: &self.res.history,
+            },
+        );
         Ok(FramePlan {
             format,
             jitter,
             view_proj,
-            shadows: shadow_stats,
-            sky_occlusion: skyocc_stats,
+            shadows: planned.shadows,
+            sky_occlusion: planned.sky_occlusion,
         })
     }
 

@@ -17,7 +17,7 @@ use crate::gpu_scene::SceneGpu;
 use crate::gpu_scene::uniforms::{LightingUniform, ViewUniform};
 use crate::graph::{History, PassTimer, PassTiming, TexturePool};
 use crate::math::sh::Sh9Gpu;
-use crate::passes::ao::{AoMode, AoUniform};
+use crate::passes::ao::AoMode;
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBufferKey;
 use crate::passes::lighting::LightingKey;
@@ -132,9 +132,12 @@ impl Renderer {
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
         let mut passes = Passes::new(&ctx, scene)?;
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
-        passes.forward.prepare(&ctx, &scene_gpu)?;
+        // Pre-warm the scene's permutations: a bad one fails here, not mid-frame.
+        for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu) {
+            passes.forward.pipeline(&ctx, key)?;
+        }
         for key in GBufferKey::for_scene(&scene_gpu, false) {
-            passes.gbuffer.prepare(&ctx, key)?;
+            passes.gbuffer.pipeline(&ctx, key)?;
         }
         if !scene.probes.is_empty() {
             passes.lighting.pipeline(&ctx, LightingKey::RELIGHT)?;
@@ -165,8 +168,10 @@ impl Renderer {
             &<SkyGpuParams as bytemuck::Zeroable>::zeroed(),
         );
         // A probe capture adds 30 passes (6 faces x G-buffer, store, relight,
-        // sky, mirror) to the shadow, AO, lighting and post passes.
-        let timer = PassTimer::new(&ctx.device, &ctx.queue, 128);
+        // sky, mirror) and 13 for mips and filter, sky occlusion up to 36
+        // (two height fields per sector), to the shadow, AO, lighting and
+        // post passes.
+        let timer = PassTimer::new(&ctx.device, &ctx.queue, 256);
         let post = PostState::new(&ctx);
         Ok(Self {
             ctx,
@@ -258,7 +263,7 @@ impl Renderer {
             passes.lighting.pipeline(ctx, key)?;
         }
         for key in GBufferKey::for_scene(&self.res.scene, true) {
-            passes.gbuffer.prepare(ctx, key)?;
+            passes.gbuffer.pipeline(ctx, key)?;
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {

@@ -15,7 +15,7 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{FrameGraph, TextureHandle};
 
 pub const ENVMAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Face size of the captured and filtered cubes (the talk: 128x128x6).
@@ -50,8 +50,6 @@ pub struct EnvMapPass {
     copy: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     source: wgpu::Texture,
-    source_cube: wgpu::TextureView,
-    source_level0: wgpu::TextureView,
     filtered: wgpu::Texture,
     /// Filtered cube, all mips (what lighting samples).
     pub filtered_cube: wgpu::TextureView,
@@ -65,17 +63,17 @@ pub struct EnvMapPass {
     pub fixed_source: bool,
 }
 
-fn layer_view(
-    texture: &wgpu::Texture,
+/// One mip of a cube texture seen as `dimension`.
+pub fn mip_view_desc(
     mip: u32,
     dimension: wgpu::TextureViewDimension,
-) -> wgpu::TextureView {
-    texture.create_view(&wgpu::TextureViewDescriptor {
+) -> wgpu::TextureViewDescriptor<'static> {
+    wgpu::TextureViewDescriptor {
         dimension: Some(dimension),
         base_mip_level: mip,
         mip_level_count: Some(1),
         ..Default::default()
-    })
+    }
 }
 
 fn cube_texture(device: &wgpu::Device, label: &str, size: u32, mips: u32) -> wgpu::Texture {
@@ -96,12 +94,6 @@ fn cube_texture(device: &wgpu::Device, label: &str, size: u32, mips: u32) -> wgp
             | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     })
-}
-
-/// One workgroup per 8x8 texels (`WORKGROUP`) of a `size`² face, six faces.
-fn dispatch_faces(cp: &mut wgpu::ComputePass<'_>, size: u32) {
-    let n = size.div_ceil(WORKGROUP);
-    cp.dispatch_workgroups(n, n, 6);
 }
 
 /// Number of mips of a full chain for `size`.
@@ -167,8 +159,6 @@ impl EnvMapPass {
                 contents: bytemuck::cast_slice(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
-            source_cube: cube(&source),
-            source_level0: layer_view(&source, 0, wgpu::TextureViewDimension::D2Array),
             filtered_cube: cube(&filtered),
             source,
             filtered,
@@ -305,11 +295,6 @@ impl EnvMapPass {
         graph.import_texture("envmap.source", &self.source)
     }
 
-    /// Level 0 of the source cube as a storage view (all six layers).
-    pub fn source_level0(&self) -> &wgpu::TextureView {
-        &self.source_level0
-    }
-
     /// Box mips of the filled source, then GGX filtering; returns the filtered cube.
     pub fn add_mips_and_filter<'a>(
         &'a self,
@@ -320,78 +305,51 @@ impl EnvMapPass {
         self.add_filter(graph, source)
     }
 
-    /// `envmap.mips`: the box-filtered chain of the source cube below level 0.
+    /// `envmap.mip1..`: the box-filtered chain of the source cube below
+    /// level 0, one node per mip (each reads its parent level).
     fn add_mips<'a>(&'a self, graph: &mut FrameGraph<'a>, source: TextureHandle) -> TextureHandle {
-        let size = self.size;
-        let mut pass = graph.add_pass("envmap.mips");
-        pass.read(source, TextureAccess::Sampled);
-        let source = pass.write(source, TextureAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            for mip in 1..full_mip_count(size) {
-                let parent = layer_view(&self.source, mip - 1, wgpu::TextureViewDimension::D2Array);
-                let child = layer_view(&self.source, mip, wgpu::TextureViewDimension::D2Array);
-                let bg = self.mips_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("parent", wgpu::BindingResource::TextureView(&parent)),
-                        ("child", wgpu::BindingResource::TextureView(&child)),
-                    ],
-                );
-                let bg = bg?;
-                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
-                cp.set_pipeline(&self.downsample);
-                cp.set_bind_group(0, &bg, &[]);
-                dispatch_faces(&mut cp, (size >> mip).max(1));
-            }
-            Ok(())
-        });
+        let mut source = source;
+        let array = wgpu::TextureViewDimension::D2Array;
+        for mip in 1..full_mip_count(self.size) {
+            let n = (self.size >> mip).max(1).div_ceil(WORKGROUP);
+            let written = graph
+                .compute(&format!("envmap.mip{mip}"), &self.mips_program)
+                .compute_pipeline(Ok(self.downsample.clone()))
+                .read_view("parent", source, mip_view_desc(mip - 1, array))
+                .storage_view("child", source, mip_view_desc(mip, array))
+                .dispatch([n, n, 6]);
+            source = written.storage.first().copied().unwrap_or(source);
+        }
         source
     }
 
-    /// `envmap.filter`: GGX filtered importance sampling of each mip (mip 0 copied).
+    /// `envmap.filter0..`: GGX filtered importance sampling of each mip of
+    /// the filtered cube (mip 0 copied), one node per mip.
     fn add_filter<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
     ) -> TextureHandle {
-        let filtered = graph.import_texture("envmap.filtered", &self.filtered);
-        let size = self.size;
-        let mut pass = graph.add_pass("envmap.filter");
-        pass.read(source, TextureAccess::Sampled);
-        let filtered = pass.write(filtered, TextureAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            for mip in 0..FILTERED_LEVELS {
-                let target = layer_view(&self.filtered, mip, wgpu::TextureViewDimension::D2Array);
-                let params = wgpu::BufferBinding {
-                    buffer: &self.params,
-                    offset: u64::from(mip) * 256,
-                    size: wgpu::BufferSize::new(16),
-                };
-                let bg = self.filter_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("params", wgpu::BindingResource::Buffer(params)),
-                        (
-                            "source",
-                            wgpu::BindingResource::TextureView(&self.source_cube),
-                        ),
-                        (
-                            "source_sampler",
-                            wgpu::BindingResource::Sampler(&self.sampler),
-                        ),
-                        ("out_texture", wgpu::BindingResource::TextureView(&target)),
-                    ],
-                );
-                let bg = bg?;
-                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
-                cp.set_pipeline(if mip == 0 { &self.copy } else { &self.filter });
-                cp.set_bind_group(0, &bg, &[]);
-                dispatch_faces(&mut cp, (size >> mip).max(1));
-            }
-            Ok(())
-        });
+        let mut filtered = graph.import_texture("envmap.filtered", &self.filtered);
+        let array = wgpu::TextureViewDimension::D2Array;
+        for mip in 0..FILTERED_LEVELS {
+            let params = wgpu::BufferBinding {
+                buffer: &self.params,
+                offset: u64::from(mip) * 256,
+                size: wgpu::BufferSize::new(16),
+            };
+            let pipeline = if mip == 0 { &self.copy } else { &self.filter };
+            let n = (self.size >> mip).max(1).div_ceil(WORKGROUP);
+            let written = graph
+                .compute(&format!("envmap.filter{mip}"), &self.filter_program)
+                .compute_pipeline(Ok(pipeline.clone()))
+                .externals([("params", wgpu::BindingResource::Buffer(params))])
+                .read_cube("source", source)
+                .sampler("source_sampler", &self.sampler)
+                .storage_view("out_texture", filtered, mip_view_desc(mip, array))
+                .dispatch([n, n, 6]);
+            filtered = written.storage.first().copied().unwrap_or(filtered);
+        }
         filtered
     }
 
@@ -433,37 +391,24 @@ impl EnvMapPass {
         Ok((median(mips), median(filter)))
     }
 
+    /// `envmap.capture`: the sky (`sky`'s parameters) into level 0 of the source.
     fn add_capture<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         source: TextureHandle,
         sky: &'a wgpu::Buffer,
     ) -> TextureHandle {
-        let size = self.size;
-        let mut pass = graph.add_pass("envmap.capture");
-        let source = pass.write(source, TextureAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            let bg = self.capture_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("sky", sky.as_entire_binding()),
-                    (
-                        "out_texture",
-                        wgpu::BindingResource::TextureView(&self.source_level0),
-                    ),
-                ],
-            );
-            let bg = bg?;
-            {
-                let mut cp = ctx.encoder.begin_compute_pass(&Default::default());
-                cp.set_pipeline(&self.capture);
-                cp.set_bind_group(0, &bg, &[]);
-                let n = size.div_ceil(WORKGROUP);
-                cp.dispatch_workgroups(n, n, 6);
-            }
-            Ok(())
-        });
-        source
+        let n = self.size.div_ceil(WORKGROUP);
+        let level0 = mip_view_desc(0, wgpu::TextureViewDimension::D2Array);
+        graph
+            .compute("envmap.capture", &self.capture_program)
+            .compute_pipeline(Ok(self.capture.clone()))
+            .uniform("sky", sky)
+            .storage_view("out_texture", source, level0)
+            .dispatch([n, n, 6])
+            .storage
+            .first()
+            .copied()
+            .unwrap_or(source)
     }
 }

@@ -176,6 +176,46 @@ impl ProbeSet {
         select_probe(&positions, camera_position, current)
     }
 
+    /// L3: relights probe `index`'s G-buffer cube face by face into level 0
+    /// of the environment source, then mips and filters it; returns the
+    /// filtered cube. `capture`: render the faces' G-buffer first (with
+    /// `gbuffer`) and store it; `relight` lights one face's G-buffer
+    /// (given the filtered cube of before, for ambient specular) into HDR.
+    /// Each face's nodes run under the prefix `envmap.probe{index}.face{f}`
+    /// with the face's camera as the `view` frame constant.
+    pub fn add_relight<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        envmap: &'a super::EnvMapPass,
+        (index, capture): (usize, bool),
+        mut gbuffer: impl FnMut(&mut FrameGraph<'a>) -> GBuffer,
+        mut relight: impl FnMut(&mut FrameGraph<'a>, GBuffer, TextureHandle) -> TextureHandle,
+    ) -> TextureHandle {
+        let constants = graph.frame_constants();
+        let mut source = envmap.import_source(graph);
+        let env_before = graph.import_texture("envmap.filtered.before", envmap.filtered());
+        for face in 0..6 {
+            graph.set_pass_prefix(Some(format!("envmap.probe{index}.face{face}")));
+            let view = &self.probes[index].faces[face].view;
+            let face_constants: Vec<_> = constants
+                .iter()
+                .map(|&(name, b)| (name, if name == "view" { view } else { b }))
+                .collect();
+            graph.set_frame_constants(&face_constants);
+            let stored = if capture {
+                let fresh = gbuffer(graph);
+                self.add_store(graph, index, face, fresh)
+            } else {
+                self.import_face(graph, index, face)
+            };
+            let hdr = relight(graph, stored, env_before);
+            source = self.add_mirror(graph, face, hdr, source);
+        }
+        graph.set_pass_prefix(None);
+        graph.set_frame_constants(&constants);
+        envmap.add_mips_and_filter(graph, source)
+    }
+
     /// Copies a freshly rendered G-buffer face into the probe's textures;
     /// returns them (as the relight's input).
     pub fn add_store<'a>(

@@ -9,14 +9,12 @@
 
 pub mod reference;
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu, vertex_layout};
-use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{FrameGraph, TextureHandle};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
@@ -28,11 +26,33 @@ pub struct ForwardKey {
     pub double_sided: bool,
 }
 
+impl ForwardKey {
+    /// The permutations `scene`'s emissive and blend draws use.
+    pub fn for_scene(scene: &SceneGpu) -> Vec<ForwardKey> {
+        let mut keys = Vec::new();
+        let Some(m) = &scene.materials else {
+            return keys;
+        };
+        let emissive = scene.draws_emissive.iter().map(|(_, mat)| (true, *mat));
+        let blend = scene.draws_blend.iter().map(|(_, mat, _)| (false, *mat));
+        for (emissive, mat) in emissive.chain(blend) {
+            if let Some(binding) = m.materials.get(mat) {
+                let key = ForwardKey {
+                    emissive,
+                    double_sided: binding.double_sided,
+                };
+                if !keys.contains(&key) {
+                    keys.push(key);
+                }
+            }
+        }
+        keys
+    }
+}
+
 /// What the forward passes read that outlives the frame.
 #[derive(Clone, Copy)]
 pub struct ForwardInputs<'a> {
-    pub view: &'a wgpu::Buffer,
-    pub lighting: &'a wgpu::Buffer,
     pub scene: &'a SceneGpu,
     /// Filtered cube, DFG table and sampler (L4); `env` orders the read
     /// after this frame's filtering.
@@ -55,7 +75,6 @@ pub fn back_to_front(centres: &[Vec3], camera: Vec3) -> Vec<usize> {
 
 pub struct ForwardPass {
     program: Program,
-    pipelines: HashMap<ForwardKey, wgpu::RenderPipeline>,
     /// `SceneGpu::draws_blend` indices, far to near (see [`ForwardPass::sort`]).
     order: Vec<usize>,
 }
@@ -64,35 +83,12 @@ impl ForwardPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         Ok(Self {
             program: Program::new(ctx, "passes/forward/forward.wgsl")?,
-            pipelines: HashMap::new(),
             order: Vec::new(),
         })
     }
 
-    /// Fetches the pipelines `scene`'s emissive and blend draws need.
-    pub fn prepare(&mut self, ctx: &GpuContext, scene: &SceneGpu) -> Result<(), GpuError> {
-        let Some(m) = &scene.materials else {
-            return Ok(());
-        };
-        let emissive = scene.draws_emissive.iter().map(|(_, mat)| (true, *mat));
-        let blend = scene.draws_blend.iter().map(|(_, mat, _)| (false, *mat));
-        for (is_emissive, mat) in emissive.chain(blend) {
-            let Some(binding) = m.materials.get(mat) else {
-                continue;
-            };
-            let key = ForwardKey {
-                emissive: is_emissive,
-                double_sided: binding.double_sided,
-            };
-            if !self.pipelines.contains_key(&key) {
-                let pipeline = self.pipeline(ctx, key)?;
-                self.pipelines.insert(key, pipeline);
-            }
-        }
-        Ok(())
-    }
-
-    fn pipeline(
+    /// The pipeline of permutation `key`, through the shared cache.
+    pub fn pipeline(
         &self,
         ctx: &GpuContext,
         key: ForwardKey,
@@ -172,6 +168,7 @@ impl ForwardPass {
     /// has such draws) on top of `hdr`; returns the new HDR version.
     pub fn add<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         hdr: TextureHandle,
         depth: TextureHandle,
@@ -181,7 +178,16 @@ impl ForwardPass {
         let mut hdr = hdr;
         if !scene.draws_emissive.is_empty() {
             let draws: Vec<(Draw, usize)> = scene.draws_emissive.clone();
-            hdr = self.add_pass(graph, "forward.emissive", true, hdr, depth, draws, inputs);
+            hdr = self.add_pass(
+                ctx,
+                graph,
+                "forward.emissive",
+                true,
+                hdr,
+                depth,
+                draws,
+                inputs,
+            );
         }
         if !scene.draws_blend.is_empty() {
             let mut draws: Vec<(Draw, usize)> = self
@@ -198,14 +204,25 @@ impl ForwardPass {
                     .map(|(d, m, _)| (d.clone(), *m))
                     .collect();
             }
-            hdr = self.add_pass(graph, "forward.blend", false, hdr, depth, draws, inputs);
+            hdr = self.add_pass(
+                ctx,
+                graph,
+                "forward.blend",
+                false,
+                hdr,
+                depth,
+                draws,
+                inputs,
+            );
         }
         hdr
     }
 
+    /// One forward node over `draws` (view and lighting are frame constants).
     #[allow(clippy::too_many_arguments)]
     fn add_pass<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         id: &str,
         emissive: bool,
@@ -214,84 +231,65 @@ impl ForwardPass {
         draws: Vec<(Draw, usize)>,
         inputs: ForwardInputs<'a>,
     ) -> TextureHandle {
-        let mut pass = graph.add_pass(id);
-        pass.read(depth, TextureAccess::DepthRead);
-        if !emissive {
-            pass.read(inputs.env, TextureAccess::Sampled);
-        }
-        let hdr = pass.write(hdr, TextureAccess::ColorAttachment);
-        let pipelines = &self.pipelines;
-        pass.execute(move |ctx| {
-            let scene = inputs.scene;
-            let Some(m) = &scene.materials else {
-                return Ok(());
-            };
-            let groups = m.bind_groups(&self.program, ctx.device)?;
-            let frame_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", inputs.view.as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
-                    ("lighting", inputs.lighting.as_entire_binding()),
-                    (
-                        "env_specular",
-                        wgpu::BindingResource::TextureView(&inputs.envmap.filtered_cube),
-                    ),
-                    (
-                        "env_sampler",
-                        wgpu::BindingResource::Sampler(&inputs.envmap.sampler),
-                    ),
-                    (
-                        "dfg_lut",
-                        wgpu::BindingResource::TextureView(&inputs.envmap.dfg_view),
-                    ),
-                ],
-            )?;
-            let label = ctx.pass_id().to_string();
-            let (target, depth_view) = (ctx.view(hdr), ctx.view(depth));
-            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&label),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth_view,
-                    depth_ops: None,
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_bind_group(0, &frame_group, &[]);
-            scene.bind_geometry(&mut rp);
-            for (draw, material) in &draws {
-                let Some((group, binding)) = groups.get(*material).zip(m.materials.get(*material))
-                else {
-                    continue;
-                };
-                let key = ForwardKey {
-                    emissive,
-                    double_sided: binding.double_sided,
-                };
-                let Some(pipeline) = pipelines.get(&key) else {
-                    return Err(GpuError::Other(format!(
-                        "forward permutation {key:?} was not prepared"
-                    )));
-                };
-                rp.set_pipeline(pipeline);
-                rp.set_bind_group(1, group, &[]);
-                SceneGpu::draw_list(&mut rp, std::slice::from_ref(draw));
+        let scene = inputs.scene;
+        // The permutations these draws use, from the shared cache.
+        let mut pipelines: Vec<(ForwardKey, Result<wgpu::RenderPipeline, GpuError>)> = Vec::new();
+        if let Some(m) = &scene.materials {
+            for (_, material) in &draws {
+                if let Some(binding) = m.materials.get(*material) {
+                    let key = ForwardKey {
+                        emissive,
+                        double_sided: binding.double_sided,
+                    };
+                    if !pipelines.iter().any(|(k, _)| *k == key) {
+                        pipelines.push((key, self.pipeline(ctx, key)));
+                    }
+                }
             }
-            Ok(())
-        });
-        hdr
+        }
+        graph
+            .raster(id, &self.program)
+            .uniform("objects", &scene.objects)
+            .read_cube("env_specular", inputs.env)
+            .sampler("env_sampler", &inputs.envmap.sampler)
+            .external("dfg_lut", &inputs.envmap.dfg_view)
+            .external_group(1)
+            .color(hdr, wgpu::LoadOp::Load)
+            .depth_test(depth)
+            .record(move |ctx, rp| {
+                let Some(m) = &scene.materials else {
+                    return Ok(());
+                };
+                let groups = m.bind_groups(&self.program, ctx.device)?;
+                scene.bind_geometry(rp);
+                for (draw, material) in &draws {
+                    let Some((group, binding)) =
+                        groups.get(*material).zip(m.materials.get(*material))
+                    else {
+                        continue;
+                    };
+                    let key = ForwardKey {
+                        emissive,
+                        double_sided: binding.double_sided,
+                    };
+                    match pipelines.iter().find(|(k, _)| *k == key) {
+                        Some((_, Ok(p))) => rp.set_pipeline(p),
+                        Some((_, Err(e))) => {
+                            return Err(GpuError::Other(format!(
+                                "forward permutation {key:?}: {e}"
+                            )));
+                        }
+                        None => {
+                            return Err(GpuError::Other(format!(
+                                "forward permutation {key:?} was not fetched"
+                            )));
+                        }
+                    }
+                    rp.set_bind_group(1, group, &[]);
+                    SceneGpu::draw_list(rp, std::slice::from_ref(draw));
+                }
+                Ok(())
+            })
+            .colors[0]
     }
 }

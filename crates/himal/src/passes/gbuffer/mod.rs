@@ -7,12 +7,10 @@
 //! Pipelines are permutations keyed by [`GBufferKey`] (E1's material-type
 //! axis), created for the material types the scene uses.
 
-use std::collections::HashMap;
-
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, vertex_layout};
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
+use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -102,25 +100,25 @@ pub struct GBufferPass {
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
-    pipelines: HashMap<GBufferKey, wgpu::RenderPipeline>,
 }
 
 impl GBufferPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
-        let mut pass = Self {
+        let pass = Self {
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
-            pipelines: HashMap::new(),
         };
-        pass.prepare(ctx, GBufferKey::VERTEX)?;
+        pass.pipeline(ctx, GBufferKey::VERTEX)?;
         Ok(pass)
     }
 
-    /// Fetches the pipeline of permutation `key` (memory, disk or compile).
-    pub fn prepare(&mut self, ctx: &GpuContext, key: GBufferKey) -> Result<(), GpuError> {
-        if self.pipelines.contains_key(&key) {
-            return Ok(());
-        }
+    /// The pipeline of permutation `key`, through the shared cache (memory,
+    /// disk or compile).
+    pub fn pipeline(
+        &self,
+        ctx: &GpuContext,
+        key: GBufferKey,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [
             target(ALBEDO_FORMAT),
             target(FRAME_FORMAT),
@@ -153,14 +151,14 @@ impl GBufferPass {
         } else {
             Some(wgpu::Face::Back)
         };
-        let pipeline = match key.material {
+        match key.material {
             MaterialType::Vertex => self
                 .program
-                .render_pipeline(ctx, &spec("gbuffer", cull, &[]))?,
+                .render_pipeline(ctx, &spec("gbuffer", cull, &[])),
             MaterialType::Vegetation => self.program.render_pipeline(
                 ctx,
                 &spec("gbuffer.vegetation", cull, &[("VEGETATION", 1.0)]),
-            )?,
+            ),
             MaterialType::Textured => {
                 let bias = if key.mip_bias {
                     TEMPORAL_AA_MIP_BIAS
@@ -170,18 +168,18 @@ impl GBufferPass {
                 self.textured.render_pipeline(
                     ctx,
                     &spec("gbuffer.textured", cull, &[("MIP_BIAS", f64::from(bias))]),
-                )?
+                )
             }
-        };
-        self.pipelines.insert(key, pipeline);
-        Ok(())
+        }
     }
 
+    /// The `gbuffer` node: clears the targets, then draws opaque per-vertex
+    /// objects, glTF materials and vegetation (`view` is the frame constant).
     pub fn add<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
-        view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
         mip_bias: bool,
     ) -> GBuffer {
@@ -195,98 +193,71 @@ impl GBufferPass {
         );
         let motion = graph.create_texture("motion", TextureDesc::new_2d(w, h, MOTION_FORMAT));
         let depth = graph.create_texture("depth", TextureDesc::new_2d(w, h, DEPTH_FORMAT));
-        let mut pass = graph.add_pass("gbuffer");
-        let out = GBuffer {
-            albedo: pass.write(albedo, TextureAccess::ColorAttachment),
-            frame: pass.write(frame, TextureAccess::ColorAttachment),
-            material: pass.write(material, TextureAccess::ColorAttachment),
-            motion: pass.write(motion, TextureAccess::ColorAttachment),
-            depth: pass.write(depth, TextureAccess::DepthAttachment),
-        };
-        let pipelines = &self.pipelines;
-        pass.execute(move |ctx| {
-            let Some(vertex) = pipelines.get(&GBufferKey::VERTEX) else {
-                return Err(GpuError::Other("G-buffer pipeline not prepared".into()));
-            };
-            let materials = match &scene.materials {
-                Some(m) => m.bind_groups(&self.textured, ctx.device)?,
-                None => Vec::new(),
-            };
-            let bind_group = self.program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
-                ],
-            )?;
-            let colour = |v| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view: v,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            };
-            let attachments = [
-                colour(ctx.view(out.albedo)),
-                colour(ctx.view(out.frame)),
-                colour(ctx.view(out.material)),
-                colour(ctx.view(out.motion)),
-            ];
-            let depth_view = ctx.view(out.depth);
-            let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("gbuffer"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(0.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_pipeline(vertex);
-            rp.set_bind_group(0, &bind_group, &[]);
-            scene.bind_geometry(&mut rp);
-            SceneGpu::draw_list(&mut rp, &scene.draws_opaque);
-            if let Some(m) = &scene.materials {
-                for (draw, material) in &scene.draws_textured {
-                    let Some((group, binding)) =
-                        materials.get(*material).zip(m.materials.get(*material))
-                    else {
-                        continue;
-                    };
-                    let key = GBufferKey::textured(binding.double_sided, mip_bias);
-                    let Some(pipeline) = pipelines.get(&key) else {
-                        return Err(GpuError::Other(format!(
-                            "G-buffer permutation {key:?} was not prepared"
-                        )));
-                    };
-                    rp.set_pipeline(pipeline);
-                    rp.set_bind_group(1, group, &[]);
-                    SceneGpu::draw_list(&mut rp, std::slice::from_ref(draw));
-                }
-            }
-            if !scene.draws_vegetation.is_empty() {
-                let Some(pipeline) = pipelines.get(&GBufferKey::VEGETATION) else {
-                    return Err(GpuError::Other(
-                        "G-buffer vegetation permutation was not prepared".into(),
-                    ));
+        // The permutations this scene draws with, from the shared cache.
+        let pipelines: Vec<(GBufferKey, Result<wgpu::RenderPipeline, GpuError>)> =
+            GBufferKey::for_scene(scene, mip_bias)
+                .into_iter()
+                .map(|key| (key, self.pipeline(ctx, key)))
+                .collect();
+        let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
+        let written = graph
+            .raster("gbuffer", &self.program)
+            .uniform("objects", &scene.objects)
+            .color(albedo, clear)
+            .color(frame, clear)
+            .color(material, clear)
+            .color(motion, clear)
+            .depth(
+                depth,
+                None,
+                wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                },
+            )
+            .record(move |ctx, rp| {
+                let pipeline = |key: GBufferKey| match pipelines.iter().find(|(k, _)| *k == key) {
+                    Some((_, Ok(p))) => Ok(p),
+                    Some((_, Err(e))) => Err(GpuError::Other(format!(
+                        "G-buffer permutation {key:?}: {e}"
+                    ))),
+                    None => Err(GpuError::Other(format!(
+                        "G-buffer permutation {key:?} is not one this scene draws with"
+                    ))),
                 };
-                rp.set_pipeline(pipeline);
-                rp.set_bind_group(0, &bind_group, &[]);
-                SceneGpu::draw_list(&mut rp, &scene.draws_vegetation);
-            }
-            Ok(())
-        });
-        out
+                rp.set_pipeline(pipeline(GBufferKey::VERTEX)?);
+                scene.bind_geometry(rp);
+                SceneGpu::draw_list(rp, &scene.draws_opaque);
+                if let Some(m) = &scene.materials {
+                    let groups = m.bind_groups(&self.textured, ctx.device)?;
+                    for (draw, material) in &scene.draws_textured {
+                        let Some((group, binding)) =
+                            groups.get(*material).zip(m.materials.get(*material))
+                        else {
+                            continue;
+                        };
+                        rp.set_pipeline(pipeline(GBufferKey::textured(
+                            binding.double_sided,
+                            mip_bias,
+                        ))?);
+                        rp.set_bind_group(1, group, &[]);
+                        SceneGpu::draw_list(rp, std::slice::from_ref(draw));
+                    }
+                }
+                if !scene.draws_vegetation.is_empty() {
+                    rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
+                    SceneGpu::draw_list(rp, &scene.draws_vegetation);
+                }
+                Ok(())
+            });
+        // The node declared four colour targets, in this order.
+        let colour = |i: usize| written.colors.get(i).copied();
+        GBuffer {
+            albedo: colour(0).unwrap_or(albedo),
+            frame: colour(1).unwrap_or(frame),
+            material: colour(2).unwrap_or(material),
+            motion: colour(3).unwrap_or(motion),
+            depth: written.depth.unwrap_or(depth),
+        }
     }
 }

@@ -103,46 +103,21 @@ impl DepthPipelines {
         Ok(Self { opaque, vegetation })
     }
 
-    /// Records `lists` into `target` (cleared to the far plane first when `clear`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        label: &str,
-        target: &wgpu::TextureView,
-        clear: bool,
-        bind_group: &wgpu::BindGroup,
-        scene: &SceneGpu,
-        lists: &DrawLists,
-    ) {
-        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(label),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target,
-                depth_ops: Some(wgpu::Operations {
-                    load: if clear {
-                        wgpu::LoadOp::Clear(1.0)
-                    } else {
-                        wgpu::LoadOp::Load
-                    },
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        rp.set_bind_group(0, bind_group, &[]);
-        scene.bind_geometry(&mut rp);
+    /// Draws `lists` (the pass's view group is set).
+    pub fn draw(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SceneGpu, lists: &DrawLists) {
+        scene.bind_geometry(rp);
+        self.draw_pipelines(rp, lists);
+    }
+
+    /// Draws `lists` with the geometry already bound.
+    pub fn draw_pipelines(&self, rp: &mut wgpu::RenderPass<'_>, lists: &DrawLists) {
         if !lists.opaque.is_empty() {
             rp.set_pipeline(&self.opaque);
-            SceneGpu::draw_list(&mut rp, &lists.opaque);
+            SceneGpu::draw_list(rp, &lists.opaque);
         }
         if !lists.vegetation.is_empty() {
             rp.set_pipeline(&self.vegetation);
-            SceneGpu::draw_list(&mut rp, &lists.vegetation);
+            SceneGpu::draw_list(rp, &lists.vegetation);
         }
     }
 }

@@ -23,8 +23,8 @@ use glam::{Mat4, Vec3};
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::SceneGpu;
-use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{draw_fullscreen, view_pipeline};
+use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
+use crate::passes::common::view_pipeline;
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::{Camera, LightDesc, Scene};
 use atlas::AtlasAllocator;
@@ -108,8 +108,6 @@ pub struct ShadowPass {
     view_program: Program,
     /// Comparison sampler of every map.
     pub sampler: wgpu::Sampler,
-    /// 1x1 depth bound where a map is absent.
-    placeholder: wgpu::Texture,
     casters: Casters,
     static_state: StaticMapState,
     /// The two static maps (shown and filling) and their edge.
@@ -154,17 +152,14 @@ fn depth_texture(
 }
 
 /// A view of one layer as a 2D array of one (how every map is bound) or as a 2D target.
-fn layer_view(t: &wgpu::Texture, layer: u32, array: bool) -> wgpu::TextureView {
-    t.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(if array {
-            wgpu::TextureViewDimension::D2Array
-        } else {
-            wgpu::TextureViewDimension::D2
-        }),
+/// The 2D view of one layer of a shadow map (a depth attachment).
+fn layer_view_desc(layer: u32) -> wgpu::TextureViewDescriptor<'static> {
+    wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2),
         base_array_layer: layer,
         array_layer_count: Some(1),
         ..Default::default()
-    })
+    }
 }
 
 impl ShadowPass {
@@ -208,7 +203,6 @@ impl ShadowPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let placeholder = depth_texture(ctx, "shadows.placeholder", 1, SHADOW_FORMAT);
         let n_lights = scene.lights.len().max(1) as u64;
         let light_size = std::mem::size_of::<LocalLightGpu>() as u64;
         let tile_size = std::mem::size_of::<ShadowTileGpu>() as u64;
@@ -225,7 +219,6 @@ impl ShadowPass {
             params,
             view_program,
             sampler,
-            placeholder,
             casters: Casters::from_scene(scene),
             static_state: StaticMapState::default(),
             static_maps: None,

@@ -2,46 +2,30 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
+use crate::graph::Fallback;
 use crate::passes::common::view_node;
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
-    /// (no plan this frame).
+    /// (no plan this frame). `view` is the frame constant.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         gbuffer: GBuffer,
-        view: &'a wgpu::Buffer,
         scene: &'a SceneGpu,
     ) -> Option<TextureHandle> {
         let plan = self.plan.as_ref()?;
-        let (g_depth, g_frame) = (gbuffer.depth, gbuffer.frame);
         let n = self.cascade_resolution;
         let mut desc = TextureDesc::new_2d(n, n, SHADOW_FORMAT);
         desc.depth_or_layers = CASCADES as u32;
         let mut cascades = graph.create_texture("shadow.cascades", desc);
         for (i, (_, lists)) in plan.cascades.iter().enumerate() {
-            let mut pass = graph.add_pass(&format!("shadows.cascade{i}"));
-            cascades = pass.write(cascades, TextureAccess::DepthAttachment);
-            let map = cascades;
-            pass.execute(move |ctx| {
-                let bg = self.depth_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("shadow", self.views[i].as_entire_binding()),
-                        ("objects", scene.objects.as_entire_binding()),
-                    ],
-                );
-                let bg = bg?;
-                let target = layer_view(ctx.texture(map), i as u32, false);
-                let label = ctx.pass_id();
-                self.depth32
-                    .record(ctx.encoder, label, &target, true, &bg, scene, lists);
-                Ok(())
-            });
+            let id = format!("shadows.cascade{i}");
+            let target = (cascades, i as u32, true);
+            cascades = self.depth_node(graph, &id, i, target, &self.depth32, scene, lists, false);
         }
+        let cascades = (!plan.cascades.is_empty()).then_some(cascades);
         // The static slice writes the back map, outside the graph's pool.
         let mut static_written = None;
         if let (Some((update, lists)), Some((_, maps))) = (&plan.static_update, &self.static_maps) {
@@ -51,206 +35,166 @@ impl ShadowPass {
                 "shadow.static1"
             };
             let h = graph.import_texture(name, &maps[update.target]);
-            let mut pass = graph.add_pass("shadows.static");
+            let target = (h, 0, update.clear);
+            let depth16 = &self.depth16;
             // The back map is read in a later frame: keep the pass even unread.
-            pass.side_effect();
-            let h = pass.write(h, TextureAccess::DepthAttachment);
+            let h = self.depth_node(
+                graph,
+                "shadows.static",
+                CASCADES,
+                target,
+                depth16,
+                scene,
+                lists,
+                true,
+            );
             static_written = Some((update.target, h));
-            pass.execute(move |ctx| {
-                let bg = self.depth_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("shadow", self.views[CASCADES].as_entire_binding()),
-                        ("objects", scene.objects.as_entire_binding()),
-                    ],
-                );
-                let bg = bg?;
-                let target = layer_view(ctx.texture(h), 0, false);
-                let label = ctx.pass_id();
-                self.depth16
-                    .record(ctx.encoder, label, &target, update.clear, &bg, scene, lists);
-                Ok(())
-            });
         }
         let hero_map = plan.hero.as_ref().map(|(_, lists)| {
             let r = self.hero_resolution;
             let map = graph.create_texture("shadow.hero", TextureDesc::new_2d(r, r, SHADOW_FORMAT));
-            let mut pass = graph.add_pass("shadows.hero");
-            let map = pass.write(map, TextureAccess::DepthAttachment);
-            pass.execute(move |ctx| {
-                let bg = self.depth_program.bind(
-                    ctx.device,
-                    0,
-                    &[
-                        ("shadow", self.views[CASCADES + 1].as_entire_binding()),
-                        ("objects", scene.objects.as_entire_binding()),
-                    ],
-                );
-                let bg = bg?;
-                let target = layer_view(ctx.texture(map), 0, false);
-                let label = ctx.pass_id();
-                self.depth32
-                    .record(ctx.encoder, label, &target, true, &bg, scene, lists);
-                Ok(())
-            });
-            map
+            let target = (map, 0, true);
+            let depth32 = &self.depth32;
+            self.depth_node(
+                graph,
+                "shadows.hero",
+                CASCADES + 1,
+                target,
+                depth32,
+                scene,
+                lists,
+                false,
+            )
         });
-
-        let atlas_map = (!plan.projectors.is_empty()).then(|| {
-            let n = self.atlas_resolution;
-            let map =
-                graph.create_texture("shadow.atlas", TextureDesc::new_2d(n, n, SHADOW_FORMAT));
-            let mut pass = graph.add_pass("shadows.atlas");
-            let map = pass.write(map, TextureAccess::DepthAttachment);
-            pass.execute(move |ctx| self.record_atlas(ctx, map, scene));
-            map
-        });
-
+        let atlas_map = (!plan.projectors.is_empty()).then(|| self.add_atlas(graph, scene, plan));
+        // The shown static map: this frame's slice when it just completed,
+        // else the front map of an earlier frame.
+        let shown = self.static_state.shown.map(|(i, _)| i);
+        let static_map = match (static_written, shown, &self.static_maps) {
+            (Some((i, h)), Some(s), _) if i == s => Some(h),
+            (_, Some(s), Some((_, maps))) => {
+                let name = if s == 0 {
+                    "shadow.static0"
+                } else {
+                    "shadow.static1"
+                };
+                Some(graph.import_texture(name, &maps[s]))
+            }
+            _ => None,
+        };
         let mask = graph.create_texture(
             "shadow.mask",
             TextureDesc::new_2d(size.0, size.1, MASK_FORMAT),
         );
-        let mut pass = graph.add_pass("shadows.mask");
-        for t in [gbuffer.depth, gbuffer.frame] {
-            pass.read(t, TextureAccess::Sampled);
-        }
-        if !plan.cascades.is_empty() {
-            pass.read(cascades, TextureAccess::Sampled);
-        }
-        // The shown static map: this frame's slice when it just completed.
-        let shown = self.static_state.shown.map(|(i, _)| i);
-        let static_read = match static_written {
-            Some((i, h)) if Some(i) == shown => Some(pass.read(h, TextureAccess::Sampled)),
-            _ => None,
-        };
-        for h in [hero_map, atlas_map].into_iter().flatten() {
-            pass.read(h, TextureAccess::Sampled);
-        }
-        let mask = pass.write(mask, TextureAccess::ColorAttachment);
-        let has_cascades = !plan.cascades.is_empty();
-        pass.execute(move |ctx| {
-            let cascades_view = if has_cascades {
-                ctx.texture(cascades)
-                    .create_view(&wgpu::TextureViewDescriptor {
-                        dimension: Some(wgpu::TextureViewDimension::D2Array),
-                        ..Default::default()
-                    })
-            } else {
-                layer_view(&self.placeholder, 0, true)
-            };
-            let static_view = match (static_read, shown, &self.static_maps) {
-                (Some(h), _, _) => layer_view(ctx.texture(h), 0, true),
-                (None, Some(i), Some((_, maps))) => layer_view(&maps[i], 0, true),
-                _ => layer_view(&self.placeholder, 0, true),
-            };
-            let hero_view = match hero_map {
-                Some(h) => layer_view(ctx.texture(h), 0, true),
-                None => layer_view(&self.placeholder, 0, true),
-            };
-            let atlas_view = match atlas_map {
-                Some(h) => layer_view(ctx.texture(h), 0, true),
-                None => layer_view(&self.placeholder, 0, true),
-            };
-            let tv = wgpu::BindingResource::TextureView;
-            let bg = self.mask_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("view", view.as_entire_binding()),
-                    ("params", self.params.as_entire_binding()),
-                    ("depth", tv(ctx.view(g_depth))),
-                    ("gbuffer_frame", tv(ctx.view(g_frame))),
-                    ("cascades", tv(&cascades_view)),
-                    ("static_map", tv(&static_view)),
-                    ("hero_map", tv(&hero_view)),
-                    ("atlas", tv(&atlas_view)),
-                    ("local_lights", self.local_lights.as_entire_binding()),
-                    ("light_tiles", self.light_tiles.as_entire_binding()),
-                    (
-                        "shadow_sampler",
-                        wgpu::BindingResource::Sampler(&self.sampler),
-                    ),
-                ],
-            );
-            let bg = bg?;
-            let target = ctx.view(mask);
-            draw_fullscreen(
-                ctx,
-                &self.mask,
-                &bg,
-                target,
-                wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-            );
-            if hero_map.is_some() {
-                draw_fullscreen(ctx, &self.hero_blend, &bg, target, wgpu::LoadOp::Load);
-            }
-            Ok(())
-        });
-        Some(mask)
+        let hero = hero_map.is_some();
+        let far = Fallback::DepthFar;
+        let written = graph
+            .raster("shadows.mask", &self.mask_program)
+            .pipeline(Ok(self.mask.clone()))
+            .uniform("params", &self.params)
+            .read("depth", gbuffer.depth)
+            .read("gbuffer_frame", gbuffer.frame)
+            .optional_array("cascades", cascades, far)
+            .optional_array("static_map", static_map, far)
+            .optional_array("hero_map", hero_map, far)
+            .optional_array("atlas", atlas_map, far)
+            .uniform("local_lights", &self.local_lights)
+            .uniform("light_tiles", &self.light_tiles)
+            .sampler("shadow_sampler", &self.sampler)
+            .color(mask, wgpu::LoadOp::Clear(wgpu::Color::WHITE))
+            .record(move |_, rp| {
+                rp.draw(0..3, 0..1);
+                // Ryse's hero blend: min into R over the mask just drawn.
+                if hero {
+                    rp.set_pipeline(&self.hero_blend);
+                    rp.draw(0..3, 0..1);
+                }
+                Ok(())
+            });
+        written.colors.first().copied()
     }
 
-    /// Records every projector into its atlas tile (one render pass, a viewport per tile).
-    fn record_atlas(
-        &self,
-        ctx: &mut crate::graph::PassContext<'_>,
-        map: TextureHandle,
-        scene: &SceneGpu,
-    ) -> Result<(), GpuError> {
-        let Some(plan) = &self.plan else {
-            return Ok(());
+    /// One sun view's depth node: `lists` into layer `target.1` of
+    /// `target.0` (cleared to the far plane first when `target.2`), seen
+    /// through `self.views[view]`; returns the map's new version. `keep`:
+    /// never culled (read by a later frame).
+    #[allow(clippy::too_many_arguments)]
+    fn depth_node<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        id: &str,
+        view: usize,
+        target: (TextureHandle, u32, bool),
+        pipelines: &'a DepthPipelines,
+        scene: &'a SceneGpu,
+        lists: &'a DrawLists,
+        keep: bool,
+    ) -> TextureHandle {
+        let (map, layer, clear) = target;
+        let ops = wgpu::Operations {
+            load: if clear {
+                wgpu::LoadOp::Clear(1.0)
+            } else {
+                wgpu::LoadOp::Load
+            },
+            store: wgpu::StoreOp::Store,
         };
-        let mut groups = Vec::with_capacity(plan.projectors.len());
-        for buffer in &self.atlas_views[..plan.projectors.len()] {
-            let bg = self.depth_program.bind(
-                ctx.device,
-                0,
-                &[
-                    ("shadow", buffer.as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
-                ],
-            );
-            let bg = bg?;
-            groups.push(bg);
+        let mut node = graph
+            .raster(id, &self.depth_program)
+            .uniform("shadow", &self.views[view])
+            .uniform("objects", &scene.objects)
+            .depth(map, Some(layer_view_desc(layer)), ops);
+        if keep {
+            node = node.side_effect();
         }
-        let target = ctx.view(map);
-        let mut rp = ctx.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadows.atlas"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        scene.bind_geometry(&mut rp);
-        for (p, bg) in plan.projectors.iter().zip(&groups) {
-            let t = p.tile;
-            rp.set_viewport(
-                t.x as f32,
-                t.y as f32,
-                t.size as f32,
-                t.size as f32,
-                0.0,
-                1.0,
-            );
-            rp.set_bind_group(0, bg, &[]);
-            if !p.draws.opaque.is_empty() {
-                rp.set_pipeline(&self.depth32.opaque);
-                SceneGpu::draw_list(&mut rp, &p.draws.opaque);
-            }
-            if !p.draws.vegetation.is_empty() {
-                rp.set_pipeline(&self.depth32.vegetation);
-                SceneGpu::draw_list(&mut rp, &p.draws.vegetation);
-            }
-        }
-        Ok(())
+        node.record(move |_, rp| {
+            pipelines.draw(rp, scene, lists);
+            Ok(())
+        })
+        .depth
+        .unwrap_or(map)
+    }
+
+    /// Every projector into its atlas tile: one render pass, a viewport and
+    /// a view bind group per tile.
+    fn add_atlas<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        scene: &'a SceneGpu,
+        plan: &'a FramePlan,
+    ) -> TextureHandle {
+        let n = self.atlas_resolution;
+        let map = graph.create_texture("shadow.atlas", TextureDesc::new_2d(n, n, SHADOW_FORMAT));
+        let ops = wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        };
+        graph
+            .raster("shadows.atlas", &self.depth_program)
+            .external_group(0)
+            .depth(map, None, ops)
+            .record(move |ctx, rp| {
+                scene.bind_geometry(rp);
+                let views = &self.atlas_views[..plan.projectors.len()];
+                for (p, buffer) in plan.projectors.iter().zip(views) {
+                    let bg = self.depth_program.bind(
+                        ctx.device,
+                        0,
+                        &[
+                            ("shadow", buffer.as_entire_binding()),
+                            ("objects", scene.objects.as_entire_binding()),
+                        ],
+                    )?;
+                    let t = p.tile;
+                    let (x, y, edge) = (t.x as f32, t.y as f32, t.size as f32);
+                    rp.set_viewport(x, y, edge, edge, 0.0, 1.0);
+                    rp.set_bind_group(0, &bg, &[]);
+                    self.depth32.draw_pipelines(rp, &p.draws);
+                }
+                Ok(())
+            })
+            .depth
+            .unwrap_or(map)
     }
 
     /// `--view shadow-mask | cascades` from the mask into `output`.

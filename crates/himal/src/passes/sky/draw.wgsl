@@ -14,7 +14,7 @@
 @group(0) @binding(2) var environment: texture_2d<f32>;
 @group(0) @binding(3) var environment_sampler: sampler;
 
-// Bruneton tables (1x1 placeholders while SKY_MODEL = 0).
+// Bruneton tables (the graph's fallbacks while SKY_MODEL = 0).
 @group(0) @binding(4) var<uniform> atmosphere: AtmosphereParams;
 @group(0) @binding(5) var transmittance_load: texture_2d<f32>;
 @group(0) @binding(6) var scattering: texture_3d<f32>;

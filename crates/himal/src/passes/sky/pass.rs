@@ -7,14 +7,13 @@
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureHandle};
+use crate::graph::{Fallback, FrameGraph, TextureHandle};
 use crate::graph::{PassTimer, PassTiming};
 use crate::passes::common::target;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
 use crate::passes::sky::bruneton::{
-    AtmosphereConfig, AtmosphereGpuParams, BrunetonTables, SkyShProjector, TABLE_FORMAT,
-    TRANSMITTANCE_FORMAT, TableSizes, TableViews, moon_light,
+    AtmosphereConfig, BrunetonTables, SkyShProjector, TableSizes, TableViews, moon_light,
 };
 use crate::passes::sky::{SkyLight, SkyModel};
 
@@ -51,63 +50,14 @@ impl BrunetonSky {
     }
 }
 
-/// 1x1 tables bound while the Preetham sky is drawn.
-struct TablePlaceholders {
-    params: wgpu::Buffer,
-    views: TableViews,
-    sampler: wgpu::Sampler,
-}
-
-impl TablePlaceholders {
-    fn new(ctx: &GpuContext) -> Self {
-        let texture = |d3: bool, format: wgpu::TextureFormat| {
-            ctx.device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("sky.tables.off"),
-                    size: wgpu::Extent3d {
-                        width: 1,
-                        height: 1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: if d3 {
-                        wgpu::TextureDimension::D3
-                    } else {
-                        wgpu::TextureDimension::D2
-                    },
-                    format,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
-        };
-        TablePlaceholders {
-            params: crate::gpu::pipeline::uniform_buffer(
-                ctx,
-                "sky.atmosphere.off",
-                &<AtmosphereGpuParams as bytemuck::Zeroable>::zeroed(),
-            ),
-            views: TableViews {
-                transmittance: texture(false, TRANSMITTANCE_FORMAT),
-                scattering: texture(true, TABLE_FORMAT),
-                single_mie: texture(true, TABLE_FORMAT),
-                irradiance: texture(false, TABLE_FORMAT),
-            },
-            sampler: ctx.device.create_sampler(&Default::default()),
-        }
-    }
-}
-
 pub struct SkyPass {
     program: Program,
     pipeline: wgpu::RenderPipeline,
     /// An HDR environment drawn instead of the Preetham sky (issue #8):
     /// its pipeline (`ENVIRONMENT`, `ENV_ROTATION`), image view and sampler.
     environment: Option<(wgpu::RenderPipeline, wgpu::TextureView, wgpu::Sampler)>,
-    /// 1x1 image bound while the Preetham sky is drawn.
-    placeholder: (wgpu::TextureView, wgpu::Sampler),
-    tables_off: TablePlaceholders,
+    /// Samples the environment and the tables' slots when they are absent.
+    sampler: wgpu::Sampler,
     bruneton: Option<BrunetonSky>,
     /// The model drawn (Bruneton needs [`SkyPass::set_bruneton`] first).
     pub model: SkyModel,
@@ -131,23 +81,11 @@ impl SkyPass {
         let mut spec = RenderSpec::fullscreen("sky", &targets);
         spec.depth_stencil = Some(sky_depth_test());
         let pipeline = program.render_pipeline(ctx, &spec)?;
-        let placeholder = crate::gpu::texture_2d(
-            &ctx.device,
-            "sky.environment.off",
-            (1, 1),
-            1,
-            wgpu::TextureFormat::Rgba16Float,
-            wgpu::TextureUsages::TEXTURE_BINDING,
-        );
         Ok(Self {
             program,
             pipeline,
             environment: None,
-            placeholder: (
-                placeholder.create_view(&Default::default()),
-                ctx.device.create_sampler(&Default::default()),
-            ),
-            tables_off: TablePlaceholders::new(ctx),
+            sampler: ctx.device.create_sampler(&Default::default()),
             bruneton: None,
             model: SkyModel::Preetham,
         })
@@ -269,23 +207,27 @@ impl SkyPass {
         sky: Option<&'a wgpu::Buffer>,
     ) -> TextureHandle {
         let (pipeline, image, sampler) = match &self.environment {
-            Some((p, i, s)) => (p, i, s),
-            None => (&self.pipeline, &self.placeholder.0, &self.placeholder.1),
+            Some((p, i, s)) => (p, Some(i), s),
+            None => (&self.pipeline, None, &self.sampler),
         };
-        let off = &self.tables_off;
-        let (pipeline, tables) = match &self.bruneton {
-            Some(b) if self.draws_bruneton() => (
-                &b.pipeline,
-                b.views.bindings(&b.tables.params, &b.tables.sampler),
-            ),
-            _ => (pipeline, off.views.bindings(&off.params, &off.sampler)),
+        let mut node = graph.fullscreen("sky", &self.program);
+        node = match &self.bruneton {
+            Some(b) if self.draws_bruneton() => node
+                .pipeline(Ok(b.pipeline.clone()))
+                .externals(b.views.bindings(&b.tables.params, &b.tables.sampler)),
+            // Preetham or an HDR image: SKY_MODEL 0 reads no table.
+            _ => node
+                .pipeline(Ok(pipeline.clone()))
+                .optional_buffer("atmosphere", None)
+                .optional_external("transmittance_load", None, Fallback::Black)
+                .optional_external("scattering", None, Fallback::Black3d)
+                .optional_external("single_mie", None, Fallback::Black3d)
+                .optional_external("irradiance", None, Fallback::Black)
+                .sampler("table_sampler", &self.sampler),
         };
-        let mut node = graph
-            .fullscreen("sky", &self.program)
-            .pipeline(Ok(pipeline.clone()))
-            .external("environment", image)
-            .sampler("environment_sampler", sampler)
-            .externals(tables);
+        node = node
+            .optional_external("environment", image, Fallback::Black)
+            .sampler("environment_sampler", sampler);
         if let Some(sky) = sky {
             node = node.uniform("sky", sky);
         }

@@ -3,7 +3,7 @@
 //! When a 64x64 m sector comes within [`RANGE`] of the camera and into the
 //! frustum, `skyocc.heightfield` renders the scene's opaque geometry top-down
 //! (orthographic, 25 cm per texel, with an apron of [`MARGIN_TEXELS`]),
-//! `skyocc.blur` blurs it (binomial, sigma 25 cm) and `skyocc.visibility`
+//! `skyocc.blur_x`/`_y` blur it (binomial, sigma 25 cm) and `skyocc.visibility`
 //! turns it into an SH2 visibility per texel (rotated Poisson disk, cap
 //! rotated to the mean visible direction) plus (terrain, blurred) heights,
 //! stored in a fixed pool of texture-array layers with LRU eviction
@@ -21,7 +21,7 @@ use glam::{Mat4, Vec2, Vec4};
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu};
-use crate::graph::{FrameGraph, TextureAccess, TextureHandle};
+use crate::graph::{FrameGraph, TextureHandle};
 use crate::passes::common::{view_node, view_pipeline};
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::{Aabb, Camera, Scene};
@@ -311,192 +311,132 @@ impl SkyOccPass {
     /// Adds this frame's sector updates (none when nothing is planned) and
     /// returns the pool textures lighting reads.
     pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>, scene: &'a SceneGpu) -> SkyOccFrame {
-        let mut vis = graph.import_texture("skyocc.vis", &self.textures.vis);
-        let mut heights = graph.import_texture("skyocc.heights", &self.textures.heights);
+        let vis = graph.import_texture("skyocc.vis", &self.textures.vis);
+        let heights = graph.import_texture("skyocc.heights", &self.textures.heights);
         let Some(work) = self.work.as_ref().filter(|_| !self.jobs.is_empty()) else {
             return SkyOccFrame { vis, heights };
         };
-        let raw = graph.import_texture("skyocc.raw", &work.raw);
-        let ground = graph.import_texture("skyocc.ground", &work.ground);
-        let blurred = graph.import_texture("skyocc.blurred", &work.blurred);
-        let mut pass = graph.add_pass("skyocc.heightfield");
-        let raw = pass.write(raw, TextureAccess::ColorAttachment);
-        let ground = pass.write(ground, TextureAccess::ColorAttachment);
-        pass.execute(move |ctx| {
-            self.record_heightfields(ctx.encoder, ctx.device, scene, work)?;
-            Ok(())
-        });
-        let mut pass = graph.add_pass("skyocc.blur");
-        pass.read(raw, TextureAccess::Sampled);
-        let blurred = pass.write(blurred, TextureAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            self.record_blur(ctx.encoder, ctx.device, work, self.jobs.len() as u32)?;
-            Ok(())
-        });
-        let mut pass = graph.add_pass("skyocc.visibility");
-        pass.side_effect();
-        pass.read(raw, TextureAccess::Sampled);
-        pass.read(ground, TextureAccess::Sampled);
-        pass.read(blurred, TextureAccess::Sampled);
-        vis = pass.write(vis, TextureAccess::StorageWrite);
-        heights = pass.write(heights, TextureAccess::StorageWrite);
-        pass.execute(move |ctx| {
-            let n = self.jobs.len() as u32;
-            self.record_visibility(ctx.encoder, ctx.device, work, n)?;
-            Ok(())
-        });
-        SkyOccFrame { vis, heights }
+        let (raw, ground) = self.add_heightfields(graph, scene, work);
+        let n = self.jobs.len() as u32;
+        self.add_kernels(graph, work, (raw, ground), (vis, heights), n)
     }
 
-    /// Per job, two render passes into layer i: every opaque draw into the
-    /// raw height image, the ground's alone into the terrain height image.
-    fn record_heightfields(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        device: &wgpu::Device,
-        scene: &SceneGpu,
-        work: &Intermediates,
-    ) -> Result<(), GpuError> {
+    /// `skyocc.heightfield{i}` and `skyocc.ground{i}` per job: every opaque
+    /// draw into layer i of the raw height image, the ground's alone into
+    /// the terrain height image; returns both images' new versions.
+    fn add_heightfields<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        scene: &'a SceneGpu,
+        work: &'a Intermediates,
+    ) -> (TextureHandle, TextureHandle) {
+        let mut raw = graph.import_texture("skyocc.raw", &work.raw);
+        let mut ground = graph.import_texture("skyocc.ground", &work.ground);
+        let mut depth = graph.import_texture("skyocc.depth", &work.depth);
         let (bottom, _) = self.heights;
+        let clear = wgpu::LoadOp::Clear(wgpu::Color {
+            r: bottom as f64,
+            g: 0.0,
+            b: 0.0,
+            a: 1.0,
+        });
+        let depth_ops = wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Discard,
+        };
         for (i, job) in self.jobs.iter().enumerate() {
-            let bg = self.height_program.bind(
-                device,
-                0,
-                &[
-                    ("sector", work.views[i].as_entire_binding()),
-                    ("objects", scene.objects.as_entire_binding()),
-                ],
-            );
-            let bg = bg?;
-            let depth = resources::layer_view(&work.depth, i as u32);
-            for (target, draws) in [(&work.raw, &job.draws), (&work.ground, &job.ground_draws)] {
-                let color = resources::layer_view(target, i as u32);
-                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("skyocc.heightfield"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &color,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: bottom as f64,
-                                g: 0.0,
-                                b: 0.0,
-                                a: 1.0,
-                            }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                if draws.is_empty() {
-                    continue;
+            for (ground_only, draws) in [(false, &job.draws), (true, &job.ground_draws)] {
+                let (id, target) = if ground_only {
+                    (format!("skyocc.ground{i}"), ground)
+                } else {
+                    (format!("skyocc.heightfield{i}"), raw)
+                };
+                let layer = resources::layer_view_desc(i as u32);
+                let written = graph
+                    .raster(&id, &self.height_program)
+                    .pipeline(Ok(self.height_pipeline.clone()))
+                    .uniform("sector", &work.views[i])
+                    .uniform("objects", &scene.objects)
+                    .color_view(target, Some(layer.clone()), clear)
+                    .depth(depth, Some(layer), depth_ops)
+                    .record(move |_, rp| {
+                        if !draws.is_empty() {
+                            scene.bind_geometry(rp);
+                            SceneGpu::draw_list(rp, draws);
+                        }
+                        Ok(())
+                    });
+                depth = written.depth.unwrap_or(depth);
+                let new = written.colors.first().copied().unwrap_or(target);
+                if ground_only {
+                    ground = new;
+                } else {
+                    raw = new;
                 }
-                rp.set_pipeline(&self.height_pipeline);
-                rp.set_bind_group(0, &bg, &[]);
-                scene.bind_geometry(&mut rp);
-                SceneGpu::draw_list(&mut rp, draws);
             }
         }
-        Ok(())
+        (raw, ground)
     }
 
-    /// Blur along x (raw -> scratch), then y (scratch -> blurred), `n` layers.
-    fn record_blur(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        device: &wgpu::Device,
-        work: &Intermediates,
+    /// `skyocc.blur_x`, `skyocc.blur_y`, `skyocc.visibility` and
+    /// `skyocc.smooth` over `n` jobs' height images into the pool's
+    /// visibility and heights; returns the pool's new versions.
+    fn add_kernels<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        work: &'a Intermediates,
+        (raw, ground): (TextureHandle, TextureHandle),
+        (vis, heights): (TextureHandle, TextureHandle),
         n: u32,
-    ) -> Result<(), GpuError> {
+    ) -> SkyOccFrame {
+        let (mut vis, mut heights) = (vis, heights);
+        let scratch = graph.import_texture("skyocc.scratch", &work.scratch);
+        let blurred = graph.import_texture("skyocc.blurred", &work.blurred);
+        let vis_ext = graph.import_texture("skyocc.vis_ext", &work.vis_ext);
+        let array = resources::array_view_desc;
+        // Blur along x (raw -> scratch), then y (scratch -> blurred).
         let groups = (RENDER_TEXELS as u32).div_ceil(8);
-        for (axis, (src, dst)) in [(&work.raw, &work.scratch), (&work.scratch, &work.blurred)]
-            .into_iter()
-            .enumerate()
-        {
-            let bg = self.blur_program.bind(
-                device,
-                0,
-                &[
-                    (
-                        "src_load",
-                        wgpu::BindingResource::TextureView(&resources::array_view(src)),
-                    ),
-                    (
-                        "dst",
-                        wgpu::BindingResource::TextureView(&resources::array_view(dst)),
-                    ),
-                ],
-            )?;
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("skyocc.blur"),
-                timestamp_writes: None,
-            });
-            cp.set_pipeline(&self.blur[axis]);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(groups, groups, n);
-        }
-        Ok(())
-    }
-
-    fn record_visibility(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        device: &wgpu::Device,
-        work: &Intermediates,
-        n: u32,
-    ) -> Result<(), GpuError> {
-        let tv = |t: &wgpu::Texture| resources::array_view(t);
-        let (raw, ground, blurred) = (tv(&work.raw), tv(&work.ground), tv(&work.blurred));
-        let (vis, heights) = (tv(&self.textures.vis), tv(&self.textures.heights));
-        let vis_ext = tv(&work.vis_ext);
-        let bg = self.vis_program.bind(
-            device,
-            0,
-            &[
-                ("raw_load", wgpu::BindingResource::TextureView(&raw)),
-                ("ground_load", wgpu::BindingResource::TextureView(&ground)),
-                ("blurred_load", wgpu::BindingResource::TextureView(&blurred)),
-                ("disk", self.disk.as_entire_binding()),
-                ("jobs", work.jobs.as_entire_binding()),
-                ("vis_out", wgpu::BindingResource::TextureView(&vis_ext)),
-                ("heights_out", wgpu::BindingResource::TextureView(&heights)),
-            ],
-        )?;
-        let smooth_bg = self.smooth_program.bind(
-            device,
-            0,
-            &[
-                ("vis_load", wgpu::BindingResource::TextureView(&vis_ext)),
-                ("jobs", work.jobs.as_entire_binding()),
-                ("vis_out", wgpu::BindingResource::TextureView(&vis)),
-            ],
-        )?;
+        let blur = |g: &mut FrameGraph<'a>, id: &str, axis: usize, src, dst| {
+            g.compute(id, &self.blur_program)
+                .compute_pipeline(Ok(self.blur[axis].clone()))
+                .read_array("src_load", src)
+                .storage_view("dst", dst, array())
+                .dispatch([groups, groups, n])
+                .storage
+                .first()
+                .copied()
+                .unwrap_or(dst)
+        };
+        let scratch = blur(graph, "skyocc.blur_x", 0, raw, scratch);
+        let blurred = blur(graph, "skyocc.blur_y", 1, scratch, blurred);
+        // SH2 visibility over the sector and its border, then the smoothing
+        // into the pool (side effect: later frames read the pool).
         let ext = (SECTOR_TEXELS + 2 * reference::SMOOTH_BORDER) as u32;
-        for (pipeline, bg, size) in [
-            (&self.visibility, &bg, ext),
-            (&self.smooth, &smooth_bg, SECTOR_TEXELS as u32),
-        ] {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("skyocc.visibility"),
-                timestamp_writes: None,
-            });
-            cp.set_pipeline(pipeline);
-            cp.set_bind_group(0, bg, &[]);
-            let groups = size.div_ceil(8);
-            cp.dispatch_workgroups(groups, groups, n);
-        }
-        Ok(())
+        let written = graph
+            .compute("skyocc.visibility", &self.vis_program)
+            .compute_pipeline(Ok(self.visibility.clone()))
+            .side_effect()
+            .read_array("raw_load", raw)
+            .read_array("ground_load", ground)
+            .read_array("blurred_load", blurred)
+            .uniform("disk", &self.disk)
+            .uniform("jobs", &work.jobs)
+            .storage_view("vis_out", vis_ext, array())
+            .storage_view("heights_out", heights, array())
+            .dispatch([ext.div_ceil(8), ext.div_ceil(8), n]);
+        let vis_ext = written.storage.first().copied().unwrap_or(vis_ext);
+        heights = written.storage.get(1).copied().unwrap_or(heights);
+        let texels = (SECTOR_TEXELS as u32).div_ceil(8);
+        let written = graph
+            .compute("skyocc.smooth", &self.smooth_program)
+            .compute_pipeline(Ok(self.smooth.clone()))
+            .side_effect()
+            .read_array("vis_load", vis_ext)
+            .uniform("jobs", &work.jobs)
+            .storage_view("vis_out", vis, array())
+            .dispatch([texels, texels, n]);
+        vis = written.storage.first().copied().unwrap_or(vis);
+        SkyOccFrame { vis, heights }
     }
 
     /// The debug view of the sky visibility or the bent normal into `output`.

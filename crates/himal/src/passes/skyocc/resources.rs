@@ -47,14 +47,22 @@ pub fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
     })
 }
 
-/// A 2D view of one layer (render attachment).
-pub fn layer_view(t: &wgpu::Texture, layer: u32) -> wgpu::TextureView {
-    t.create_view(&wgpu::TextureViewDescriptor {
+/// The descriptor of [`array_view`] (every layer).
+pub fn array_view_desc() -> wgpu::TextureViewDescriptor<'static> {
+    wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    }
+}
+
+/// The descriptor of [`layer_view`] (one layer, render attachment).
+pub fn layer_view_desc(layer: u32) -> wgpu::TextureViewDescriptor<'static> {
+    wgpu::TextureViewDescriptor {
         dimension: Some(wgpu::TextureViewDimension::D2),
         base_array_layer: layer,
         array_layer_count: Some(1),
         ..Default::default()
-    })
+    }
 }
 
 /// Writes f32 texels into one layer of an R32Float texture.

@@ -11,6 +11,19 @@ use super::{
 };
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::SceneGpu;
+use crate::graph::{FrameGraph, TexturePool};
+
+/// Compiles, records and submits a graph of side-effect nodes.
+fn run_graph(ctx: &GpuContext, graph: FrameGraph<'_>) -> Result<(), GpuError> {
+    let err = |e: crate::graph::GraphError| GpuError::Other(e.to_string());
+    let commands = graph
+        .compile()
+        .map_err(err)?
+        .execute(&ctx.device, &mut TexturePool::new(), None)
+        .map_err(err)?;
+    ctx.queue.submit([commands]);
+    Ok(())
+}
 
 impl SkyOccPass {
     /// Tests and tools: renders `sectors` (at most [`MAX_SECTORS_PER_FRAME`])
@@ -25,16 +38,9 @@ impl SkyOccPass {
         let planned = self.pool.plan(sectors, MAX_SECTORS_PER_FRAME);
         let layers: Vec<u32> = sectors.iter().filter_map(|s| self.pool.layer(*s)).collect();
         self.plan_jobs(ctx, scene, &planned, sectors);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let n = self.jobs.len() as u32;
-        if let Some(work) = &self.work {
-            self.record_heightfields(&mut encoder, &ctx.device, scene, work)?;
-            if n > 0 {
-                self.record_blur(&mut encoder, &ctx.device, work, n)?;
-                self.record_visibility(&mut encoder, &ctx.device, work, n)?;
-            }
-        }
-        ctx.queue.submit([encoder.finish()]);
+        let mut graph = FrameGraph::new();
+        self.add(&mut graph, scene);
+        run_graph(ctx, graph)?;
         ctx.check("skyocc.render_sectors")?;
         let mut out = Vec::new();
         for (i, layer) in layers.into_iter().enumerate() {
@@ -80,14 +86,21 @@ impl SkyOccPass {
         }
         ctx.queue
             .write_buffer(&work.jobs, 0, bytemuck::cast_slice(&jobs));
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let work = self
             .work
             .as_ref()
             .ok_or_else(|| GpuError::Other("no work".into()))?;
-        self.record_blur(&mut encoder, &ctx.device, work, n)?;
-        self.record_visibility(&mut encoder, &ctx.device, work, n)?;
-        ctx.queue.submit([encoder.finish()]);
+        let mut graph = FrameGraph::new();
+        let images = (
+            graph.import_texture("skyocc.raw", &work.raw),
+            graph.import_texture("skyocc.ground", &work.ground),
+        );
+        let pool = (
+            graph.import_texture("skyocc.vis", &self.textures.vis),
+            graph.import_texture("skyocc.heights", &self.textures.heights),
+        );
+        self.add_kernels(&mut graph, work, images, pool, n);
+        run_graph(ctx, graph)?;
         ctx.check("skyocc.run_kernels")?;
         (0..n).map(|i| self.read_layer(ctx, i, i)).collect()
     }

@@ -83,22 +83,16 @@ impl SkyShProjector {
         ctx.queue
             .write_buffer(&self.sun, 0, bytemuck::bytes_of(&sun));
         let views = tables.views();
-        let mut entries = views.bindings(&tables.params, &tables.sampler).to_vec();
-        entries.push(("sun", self.sun.as_entire_binding()));
-        entries.push(("rows", self.rows.as_entire_binding()));
-        entries.push(("out_sh", self.output.as_entire_binding()));
-        let bind_group = self.program.bind_group(ctx, 0, &entries)?;
         let mut graph = FrameGraph::new();
-        let mut pass = graph.add_pass("sky.sh");
-        pass.side_effect();
-        let (pipeline, bg) = (&self.pipeline, &bind_group);
-        pass.execute(move |pc| {
-            let mut cp = pc.encoder.begin_compute_pass(&Default::default());
-            cp.set_pipeline(pipeline);
-            cp.set_bind_group(0, bg, &[]);
-            cp.dispatch_workgroups(1, 1, 1);
-            Ok(())
-        });
+        graph
+            .compute("sky.sh", &self.program)
+            .compute_pipeline(Ok(self.pipeline.clone()))
+            .side_effect()
+            .externals(views.bindings(&tables.params, &tables.sampler))
+            .uniform("sun", &self.sun)
+            .uniform("rows", &self.rows)
+            .uniform("out_sh", &self.output)
+            .dispatch([1, 1, 1]);
         let timings = crate::graph::run(ctx, graph, timer, "sky.sh")?;
         let bytes = read_buffer(ctx, &self.output)?;
         let v: &[[f32; 4]] = bytemuck::try_cast_slice(&bytes)
