@@ -9,6 +9,7 @@ mod bench_ao;
 mod bench_envmap;
 mod prewarm;
 mod render;
+mod soak;
 mod view;
 
 use std::path::PathBuf;
@@ -37,6 +38,9 @@ enum Command {
     View(view::ViewArgs),
     /// Render a fixed camera path and print GPU time per pass.
     Bench(bench::BenchArgs),
+    /// Render many frames (the camera dollying forward and back) and report
+    /// resident and GPU memory over time: they must stay flat.
+    Soak(soak::SoakArgs),
     /// Compile every pipeline permutation the renderer can use and write the pipeline cache.
     Prewarm(prewarm::PrewarmArgs),
     /// Compute offline data into the cache with a progress bar: the L1 sky
@@ -152,6 +156,7 @@ fn main() -> Result<()> {
         Command::Render(a) => render::run(&a),
         Command::View(a) => view::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Soak(a) => soak::run(&a),
         Command::Prewarm(a) => prewarm::run(&a),
         Command::Bake(a) => bake::run(&a),
         Command::Info(a) => info(&a),

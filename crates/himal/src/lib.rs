@@ -26,6 +26,7 @@ pub mod renderer;
 pub mod scene;
 pub mod settings;
 pub mod shader;
+pub mod soak;
 
 pub use renderer::{DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer};
 

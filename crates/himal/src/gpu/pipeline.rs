@@ -256,13 +256,17 @@ pub fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
     })
 }
 
-/// A uniform buffer initialised with `data`.
+/// A parameter buffer initialised with `data`, bindable as a uniform or as
+/// a read-only storage buffer (shaders that branch on their parameters read
+/// them as storage: see docs/reliability.md, the lavapipe recompile leak).
 pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &T) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     ctx.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents: bytemuck::bytes_of(data),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::UNIFORM
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST,
         })
 }

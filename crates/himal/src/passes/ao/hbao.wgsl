@@ -12,7 +12,10 @@
 #import math
 #import fullscreen
 
-@group(0) @binding(0) var<uniform> params: AoParams;
+// Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
+// without freeing, any shader whose branches or loop bounds read a uniform
+// block (docs/reliability.md).
+@group(0) @binding(0) var<storage, read> params: AoParams;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var jitter_load: texture_2d<f32>;
 

@@ -48,7 +48,10 @@ override ENV_SPECULAR: bool = true;
 override SKY_OCCLUSION: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> lighting: Lighting;
+// Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
+// without freeing, any shader whose branches or loop bounds read a uniform
+// block (docs/reliability.md).
+@group(0) @binding(1) var<storage, read> lighting: Lighting;
 @group(0) @binding(2) var<uniform> sky: SkyParams;
 @group(0) @binding(3) var gbuffer_albedo: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_frame: texture_2d<f32>;

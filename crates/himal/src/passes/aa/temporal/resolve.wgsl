@@ -21,7 +21,10 @@ override MODE: u32 = 2u;
 // The motion input is aa.taa_motion's stabilised jitter-free motion.
 override JITTER_FREE_MOTION: bool = false;
 
-@group(0) @binding(0) var<uniform> params: AaParams;
+// Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
+// without freeing, any shader whose branches or loop bounds read a uniform
+// block (docs/reliability.md).
+@group(0) @binding(0) var<storage, read> params: AaParams;
 @group(0) @binding(1) var current: texture_2d<f32>;
 @group(0) @binding(2) var previous: texture_2d<f32>;
 @group(0) @binding(3) var previous2: texture_2d<f32>;

@@ -12,7 +12,10 @@
 #import aa
 #import fullscreen
 
-@group(0) @binding(0) var<uniform> params: AaParams;
+// Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
+// without freeing, any shader whose branches or loop bounds read a uniform
+// block (docs/reliability.md).
+@group(0) @binding(0) var<storage, read> params: AaParams;
 @group(0) @binding(1) var input: texture_2d<f32>;
 @group(0) @binding(2) var history: texture_2d<f32>;
 @group(0) @binding(3) var motion: texture_2d<f32>;
