@@ -13,7 +13,7 @@ pub struct AoArgs {
     #[arg(long, default_value = "half", value_name = "half|full")]
     pub ao_resolution: String,
     /// HBAO radius in metres.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub ao_radius: Option<f32>,
     /// Blur sampling: adaptive (point inner half, bilinear outer half) or brute force.
     #[arg(long, default_value = "adaptive", value_name = "adaptive|brute")]
@@ -40,6 +40,9 @@ impl AoArgs {
             other => bail!("--ao-blur {other}: expected adaptive or brute"),
         };
         if let Some(r) = self.ao_radius {
+            if !(r.is_finite() && r > 0.0) {
+                bail!("--ao-radius {r}: must be a positive number of metres");
+            }
             s.radius = r;
         }
         if let Some(r) = self.ao_blur_radius {

@@ -24,7 +24,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub env: Option<String>,
     /// Radiance scale of --env.
-    #[arg(long, default_value_t = 1.0, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "X",
+        allow_hyphen_values = true
+    )]
     pub env_intensity: f32,
     /// Named camera of the scene (default: its first camera).
     #[arg(long)]
@@ -43,7 +48,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
     /// Camera travel per frame in metres along its view direction (sequences).
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, allow_hyphen_values = true)]
     pub speed: f32,
     /// Buffer to write: final or a debug view.
     #[arg(long, default_value = "final", value_name = "BUFFER")]
@@ -329,6 +334,19 @@ pub fn setup(
     let kind = ImageKind::from_path(&args.out)?;
     if args.frames == 0 {
         bail!("--frames must be at least 1");
+    }
+    // A dolly of more than a kilometre per frame leaves any world at once.
+    if !(args.speed.is_finite() && args.speed.abs() <= 1000.0) {
+        bail!(
+            "--speed {}: must be a finite number of metres per frame in -1000..=1000",
+            args.speed
+        );
+    }
+    if !(args.env_intensity.is_finite() && args.env_intensity >= 0.0) {
+        bail!(
+            "--env-intensity {}: must be a finite scale >= 0",
+            args.env_intensity
+        );
     }
     let mut scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
     if let Some(env) = &args.env {

@@ -148,3 +148,22 @@ fn env_lights_the_demo_with_an_hdr_image() {
         "/nowhere/sky.hdr",
     );
 }
+
+#[test]
+fn numeric_options_out_of_range_say_the_allowed_range() {
+    // Negative values reach the check (not clap's "unexpected argument").
+    fails_with(
+        &["render", "--ao-radius", "-1"],
+        "--ao-radius -1: must be a positive number of metres",
+    );
+    fails_with(
+        &["render", "--speed", "nan"],
+        "--speed NaN: must be a finite",
+    );
+    fails_with(&["render", "--speed", "1e30"], "in -1000..=1000");
+    fails_with(&["render", "--speed", "-inf"], "--speed -inf");
+    fails_with(
+        &["render", "--env-intensity", "-2"],
+        "--env-intensity -2: must be a finite scale >= 0",
+    );
+}
