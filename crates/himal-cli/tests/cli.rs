@@ -167,3 +167,20 @@ fn numeric_options_out_of_range_say_the_allowed_range() {
         "--env-intensity -2: must be a finite scale >= 0",
     );
 }
+
+#[test]
+fn a_shadow_map_too_large_for_one_texture_is_refused_before_the_frame() {
+    // 4 x 16384² x 4 B = 4 GiB: the driver's raw "texture is invalid" before.
+    let out = common::temp_path("huge-shadow").with_extension("png");
+    let out = out.to_str().expect("utf-8 temp path");
+    let args = [
+        "render",
+        "--size",
+        "16x16",
+        "--shadow-resolution",
+        "16384",
+        "--out",
+        out,
+    ];
+    fails_with(&args, "shadow resolution 16384 needs 4.0 GiB");
+}

@@ -304,7 +304,7 @@ impl Renderer {
     /// Renders one frame from `camera` into [`Renderer::output`] and waits for
     /// the GPU timings; the image stays on the GPU.
     pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
-        Self::validate(settings)?;
+        self.validate(settings)?;
         let size = (settings.width, settings.height);
         let FramePlan {
             format,

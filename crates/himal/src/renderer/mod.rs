@@ -124,6 +124,9 @@ pub struct Renderer {
     aa_last_jitter: [f32; 2],
 }
 
+/// The largest single texture the renderer asks a driver for (bytes).
+const MAX_TEXTURE_BYTES: u64 = 2 << 30;
+
 #[derive(Clone, Copy, PartialEq)]
 struct SunKey(f32, f32, u32, f32);
 
@@ -290,20 +293,49 @@ impl Renderer {
         Ok((l_avg, read(&self.res.post.adapted, 1)?))
     }
 
-    fn validate(settings: &FrameSettings) -> Result<(), Error> {
-        let max = 16384;
+    fn validate(&self, settings: &FrameSettings) -> Result<(), Error> {
+        // Every size that becomes a texture edge, against this adapter's limit.
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
         if settings.width == 0
             || settings.height == 0
             || settings.width > max
             || settings.height > max
         {
             return Err(Error::InvalidSettings(format!(
-                "frame size {}x{} is outside 1x1..{max}x{max}",
+                "frame size {}x{} is outside 1x1..{max}x{max} (this adapter's \
+                 largest 2D texture is {max} texels on a side)",
                 settings.width, settings.height
             )));
         }
         settings.ao.validate()?;
         settings.shadows.validate()?;
+        let shadows = [
+            ("shadow resolution", settings.shadow_resolution),
+            (
+                "static shadow resolution",
+                settings.shadows.static_resolution,
+            ),
+        ];
+        for (what, edge) in shadows {
+            if edge > max {
+                return Err(Error::InvalidSettings(format!(
+                    "{what} {edge} exceeds this adapter's limit of {max} texels on a side"
+                )));
+            }
+        }
+        // The four cascades are one Depth32Float array: drivers refuse (or
+        // fail to back) single allocations past a few GiB.
+        let cascades = 4 * 4 * u64::from(settings.shadow_resolution).pow(2);
+        if cascades > MAX_TEXTURE_BYTES {
+            return Err(Error::InvalidSettings(format!(
+                "shadow resolution {} needs {:.1} GiB for the four cascades (one texture), \
+                 above the {} GiB one texture may take; use at most {}",
+                settings.shadow_resolution,
+                cascades as f64 / f64::from(1u32 << 30),
+                MAX_TEXTURE_BYTES >> 30,
+                ((MAX_TEXTURE_BYTES / 16) as f64).sqrt() as u64,
+            )));
+        }
         let shadows_off = settings.shadow_resolution == 0
             || settings.shadows.mode == crate::passes::shadows::ShadowMode::Off;
         if matches!(settings.view, ViewBuffer::Shadow(_)) && shadows_off {
@@ -419,7 +451,7 @@ impl Renderer {
     /// a camera at the origin looking down -Z (`himal render --graph`): the
     /// same planning as [`Renderer::draw`], nothing submitted.
     pub fn describe_graph(&mut self, settings: &FrameSettings) -> Result<String, Error> {
-        Self::validate(settings)?;
+        self.validate(settings)?;
         let size = (settings.width, settings.height);
         let camera = Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 60.0);
         let format = self.plan_frame(&camera, settings)?.format;
