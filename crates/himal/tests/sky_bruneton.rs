@@ -326,7 +326,7 @@ fn sky_pass_and_capture_match_the_cpu_lookup() {
 }
 
 #[test]
-fn table_cache_round_trips_and_rejects_stale_files() {
+fn table_cache_round_trips_and_rejects_stale_and_damaged_files() {
     let ctx = shared_context().expect("GPU");
     let dir = std::env::temp_dir().join(format!("himal-sky-cache-{}", std::process::id()));
     let path = himal::passes::sky::bruneton::cache_file(&dir, &test_config());
@@ -350,11 +350,48 @@ fn table_cache_round_trips_and_rejects_stale_files() {
         .err()
         .expect("stale file accepted");
     assert!(e.to_string().contains("stale"), "{e}");
-    std::fs::write(&path, b"HIMALSKY").expect("truncate");
-    let e = BrunetonTables::load(ctx, test_config(), &path)
-        .err()
-        .expect("truncated file accepted");
-    assert!(e.to_string().contains("himal-sky"), "names the file: {e}");
+    // Every kind of damage is refused, naming the file and the problem.
+    let good = std::fs::read(&path).expect("read");
+    let refuses = |bytes: &[u8], what: &str| {
+        std::fs::write(&path, bytes).expect("write");
+        let e = BrunetonTables::load(ctx, test_config(), &path)
+            .err()
+            .unwrap_or_else(|| panic!("{what}: accepted"));
+        let e = e.to_string();
+        assert!(e.contains("himal-sky"), "{what}: names the file: {e}");
+        e
+    };
+    // File layout (cache.rs): magic 8, version 4, key 8, payload length 8,
+    // checksum 8, then per table a u64 length and its texels.
+    const HEADER: usize = 36;
+    let mut flipped = good.clone();
+    flipped[HEADER + 8 + 100] ^= 0x10;
+    assert!(refuses(&flipped, "flipped texel").contains("checksum"));
+    assert!(refuses(&vec![0; good.len()], "zeroed").contains("not a himal sky table"));
+    assert!(refuses(&good[..good.len() / 2], "half").contains("truncated"));
+    assert!(refuses(b"HIMALSKY", "magic only").contains("truncated"));
+    let mut longer = good.clone();
+    longer.extend([7u8; 5]);
+    assert!(refuses(&longer, "trailing bytes").contains("5 trailing bytes"));
+    let mut old = good.clone();
+    old[8..12].copy_from_slice(&1u32.to_le_bytes());
+    assert!(refuses(&old, "version 1").contains("stale"));
+    // NaN texels with a matching checksum: the values themselves are checked.
+    let mut nan = good.clone();
+    nan[HEADER + 8..HEADER + 12].copy_from_slice(&f32::NAN.to_le_bytes());
+    let sum = himal::gpu::cache::fnv1a(&nan[HEADER..]);
+    nan[28..36].copy_from_slice(&sum.to_le_bytes());
+    assert!(refuses(&nan, "NaN").contains("transmittance table holds NaN"));
+    // Not a regular file: never read (an endless device would hang the load).
+    if std::path::Path::new("/dev/zero").exists() {
+        let e = BrunetonTables::load(ctx, test_config(), std::path::Path::new("/dev/zero"))
+            .err()
+            .expect("/dev/zero accepted");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+    }
+    // The intact file still loads.
+    std::fs::write(&path, &good).expect("restore");
+    BrunetonTables::load(ctx, test_config(), &path).expect("intact file loads");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
