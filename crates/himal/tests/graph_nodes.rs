@@ -15,17 +15,12 @@ const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// out = scale.x * textureLoad(src) + offset.x * (1, 1, 1, 1), from two uniforms
 /// (`view` named like the frame constant) and one texture.
 const BLIT: &str = r#"
+#import fullscreen
 struct Scale { x: vec4<f32> }
 @group(0) @binding(0) var<uniform> scale: Scale;
 @group(0) @binding(1) var<uniform> view: Scale;
 @group(0) @binding(2) var src: texture_2d<f32>;
 @group(0) @binding(3) var src_sampler: sampler;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
 
 @fragment
 fn fs_main(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
@@ -200,14 +195,9 @@ fn optional_inputs_and_frame_constants_bind_themselves() {
 
 /// Shadow-map style: out = comparison of 0.5 against `map` (a depth array).
 const SHADOW: &str = r#"
+#import fullscreen
 @group(0) @binding(0) var map: texture_depth_2d_array;
 @group(0) @binding(1) var cmp: sampler_comparison;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
 
 @fragment
 fn fs_main(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
