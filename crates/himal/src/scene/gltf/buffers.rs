@@ -117,7 +117,16 @@ pub(super) fn check_accessors(
         }
         let Some(view) = a.view() else { continue };
         let bytes = view_bytes(cx, &view, buffers)?;
-        let stride = view.stride().unwrap_or(elem).max(elem);
+        if let Some(stride) = view.stride()
+            && stride < elem
+        {
+            return Err(cx.invalid(format!(
+                "accessors[{}]: byte stride {stride} of buffer view {} is smaller than its {elem}-byte element",
+                a.index(),
+                view.index()
+            )));
+        }
+        let stride = view.stride().unwrap_or(elem);
         let end = (a.count() - 1)
             .checked_mul(stride)
             .and_then(|x| x.checked_add(a.offset()))
@@ -156,6 +165,141 @@ pub(super) fn check_position_accessors(
                     root.accessors.len()
                 )));
             }
+        }
+    }
+    Ok(())
+}
+
+/// What a vertex attribute or index accessor may be (glTF 2.0 3.7.2.1 and
+/// 3.7.2.2): element types and (component type, normalized) pairs.
+struct Allowed {
+    dims: &'static [gltf::accessor::Dimensions],
+    components: &'static [(gltf::accessor::DataType, bool)],
+    text: &'static str,
+}
+
+fn allowed(semantic: Option<&gltf::Semantic>) -> Option<Allowed> {
+    use gltf::Semantic as S;
+    use gltf::accessor::DataType as T;
+    use gltf::accessor::Dimensions as D;
+    const FLOAT: &[(T, bool)] = &[(T::F32, false)];
+    const UNIT: &[(T, bool)] = &[(T::F32, false), (T::U8, true), (T::U16, true)];
+    Some(match semantic {
+        None => Allowed {
+            dims: &[D::Scalar],
+            components: &[(T::U8, false), (T::U16, false), (T::U32, false)],
+            text: "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
+        },
+        Some(S::Positions) | Some(S::Normals) => Allowed {
+            dims: &[D::Vec3],
+            components: FLOAT,
+            text: "VEC3 of FLOAT",
+        },
+        Some(S::Tangents) => Allowed {
+            dims: &[D::Vec4],
+            components: FLOAT,
+            text: "VEC4 of FLOAT",
+        },
+        Some(S::TexCoords(_)) => Allowed {
+            dims: &[D::Vec2],
+            components: UNIT,
+            text: "VEC2 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT",
+        },
+        Some(S::Colors(_)) => Allowed {
+            dims: &[D::Vec3, D::Vec4],
+            components: UNIT,
+            text: "VEC3 or VEC4 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT",
+        },
+        Some(S::Joints(_)) => Allowed {
+            dims: &[D::Vec4],
+            components: &[(T::U8, false), (T::U16, false)],
+            text: "VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT",
+        },
+        Some(S::Weights(_)) => Allowed {
+            dims: &[D::Vec4],
+            components: UNIT,
+            text: "VEC4 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT",
+        },
+        // Application-specific attributes (_FOO) are not read.
+        Some(_) => return None,
+    })
+}
+
+fn describe(a: &gltf::Accessor) -> String {
+    use gltf::accessor::DataType as T;
+    let component = match a.data_type() {
+        T::I8 => "BYTE",
+        T::U8 => "UNSIGNED_BYTE",
+        T::I16 => "SHORT",
+        T::U16 => "UNSIGNED_SHORT",
+        T::U32 => "UNSIGNED_INT",
+        T::F32 => "FLOAT",
+    };
+    let normalized = if a.normalized() { "normalized " } else { "" };
+    let dims = format!("{:?}", a.dimensions()).to_uppercase();
+    format!("{dims} of {normalized}{component}")
+}
+
+/// Every index, attribute and morph-target accessor has an element and
+/// component type its semantic allows (the gltf crate's readers assert or
+/// reach `unreachable!` on the others); errors name the JSON path.
+pub(super) fn check_attribute_types(
+    cx: &GltfContext,
+    doc: &gltf::Document,
+) -> Result<(), SceneError> {
+    let check = |path: String, semantic: Option<&gltf::Semantic>, a: &gltf::Accessor| {
+        let Some(rule) = allowed(semantic) else {
+            return Ok(());
+        };
+        let fits = rule.dims.contains(&a.dimensions())
+            && rule.components.contains(&(a.data_type(), a.normalized()));
+        if fits {
+            Ok(())
+        } else {
+            Err(cx.invalid(format!(
+                "{path}: accessor {} is {}; it must be {}",
+                a.index(),
+                describe(a),
+                rule.text
+            )))
+        }
+    };
+    for mesh in doc.meshes() {
+        for p in mesh.primitives() {
+            let at = format!("meshes[{}].primitives[{}]", mesh.index(), p.index());
+            if let Some(a) = p.indices() {
+                check(format!("{at}.indices"), None, &a)?;
+            }
+            for (semantic, a) in p.attributes() {
+                let path = format!("{at}.attributes.{}", semantic.to_string());
+                check(path, Some(&semantic), &a)?;
+            }
+            for (t, target) in p.morph_targets().enumerate() {
+                let named = [
+                    ("POSITION", target.positions()),
+                    ("NORMAL", target.normals()),
+                    ("TANGENT", target.tangents()),
+                ];
+                for (name, a) in named {
+                    let Some(a) = a else { continue };
+                    // Displacements: VEC3 of FLOAT (no quantization extension).
+                    let s = gltf::Semantic::Positions;
+                    check(format!("{at}.targets[{t}].{name}"), Some(&s), &a)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every image has a source the loader can read: a `uri` or a `bufferView`.
+pub(super) fn check_image_sources(
+    cx: &GltfContext,
+    root: &gltf::json::Root,
+) -> Result<(), SceneError> {
+    for (i, image) in root.images.iter().enumerate() {
+        if image.uri.is_none() && image.buffer_view.is_none() {
+            return Err(cx.invalid(format!("images[{i}] has neither a uri nor a bufferView")));
         }
     }
     Ok(())

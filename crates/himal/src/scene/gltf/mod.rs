@@ -24,7 +24,9 @@ pub use material::{
 };
 
 pub(crate) use buffers::GltfContext;
-use buffers::{check_accessors, check_position_accessors};
+use buffers::{
+    check_accessors, check_attribute_types, check_image_sources, check_position_accessors,
+};
 
 use super::{Aabb, Camera, Mesh, NamedCamera, Object, SceneError, Vertex};
 
@@ -121,6 +123,7 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
         gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     let root = document.into_json();
     check_position_accessors(&cx, &root)?;
+    check_image_sources(&cx, &root)?;
     let doc = gltf::Document::from_json(root).map_err(invalid)?;
     let mut blob = blob;
     let mut buffers = Vec::new();
@@ -145,6 +148,7 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
         buffers.push(data);
     }
     check_accessors(&cx, &doc, &buffers)?;
+    check_attribute_types(&cx, &doc)?;
 
     let mut pbr = PbrSet::default();
     for img in doc.images() {
