@@ -135,3 +135,44 @@ fn a_stride_below_the_element_and_an_image_without_a_source_are_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn a_glb_whose_header_length_disagrees_and_an_empty_sparse_accessor_are_errors() {
+    // A minimal GLB of the triangle: header (magic, version 2, length), JSON chunk.
+    let json = triangle("TANGENT", FLOAT, "VEC4", 0, "");
+    let mut chunk = json.into_bytes();
+    while !chunk.len().is_multiple_of(4) {
+        chunk.push(b' ');
+    }
+    let glb = |declared: u32, extra: usize| {
+        let mut g = b"glTF".to_vec();
+        g.extend(2u32.to_le_bytes());
+        g.extend(declared.to_le_bytes());
+        g.extend((chunk.len() as u32).to_le_bytes());
+        g.extend(b"JSON");
+        g.extend(&chunk);
+        g.extend(vec![0u8; extra]);
+        g
+    };
+    let whole = 12 + 8 + chunk.len() as u32;
+    let path = Path::new("malformed.glb");
+    load_from_bytes(path, &glb(whole, 0)).expect("a consistent GLB loads");
+    let Err(e) = load_from_bytes(path, &glb(whole, 16)) else {
+        panic!("a GLB longer than its header says was accepted");
+    };
+    assert!(
+        e.to_string().contains(&format!(
+            "GLB header declares {whole} bytes, the file has {}",
+            whole + 16
+        )),
+        "{e}"
+    );
+    // sparse.count must be 1..=count.
+    let sparse = triangle("TANGENT", FLOAT, "VEC4", 0, "").replace(
+        r#""count":3,"type":"VEC4"}"#,
+        r#""count":3,"type":"VEC4","sparse":{"count":0,"indices":{"bufferView":1,"componentType":5121},"values":{"bufferView":1}}}"#,
+    );
+    assert!(sparse.contains("sparse"), "the test replaced the accessor");
+    let e = error(&sparse, "sparse count 0");
+    assert!(e.contains("accessors[1].sparse.count is 0"), "{e}");
+}

@@ -115,6 +115,16 @@ pub(super) fn check_accessors(
         if a.count() == 0 || a.count() > MAX_ELEMENTS {
             return Err(cx.invalid(format!("accessor {} has count {}", a.index(), a.count())));
         }
+        if let Some(sparse) = a.sparse()
+            && !(1..=a.count()).contains(&sparse.count())
+        {
+            return Err(cx.invalid(format!(
+                "accessors[{}].sparse.count is {}; it must be 1..={} (the accessor's count)",
+                a.index(),
+                sparse.count(),
+                a.count()
+            )));
+        }
         let Some(view) = a.view() else { continue };
         let bytes = view_bytes(cx, &view, buffers)?;
         if let Some(stride) = view.stride()

@@ -116,6 +116,18 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
         path: path.to_path_buf(),
     };
     let invalid = |e: gltf::Error| cx.invalid(format!("not valid glTF: {e}"));
+    // A GLB's header states its whole length (glTF 2.0 4.4.2).
+    if let Some(declared) = bytes
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .map(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]]) as usize)
+        && declared != bytes.len()
+    {
+        return Err(cx.invalid(format!(
+            "GLB header declares {declared} bytes, the file has {}",
+            bytes.len()
+        )));
+    }
     // Parsed first, validated after our own index check: the gltf crate's
     // validation indexes the POSITION accessor unchecked (a panic found by
     // tests/gltf_fuzz.rs).
