@@ -28,6 +28,7 @@ mod builder;
 mod compile;
 mod describe;
 mod execute;
+mod fallback;
 mod history;
 mod node;
 mod pool;

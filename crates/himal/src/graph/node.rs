@@ -15,46 +15,12 @@
 
 use super::builder::FrameGraph;
 use super::execute::PassContext;
+pub use super::fallback::{Fallback, ZERO_BUFFER_BYTES};
 use super::resource::{BufferAccess, BufferHandle, TextureAccess, TextureHandle};
 use super::{GraphError, PassBuilder};
 use crate::gpu::GpuError;
 use crate::gpu::pipeline::Program;
 use crate::shader::BindingInfo;
-
-/// A constant texture the graph provides for an optional binding that is
-/// absent (1x1 `Rgba8Unorm`, kept by the [`super::TexturePool`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Fallback {
-    /// (1, 1, 1, 1): no occlusion, no shadow.
-    White,
-    /// (0, 0, 0, 0): no contribution.
-    Black,
-    /// A one-layer `Depth32Float` array at the far plane (1.0): an absent
-    /// shadow map, nothing occludes.
-    DepthFar,
-    /// A 1x1x1 3D texture of zeros (an absent lookup table).
-    Black3d,
-}
-
-impl Fallback {
-    pub const ALL: [Fallback; 4] = [
-        Fallback::White,
-        Fallback::Black,
-        Fallback::DepthFar,
-        Fallback::Black3d,
-    ];
-
-    pub(crate) fn index(self) -> usize {
-        self as usize
-    }
-
-    pub(crate) fn value(self) -> wgpu::Color {
-        match self {
-            Fallback::White => wgpu::Color::WHITE,
-            Fallback::Black | Fallback::DepthFar | Fallback::Black3d => wgpu::Color::TRANSPARENT,
-        }
-    }
-}
 
 /// What a binding is bound to.
 enum Source<'a> {
@@ -72,10 +38,6 @@ enum Source<'a> {
     /// uniform or read-only storage input.
     ZeroBuffer,
 }
-
-/// Size of the graph's buffer of zeros (an absent optional buffer binding
-/// may need at most this many bytes).
-pub const ZERO_BUFFER_BYTES: u64 = 4096;
 
 impl Source<'_> {
     fn kind(&self) -> &'static str {
@@ -98,27 +60,7 @@ impl Source<'_> {
         use wgpu::BindingType as B;
         match self {
             Source::Texture(..) => matches!(ty, B::Texture { .. }),
-            Source::Fallback(f) => match ty {
-                B::Texture {
-                    sample_type,
-                    view_dimension,
-                    ..
-                } => {
-                    let depth = matches!(sample_type, wgpu::TextureSampleType::Depth);
-                    match f {
-                        Fallback::DepthFar => {
-                            depth && *view_dimension == wgpu::TextureViewDimension::D2Array
-                        }
-                        Fallback::White | Fallback::Black => {
-                            !depth && *view_dimension == wgpu::TextureViewDimension::D2
-                        }
-                        Fallback::Black3d => {
-                            !depth && *view_dimension == wgpu::TextureViewDimension::D3
-                        }
-                    }
-                }
-                _ => false,
-            },
+            Source::Fallback(f) => f.fits(ty),
             Source::Storage(_) | Source::StorageView(..) => {
                 matches!(ty, B::StorageTexture { .. })
             }

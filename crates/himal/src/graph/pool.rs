@@ -26,7 +26,7 @@ pub struct TexturePool {
     /// Set once a frame that recorded their clears finished recording; until
     /// then every execute records them (a failed frame is never submitted).
     fallbacks_cleared: std::cell::Cell<bool>,
-    /// [`super::node::ZERO_BUFFER_BYTES`] of zeros (wgpu zero-initialises it).
+    /// [`super::fallback::ZERO_BUFFER_BYTES`] of zeros (wgpu zero-initialises it).
     zero_buffer: std::cell::OnceCell<wgpu::Buffer>,
 }
 
@@ -61,10 +61,7 @@ impl TexturePool {
             return;
         }
         if self.fallbacks.is_empty() {
-            self.fallbacks = Fallback::ALL
-                .iter()
-                .map(|f| fallback_texture(device, *f))
-                .collect();
+            self.fallbacks = Fallback::ALL.iter().map(|f| f.texture(device)).collect();
         }
         for (f, (texture, view)) in Fallback::ALL.iter().zip(&self.fallbacks) {
             if *f == Fallback::Black3d {
@@ -105,7 +102,7 @@ impl TexturePool {
         self.zero_buffer.get_or_init(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("himal.fallback.zeros"),
-                size: super::node::ZERO_BUFFER_BYTES,
+                size: super::fallback::ZERO_BUFFER_BYTES,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
@@ -207,47 +204,4 @@ impl TexturePool {
     pub(crate) fn buffer(&self, key: &BufferKey, index: usize) -> Option<&wgpu::Buffer> {
         self.buffers.get(key)?.get(index).map(|p| &p.object)
     }
-}
-
-/// A 1x1 fallback texture (cleared to its value by the first frame).
-fn fallback_texture(device: &wgpu::Device, f: Fallback) -> (wgpu::Texture, wgpu::TextureView) {
-    if f == Fallback::Black3d {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("himal.fallback.Black3d"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
-        return (texture, view);
-    }
-    let format = match f {
-        Fallback::DepthFar => wgpu::TextureFormat::Depth32Float,
-        Fallback::White | Fallback::Black | Fallback::Black3d => wgpu::TextureFormat::Rgba8Unorm,
-    };
-    let texture = crate::gpu::texture_2d(
-        device,
-        &format!("himal.fallback.{f:?}"),
-        (1, 1),
-        1,
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
-    let dimension = match f {
-        Fallback::DepthFar => Some(wgpu::TextureViewDimension::D2Array),
-        Fallback::White | Fallback::Black | Fallback::Black3d => None,
-    };
-    let view = texture.create_view(&wgpu::TextureViewDescriptor {
-        dimension,
-        ..Default::default()
-    });
-    (texture, view)
 }
