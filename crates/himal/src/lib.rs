@@ -14,6 +14,7 @@
 //! # Ok::<(), himal::Error>(())
 //! ```
 
+pub mod budget;
 pub mod frame;
 pub mod gpu;
 pub mod gpu_scene;

@@ -106,7 +106,7 @@ fn bad_gltf_entries_name_the_line_and_the_problem() {
         (
             "[[gltf]]\nfile = \"gltf/DamagedHelmet/glTF/DamagedHelmet.gltf\"\nscale = -1\n",
             "placed.toml:3:",
-            "must be positive",
+            "must lie in [0.0001, 10000]",
         ),
         (
             "[[gltf]]\nfile = \"gltf/DamagedHelmet/glTF/DamagedHelmet.gltf\"\nspin = 3\n",

@@ -590,7 +590,7 @@ fn semantic_checks_point_at_the_offending_key() {
         (
             "[[object]]\nname = \"b\"\nprimitive = \"box\"\nmaterial = \"m\"\nsize = [1, -2, 1]\n",
             "x.toml:9:8:",
-            "box size must be 3 positive numbers",
+            "box size must be 3 numbers [x, y, z] in [0.0001, 1000000] m",
         ),
         (
             "[[object]]\nname = \"b\"\nprimitive = \"box\"\nmaterial = \"m\"\nsize = [1, 2, 1]\nradius = 3\n",

@@ -13,6 +13,7 @@ use super::file::{FileCamera, FileMaterial, FileObject, FileScene, FileSun};
 use super::place::Placer;
 use super::{Aabb, Camera, MaterialDesc, NamedCamera, Scene, SceneError, SunDesc};
 use super::{heightfield, primitives, vegetation};
+use crate::budget::MemoryBudget;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -22,6 +23,14 @@ const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield, gras
 pub(crate) struct Checker<'a> {
     pub src: SourceMap<'a>,
 }
+
+/// Largest coordinate or length a scene may give, in metres (the open
+/// world is 10.24 km; f32 positions this far out still resolve 6 cm).
+pub(crate) const MAX_EXTENT: f32 = 1.0e6;
+/// Smallest length (radius, height, size component), in metres.
+pub(crate) const MIN_LENGTH: f32 = 1.0e-4;
+/// Scale factors per axis lie in [1 / MAX_SCALE, MAX_SCALE].
+pub(crate) const MAX_SCALE: f32 = 1.0e4;
 
 impl Checker<'_> {
     pub fn err(&self, span: &Range<usize>, message: impl Into<String>) -> SceneError {
@@ -55,13 +64,22 @@ impl Checker<'_> {
         }
     }
 
-    /// A vector of finite numbers (TOML allows nan and inf).
+    /// A length in metres: [`MIN_LENGTH`] to [`MAX_EXTENT`].
+    pub fn length(&self, v: &Spanned<f32>, key: &str) -> Result<f32> {
+        self.range(v, key, MIN_LENGTH, MAX_EXTENT)
+    }
+
+    /// A vector of finite numbers (TOML allows nan and inf) within
+    /// [`MAX_EXTENT`] of the origin on each axis.
     pub fn finite3(&self, v: &Spanned<[f32; 3]>, key: &str) -> Result<Vec3> {
         let a = *v.get_ref();
-        if a.iter().all(|c| c.is_finite()) {
+        if a.iter().all(|c| c.is_finite() && c.abs() <= MAX_EXTENT) {
             Ok(Vec3::from(a))
         } else {
-            Err(self.err(&v.span(), format!("{key} {a:?} must be finite")))
+            Err(self.err(
+                &v.span(),
+                format!("{key} {a:?} must be finite numbers within +-{MAX_EXTENT}"),
+            ))
         }
     }
 
@@ -100,11 +118,13 @@ impl Checker<'_> {
     /// `size` with exactly `N` positive components.
     pub fn size<const N: usize>(&self, v: &Spanned<Vec<f32>>, primitive: &str) -> Result<[f32; N]> {
         let s = v.get_ref();
-        if s.len() != N || s.iter().any(|c| !(*c > 0.0 && c.is_finite())) {
+        if s.len() != N || s.iter().any(|c| !(MIN_LENGTH..=MAX_EXTENT).contains(c)) {
             let want = if N == 2 { "[x, z]" } else { "[x, y, z]" };
             return Err(self.err(
                 &v.span(),
-                format!("{primitive} size must be {N} positive numbers {want}, got {s:?}"),
+                format!(
+                    "{primitive} size must be {N} numbers {want} in [{MIN_LENGTH}, {MAX_EXTENT}] m, got {s:?}"
+                ),
             ));
         }
         let mut out = [0.0; N];
@@ -121,7 +141,12 @@ fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<Scene> {
+pub(crate) fn build_scene(
+    text: &str,
+    origin: &str,
+    base_dir: &Path,
+    budget: MemoryBudget,
+) -> Result<Scene> {
     let ck = Checker {
         src: SourceMap { origin, text },
     };
@@ -155,12 +180,19 @@ pub(crate) fn build_scene(text: &str, origin: &str, base_dir: &Path) -> Result<S
         materials: &materials,
         meshes: Vec::new(),
         mesh_keys: HashMap::new(),
+        budget,
+        charged: 0,
     };
     let mut objects = Placer::place_all(&mut world, &file.object)?;
+    let charged = world.charged;
     let mut meshes = world.meshes;
     let mut lights = lights;
+    // Models share what the scene's own meshes left of the budget.
+    let left = MemoryBudget {
+        bytes: budget.bytes.saturating_sub(charged).max(1),
+    };
     let placed =
-        super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes, &objects)?;
+        super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes, &objects, left)?;
     objects.extend(placed.objects);
     lights.extend(placed.lights);
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
@@ -304,7 +336,7 @@ fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<NamedCamera>> 
             None => 60.0,
         };
         let near = match &c.near {
-            Some(n) => ck.positive(n, "near")?,
+            Some(n) => ck.range(n, "near", MIN_LENGTH, 1000.0)?,
             None => super::DEFAULT_NEAR,
         };
         out.push(NamedCamera {
@@ -328,6 +360,9 @@ pub(crate) struct World<'a> {
     pub materials: &'a [MaterialDesc],
     pub meshes: Vec<super::Mesh>,
     pub mesh_keys: HashMap<String, usize>,
+    pub budget: MemoryBudget,
+    /// Bytes charged to the budget by the meshes built so far.
+    pub charged: u64,
 }
 
 /// A validated primitive; its Debug text (with the material) keys mesh sharing.
@@ -356,6 +391,43 @@ enum Shape {
     },
     Grass(vegetation::GrassParams),
     Bush(vegetation::BushParams),
+}
+
+impl Shape {
+    /// Vertices and indices of the mesh (upper bounds) and the parameters
+    /// that set them, for the budget.
+    fn size(&self) -> (u64, u64, String) {
+        let n = |x: u32| x as u64;
+        match self {
+            Shape::Plane { segments, .. } => (
+                (n(*segments) + 1).pow(2),
+                6 * n(*segments).pow(2),
+                format!("with {segments} segments"),
+            ),
+            Shape::Sphere {
+                segments, rings, ..
+            } => (
+                (n(*segments) + 1) * (n(*rings) + 1),
+                6 * n(*segments) * n(*rings),
+                format!("with {segments} segments and {rings} rings"),
+            ),
+            Shape::Cylinder { segments, .. } => (
+                4 * (n(*segments) + 1) + 2,
+                12 * n(*segments),
+                format!("with {segments} segments"),
+            ),
+            Shape::Box { .. } | Shape::Prism { .. } => (24, 36, String::new()),
+            Shape::Grass(p) => {
+                let cards = p.clump_count().saturating_mul(n(p.cards));
+                (4 * cards, 6 * cards, format!("with {cards} cards"))
+            }
+            Shape::Bush(p) => (
+                4 * n(p.cards),
+                6 * n(p.cards),
+                format!("with {} cards", p.cards),
+            ),
+        }
+    }
 }
 
 /// Which keys each primitive takes besides the common ones.
@@ -416,6 +488,34 @@ impl World<'_> {
             .map_or(Ok(default), |s| self.ck.int(s, key, lo, 4096))
     }
 
+    /// Charges `bytes` for `what` (an object's mesh, at `span`) against the
+    /// memory budget before it is allocated.
+    pub fn charge(&mut self, span: &Range<usize>, what: String, bytes: u64) -> Result<()> {
+        let total = self.charged.saturating_add(bytes);
+        let what = if self.charged > 0 {
+            format!("{what}, with the scene's earlier meshes,")
+        } else {
+            what
+        };
+        self.budget
+            .check(what, total)
+            .map_err(|e| self.ck.err(span, e))?;
+        self.charged = total;
+        Ok(())
+    }
+
+    /// Charges a mesh of `vertices` and `indices` (see [`MemoryBudget::mesh_bytes`]).
+    pub fn charge_mesh(
+        &mut self,
+        span: &Range<usize>,
+        what: String,
+        vertices: u64,
+        indices: u64,
+    ) -> Result<()> {
+        let what = format!("{what} ({vertices} vertices, {indices} indices)");
+        self.charge(span, what, MemoryBudget::mesh_bytes(vertices, indices))
+    }
+
     /// Rejects unknown primitives and keys that do not apply to the primitive.
     pub fn check_keys(&self, o: &FileObject) -> Result<()> {
         let prim = o.primitive.get_ref().as_str();
@@ -459,7 +559,7 @@ impl World<'_> {
                 Shape::Sphere {
                     radius: self
                         .ck
-                        .positive(self.required(o, &o.radius, "radius")?, "radius")?,
+                        .length(self.required(o, &o.radius, "radius")?, "radius")?,
                     segments,
                     rings: self.segments(&o.rings, "rings", (segments / 2).max(2), 2)?,
                 }
@@ -467,10 +567,10 @@ impl World<'_> {
             "cylinder" => Shape::Cylinder {
                 radius: self
                     .ck
-                    .positive(self.required(o, &o.radius, "radius")?, "radius")?,
+                    .length(self.required(o, &o.radius, "radius")?, "radius")?,
                 height: self
                     .ck
-                    .positive(self.required(o, &o.height, "height")?, "height")?,
+                    .length(self.required(o, &o.height, "height")?, "height")?,
                 segments: self.segments(&o.segments, "segments", 32, 3)?,
             },
             "grass" => Shape::Grass(self.grass_params(o)?),
@@ -488,6 +588,10 @@ impl World<'_> {
         if let Some(&i) = self.mesh_keys.get(&key) {
             return Ok(i);
         }
+        let (vertices, indices, what) = shape.size();
+        let span = o.segments.as_ref().map_or(o.name.span(), |s| s.span());
+        let what = format!("object \"{}\": {prim} {what}", o.name.get_ref());
+        self.charge_mesh(&span, what, vertices, indices)?;
         let m = &self.materials[material];
         let name = format!("{prim}/{}/{}", m.name, self.meshes.len());
         let mesh = match shape {

@@ -45,6 +45,109 @@ pub struct EnvironmentImage {
     pub rotation: f32,
 }
 
+/// Widest environment image read (16K equirectangular).
+const MAX_ENVIRONMENT_WIDTH: u64 = 16384;
+/// Largest environment file read (a 16K float EXR, uncompressed, is 1.5 GiB).
+const MAX_ENVIRONMENT_FILE_BYTES: u64 = 2 << 30;
+
+/// The two formats read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvironmentFormat {
+    /// Radiance RGBE.
+    Hdr,
+    Exr,
+}
+
+impl EnvironmentFormat {
+    /// By the file's extension.
+    pub fn of(path: &Path) -> Result<Self, SceneError> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("hdr") => Ok(Self::Hdr),
+            Some("exr") => Ok(Self::Exr),
+            _ => Err(invalid(
+                path,
+                "unsupported environment image (use an equirectangular .hdr or .exr)",
+            )),
+        }
+    }
+}
+
+/// Width and height from the header, before any texel is decoded.
+fn header_size(
+    path: &Path,
+    bytes: &[u8],
+    format: EnvironmentFormat,
+) -> Result<(usize, usize), SceneError> {
+    match format {
+        EnvironmentFormat::Exr => {
+            let m = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+                .map_err(|e| invalid(path, format!("cannot read the EXR header: {e}")))?;
+            let header = m
+                .headers
+                .first()
+                .ok_or_else(|| invalid(path, "the EXR file has no layer"))?;
+            let size = header.layer_size;
+            Ok((size.width(), size.height()))
+        }
+        EnvironmentFormat::Hdr => {
+            image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Hdr)
+                .into_dimensions()
+                .map(|(w, h)| (w as usize, h as usize))
+                .map_err(|e| invalid(path, format!("cannot read the HDR header: {e}")))
+        }
+    }
+}
+
+/// Decodes the texels (linear RGB, rows top to bottom).
+fn decode(
+    path: &Path,
+    bytes: &[u8],
+    format: EnvironmentFormat,
+) -> Result<(usize, usize, Vec<Vec3>), SceneError> {
+    match format {
+        EnvironmentFormat::Hdr => {
+            let img = image::ImageReader::with_format(
+                std::io::Cursor::new(bytes),
+                image::ImageFormat::Hdr,
+            )
+            .decode()
+            .map_err(|e| invalid(path, format!("cannot read the HDR image: {e}")))?
+            .into_rgb32f();
+            let (w, h) = (img.width() as usize, img.height() as usize);
+            Ok((w, h, img.pixels().map(|p| Vec3::from(p.0)).collect()))
+        }
+        EnvironmentFormat::Exr => {
+            use exr::prelude::*;
+            let img = read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .rgba_channels(
+                    |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
+                    |(w, texels): &mut (usize, Vec<Vec3>),
+                     pos,
+                     (r, g, b, _a): (f32, f32, f32, f32)| {
+                        texels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+                    },
+                )
+                .first_valid_layer()
+                .all_attributes()
+                .from_buffered(std::io::Cursor::new(bytes))
+                .map_err(|e| invalid(path, format!("cannot read the EXR image: {e}")))?;
+            let size = img.layer_data.size;
+            Ok((
+                size.width(),
+                size.height(),
+                img.layer_data.channel_data.pixels.1,
+            ))
+        }
+    }
+}
+
 fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         file: path.display().to_string(),
@@ -56,45 +159,48 @@ impl EnvironmentImage {
     /// Reads `.hdr` (Radiance RGBE) or `.exr`, scaled by the intensity.
     pub fn load(desc: &EnvironmentDesc) -> Result<Self, SceneError> {
         let path = &desc.path;
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
-        let (width, height, mut texels) = match ext.as_deref() {
-            Some("hdr") => {
-                let img = image::open(path)
-                    .map_err(|e| invalid(path, format!("cannot read the HDR image: {e}")))?
-                    .into_rgb32f();
-                let (w, h) = (img.width() as usize, img.height() as usize);
-                let texels = img.pixels().map(|p| Vec3::from(p.0)).collect();
-                (w, h, texels)
-            }
-            Some("exr") => {
-                use exr::prelude::*;
-                let img = read_first_rgba_layer_from_file(
-                    path,
-                    |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
-                    |(w, texels): &mut (usize, Vec<Vec3>),
-                     pos,
-                     (r, g, b, _a): (f32, f32, f32, f32)| {
-                        texels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
-                    },
+        let format = EnvironmentFormat::of(path)?;
+        let meta =
+            std::fs::metadata(path).map_err(|e| invalid(path, format!("cannot read: {e}")))?;
+        // A directory, a device or an endless pipe is not read.
+        if !meta.is_file() || meta.len() > MAX_ENVIRONMENT_FILE_BYTES {
+            return Err(invalid(
+                path,
+                format!(
+                    "not a regular file of at most {} GiB",
+                    MAX_ENVIRONMENT_FILE_BYTES >> 30
+                ),
+            ));
+        }
+        let bytes = std::fs::read(path).map_err(|e| invalid(path, format!("cannot read: {e}")))?;
+        Self::from_bytes(desc, &bytes, format)
+    }
+
+    /// [`EnvironmentImage::load`] for bytes already read; `desc.path` names
+    /// them in messages.
+    pub fn from_bytes(
+        desc: &EnvironmentDesc,
+        bytes: &[u8],
+        format: EnvironmentFormat,
+    ) -> Result<Self, SceneError> {
+        let path = &desc.path;
+        let (w, h) = header_size(path, bytes, format)?;
+        if w as u64 > MAX_ENVIRONMENT_WIDTH || h as u64 > MAX_ENVIRONMENT_WIDTH / 2 {
+            return Err(invalid(
+                path,
+                format!("{w}x{h}: at most {MAX_ENVIRONMENT_WIDTH} texels wide (16K) are read"),
+            ));
+        }
+        // The decoded texels, the f32 copy, cube faces and SH projection.
+        crate::budget::MemoryBudget::from_env()
+            .and_then(|b| {
+                b.check(
+                    format!("a {w}x{h} environment image"),
+                    w as u64 * h as u64 * 48,
                 )
-                .map_err(|e| invalid(path, format!("cannot read the EXR image: {e}")))?;
-                let size = img.layer_data.size;
-                (
-                    size.width(),
-                    size.height(),
-                    img.layer_data.channel_data.pixels.1,
-                )
-            }
-            _ => {
-                return Err(invalid(
-                    path,
-                    "unsupported environment image (use an equirectangular .hdr or .exr)",
-                ));
-            }
-        };
+            })
+            .map_err(|e| invalid(path, e))?;
+        let (width, height, mut texels) = decode(path, bytes, format)?;
         if width < 2 || height < 2 || width != 2 * height {
             return Err(invalid(
                 path,
@@ -107,13 +213,19 @@ impl EnvironmentImage {
                 format!("intensity {} must be >= 0", desc.intensity),
             ));
         }
+        // Non-finite texels (a damaged file) would poison the SH and the filter.
+        let broken = texels.iter().filter(|t| !t.is_finite()).count();
+        if broken > 0 {
+            return Err(invalid(
+                path,
+                format!(
+                    "{broken} of {} texels are NaN or infinite: a damaged image",
+                    texels.len()
+                ),
+            ));
+        }
         for t in &mut texels {
-            // Non-finite texels (broken files) would poison the SH and the filter.
-            *t = if t.is_finite() {
-                t.max(Vec3::ZERO) * desc.intensity
-            } else {
-                Vec3::ZERO
-            };
+            *t = t.max(Vec3::ZERO) * desc.intensity;
         }
         Ok(Self {
             width,

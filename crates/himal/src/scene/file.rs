@@ -33,6 +33,7 @@ pub(crate) struct FileScene {
 pub(crate) struct FileGltf {
     pub file: Spanned<String>,
     pub name: Option<Spanned<String>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub translation: Option<Spanned<[f32; 3]>>,
     pub rotation: Option<Spanned<GltfRotation>>,
     pub scale: Option<Spanned<Scale>>,
@@ -64,6 +65,7 @@ pub(crate) struct FileEnvironment {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileProbe {
+    #[serde(deserialize_with = "exact3")]
     pub position: Spanned<[f32; 3]>,
 }
 
@@ -73,10 +75,13 @@ pub(crate) struct FileProbe {
 pub(crate) struct FileLight {
     pub name: Spanned<String>,
     pub kind: Spanned<String>,
+    #[serde(deserialize_with = "exact3")]
     pub position: Spanned<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub color: Option<Spanned<[f32; 3]>>,
     pub intensity: Spanned<f32>,
     pub range: Spanned<f32>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub direction: Option<Spanned<[f32; 3]>>,
     pub inner_angle: Option<Spanned<f32>>,
     pub outer_angle: Option<Spanned<f32>>,
@@ -96,7 +101,9 @@ pub(crate) struct FileSun {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileMaterial {
     pub name: Spanned<String>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub albedo: Option<Spanned<[f32; 3]>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub albedo_linear: Option<Spanned<[f32; 3]>>,
     pub glossiness: Option<Spanned<f32>>,
     pub reflectance: Option<Spanned<f32>>,
@@ -109,6 +116,7 @@ pub(crate) struct FileMaterial {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileRepeat {
     pub count: Spanned<i64>,
+    #[serde(deserialize_with = "exact3")]
     pub step: Spanned<[f32; 3]>,
 }
 
@@ -118,7 +126,9 @@ pub(crate) struct FileObject {
     pub name: Spanned<String>,
     pub primitive: Spanned<String>,
     pub material: Option<Spanned<String>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub position: Option<Spanned<[f32; 3]>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub rotation: Option<Spanned<[f32; 3]>>,
     pub scale: Option<Spanned<Scale>>,
     pub snap_to_ground: Option<Spanned<bool>>,
@@ -223,12 +233,31 @@ pub(crate) struct FileLayer {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileCamera {
     pub name: Spanned<String>,
+    #[serde(deserialize_with = "exact3")]
     pub position: Spanned<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub target: Option<Spanned<[f32; 3]>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub forward: Option<Spanned<[f32; 3]>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
     pub up: Option<Spanned<[f32; 3]>>,
     pub fov_y: Option<Spanned<f32>>,
     pub near: Option<Spanned<f32>>,
+}
+
+/// `[x, y, z]` with exactly three numbers (serde's array reader would
+/// ignore a fourth).
+fn exact3<'de, D: Deserializer<'de>>(d: D) -> Result<Spanned<[f32; 3]>, D::Error> {
+    let v = Spanned::<Vec<f32>>::deserialize(d)?;
+    let span = v.span();
+    let n = v.get_ref().len();
+    <[f32; 3]>::try_from(v.into_inner())
+        .map(|a| Spanned::new(span, a))
+        .map_err(|_| de::Error::invalid_length(n, &"three numbers [x, y, z]"))
+}
+
+fn exact3_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Spanned<[f32; 3]>>, D::Error> {
+    exact3(d).map(Some)
 }
 
 /// `time = "HH:MM"` or `time = 14.5` (hours); range checked later.

@@ -212,6 +212,15 @@ impl HeightGrid {
         Self::from_fn(size, resolution, resolution, |x, z| noise.height(x, z))
     }
 
+    /// Width and height of the image at `path`, read from its header only.
+    pub fn png_dimensions(path: &Path) -> Result<(u32, u32), String> {
+        image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| e.to_string())?
+            .into_dimensions()
+            .map_err(|e| e.to_string())
+    }
+
     /// Heights from a grayscale image (any bit depth, 16-bit recommended):
     /// white = `height_scale` metres. Column 0 is at -x, row 0 at -z.
     /// `resolution` resamples bilinearly; `None` keeps one vertex per pixel.

@@ -40,7 +40,17 @@ pub struct LightDesc {
 
 pub(crate) fn build_lights(ck: &Checker, file: &[FileLight]) -> Result<Vec<LightDesc>> {
     file.iter()
-        .map(|l| {
+        .enumerate()
+        .map(|(k, l)| {
+            if file[..k]
+                .iter()
+                .any(|o| o.name.get_ref() == l.name.get_ref())
+            {
+                return Err(ck.err(
+                    &l.name.span(),
+                    format!("light \"{}\" is defined twice", l.name.get_ref()),
+                ));
+            }
             let kind = match l.kind.get_ref().as_str() {
                 "point" => LightKind::Point,
                 "spot" => LightKind::Spot,
@@ -53,11 +63,17 @@ pub(crate) fn build_lights(ck: &Checker, file: &[FileLight]) -> Result<Vec<Light
             };
             let position = ck.finite3(&l.position, "position")?;
             let color = match &l.color {
-                Some(c) => ck.finite3(c, "color")?.max(Vec3::ZERO),
+                Some(c) => {
+                    let v = ck.finite3(c, "color")?;
+                    if v.min_element() < 0.0 {
+                        return Err(ck.err(&c.span(), format!("color {v} must not be negative")));
+                    }
+                    v
+                }
                 None => Vec3::ONE,
             };
             let intensity = ck.positive(&l.intensity, "intensity")?;
-            let range = ck.positive(&l.range, "range")?;
+            let range = ck.length(&l.range, "range")?;
             let direction = match &l.direction {
                 Some(d) => {
                     let v = ck.finite3(d, "direction")?;

@@ -127,8 +127,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
+use crate::budget::MemoryBudget;
+
 pub use camera::{Camera, DEFAULT_NEAR};
-pub use environment::{EnvironmentDesc, EnvironmentImage};
+pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
 pub use lights::{LightDesc, LightKind};
@@ -452,26 +454,70 @@ pub struct Scene {
     pub environment: Option<EnvironmentDesc>,
 }
 
+/// Largest scene file read (the demo is 30 kB).
+const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
+
+/// The budget of `HIMAL_MEMORY_BUDGET` (or the machine default).
+fn env_budget() -> Result<MemoryBudget, SceneError> {
+    MemoryBudget::from_env().map_err(|message| SceneError::Invalid {
+        file: crate::budget::MEMORY_BUDGET_ENV.into(),
+        message,
+    })
+}
+
 /// Text of the demo world, embedded so the renderer runs from anywhere.
 const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
 impl Scene {
     /// Reads, parses and builds the scene file at `path`; relative paths
     /// inside it are resolved against its folder.
+    /// Allocations are checked against [`MemoryBudget::from_env`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        Self::load_within(path, env_budget()?)
+    }
+
+    /// [`Scene::load`] with an explicit memory budget.
+    pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
+        let io = |source| SceneError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
+        };
+        let meta = std::fs::metadata(path).map_err(io)?;
+        // A directory, a device or an endless pipe is not read.
+        if !meta.is_file() || meta.len() > MAX_SCENE_FILE_BYTES {
+            return Err(SceneError::Invalid {
+                file: path.display().to_string(),
+                message: format!(
+                    "not a scene file: {} (at most {} MiB of TOML)",
+                    if meta.is_file() {
+                        "too large"
+                    } else {
+                        "not a regular file"
+                    },
+                    MAX_SCENE_FILE_BYTES >> 20
+                ),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(io)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
-        let mut scene = Self::from_toml_str(&text, &path.display().to_string(), base_dir)?;
+        let mut scene = build::build_scene(&text, &path.display().to_string(), base_dir, budget)?;
         scene.path = Some(path.to_path_buf());
         Ok(scene)
     }
 
     /// Parses scene text; `origin` names it in messages, `base_dir` resolves relative paths.
     pub fn from_toml_str(text: &str, origin: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-        build::build_scene(text, origin, base_dir)
+        build::build_scene(text, origin, base_dir, env_budget()?)
+    }
+
+    /// [`Scene::from_toml_str`] with an explicit memory budget.
+    pub fn from_toml_str_within(
+        text: &str,
+        origin: &str,
+        base_dir: &Path,
+        budget: MemoryBudget,
+    ) -> Result<Scene, SceneError> {
+        build::build_scene(text, origin, base_dir, budget)
     }
 
     /// The demo world (`scenes/demo.toml`, embedded at compile time).
@@ -483,7 +529,12 @@ impl Scene {
     /// A glTF model (`scene/gltf`) as a scene: its nodes, its cameras after
     /// an auto-framed `"default"` camera, the default sun.
     pub fn from_gltf(path: &Path) -> Result<Scene, SceneError> {
-        let asset = gltf::load(path)?;
+        Self::from_gltf_within(path, env_budget()?)
+    }
+
+    /// [`Scene::from_gltf`] with an explicit memory budget.
+    pub fn from_gltf_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
+        let asset = gltf::load_within(path, budget)?;
         let mut cameras = vec![NamedCamera {
             name: "default".into(),
             camera: gltf::framing_camera(&asset.bounds, 40.0),

@@ -299,12 +299,17 @@ fn scale(world: &World, o: &FileObject) -> Result<Vec3> {
         None => Ok(Vec3::ONE),
         Some(s) => {
             let v = s.get_ref().0;
-            if v.iter().all(|c| *c > 0.0 && c.is_finite()) {
+            let max = super::build::MAX_SCALE;
+            if v.iter().all(|c| (1.0 / max..=max).contains(c)) {
                 Ok(Vec3::from(v))
             } else {
-                Err(world
-                    .ck
-                    .err(&s.span(), format!("scale {v:?} must be positive")))
+                Err(world.ck.err(
+                    &s.span(),
+                    format!(
+                        "scale {v:?} must lie in [{}, {max}] on each axis",
+                        1.0 / max
+                    ),
+                ))
             }
         }
     }

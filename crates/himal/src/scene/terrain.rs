@@ -12,10 +12,11 @@ type Result<T> = std::result::Result<T, SceneError>;
 /// The grid, the seed for layer jitter and albedo variation, the layers
 /// (base first) and the albedo variation.
 pub(crate) fn build(
-    w: &World,
+    w: &mut World,
     o: &FileObject,
 ) -> Result<(HeightGrid, u32, Vec<TerrainLayer>, f32)> {
     let ck = w.ck;
+    let name = o.name.get_ref();
     let size = ck.size::<2>(w.required(o, &o.size, "size")?, "heightfield")?;
     let resolution = o
         .resolution
@@ -37,6 +38,8 @@ pub(crate) fn build(
                 ));
             };
             let noise = terrain_noise(w, n)?;
+            let span = o.resolution.as_ref().map_or(n.span(), |r| r.span());
+            charge_grid(w, &span, name, resolution, resolution, 0)?;
             (HeightGrid::from_noise(size, resolution, &noise), noise.seed)
         }
         (None, Some(png)) => {
@@ -45,6 +48,19 @@ pub(crate) fn build(
                 "height_scale",
             )?;
             let path = w.base_dir.join(png.get_ref());
+            let cannot = |e: String| {
+                ck.err(
+                    &png.span(),
+                    format!("cannot load height map {}: {e}", path.display()),
+                )
+            };
+            let (pw, ph) = HeightGrid::png_dimensions(&path).map_err(cannot)?;
+            let (nx, nz) = resolution.map_or((pw as usize, ph as usize), |r| (r, r));
+            // Decoding holds the image at up to 16 bits per channel, 4 channels.
+            let decoded = pw as u64 * ph as u64 * 8;
+            let span = o.resolution.as_ref().map_or(png.span(), |r| r.span());
+            let what = format!("{} ({pw}x{ph} pixels)", path.display());
+            charge_grid(w, &span, &what, nx, nz, decoded)?;
             let grid = HeightGrid::from_png(&path, size, scale, resolution).map_err(|e| {
                 ck.err(
                     &png.span(),
@@ -82,6 +98,25 @@ pub(crate) fn build(
     }
     let variation = ck.unit(&o.albedo_variation, "albedo_variation", 0.0)?;
     Ok((grid, seed, layers, variation))
+}
+
+/// Charges a height field of `nx` x `nz` vertices (its heights and mesh)
+/// plus `extra` bytes to the budget.
+fn charge_grid(
+    w: &mut World,
+    span: &std::ops::Range<usize>,
+    what: &str,
+    nx: usize,
+    nz: usize,
+    extra: u64,
+) -> Result<()> {
+    let vertices = nx as u64 * nz as u64;
+    let indices = 6 * (nx as u64).saturating_sub(1) * (nz as u64).saturating_sub(1);
+    let bytes = crate::budget::MemoryBudget::mesh_bytes(vertices, indices)
+        .saturating_add(vertices * 4)
+        .saturating_add(extra);
+    let what = format!("height field \"{what}\" of {nx}x{nz} vertices");
+    w.charge(span, what, bytes)
 }
 
 fn terrain_noise(w: &World, n: &Spanned<FileNoise>) -> Result<TerrainNoise> {

@@ -314,3 +314,204 @@ pub(super) fn check_image_sources(
     }
     Ok(())
 }
+
+/// Most node instances a hierarchy may expand to (each is an object drawn
+/// every frame; a DAG of 40 levels with two edges each would be 2^40).
+pub(crate) const MAX_NODE_INSTANCES: u64 = 1_000_000;
+
+/// The node graph before it is walked: no cycle, an expansion (instances
+/// counted through shared children) of at most [`MAX_NODE_INSTANCES`], and
+/// per node the transform glTF allows (a matrix or TRS, a unit quaternion).
+pub(super) fn check_nodes(cx: &GltfContext, root: &gltf::json::Root) -> Result<(), SceneError> {
+    let nodes = &root.nodes;
+    for (i, n) in nodes.iter().enumerate() {
+        if n.matrix.is_some()
+            && (n.translation.is_some() || n.rotation.is_some() || n.scale.is_some())
+        {
+            return Err(cx.invalid(format!(
+                "nodes[{i}] has both matrix and translation/rotation/scale (glTF allows one)"
+            )));
+        }
+        if let Some(r) = &n.rotation {
+            let len = r.0.iter().map(|c| c * c).sum::<f32>().sqrt();
+            if !(0.9..=1.1).contains(&len) {
+                return Err(cx.invalid(format!(
+                    "nodes[{i}].rotation {:?} is not a unit quaternion (length {len})",
+                    r.0
+                )));
+            }
+        }
+        for c in n.children.iter().flatten() {
+            if c.value() >= nodes.len() {
+                return Err(cx.invalid(format!(
+                    "nodes[{i}].children names node {}, which does not exist ({} nodes)",
+                    c.value(),
+                    nodes.len()
+                )));
+            }
+        }
+    }
+    // Instances below each node, children first (iterative post-order; a
+    // node met again while on the path is a cycle).
+    const NEW: u8 = 0;
+    const ON_PATH: u8 = 1;
+    const DONE: u8 = 2;
+    let mut state = vec![NEW; nodes.len()];
+    let mut instances = vec![0u64; nodes.len()];
+    let children = |i: usize| -> Vec<usize> {
+        nodes[i]
+            .children
+            .iter()
+            .flatten()
+            .map(|c| c.value())
+            .collect()
+    };
+    for start in 0..nodes.len() {
+        if state[start] != NEW {
+            continue;
+        }
+        let mut stack = vec![(start, false)];
+        while let Some((i, expanded)) = stack.pop() {
+            if expanded {
+                let below = children(i)
+                    .into_iter()
+                    .fold(1u64, |s, c| s.saturating_add(instances[c]));
+                instances[i] = below;
+                state[i] = DONE;
+                continue;
+            }
+            if state[i] == DONE {
+                continue;
+            }
+            state[i] = ON_PATH;
+            stack.push((i, true));
+            for c in children(i) {
+                match state[c] {
+                    ON_PATH => {
+                        return Err(cx.invalid(format!(
+                            "nodes[{i}].children names node {c}, an ancestor: the node hierarchy has a cycle"
+                        )));
+                    }
+                    NEW => stack.push((c, false)),
+                    _ => {}
+                }
+            }
+        }
+    }
+    let roots: Vec<usize> = match root.scene.map(|s| s.value()).or(if root.scenes.is_empty() {
+        None
+    } else {
+        Some(0)
+    }) {
+        Some(s) => root
+            .scenes
+            .get(s)
+            .map(|s| s.nodes.iter().map(|n| n.value()).collect())
+            .unwrap_or_default(),
+        None => Vec::new(),
+    };
+    let total = roots
+        .iter()
+        .filter(|&&r| r < nodes.len())
+        .fold(0u64, |s, &r| s.saturating_add(instances[r]));
+    if total > MAX_NODE_INSTANCES {
+        return Err(cx.invalid(format!(
+            "the node hierarchy expands to {total} node instances (children shared by several parents), \
+             more than {MAX_NODE_INSTANCES}"
+        )));
+    }
+    Ok(())
+}
+
+/// The asset's version (glTF 2.0 3.2: `asset.version` "2.x", a
+/// `minVersion` no newer than 2.0), meshes with primitives, and sparse
+/// accessor indices inside the accessor and increasing.
+pub(super) fn check_document(
+    cx: &GltfContext,
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+) -> Result<(), SceneError> {
+    let asset = &doc.as_json().asset;
+    let major = |v: &str| v.split('.').next().and_then(|m| m.parse::<u32>().ok());
+    if major(&asset.version) != Some(2) {
+        return Err(cx.invalid(format!(
+            "asset.version is \"{}\"; this loader reads glTF 2.x",
+            asset.version
+        )));
+    }
+    if let Some(min) = &asset.min_version
+        && min.as_str() > "2.0"
+    {
+        return Err(cx.invalid(format!(
+            "asset.minVersion is \"{min}\"; this loader reads glTF 2.0"
+        )));
+    }
+    for m in doc.meshes() {
+        if m.primitives().len() == 0 {
+            return Err(cx.invalid(format!("meshes[{}] has no primitives", m.index())));
+        }
+    }
+    for a in doc.accessors() {
+        let Some(sparse) = a.sparse() else { continue };
+        let idx = sparse.indices();
+        let bytes = view_bytes(cx, &idx.view(), buffers)?;
+        let size = match idx.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let start = idx.offset();
+        let Some(data) = start
+            .checked_add(sparse.count() * size)
+            .and_then(|end| bytes.get(start..end))
+        else {
+            return Err(cx.invalid(format!(
+                "accessors[{}].sparse.indices: {} indices at offset {start} run past buffer view {}",
+                a.index(),
+                sparse.count(),
+                idx.view().index()
+            )));
+        };
+        let mut previous: Option<u64> = None;
+        for k in data.chunks_exact(size) {
+            let i = k.iter().rev().fold(0u64, |v, b| (v << 8) | *b as u64);
+            if i >= a.count() as u64 || previous.is_some_and(|p| i <= p) {
+                return Err(cx.invalid(format!(
+                    "accessors[{}].sparse.indices: index {i} is out of order or not below the count {}",
+                    a.index(),
+                    a.count()
+                )));
+            }
+            previous = Some(i);
+        }
+        let values = sparse.values();
+        let vbytes = view_bytes(cx, &values.view(), buffers)?;
+        let need = values.offset().checked_add(sparse.count() * a.size());
+        if need.is_none_or(|n| n > vbytes.len()) {
+            return Err(cx.invalid(format!(
+                "accessors[{}].sparse.values: {} values of {} bytes run past buffer view {}",
+                a.index(),
+                sparse.count(),
+                a.size(),
+                values.view().index()
+            )));
+        }
+    }
+    for anim in doc.animations() {
+        for s in anim.samplers() {
+            let input = s.input();
+            if input.dimensions() != gltf::accessor::Dimensions::Scalar
+                || input.data_type() != gltf::accessor::DataType::F32
+            {
+                return Err(cx.invalid(format!(
+                    "animations[{}]: sampler input accessor {} is {:?} {:?}; key times are SCALAR FLOAT",
+                    anim.index(),
+                    input.index(),
+                    input.dimensions(),
+                    input.data_type()
+                )));
+            }
+        }
+    }
+    Ok(())
+}

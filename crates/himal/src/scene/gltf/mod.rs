@@ -25,10 +25,12 @@ pub use material::{
 
 pub(crate) use buffers::GltfContext;
 use buffers::{
-    check_accessors, check_attribute_types, check_image_sources, check_position_accessors,
+    check_accessors, check_attribute_types, check_document, check_image_sources, check_nodes,
+    check_position_accessors,
 };
 
 use super::{Aabb, Camera, Mesh, NamedCamera, Object, SceneError, Vertex};
+use crate::budget::MemoryBudget;
 
 /// Largest accepted image side (texels); larger ones are refused, not decoded.
 pub const MAX_TEXTURE_SIZE: u32 = 8192;
@@ -103,15 +105,42 @@ pub struct GltfAsset {
 
 /// Loads a .gltf (with its .bin and images) or a .glb file.
 pub fn load(path: &Path) -> Result<GltfAsset, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    load_within(path, MemoryBudget::default())
+}
+
+/// [`load`] with meshes and images charged against `budget` before they
+/// are read.
+pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<GltfAsset, SceneError> {
+    let io = |source| SceneError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    load_from_bytes(path, &bytes)
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    let cx = GltfContext {
+        path: path.to_path_buf(),
+    };
+    // A directory, a device or an endless pipe is not read.
+    if !meta.is_file() {
+        return Err(cx.invalid("not a regular file"));
+    }
+    budget
+        .check("the file", meta.len())
+        .map_err(|e| cx.invalid(e))?;
+    let bytes = std::fs::read(path).map_err(io)?;
+    load_from_bytes_within(path, &bytes, budget)
 }
 
 /// Like [`load`] for bytes already read; `path` names it and resolves URIs.
 pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneError> {
+    load_from_bytes_within(path, bytes, MemoryBudget::default())
+}
+
+/// [`load_from_bytes`] within `budget`.
+pub fn load_from_bytes_within(
+    path: &Path,
+    bytes: &[u8],
+    budget: MemoryBudget,
+) -> Result<GltfAsset, SceneError> {
     let cx = GltfContext {
         path: path.to_path_buf(),
     };
@@ -136,6 +165,7 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
     let root = document.into_json();
     check_position_accessors(&cx, &root)?;
     check_image_sources(&cx, &root)?;
+    check_nodes(&cx, &root)?;
     let doc = gltf::Document::from_json(root).map_err(invalid)?;
     let mut blob = blob;
     let mut buffers = Vec::new();
@@ -161,10 +191,34 @@ pub fn load_from_bytes(path: &Path, bytes: &[u8]) -> Result<GltfAsset, SceneErro
     }
     check_accessors(&cx, &doc, &buffers)?;
     check_attribute_types(&cx, &doc)?;
+    check_document(&cx, &doc, &buffers)?;
+    // Meshes are charged before they are read, images as they are decoded
+    // (each is at most MAX_TEXTURE_SIZE square).
+    let mut charged: u64 = buffers.iter().map(|b| b.len() as u64).sum();
+    for m in doc.meshes() {
+        for p in m.primitives() {
+            let vertices = p.get(&gltf::Semantic::Positions).map_or(0, |a| a.count());
+            let indices = p.indices().map_or(vertices, |a| a.count());
+            charged =
+                charged.saturating_add(MemoryBudget::mesh_bytes(vertices as u64, indices as u64));
+        }
+    }
+    budget
+        .check("its meshes", charged)
+        .map_err(|e| cx.invalid(e))?;
 
     let mut pbr = PbrSet::default();
     for img in doc.images() {
-        pbr.images.push(material::image(&cx, &img, &buffers)?);
+        let image = material::image(&cx, &img, &buffers)?;
+        // The decoded texels, their mip chain and the GPU copy.
+        charged = charged.saturating_add(image.rgba8.len() as u64 * 3);
+        budget
+            .check(
+                format!("its meshes and images up to images[{}]", img.index()),
+                charged,
+            )
+            .map_err(|e| cx.invalid(e))?;
+        pbr.images.push(image);
     }
     for t in doc.textures() {
         pbr.textures.push(TextureSlot {
@@ -404,6 +458,12 @@ fn primitive(
     let uv_set = material.base_color_texture.map_or(0, |t| t.tex_coord);
     let uvs: Vec<[f32; 2]> = match reader.read_tex_coords(uv_set) {
         Some(t) => t.into_f32().collect(),
+        None if material.base_color_texture.is_some() => {
+            return Err(cx.invalid(format!(
+                "mesh \"{name}\": its material's base colour texture reads TEXCOORD_{uv_set}, \
+                 which the primitive does not have"
+            )));
+        }
         None => vec![[0.0; 2]; n],
     };
     count_ok(uvs.len(), "TEXCOORD")?;

@@ -46,8 +46,12 @@ fn entry_transform(ck: &Checker, g: &FileGltf) -> Result<Mat4, SceneError> {
         None => Vec3::ONE,
         Some(s) => {
             let v = Vec3::from(s.get_ref().0);
-            if !(v.is_finite() && v.cmpgt(Vec3::ZERO).all()) {
-                return Err(ck.err(&s.span(), format!("scale {v} must be positive")));
+            let max = crate::scene::build::MAX_SCALE;
+            if !v.to_array().iter().all(|c| (1.0 / max..=max).contains(c)) {
+                return Err(ck.err(
+                    &s.span(),
+                    format!("scale {v} must lie in [{}, {max}] on each axis", 1.0 / max),
+                ));
             }
             v
         }
@@ -63,6 +67,7 @@ pub(crate) fn place_all(
     entries: &[FileGltf],
     meshes: &mut Vec<Mesh>,
     placed_objects: &[Object],
+    budget: crate::budget::MemoryBudget,
 ) -> Result<Placed, SceneError> {
     let mut out = Placed::default();
     for (k, g) in entries.iter().enumerate() {
@@ -76,7 +81,7 @@ pub(crate) fn place_all(
             continue;
         }
         let mut transform = entry_transform(ck, g)?;
-        let asset = super::load(&path).map_err(|e| {
+        let asset = super::load_within(&path, budget).map_err(|e| {
             ck.err(
                 &g.file.span(),
                 format!("glTF \"{}\": {e}", g.file.get_ref()),
