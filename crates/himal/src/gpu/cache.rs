@@ -24,6 +24,21 @@ use std::time::Instant;
 use super::{GpuContext, GpuError};
 
 const MAGIC: &[u8; 8] = b"HIMALPC\0";
+/// Largest pipeline cache read (lavapipe's for every permutation: ~20 MB).
+const MAX_CACHE_BYTES: u64 = 512 << 20;
+
+/// Reads `path` when it is a regular file of at most `max` bytes (a
+/// symlink to a device or an endless file is refused before reading).
+fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() || meta.len() > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not a regular file of at most {} MiB", max >> 20),
+        ));
+    }
+    std::fs::read(path)
+}
 /// Bumped whenever the file layout or the key format changes.
 pub const FORMAT_VERSION: u32 = 1;
 
@@ -356,7 +371,7 @@ impl GpuContext {
         let path = cache_file(dir, &info);
         let identity = adapter_identity(&info);
         let mut contents = None;
-        let status = match std::fs::read(&path) {
+        let status = match read_bounded(&path, MAX_CACHE_BYTES) {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => LoadStatus::Missing(path.clone()),
             Err(e) => LoadStatus::Rejected {
                 path: path.clone(),
