@@ -63,6 +63,9 @@ enum Presentation {
     Cpu(softbuffer::Surface<Arc<Window>, Arc<Window>>),
 }
 
+/// Lost devices the viewer recreates before it gives up.
+const MAX_RECOVERIES: u32 = 3;
+
 /// Movement keys held down.
 #[derive(Default)]
 struct Held {
@@ -75,7 +78,13 @@ struct Held {
 
 struct Viewer {
     args: RenderArgs,
+    /// Kept to rebuild the renderer when the device is lost.
+    scene: himal::scene::Scene,
     renderer: Renderer,
+    /// Devices recreated after a loss (more than MAX_RECOVERIES ends the run).
+    recoveries: u32,
+    /// Test hook ($HIMAL_VIEW_LOSE_DEVICE_AT): destroy the device before this frame.
+    lose_device_at: Option<u32>,
     camera: Camera,
     settings: FrameSettings,
     present: PresentMode,
@@ -226,10 +235,46 @@ impl Viewer {
     }
 
     /// Renders a frame, presents it, and updates the title.
+    /// After a frame failed: when the device is lost, recreate it, the
+    /// renderer and the window's presentation and go on (`Ok`); otherwise,
+    /// or past MAX_RECOVERIES, the error ends the viewer.
+    fn recover(&mut self, error: anyhow::Error) -> Result<()> {
+        let Some(reason) = self.renderer.context().lost_reason() else {
+            return Err(error);
+        };
+        if self.recoveries >= MAX_RECOVERIES {
+            return Err(error.context(format!(
+                "the device was lost {} times ({reason}); giving up",
+                self.recoveries + 1
+            )));
+        }
+        self.recoveries += 1;
+        eprintln!(
+            "warning: GPU device lost ({reason}) at frame {}: {error:#}; recreating the device \
+             and its resources",
+            self.frames
+        );
+        // The presentation holds the old device's surface: drop it first.
+        let window = self.window.take().map(|(w, _)| w);
+        let mut renderer = Renderer::new(self.args.gpu.context()?, &self.scene)?;
+        self.args.post.configure(&mut renderer, &self.args.gpu)?;
+        self.renderer = renderer;
+        if let Some(window) = window {
+            let presentation = self.presentation(&window)?;
+            self.window = Some((window, presentation));
+        }
+        eprintln!("device recreated on {}", self.renderer.context().info.name);
+        Ok(())
+    }
+
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let Some((window, _)) = &self.window else {
             return Ok(());
         };
+        if self.lose_device_at == Some(self.frames) {
+            self.lose_device_at = None;
+            self.renderer.context().device.destroy();
+        }
         let size = window.inner_size();
         let (w, h) = (size.width.max(1), size.height.max(1));
         let now = Instant::now();
@@ -420,18 +465,23 @@ impl Viewer {
                 .create_window(attributes)
                 .map_err(|e| anyhow::anyhow!("cannot open a window: {e}"))?,
         );
-        let presentation = match self.present {
-            PresentMode::Cpu => Self::cpu_presentation(&window)?,
-            PresentMode::Gpu => self.gpu_presentation(&window)?,
-            PresentMode::Auto => match self.gpu_presentation(&window) {
+        let presentation = self.presentation(&window)?;
+        Ok((window, presentation))
+    }
+
+    /// The presentation `--present` asks for.
+    fn presentation(&self, window: &Arc<Window>) -> Result<Presentation> {
+        Ok(match self.present {
+            PresentMode::Cpu => Self::cpu_presentation(window)?,
+            PresentMode::Gpu => self.gpu_presentation(window)?,
+            PresentMode::Auto => match self.gpu_presentation(window) {
                 Ok(p) => p,
                 Err(e) => {
                     eprintln!("note: {e:#}; falling back to CPU presentation");
-                    Self::cpu_presentation(&window)?
+                    Self::cpu_presentation(window)?
                 }
             },
-        };
-        Ok((window, presentation))
+        })
     }
 }
 
@@ -476,7 +526,7 @@ impl ApplicationHandler for Viewer {
             WindowEvent::RedrawRequested => {
                 let dt = (Instant::now() - self.last).as_secs_f32().min(0.25);
                 self.step_camera(dt);
-                if let Err(e) = self.redraw(event_loop) {
+                if let Err(e) = self.redraw(event_loop).or_else(|e| self.recover(e)) {
                     self.error = Some(e);
                     event_loop.exit();
                 }
@@ -538,9 +588,19 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     })?;
     event_loop.set_control_flow(ControlFlow::Poll);
     println!("{HELP}");
+    let lose_device_at =
+        match std::env::var("HIMAL_VIEW_LOSE_DEVICE_AT") {
+            Ok(v) => Some(v.parse::<u32>().with_context(|| {
+                format!("HIMAL_VIEW_LOSE_DEVICE_AT={v}: expected a frame number")
+            })?),
+            Err(_) => None,
+        };
     let mut viewer = Viewer {
         args: args.clone(),
+        scene,
         renderer,
+        recoveries: 0,
+        lose_device_at,
         camera,
         settings,
         present: view.present,

@@ -3,25 +3,38 @@
 
 use std::process::Command;
 
+/// `himal view` under Xvfb on the village for `frames` frames, writing the
+/// screenshot and the window to `dir/view.png` and `dir/window.png`.
+fn viewer(dir: &std::path::Path, present: &str, size: (u32, u32), frames: u32) -> Command {
+    let mut c = Command::new("xvfb-run");
+    c.args([
+        "-a",
+        env!("CARGO_BIN_EXE_himal"),
+        "view",
+        "--present",
+        present,
+    ])
+    .args(["--size", &format!("{}x{}", size.0, size.1)])
+    .args([
+        "--camera",
+        "village",
+        "--frames",
+        &frames.to_string(),
+        "--out",
+    ])
+    .arg(dir.join("view.png"))
+    .arg("--window-out")
+    .arg(dir.join("window.png"))
+    .env("HIMAL_CACHE_DIR", dir.join("cache"));
+    c
+}
+
 /// Runs `himal view` under Xvfb for 4 frames; returns stdout, the screenshot
 /// (`--out`, the clean frame) and what the window showed (`--window-out`).
 fn run_viewer(present: &str, size: (u32, u32)) -> (String, image::RgbImage, image::RgbImage) {
     let dir = std::env::temp_dir().join(format!("himal-view-{present}-{}", std::process::id()));
     let (shot, window) = (dir.join("view.png"), dir.join("window.png"));
-    let out = Command::new("xvfb-run")
-        .args([
-            "-a",
-            env!("CARGO_BIN_EXE_himal"),
-            "view",
-            "--present",
-            present,
-        ])
-        .args(["--size", &format!("{}x{}", size.0, size.1)])
-        .args(["--camera", "village", "--frames", "4", "--out"])
-        .arg(&shot)
-        .arg("--window-out")
-        .arg(&window)
-        .env("HIMAL_CACHE_DIR", dir.join("cache"))
+    let out = viewer(&dir, present, size, 4)
         .output()
         .expect("xvfb-run (apt-get install xvfb; ./run test installs it)");
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -95,4 +108,31 @@ fn viewer_without_a_display_says_so() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("needs a display"), "{stderr}");
+}
+
+/// Issue #16: a lost device (destroyed before frame 2 through the test
+/// hook) is reported and recreated with the renderer and the swapchain;
+/// the viewer goes on and writes its last frame, the same village it
+/// draws without the loss.
+#[test]
+fn viewer_recreates_a_lost_device() {
+    let dir = std::env::temp_dir().join(format!("himal-view-lost-{}", std::process::id()));
+    let (shot, window) = (dir.join("view.png"), dir.join("window.png"));
+    let out = viewer(&dir, "gpu", (480, 360), 6)
+        .env("HIMAL_VIEW_LOSE_DEVICE_AT", "2")
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "the viewer did not survive:\n{stderr}"
+    );
+    assert!(
+        stderr.contains("device lost") && stderr.contains("device recreated"),
+        "{stderr}"
+    );
+    let frame = image::open(&shot).expect("the last frame").to_rgb8();
+    let window = image::open(&window).expect("the window").to_rgb8();
+    check_window(&frame, &window);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -231,6 +231,12 @@ impl GpuContext {
         })
     }
 
+    /// Why the device was lost, once it has been (driver reset, removal,
+    /// `Device::destroy`); a lost device stays lost: recreate the context.
+    pub fn lost_reason(&self) -> Option<String> {
+        self.lost.lock().ok().and_then(|l| l.clone())
+    }
+
     /// Returns the first error recorded since the last check (device loss
     /// first), naming `context`.
     pub fn check(&self, context: &str) -> Result<(), GpuError> {

@@ -240,7 +240,20 @@ impl CompiledGraph<'_> {
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
         match v.or(o) {
-            Some(e) => Err(GraphError::Device(e.to_string())),
+            // wgpu names the pass (its label is the pass id) in the message.
+            Some(e) => {
+                let message = e.to_string();
+                let quoted = |id: &str| {
+                    message.contains(&format!("'{id}'")) || message.contains(&format!("\"{id}\""))
+                };
+                Err(match self.passes.iter().find(|p| quoted(&p.id)) {
+                    Some(p) => GraphError::Pass {
+                        pass: p.id.clone(),
+                        message,
+                    },
+                    None => GraphError::Device(format!("recording the frame graph: {message}")),
+                })
+            }
             None => Ok(commands),
         }
     }
