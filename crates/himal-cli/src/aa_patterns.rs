@@ -7,13 +7,13 @@ use himal::passes::aa::patterns::{StudySettings, study};
 #[derive(Args, Debug)]
 pub struct AaPatternsArgs {
     /// Edge orientations over [0, π).
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = 720, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub angles: u32,
     /// Edge offsets per orientation.
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub offsets: u32,
     /// Width of the 1024-sample reference box in pixels.
-    #[arg(long, default_value_t = 1.25)]
+    #[arg(long, default_value_t = 1.25, allow_hyphen_values = true)]
     pub reference_width: f64,
     /// Exponent p of the orientation weight cos(2θ)^p (even).
     #[arg(long, default_value_t = 16)]

@@ -7,26 +7,44 @@ use himal::passes::ao::{AoMode, AoSettings};
 #[derive(Args, Debug, Clone)]
 pub struct AoArgs {
     /// Screen-space AO: off, hbao (HBAO + bilateral blur), hbao+stf (plus the selective temporal filter).
-    #[arg(long, default_value = "hbao+stf", value_name = "off|hbao|hbao+stf")]
+    #[arg(
+        long,
+        default_value = "hbao+stf",
+        value_name = "off|hbao|hbao+stf",
+        allow_hyphen_values = true
+    )]
     pub ao: String,
     /// HBAO resolution.
-    #[arg(long, default_value = "half", value_name = "half|full")]
+    #[arg(
+        long,
+        default_value = "half",
+        value_name = "half|full",
+        allow_hyphen_values = true
+    )]
     pub ao_resolution: String,
     /// HBAO radius in metres.
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub ao_radius: Option<f32>,
     /// Blur sampling: adaptive (point inner half, bilinear outer half) or brute force.
-    #[arg(long, default_value = "adaptive", value_name = "adaptive|brute")]
+    #[arg(
+        long,
+        default_value = "adaptive",
+        value_name = "adaptive|brute",
+        allow_hyphen_values = true
+    )]
     pub ao_blur: String,
     /// Blur kernel radius in pixels.
-    #[arg(long, value_name = "PIXELS")]
+    #[arg(long, value_name = "PIXELS", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub ao_blur_radius: Option<u32>,
 }
 
 impl AoArgs {
     pub fn settings(&self) -> Result<AoSettings> {
         let mut s = AoSettings {
-            mode: self.ao.parse::<AoMode>()?,
+            mode: self
+                .ao
+                .parse::<AoMode>()
+                .map_err(|e| anyhow::anyhow!("--ao {}: {e}", self.ao))?,
             ..AoSettings::default()
         };
         s.full_resolution = match self.ao_resolution.as_str() {
@@ -40,15 +58,18 @@ impl AoArgs {
             other => bail!("--ao-blur {other}: expected adaptive or brute"),
         };
         if let Some(r) = self.ao_radius {
-            if !(r.is_finite() && r > 0.0) {
-                bail!("--ao-radius {r}: must be a positive number of metres");
+            if !(r.is_finite() && r > 0.0 && r <= 100.0) {
+                bail!("--ao-radius {r}: must be a number of metres in (0, 100]");
             }
             s.radius = r;
         }
         if let Some(r) = self.ao_blur_radius {
             s.blur_radius = r;
         }
-        s.validate()?;
+        s.validate().map_err(|e| match self.ao_blur_radius {
+            Some(r) => anyhow::anyhow!("--ao-blur-radius {r}: {e}"),
+            None => e.into(),
+        })?;
         Ok(s)
     }
 }

@@ -14,7 +14,12 @@ use crate::render::parse_table_sizes;
 #[derive(Args, Debug)]
 pub struct BakeArgs {
     /// Bruneton table sizes to bake (`--sky-tables` picks them when rendering).
-    #[arg(long, default_value = "default", value_name = "default|reference|all")]
+    #[arg(
+        long,
+        default_value = "default",
+        value_name = "default|reference|all",
+        allow_hyphen_values = true
+    )]
     pub tables: String,
     /// Recompute tables the cache already holds.
     #[arg(long)]

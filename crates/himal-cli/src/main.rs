@@ -26,6 +26,28 @@ use clap::{Args, Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory the scene and the frame may plan to hold (mesh segments,
+    /// height fields, images, frame size), e.g. 4GiB; default:
+    /// $HIMAL_MEMORY_BUDGET, else half of this machine's memory.
+    #[arg(long, global = true, value_name = "SIZE", allow_hyphen_values = true)]
+    memory_budget: Option<String>,
+}
+
+/// A whole number for clap, with the reason a value is refused ("-1" is
+/// parsed and rejected, not taken for a flag).
+pub fn whole_number(s: &str) -> Result<u32, String> {
+    s.trim().parse::<u32>().map_err(|_| {
+        if s.trim().starts_with('-') {
+            "must not be negative: expected a whole number in 0..=4294967295".to_string()
+        } else {
+            "expected a whole number in 0..=4294967295".to_string()
+        }
+    })
+}
+
+/// The memory budget of `--memory-budget`, else the environment's.
+pub fn memory_budget() -> Result<himal::budget::MemoryBudget> {
+    himal::budget::MemoryBudget::from_env().map_err(|e| anyhow::anyhow!("--memory-budget: {e}"))
 }
 
 #[derive(Subcommand)]
@@ -56,10 +78,10 @@ enum Command {
 #[derive(Args, Clone, Debug, Default)]
 pub struct GpuArgs {
     /// Adapter name substring or backend (vulkan, gl, metal, dx12); default: $HIMAL_ADAPTER, else hardware first.
-    #[arg(long, value_name = "NAME|BACKEND")]
+    #[arg(long, value_name = "NAME|BACKEND", allow_hyphen_values = true)]
     pub adapter: Option<String>,
     /// Pipeline cache directory, or off; default: $HIMAL_CACHE_DIR, else $XDG_CACHE_HOME/himal, else ~/.cache/himal.
-    #[arg(long, value_name = "DIR|off")]
+    #[arg(long, value_name = "DIR|off", allow_hyphen_values = true)]
     pub cache: Option<String>,
 }
 
@@ -88,8 +110,21 @@ impl GpuArgs {
     /// The GPU context with the pipeline cache opened (a bad cache file is
     /// ignored with a warning).
     pub fn context(&self) -> Result<himal::gpu::GpuContext> {
+        if let Some(dir) = self.cache_dir()
+            && dir.exists()
+            && !dir.is_dir()
+        {
+            anyhow::bail!(
+                "--cache {}: not a directory (give a folder for the pipeline and sky-table caches, or off)",
+                dir.display()
+            );
+        }
         let ctx = himal::gpu::GpuContext::new(&himal::gpu::GpuOptions {
             adapter: self.adapter.clone(),
+        })
+        .map_err(|e| match &self.adapter {
+            Some(a) => anyhow::anyhow!("--adapter {a}: {e}"),
+            None => e.into(),
         })?;
         if let Some(dir) = self.cache_dir() {
             let status = ctx.open_pipeline_cache(&dir);
@@ -152,6 +187,13 @@ fn info(args: &GpuArgs) -> Result<()> {
 fn main() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
+    if let Some(b) = &cli.memory_budget {
+        himal::budget::MemoryBudget::parse(b)
+            .map_err(|e| anyhow::anyhow!("--memory-budget {b}: {e}"))?;
+        // The library reads the budget from the environment; no other
+        // thread exists yet.
+        unsafe { std::env::set_var(himal::budget::MEMORY_BUDGET_ENV, b) };
+    }
     match cli.command {
         Command::Render(a) => render::run(&a),
         Command::View(a) => view::run(&a),

@@ -12,7 +12,12 @@ use crate::render::load_scene;
 #[derive(Args, Debug)]
 pub struct PrewarmArgs {
     /// Scene file (TOML), or `demo` for the built-in demo world.
-    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    #[arg(
+        long,
+        default_value = "demo",
+        value_name = "FILE|demo",
+        allow_hyphen_values = true
+    )]
     pub scene: String,
     #[command(flatten)]
     pub gpu: GpuArgs,

@@ -14,14 +14,19 @@ use crate::GpuArgs;
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
     /// Scene file (TOML), or `demo` for the built-in demo world.
-    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    #[arg(
+        long,
+        default_value = "demo",
+        value_name = "FILE|demo",
+        allow_hyphen_values = true
+    )]
     pub scene: String,
     /// A glTF model (.gltf or .glb) instead of --scene, framed by an automatic camera.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
     pub gltf: Option<String>,
     /// An equirectangular HDR environment (.hdr or .exr) lighting the scene
     /// instead of the physical sky (replaces the scene's `[environment]`).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
     pub env: Option<String>,
     /// Radiance scale of --env.
     #[arg(
@@ -32,26 +37,36 @@ pub struct RenderArgs {
     )]
     pub env_intensity: f32,
     /// Named camera of the scene (default: its first camera).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
     /// Time of day, HH:MM (default: the scene's).
-    #[arg(long, value_name = "HH:MM")]
+    #[arg(long, value_name = "HH:MM", allow_hyphen_values = true)]
     pub time: Option<String>,
     /// Time-lapse: with --frames N, the sun moves from the first time to the
     /// second over the sequence while the camera stays put (each frame is a cut).
-    #[arg(long, value_name = "HH:MM..HH:MM")]
+    #[arg(long, value_name = "HH:MM..HH:MM", allow_hyphen_values = true)]
     pub time_lapse: Option<String>,
     /// Image size.
-    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    #[arg(
+        long,
+        default_value = "1280x720",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub size: String,
     /// Frames to render; more than one writes a numbered sequence while the camera dollies forward.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub frames: u32,
     /// Camera travel per frame in metres along its view direction (sequences).
     #[arg(long, default_value_t = 0.25, allow_hyphen_values = true)]
     pub speed: f32,
     /// Buffer to write: final or a debug view.
-    #[arg(long, default_value = "final", value_name = "BUFFER")]
+    #[arg(
+        long,
+        default_value = "final",
+        value_name = "BUFFER",
+        allow_hyphen_values = true
+    )]
     pub view: String,
     /// Output file (.png or .exr); sequences insert _NNNN before the extension.
     #[arg(long, default_value = "out/demo.png")]
@@ -85,7 +100,12 @@ pub struct PostArgs {
     )]
     pub exposure: String,
     /// Kawase bloom, composited in HDR before tone mapping.
-    #[arg(long, default_value = "on", value_name = "on|off")]
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
     pub bloom: String,
     /// Bloom bright-pass threshold in scaled luminance (1 = display 0.5).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
@@ -94,24 +114,44 @@ pub struct PostArgs {
     #[arg(long, value_name = "W", allow_hyphen_values = true)]
     pub bloom_strength: Option<f32>,
     /// Kawase blur passes at quarter resolution (0..8).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub bloom_passes: Option<u32>,
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
     /// irradiance along the reflection vector.
-    #[arg(long, default_value = "on", value_name = "on|off")]
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
     pub env_specular: String,
     /// L3: ambient specular from the relit cube of the probe nearest the
     /// camera (scenes with `[[probe]]`); off: the sky cube.
-    #[arg(long, default_value = "on", value_name = "on|off")]
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
     pub env_probes: String,
     /// L2 height-field sky occlusion (SH2 visibility, bent normals).
-    #[arg(long, default_value = "on", value_name = "on|off")]
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
     pub sky_occlusion: String,
     /// L2: sky light along the bent normal (off: along the surface normal).
-    #[arg(long, default_value = "on", value_name = "on|off")]
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
     pub bent_normals: String,
     /// Anti-aliasing after tone mapping; hraa = SMAA + temporal FLIPQUAD + TAA + unsharp.
     #[arg(
@@ -122,21 +162,36 @@ pub struct PostArgs {
     pub aa: String,
     /// A3 TAA on other buffers: the AO result and/or the motion vectors
     /// (comma-separated; bench rows aa.taa_ao, aa.taa_motion).
-    #[arg(long, default_value = "none", value_name = "none|ao|motion|ao,motion")]
+    #[arg(
+        long,
+        default_value = "none",
+        value_name = "none|ao|motion|ao,motion",
+        allow_hyphen_values = true
+    )]
     pub aa_buffers: String,
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
-    #[arg(long, default_value = "bruneton", value_name = "preetham|bruneton")]
+    #[arg(
+        long,
+        default_value = "bruneton",
+        value_name = "preetham|bruneton",
+        allow_hyphen_values = true
+    )]
     pub sky: String,
     /// L1 Bruneton table sizes: default (fast) or reference (Bruneton 2017's;
     /// minutes on a software rasteriser: bake them first with `himal bake`).
-    #[arg(long, default_value = "default", value_name = "default|reference")]
+    #[arg(
+        long,
+        default_value = "default",
+        value_name = "default|reference",
+        allow_hyphen_values = true
+    )]
     pub sky_tables: String,
 }
 
 impl PostArgs {
     /// The Bruneton table sizes of `--sky-tables`.
     pub fn table_sizes(&self) -> Result<TableSizes> {
-        parse_table_sizes(&self.sky_tables)
+        parse_table_sizes(&self.sky_tables).map_err(|e| anyhow::anyhow!("--sky-tables {e}"))
     }
 
     /// Sets the renderer's sky table cache (`gpu`'s cache directory) and
@@ -161,7 +216,10 @@ impl PostArgs {
 
     /// Applies the options to `settings` (the library checks the ranges).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
-        settings.sky_model = self.sky.parse()?;
+        settings.sky_model = self
+            .sky
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--sky {}: {e}", self.sky))?;
         settings.aa = himal::passes::aa::AaMode::parse(&self.aa)
             .map_err(|e| anyhow::anyhow!("--aa {}: {e}", self.aa))?;
         settings.aa_buffers = himal::passes::aa::AaBuffers::parse(&self.aa_buffers)
@@ -175,9 +233,9 @@ impl PostArgs {
                 let v: f32 = ev
                     .parse()
                     .ok()
-                    .filter(|v: &f32| v.is_finite())
+                    .filter(|v: &f32| v.is_finite() && v.abs() <= 64.0)
                     .with_context(|| {
-                        format!("--exposure {ev}: expected auto or a number of EV (e.g. -1.5)")
+                        format!("--exposure {ev}: expected auto or a number of EV in -64..=64 (e.g. -1.5)")
                     })?;
                 settings.adaptation.enabled = false;
                 settings.exposure_ev = v;
@@ -188,14 +246,34 @@ impl PostArgs {
             "off" => false,
             other => bail!("--bloom {other}: expected on or off"),
         };
+        let finite = |v: f32, name: &str, lo: f32, hi: f32| {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(v)
+            } else {
+                Err(anyhow::anyhow!(
+                    "{name} {v}: must be a finite number in {lo}..={hi}"
+                ))
+            }
+        };
         if let Some(t) = self.bloom_threshold {
-            settings.bloom.threshold = t;
+            settings.bloom.threshold = finite(t, "--bloom-threshold", 0.0, 1e6)?;
         }
         if let Some(s) = self.bloom_strength {
-            settings.bloom.strength = s;
+            settings.bloom.strength = finite(s, "--bloom-strength", 0.0, 100.0)?;
         }
         if let Some(n) = self.bloom_passes {
+            if n > himal::passes::post::BloomSettings::MAX_PASSES {
+                bail!(
+                    "--bloom-passes {n}: at most {} Kawase passes",
+                    himal::passes::post::BloomSettings::MAX_PASSES
+                );
+            }
             settings.bloom.passes = n;
+        }
+        if let Some(w) = self.white_point
+            && !(w.is_finite() && w > 0.0 && w <= 1e6)
+        {
+            bail!("--white-point {w}: must be a positive finite luminance up to 1e6");
         }
         settings.white_point = self.white_point;
         settings.environment_specular = match self.env_specular.as_str() {
@@ -255,26 +333,38 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
 #[derive(Args, Clone, Debug)]
 pub struct ShadowArgs {
     /// Sun shadows: off, csm (4 cascades), csm+static (far cascade from the static map); `sun` = csm.
-    #[arg(long, default_value = "csm", value_name = "off|csm|csm+static")]
+    #[arg(
+        long,
+        default_value = "csm",
+        value_name = "off|csm|csm+static",
+        allow_hyphen_values = true
+    )]
     pub shadows: String,
     /// Edge of each sun cascade in texels.
-    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION)]
+    #[arg(long, default_value_t = himal::renderer::DEFAULT_SHADOW_RESOLUTION, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub shadow_resolution: u32,
     /// Edge of the static shadow map in texels (csm+static).
-    #[arg(long, default_value_t = 8192)]
+    #[arg(long, default_value_t = 8192, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub static_resolution: u32,
     /// Object with the hero shadow map, or off (default: the first moving object).
-    #[arg(long, value_name = "NAME|off")]
+    #[arg(long, value_name = "NAME|off", allow_hyphen_values = true)]
     pub hero: Option<String>,
 }
 
 impl ShadowArgs {
     /// Writes the shadow options into `settings` (cascade edge 0 = off).
     pub fn apply(&self, settings: &mut FrameSettings) -> Result<()> {
-        let mode: himal::passes::shadows::ShadowMode = self.shadows.parse()?;
+        let mode: himal::passes::shadows::ShadowMode = self
+            .shadows
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--shadows {}: {e}", self.shadows))?;
         let n = self.shadow_resolution;
         if !(16..=16384).contains(&n) {
             bail!("--shadow-resolution {n}: expected 16..16384");
+        }
+        let st = self.static_resolution;
+        if !(16..=16384).contains(&st) {
+            bail!("--static-resolution {st}: expected 16..16384");
         }
         settings.shadow_resolution = if mode == himal::passes::shadows::ShadowMode::Off {
             0
@@ -308,14 +398,46 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
 
 /// The named camera, or the scene's first.
 pub fn pick_camera(scene: &Scene, name: Option<&str>) -> Result<Camera> {
+    let origin = scene
+        .path
+        .as_ref()
+        .map_or_else(|| "the scene".to_string(), |p| p.display().to_string());
     match name {
-        Some(n) => Ok(scene.camera(n)?.clone()),
+        Some(n) => Ok(scene
+            .camera(n)
+            .map_err(|e| anyhow::anyhow!("--camera {n}: {e}"))?
+            .clone()),
         None => scene
             .cameras
             .first()
             .map(|c| c.camera.clone())
-            .context("the scene has no camera: add a [[camera]] table"),
+            .with_context(|| format!("{origin}: the scene has no camera: add a [[camera]] table")),
     }
+}
+
+/// `--hero NAME` must name an object of the scene.
+fn check_hero(scene: &Scene, hero: Option<&str>) -> Result<()> {
+    let Some(name) = hero.filter(|h| *h != "off") else {
+        return Ok(());
+    };
+    if scene.objects.iter().any(|o| o.name == name) {
+        return Ok(());
+    }
+    let mut moving: Vec<&str> = scene
+        .objects
+        .iter()
+        .filter(|o| o.motion.is_some())
+        .map(|o| o.name.as_str())
+        .collect();
+    moving.dedup();
+    bail!(
+        "--hero {name}: the scene has no object of that name (moving objects: {})",
+        if moving.is_empty() {
+            "none".to_string()
+        } else {
+            moving.join(", ")
+        }
+    )
 }
 
 fn sequence_path(out: &Path, index: u32) -> PathBuf {
@@ -330,7 +452,10 @@ pub fn setup(
     args: &RenderArgs,
 ) -> Result<(himal::scene::Scene, himal::scene::Camera, FrameSettings)> {
     let (width, height) = parse_size(&args.size)?;
-    let view: ViewBuffer = args.view.parse()?;
+    let view: ViewBuffer = args
+        .view
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--view {}: {e}", args.view))?;
     let kind = ImageKind::from_path(&args.out)?;
     if args.frames == 0 {
         bail!("--frames must be at least 1");
@@ -348,7 +473,16 @@ pub fn setup(
             args.env_intensity
         );
     }
+    let budget = crate::memory_budget()?;
+    budget
+        .check(
+            format!("--size {}", args.size),
+            u64::from(width) * u64::from(height) * himal::budget::FRAME_BYTES_PER_PIXEL,
+        )
+        .map_err(anyhow::Error::msg)?;
+    check_output_space(&args.out, width, height, args.frames, kind)?;
     let mut scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
+    check_hero(&scene, args.shadows.hero.as_deref())?;
     if let Some(env) = &args.env {
         let mut desc = himal::scene::EnvironmentDesc::new(env);
         desc.intensity = args.env_intensity;
@@ -368,12 +502,85 @@ pub fn setup(
     Ok((scene, camera, settings))
 }
 
+/// A sequence that cannot fit on the output's file system is refused
+/// before the first frame: an error when even at 4:1 compression it would
+/// not fit, a warning when uncompressed it would not.
+fn check_output_space(
+    out: &Path,
+    width: u32,
+    height: u32,
+    frames: u32,
+    kind: ImageKind,
+) -> Result<()> {
+    let per_pixel = match kind {
+        ImageKind::Png => 4,
+        ImageKind::Exr => 16,
+    };
+    let bytes = u64::from(width) * u64::from(height) * per_pixel * u64::from(frames);
+    let mut dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    // The folder may not exist yet: ask the nearest one that does.
+    while !dir.exists() {
+        match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => dir = p,
+            _ => {
+                dir = Path::new(".");
+                break;
+            }
+        }
+    }
+    let Some(free) = free_bytes(dir) else {
+        return Ok(());
+    };
+    let size = himal::budget::Bytes(bytes);
+    if bytes / 4 > free {
+        bail!(
+            "--frames {frames} at {width}x{height}: the sequence needs up to {size}, \
+             and {} is left on the file system of {}",
+            himal::budget::Bytes(free),
+            dir.display()
+        );
+    }
+    if bytes > free {
+        log::warn!(
+            "--frames {frames} at {width}x{height}: up to {size} of images, {} free on {}",
+            himal::budget::Bytes(free),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Bytes free to this user on the file system holding `dir` (statvfs).
+fn free_bytes(dir: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
+    let mut st = std::mem::MaybeUninit::<libc::statvfs>::uninit();
+    // SAFETY: `c` is a NUL-terminated path and `st` is written by statvfs
+    // before it is read (checked by the return value).
+    let r = unsafe { libc::statvfs(c.as_ptr(), st.as_mut_ptr()) };
+    if r != 0 {
+        return None;
+    }
+    // SAFETY: statvfs returned 0, so it filled `st`.
+    let st = unsafe { st.assume_init() };
+    // Pseudo file systems (/proc, /sys) report no blocks at all.
+    if st.f_blocks == 0 {
+        return None;
+    }
+    // The field types differ between platforms (u32 on some 32-bit ones).
+    #[allow(clippy::unnecessary_cast)]
+    Some(st.f_bavail as u64 * st.f_frsize as u64)
+}
+
 /// `--sky-tables` / `--tables`: default or reference.
 pub fn parse_table_sizes(s: &str) -> Result<TableSizes> {
     match s {
         "default" => Ok(TableSizes::DEFAULT),
         "reference" => Ok(TableSizes::REFERENCE),
-        other => bail!("sky tables {other}: expected default or reference"),
+        other => bail!("{other}: expected default or reference"),
     }
 }
 

@@ -154,7 +154,7 @@ fn numeric_options_out_of_range_say_the_allowed_range() {
     // Negative values reach the check (not clap's "unexpected argument").
     fails_with(
         &["render", "--ao-radius", "-1"],
-        "--ao-radius -1: must be a positive number of metres",
+        "--ao-radius -1: must be a number of metres in (0, 100]",
     );
     fails_with(
         &["render", "--speed", "nan"],
