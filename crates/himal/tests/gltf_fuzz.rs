@@ -74,23 +74,7 @@ fn mutated_inputs_are_errors_or_models_never_panics() {
     }
     // 3. Numbers of the JSON replaced by extreme values (valid JSON, bad
     //    counts, offsets, indices, transforms), with the real .bin beside it.
-    let digits: Vec<(usize, usize)> = {
-        let bytes = json.as_bytes();
-        let mut runs = Vec::new();
-        let mut i = 0;
-        while i < bytes.len() {
-            if bytes[i].is_ascii_digit() {
-                let start = i;
-                while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
-                    i += 1;
-                }
-                runs.push((start, i));
-            } else {
-                i += 1;
-            }
-        }
-        runs
-    };
+    let digits = common::number_runs(&json);
     let extremes = [
         "0",
         "4294967295",

@@ -282,3 +282,22 @@ pub fn environment_specular(
         dfg_size: env.dfg.width() as usize,
     }
 }
+
+/// Byte ranges of the numbers (digits and dots) in `text`, for mutations.
+pub fn number_runs(text: &str) -> Vec<(usize, usize)> {
+    let b = text.as_bytes();
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i].is_ascii_digit() {
+            let start = i;
+            while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
+                i += 1;
+            }
+            runs.push((start, i));
+        } else {
+            i += 1;
+        }
+    }
+    runs
+}
