@@ -13,14 +13,24 @@ use crate::render::{PostArgs, ShadowArgs, load_scene, parse_size, pick_camera};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    #[arg(
+        long,
+        default_value = "demo",
+        value_name = "FILE|demo",
+        allow_hyphen_values = true
+    )]
     pub scene: String,
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
-    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    #[arg(
+        long,
+        default_value = "1280x720",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub size: String,
     /// Frames measured (after one warm-up frame).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub frames: u32,
     #[command(flatten)]
     pub shadows: ShadowArgs,
@@ -111,6 +121,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut shadow_draws: Vec<u32> = Vec::new();
     // L2 sky occlusion sectors rendered per measured frame.
     let mut sectors: Vec<u32> = Vec::new();
+    // Resident memory after each measured frame (issue #16: flat over time).
+    let mut resident: Vec<himal::soak::SoakSample> = Vec::new();
+    let mut gpu_first: Vec<(String, u64)> = Vec::new();
     for i in 0..args.frames {
         // A fixed path: a slow dolly, the same for every run.
         let mut cam = camera.clone();
@@ -120,6 +133,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         wall.push(t.elapsed().as_secs_f64() * 1e3);
         shadow_draws.push(frame.shadows.draws);
         sectors.push(frame.sky_occlusion.rendered);
+        let memory = renderer.memory();
+        resident.push(himal::soak::SoakSample {
+            frame: u64::from(i) + 1,
+            resident: himal::soak::resident_bytes().unwrap_or(0),
+            gpu: memory.iter().map(|(_, b)| b).sum(),
+        });
+        if i == 0 {
+            gpu_first = memory;
+        }
         for t in frame.timings {
             if !order.contains(&t.id) {
                 order.push(t.id.clone());
@@ -165,7 +187,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
             cache.memory_hits,
@@ -174,7 +196,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             cache.disk_ms,
             cache.compile_ms,
             passes.join(","),
-            memory.join(",")
+            memory.join(","),
+            resident
+                .iter()
+                .map(|s| s.resident.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
         );
         return Ok(());
     }
@@ -232,12 +259,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
     println!("pipeline cache (whole run, E1): {cache}");
-    println!("memory:");
-    for (what, bytes) in renderer.memory() {
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    println!("memory (after frame 1 -> after frame {}):", args.frames);
+    crate::soak::print_memory_change(&gpu_first, &renderer.memory());
+    if let (Some(a), Some(b)) = (resident.first(), resident.last())
+        && a.resident > 0
+    {
         println!(
-            "  {:<22} {:>8.2} MiB",
-            what,
-            bytes as f64 / (1024.0 * 1024.0)
+            "  {:<22} {:>8.1} -> {:>8.1} MiB (slope {:.1} kB/frame)",
+            "process resident",
+            mib(a.resident),
+            mib(b.resident),
+            himal::soak::slope(&resident, |s| s.resident) / 1024.0
         );
     }
     Ok(())

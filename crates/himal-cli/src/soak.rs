@@ -13,15 +13,15 @@ pub struct SoakArgs {
     #[command(flatten)]
     pub render: RenderArgs,
     /// Print a sample every N frames (default: --frames / 20).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub every: Option<u32>,
     /// The frame after which memory must be flat (warm-up: pools, caches,
     /// sky-occlusion sectors and probes fill before it).
-    #[arg(long, default_value_t = 100, value_name = "FRAME")]
+    #[arg(long, default_value_t = 100, value_name = "FRAME", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub baseline: u32,
     /// Exit with an error when resident memory after the last frame exceeds
     /// that after --baseline by more than PCT percent.
-    #[arg(long, value_name = "PCT")]
+    #[arg(long, value_name = "PCT", allow_hyphen_values = true)]
     pub max_growth: Option<f64>,
 }
 
@@ -31,6 +31,11 @@ const DOLLY_PERIOD: u32 = 200;
 
 pub fn run(args: &SoakArgs) -> Result<()> {
     let r = &args.render;
+    if let Some(p) = args.max_growth
+        && !(p.is_finite() && p >= 0.0)
+    {
+        bail!("--max-growth must be a finite percentage >= 0 (got {p})");
+    }
     if r.frames < 2 {
         bail!("--frames must be at least 2 for a soak (got {})", r.frames);
     }
@@ -40,11 +45,6 @@ pub fn run(args: &SoakArgs) -> Result<()> {
             args.baseline,
             r.frames
         );
-    }
-    if let Some(p) = args.max_growth
-        && !(p.is_finite() && p >= 0.0)
-    {
-        bail!("--max-growth must be a finite percentage >= 0 (got {p})");
     }
     let (scene, camera, mut settings) = setup(r)?;
     let mut renderer = Renderer::new(r.gpu.context()?, &scene)?;
@@ -60,6 +60,7 @@ pub fn run(args: &SoakArgs) -> Result<()> {
     println!("{:>8} {:>13} {:>9}", "frame", "resident MB", "GPU MB");
     let mut samples = Vec::new();
     let mut at_baseline = None;
+    let mut gpu_at_baseline: Vec<(String, u64)> = Vec::new();
     for i in 0..r.frames {
         let mut cam = camera.clone();
         let phase = i % DOLLY_PERIOD;
@@ -68,13 +69,15 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         settings.time_s = i as f32 / 30.0;
         renderer.render(&cam, &settings)?;
         let frame = u64::from(i) + 1;
+        let memory = renderer.memory();
         let sample = SoakSample {
             frame,
             resident: resident_bytes().unwrap_or(0),
-            gpu: renderer.memory().iter().map(|(_, b)| b).sum(),
+            gpu: memory.iter().map(|(_, b)| b).sum(),
         };
         if frame == u64::from(args.baseline) {
             at_baseline = Some(sample);
+            gpu_at_baseline = memory;
         }
         if frame % u64::from(every) == 0 || frame == u64::from(r.frames) {
             let mb = |b: u64| b as f64 / (1024.0 * 1024.0);
@@ -92,6 +95,11 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         bail!("no sample at --baseline {}", args.baseline);
     };
     let last = *samples.last().unwrap_or(&base);
+    println!(
+        "GPU memory by subsystem, after frame {} -> after frame {}:",
+        base.frame, last.frame
+    );
+    print_memory_change(&gpu_at_baseline, &renderer.memory());
     if base.resident == 0 {
         println!("resident memory is not available on this platform");
         return Ok(());
@@ -116,4 +124,16 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// One line per subsystem: its GPU bytes `before` -> `after` (MiB).
+pub fn print_memory_change(before: &[(String, u64)], after: &[(String, u64)]) {
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    for (what, bytes) in after {
+        let was = before
+            .iter()
+            .find(|(w, _)| w == what)
+            .map_or(0, |(_, b)| *b);
+        println!("  {what:<22} {:>8.2} -> {:>8.2} MiB", mib(was), mib(*bytes));
+    }
 }
