@@ -119,6 +119,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut wall = Vec::new();
     // Shadow draw calls per measured frame (S2: the static map saves them).
     let mut shadow_draws: Vec<u32> = Vec::new();
+    let mut gbuffer_draws: u32 = 0;
     // L2 sky occlusion sectors rendered per measured frame.
     let mut sectors: Vec<u32> = Vec::new();
     // Resident memory after each measured frame (issue #16: flat over time).
@@ -132,6 +133,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let frame = renderer.render(&cam, &settings)?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);
         shadow_draws.push(frame.shadows.draws);
+        gbuffer_draws = frame.gbuffer_draws;
         sectors.push(frame.sky_occlusion.rendered);
         let memory = renderer.memory();
         resident.push(himal::soak::SoakSample {
@@ -187,7 +189,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws\":{gbuffer_draws},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
             cache.memory_hits,
@@ -251,6 +253,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             if total > 0.0 { 100.0 * ms / total } else { 0.0 }
         );
     }
+    println!("G-buffer draw calls per frame: {gbuffer_draws}");
     println!("shadow draw calls per frame: mean {draws_mean:.1}, max {draws_max}");
     println!(
         "sky occlusion sectors rendered per frame: mean {:.2}, max {}",

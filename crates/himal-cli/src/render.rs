@@ -169,6 +169,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub aa_buffers: String,
+    /// V6: draw runs of one mesh's consecutive objects as one instanced draw
+    /// (off: one draw per object, for comparisons).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub instancing: String,
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
     #[arg(
         long,
@@ -295,6 +304,11 @@ impl PostArgs {
             "on" => true,
             "off" => false,
             other => bail!("--bent-normals {other}: expected on or off"),
+        };
+        settings.instancing = match self.instancing.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--instancing {other}: expected on or off"),
         };
         Ok(())
     }

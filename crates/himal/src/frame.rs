@@ -122,6 +122,10 @@ pub struct Planned {
 pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     let (ctx, scene, settings, camera) = (p.ctx, p.scene, p.settings, p.camera);
     let (jitter, prev_jitter) = (p.jitter, p.prev_jitter);
+    // V6: every pass's draw lists merge into instanced draws (or not).
+    scene
+        .instancing
+        .store(settings.instancing, std::sync::atomic::Ordering::Relaxed);
     let size = (settings.width, settings.height);
     let aspect = size.0 as f32 / size.1 as f32;
     // B1: reconstruction from depth and reprojection with this jitter.

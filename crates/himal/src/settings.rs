@@ -135,6 +135,9 @@ pub struct FrameSettings {
     /// L2: evaluate the sky light along the bent normal (on by default);
     /// off keeps the visibility but uses the surface normal (comparisons).
     pub bent_normals: bool,
+    /// V6: draw runs of consecutive objects of one mesh as one instanced
+    /// draw (on by default); off: one draw per object (comparisons).
+    pub instancing: bool,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -180,6 +183,7 @@ impl FrameSettings {
             environment_specular: true,
             sky_occlusion: false,
             bent_normals: true,
+            instancing: true,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -12,7 +12,7 @@ use himal::FrameSettings;
 use himal::gpu::read_buffer;
 use himal::gpu::testing::run_compute;
 use himal::gpu_scene::uniforms::ViewUniform;
-use himal::gpu_scene::{ObjectGpu, SceneGpu};
+use himal::gpu_scene::{ObjectGpu, SceneGpu, gpu_order};
 use himal::math::brdf::Material;
 use himal::passes::lighting::reference::shade;
 use himal::scene::{AlphaPattern, Camera, Mesh, Object, Scene, vegetation};
@@ -147,6 +147,15 @@ fn orbit_follows_its_formula_and_prev_model_is_the_last_model() {
     let frame1 = read(&gpu);
     gpu.update_objects(&ctx.queue, t2, t1);
     let frame2 = read(&gpu);
+    // GPU records follow `gpu_order` (V6), not the scene's order.
+    let order = gpu_order(&scene);
+    let on_gpu = |scene_index: usize| {
+        order
+            .iter()
+            .position(|&i| i == scene_index)
+            .expect("every object is uploaded")
+    };
+    let index = on_gpu(index);
     assert_eq!(frame2[index].prev_model, frame1[index].model);
     assert_eq!(
         Mat4::from_cols_array_2d(&frame2[index].model),
@@ -157,6 +166,7 @@ fn orbit_follows_its_formula_and_prev_model_is_the_last_model() {
         .objects
         .iter()
         .position(|o| o.name == "ground")
+        .map(on_gpu)
         .expect("ground");
     assert_eq!(frame2[ground].prev_model, frame2[ground].model);
 }

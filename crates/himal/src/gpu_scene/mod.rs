@@ -4,6 +4,8 @@
 //! vegetation (alpha-tested, swaying, double-sided), each drawn with its own
 //! pipeline. Moving objects are rewritten every frame by [`SceneGpu::update_objects`].
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
@@ -30,6 +32,69 @@ where
         let i = d.object as usize;
         bounds.get(i).filter(|b| keep(i, b)).map(|_| d.clone())
     })
+}
+
+/// The GPU order of `scene`'s objects (GPU index -> scene index). Moving
+/// objects come first, in scene order (the first is the default hero);
+/// static objects follow grouped by mesh and, within a mesh, along a Morton
+/// curve of their position on the ground plane, so that the objects one
+/// culled list draws are mostly consecutive and merge into instanced draws
+/// ([`SceneGpu::draw_list`], V6). Every consumer indexed by object (the
+/// upload, shadow casters, sky-occlusion sectors) uses this order.
+pub fn gpu_order(scene: &Scene) -> Vec<usize> {
+    let b = scene.bounds;
+    let extent = (b.max - b.min).max(glam::Vec3::splat(1e-3));
+    let morton = |p: glam::Vec3| {
+        let q = |v: f32| ((v.clamp(0.0, 1.0) * 65535.0) as u32) & 0xffff;
+        let spread = |mut x: u32| {
+            x = (x | (x << 8)) & 0x00ff_00ff;
+            x = (x | (x << 4)) & 0x0f0f_0f0f;
+            x = (x | (x << 2)) & 0x3333_3333;
+            (x | (x << 1)) & 0x5555_5555
+        };
+        let n = (p - b.min) / extent;
+        spread(q(n.x)) | (spread(q(n.z)) << 1)
+    };
+    let mut order: Vec<usize> = (0..scene.objects.len()).collect();
+    // Stable: equal keys keep scene order, so the order is deterministic.
+    order.sort_by_key(|&i| {
+        let o = &scene.objects[i];
+        match o.motion {
+            Some(_) => (0u8, 0usize, 0u32),
+            None => (1, o.mesh, morton(o.transform.w_axis.truncate())),
+        }
+    });
+    order
+}
+
+/// Consecutive draws of one mesh with consecutive objects, as one
+/// instanced draw: (the first draw, instance count).
+fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        let first = draws.get(i)?;
+        let mut n = 1;
+        while let Some(d) = draws.get(i + n as usize) {
+            let same_mesh = (d.first_index, d.index_count, d.base_vertex)
+                == (first.first_index, first.index_count, first.base_vertex);
+            if !(same_mesh && d.object == first.object + n) {
+                break;
+            }
+            n += 1;
+        }
+        i += n as usize;
+        Some((first, n))
+    })
+}
+
+/// Draw calls `draws` records: with instancing, one per run of
+/// consecutive objects of one mesh; without, one per draw.
+pub fn draw_calls(draws: &[Draw], instancing: bool) -> u32 {
+    if instancing {
+        runs(draws).count() as u32
+    } else {
+        draws.len() as u32
+    }
 }
 
 /// Twin of `Object` in `shaders/scene.wgsl`.
@@ -87,6 +152,9 @@ pub struct SceneGpu {
     pub animated: Vec<(u32, Object)>,
     pub triangles: u64,
     pub bytes: u64,
+    /// V6: merge runs of consecutive objects into instanced draws
+    /// (`FrameSettings::instancing`, set per frame).
+    pub instancing: AtomicBool,
 }
 
 /// Vertex attributes of [`Vertex`], locations as in gbuffer.wgsl.
@@ -122,7 +190,11 @@ impl SceneGpu {
             (Vec::new(), Vec::new(), Vec::new());
         let mut animated = Vec::new();
         let mut triangles = 0u64;
-        for (i, object) in scene.objects.iter().enumerate() {
+        for (i, object) in gpu_order(scene)
+            .into_iter()
+            .map(|i| &scene.objects[i])
+            .enumerate()
+        {
             let Some(&(first_index, index_count, base_vertex)) = ranges.get(object.mesh) else {
                 return Err(GpuError::Other(format!(
                     "object \"{}\" names mesh {} of {}",
@@ -214,6 +286,7 @@ impl SceneGpu {
                 animated,
                 triangles,
                 bytes,
+                instancing: AtomicBool::new(true),
             }
         })
     }
@@ -239,40 +312,96 @@ impl SceneGpu {
         rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
     }
 
-    /// Records `draws` (geometry bound): one indexed draw per object, instance index = object.
-    pub fn draw_list(rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
-        for d in draws {
-            let indices = d.first_index..d.first_index + d.index_count;
-            rp.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
+    /// Records `draws` (geometry bound), instance index = object: with
+    /// instancing one draw per run of consecutive objects of one mesh
+    /// (V6), else one draw per object.
+    pub fn draw_list(&self, rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
+        if self.instancing.load(Ordering::Relaxed) {
+            for (d, n) in runs(draws) {
+                let indices = d.first_index..d.first_index + d.index_count;
+                rp.draw_indexed(indices, d.base_vertex, d.object..d.object + n);
+            }
+        } else {
+            for d in draws {
+                let indices = d.first_index..d.first_index + d.index_count;
+                rp.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
+            }
         }
+    }
+
+    /// Whether draws merge into instanced ones (V6).
+    pub fn instancing(&self) -> bool {
+        self.instancing.load(Ordering::Relaxed)
+    }
+
+    /// Draw calls of the G-buffer pass (opaque, textured, vegetation).
+    pub fn gbuffer_draw_calls(&self) -> u32 {
+        let i = self.instancing();
+        let textured: Vec<Draw> = self.draws_textured.iter().map(|(d, _)| d.clone()).collect();
+        // Textured draws change bind groups per draw: never merged.
+        draw_calls(&self.draws_opaque, i)
+            + draw_calls(&self.draws_vegetation, i)
+            + textured.len() as u32
     }
 
     /// Binds the geometry and records the opaque objects, glTF ones
     /// included (shadow casters; their alpha is not tested there).
     pub fn draw_opaque(&self, rp: &mut wgpu::RenderPass<'_>) {
         self.bind_geometry(rp);
-        Self::draw_list(rp, &self.draws_opaque);
+        self.draw_list(rp, &self.draws_opaque);
         for (d, _) in &self.draws_textured {
-            Self::draw_list(rp, std::slice::from_ref(d));
+            self.draw_list(rp, std::slice::from_ref(d));
         }
     }
 
     /// Binds the geometry and records the vegetation (set a `VEGETATION` pipeline first).
     pub fn draw_vegetation(&self, rp: &mut wgpu::RenderPass<'_>) {
         self.bind_geometry(rp);
-        Self::draw_list(rp, &self.draws_vegetation);
+        self.draw_list(rp, &self.draws_vegetation);
     }
 
     /// Records every draw, vegetation as plain cards (no alpha test, no
     /// sway); passes that need the true vegetation shape draw the two lists.
     pub fn draw_all(&self, rp: &mut wgpu::RenderPass<'_>) {
         self.bind_geometry(rp);
-        Self::draw_list(rp, &self.draws_opaque);
-        Self::draw_list(rp, &self.draws_vegetation);
+        self.draw_list(rp, &self.draws_opaque);
+        self.draw_list(rp, &self.draws_vegetation);
     }
 }
 
 /// `ObjectGpu::params` of an object: its foliage, zero for opaque objects.
 fn params(object: &Object) -> [f32; 4] {
     object.foliage.map_or([0.0; 4], |f| f.params())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn draw(mesh: u32, object: u32) -> Draw {
+        Draw {
+            first_index: mesh * 36,
+            index_count: 36,
+            base_vertex: 0,
+            object,
+        }
+    }
+
+    #[test]
+    fn runs_merge_consecutive_objects_of_one_mesh_only() {
+        // Objects 0-2 of mesh 0, a gap (4), mesh 1 at 5, then 6 of mesh 0.
+        let draws = [
+            draw(0, 0),
+            draw(0, 1),
+            draw(0, 2),
+            draw(0, 4),
+            draw(1, 5),
+            draw(0, 6),
+        ];
+        let got: Vec<(u32, u32)> = runs(&draws).map(|(d, n)| (d.object, n)).collect();
+        assert_eq!(got, vec![(0, 3), (4, 1), (5, 1), (6, 1)]);
+        assert_eq!(draw_calls(&draws, true), 4);
+        assert_eq!(draw_calls(&draws, false), 6);
+        assert_eq!(draw_calls(&[], true), 0);
+    }
 }

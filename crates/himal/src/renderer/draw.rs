@@ -9,6 +9,8 @@ use super::*;
 /// One rendered frame read back to the CPU.
 pub struct RenderedFrame {
     pub image: TextureData,
+    /// G-buffer draw calls (V6: one per run of one mesh's objects).
+    pub gbuffer_draws: u32,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
@@ -48,6 +50,8 @@ pub(super) struct FramePlan {
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
 /// presents it without a read-back).
 pub struct DrawnFrame {
+    /// G-buffer draw calls (V6: one per run of one mesh's objects).
+    pub gbuffer_draws: u32,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
@@ -142,6 +146,7 @@ impl Renderer {
         settings: &FrameSettings,
     ) -> Result<RenderedFrame, Error> {
         let DrawnFrame {
+            gbuffer_draws,
             timings,
             shadows,
             sky_occlusion,
@@ -151,6 +156,7 @@ impl Renderer {
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
         Ok(RenderedFrame {
             image: read_texture(&self.ctx, output, 0, 0)?,
+            gbuffer_draws,
             timings,
             shadows,
             sky_occlusion,
@@ -358,6 +364,7 @@ impl Renderer {
             self.aa_last_jitter = jitter;
         }
         Ok(DrawnFrame {
+            gbuffer_draws: self.res.scene.gbuffer_draw_calls(),
             timings,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,

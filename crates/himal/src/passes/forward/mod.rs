@@ -286,7 +286,7 @@ impl ForwardPass {
                         }
                     }
                     rp.set_bind_group(1, group, &[]);
-                    SceneGpu::draw_list(rp, std::slice::from_ref(draw));
+                    scene.draw_list(rp, std::slice::from_ref(draw));
                 }
                 Ok(())
             })

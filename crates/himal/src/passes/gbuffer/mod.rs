@@ -227,7 +227,7 @@ impl GBufferPass {
                 };
                 rp.set_pipeline(pipeline(GBufferKey::VERTEX)?);
                 scene.bind_geometry(rp);
-                SceneGpu::draw_list(rp, &scene.draws_opaque);
+                scene.draw_list(rp, &scene.draws_opaque);
                 if let Some(m) = &scene.materials {
                     let groups = m.bind_groups(&self.textured, ctx.device)?;
                     for (draw, material) in &scene.draws_textured {
@@ -241,12 +241,12 @@ impl GBufferPass {
                             mip_bias,
                         ))?);
                         rp.set_bind_group(1, group, &[]);
-                        SceneGpu::draw_list(rp, std::slice::from_ref(draw));
+                        scene.draw_list(rp, std::slice::from_ref(draw));
                     }
                 }
                 if !scene.draws_vegetation.is_empty() {
                     rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    SceneGpu::draw_list(rp, &scene.draws_vegetation);
+                    scene.draw_list(rp, &scene.draws_vegetation);
                 }
                 Ok(())
             });

@@ -22,6 +22,12 @@ impl DrawLists {
         self.len() == 0
     }
 
+    /// Draw calls these lists record ([`crate::gpu_scene::draw_calls`]).
+    pub fn draw_calls(&self, instancing: bool) -> u32 {
+        crate::gpu_scene::draw_calls(&self.opaque, instancing)
+            + crate::gpu_scene::draw_calls(&self.vegetation, instancing)
+    }
+
     pub fn clear(&mut self) {
         self.opaque.clear();
         self.vegetation.clear();
@@ -45,7 +51,10 @@ impl Casters {
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut moving = Vec::with_capacity(scene.objects.len());
         let mut objects = Vec::with_capacity(scene.objects.len());
-        for o in &scene.objects {
+        for o in crate::gpu_scene::gpu_order(scene)
+            .into_iter()
+            .map(|i| &scene.objects[i])
+        {
             let mesh = scene.meshes.get(o.mesh).map_or_else(
                 || Aabb::new(glam::Vec3::ZERO, glam::Vec3::ZERO),
                 |m| m.bounds,

@@ -106,18 +106,23 @@ impl DepthPipelines {
     /// Draws `lists` (the pass's view group is set).
     pub fn draw(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SceneGpu, lists: &DrawLists) {
         scene.bind_geometry(rp);
-        self.draw_pipelines(rp, lists);
+        self.draw_pipelines(rp, scene, lists);
     }
 
     /// Draws `lists` with the geometry already bound.
-    pub fn draw_pipelines(&self, rp: &mut wgpu::RenderPass<'_>, lists: &DrawLists) {
+    pub fn draw_pipelines(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        scene: &SceneGpu,
+        lists: &DrawLists,
+    ) {
         if !lists.opaque.is_empty() {
             rp.set_pipeline(&self.opaque);
-            SceneGpu::draw_list(rp, &lists.opaque);
+            scene.draw_list(rp, &lists.opaque);
         }
         if !lists.vegetation.is_empty() {
             rp.set_pipeline(&self.vegetation);
-            SceneGpu::draw_list(rp, &lists.vegetation);
+            scene.draw_list(rp, &lists.vegetation);
         }
     }
 }

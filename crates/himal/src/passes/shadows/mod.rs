@@ -443,17 +443,21 @@ impl ShadowPass {
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
 
+        let inst = scene.instancing();
         stats.draws = plan
             .cascades
             .iter()
-            .map(|(_, l)| l.len() as u32)
+            .map(|(_, l)| l.draw_calls(inst))
             .sum::<u32>()
-            + stats.static_draws
-            + plan.hero.as_ref().map_or(0, |(_, l)| l.len() as u32)
+            + plan
+                .static_update
+                .as_ref()
+                .map_or(0, |(_, l)| l.draw_calls(inst))
+            + plan.hero.as_ref().map_or(0, |(_, l)| l.draw_calls(inst))
             + plan
                 .projectors
                 .iter()
-                .map(|p| p.draws.len() as u32)
+                .map(|p| p.draws.draw_calls(inst))
                 .sum::<u32>();
         self.cascade_resolution = cascade_resolution;
         self.hero_resolution = s.hero_resolution;

@@ -189,7 +189,7 @@ impl ShadowPass {
                     let (x, y, edge) = (t.x as f32, t.y as f32, t.size as f32);
                     rp.set_viewport(x, y, edge, edge, 0.0, 1.0);
                     rp.set_bind_group(0, &bg, &[]);
-                    self.depth32.draw_pipelines(rp, &p.draws);
+                    self.depth32.draw_pipelines(rp, scene, &p.draws);
                 }
                 Ok(())
             })

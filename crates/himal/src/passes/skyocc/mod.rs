@@ -159,7 +159,10 @@ impl SkyOccPass {
             work: None,
             disk: resources::disk_buffer(ctx),
             bounds: casters.bounds,
-            ground: scene.objects.iter().map(|o| o.ground).collect(),
+            ground: crate::gpu_scene::gpu_order(scene)
+                .into_iter()
+                .map(|i| scene.objects[i].ground)
+                .collect(),
             moving: casters.moving,
             heights,
             jobs: Vec::new(),
@@ -362,7 +365,7 @@ impl SkyOccPass {
                     .record(move |_, rp| {
                         if !draws.is_empty() {
                             scene.bind_geometry(rp);
-                            SceneGpu::draw_list(rp, draws);
+                            scene.draw_list(rp, draws);
                         }
                         Ok(())
                     });
