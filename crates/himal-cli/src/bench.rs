@@ -119,7 +119,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut wall = Vec::new();
     // Shadow draw calls per measured frame (S2: the static map saves them).
     let mut shadow_draws: Vec<u32> = Vec::new();
-    let mut gbuffer_draws: u32 = 0;
+    let mut gbuffer_draws: Vec<u32> = Vec::new();
+    // CPU milliseconds per measured frame: plan, record, submit.
+    let mut cpu: [Vec<f64>; 3] = Default::default();
     // L2 sky occlusion sectors rendered per measured frame.
     let mut sectors: Vec<u32> = Vec::new();
     // Resident memory after each measured frame (issue #16: flat over time).
@@ -133,7 +135,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let frame = renderer.render(&cam, &settings)?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);
         shadow_draws.push(frame.shadows.draws);
-        gbuffer_draws = frame.gbuffer_draws;
+        gbuffer_draws.push(frame.gbuffer_draws);
+        for (v, ms) in
+            cpu.iter_mut()
+                .zip([frame.cpu.plan_ms, frame.cpu.record_ms, frame.cpu.submit_ms])
+        {
+            v.push(ms);
+        }
         sectors.push(frame.sky_occlusion.rendered);
         let memory = renderer.memory();
         resident.push(himal::soak::SoakSample {
@@ -169,6 +177,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let wall_median = median(&mut wall);
     let draws_mean = shadow_draws.iter().sum::<u32>() as f64 / shadow_draws.len().max(1) as f64;
     let draws_max = shadow_draws.iter().copied().max().unwrap_or(0);
+    let g_mean = gbuffer_draws.iter().sum::<u32>() as f64 / gbuffer_draws.len().max(1) as f64;
+    let [mut plan, mut record, mut submit] = cpu;
+    let (plan, record, submit) = (median(&mut plan), median(&mut record), median(&mut submit));
     let adapter = renderer.context().info.to_string();
     let cache = renderer.context().pipelines.stats();
     crate::save_cache(renderer.context());
@@ -189,7 +200,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws\":{gbuffer_draws},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws_mean\":{g_mean:.2},\"cpu_ms_median\":{{\"plan\":{plan:.3},\"record\":{record:.3},\"submit\":{submit:.3}}},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
             cache.memory_hits,
@@ -253,7 +264,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             if total > 0.0 { 100.0 * ms / total } else { 0.0 }
         );
     }
-    println!("G-buffer draw calls per frame: {gbuffer_draws}");
+    println!("G-buffer draw calls per frame: mean {g_mean:.1}");
+    println!(
+        "CPU per frame (median): plan + culling {plan:.2} ms, record {record:.2} ms, submit {submit:.2} ms"
+    );
     println!("shadow draw calls per frame: mean {draws_mean:.1}, max {draws_max}");
     println!(
         "sky occlusion sectors rendered per frame: mean {:.2}, max {}",

@@ -178,6 +178,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub instancing: String,
+    /// Draw only the objects inside the camera's frustum in the G-buffer
+    /// (CPU, per object; off: every object).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub culling: String,
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
     #[arg(
         long,
@@ -309,6 +318,11 @@ impl PostArgs {
             "on" => true,
             "off" => false,
             other => bail!("--instancing {other}: expected on or off"),
+        };
+        settings.frustum_culling = match self.culling.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--culling {other}: expected on or off"),
         };
         Ok(())
     }

@@ -128,6 +128,9 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         .store(settings.instancing, std::sync::atomic::Ordering::Relaxed);
     let size = (settings.width, settings.height);
     let aspect = size.0 as f32 / size.1 as f32;
+    // The G-buffer's objects: inside the camera's frustum (V6 merges them).
+    let cull_view = settings.frustum_culling.then(|| p.proj * camera.view());
+    passes.gbuffer.visible = scene.visible(cull_view);
     // B1: reconstruction from depth and reprojection with this jitter.
     let ao = AoUniform::new(&settings.ao, p.proj, camera.near, size);
     passes
@@ -226,7 +229,10 @@ pub fn build<'a>(
     let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
     g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
-    let gbuffer = passes.gbuffer.add(ctx, &mut g, size, scene, mip_bias);
+    let visible = Some(&passes.gbuffer.visible);
+    let gbuffer = passes
+        .gbuffer
+        .add(ctx, &mut g, size, scene, visible, mip_bias);
     let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, scene);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
@@ -276,7 +282,8 @@ pub fn build<'a>(
         // passes (sun unshadowed, sky unoccluded), then mipped and filtered.
         Some(probe) if passes.envmap.dirty => {
             let edge = (passes.probes.size, passes.probes.size);
-            let gbuffer = |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, false);
+            let gbuffer =
+                |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, None, false);
             let relight = |g: &mut FrameGraph<'a>, stored: GBuffer, env_before| {
                 let inputs = LightingInputs {
                     shadow_mask: None,

@@ -138,6 +138,9 @@ pub struct FrameSettings {
     /// V6: draw runs of consecutive objects of one mesh as one instanced
     /// draw (on by default); off: one draw per object (comparisons).
     pub instancing: bool,
+    /// Draw only the objects whose bounds may be inside the camera's
+    /// frustum in the G-buffer (on by default; CPU, per object).
+    pub frustum_culling: bool,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -184,6 +187,7 @@ impl FrameSettings {
             sky_occlusion: false,
             bent_normals: true,
             instancing: true,
+            frustum_culling: true,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -67,6 +67,25 @@ pub fn gpu_order(scene: &Scene) -> Vec<usize> {
     order
 }
 
+/// What a G-buffer pass draws ([`SceneGpu::visible`]).
+#[derive(Clone, Debug, Default)]
+pub struct VisibleLists {
+    pub opaque: Vec<Draw>,
+    pub vegetation: Vec<Draw>,
+    /// glTF draws with their material.
+    pub textured: Vec<(Draw, usize)>,
+}
+
+impl VisibleLists {
+    /// Draw calls these lists record; textured draws change bind groups per
+    /// draw and are never merged.
+    pub fn draw_calls(&self, instancing: bool) -> u32 {
+        draw_calls(&self.opaque, instancing)
+            + draw_calls(&self.vegetation, instancing)
+            + self.textured.len() as u32
+    }
+}
+
 /// Consecutive draws of one mesh with consecutive objects, as one
 /// instanced draw: (the first draw, instance count).
 fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
@@ -150,6 +169,8 @@ pub struct SceneGpu {
     pub materials: Option<textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
     pub animated: Vec<(u32, Object)>,
+    /// World bounds of each object over all time (GPU order): culling.
+    pub bounds: Vec<crate::scene::Aabb>,
     pub triangles: u64,
     pub bytes: u64,
     /// V6: merge runs of consecutive objects into instanced draws
@@ -189,6 +210,7 @@ impl SceneGpu {
         let (mut draws_textured, mut draws_blend, mut draws_emissive) =
             (Vec::new(), Vec::new(), Vec::new());
         let mut animated = Vec::new();
+        let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
         for (i, object) in gpu_order(scene)
             .into_iter()
@@ -205,6 +227,13 @@ impl SceneGpu {
             };
             let m = object.transform;
             objects.push(ObjectGpu::new(m, m, params(object)));
+            // Swaying cards reach up to their amplitude (local metres,
+            // scaled: a generous margin) beyond the mesh.
+            let b = object.swept_bounds(&scene.meshes[object.mesh].bounds);
+            let sway = object.foliage.map_or(0.0, |f| f.sway)
+                * object.transform.to_scale_rotation_translation().0.max_element();
+            let margin = glam::Vec3::splat(sway);
+            bounds.push(crate::scene::Aabb::new(b.min - margin, b.max + margin));
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
@@ -284,6 +313,7 @@ impl SceneGpu {
                 draws_emissive,
                 materials,
                 animated,
+                bounds,
                 triangles,
                 bytes,
                 instancing: AtomicBool::new(true),
@@ -334,14 +364,26 @@ impl SceneGpu {
         self.instancing.load(Ordering::Relaxed)
     }
 
-    /// Draw calls of the G-buffer pass (opaque, textured, vegetation).
-    pub fn gbuffer_draw_calls(&self) -> u32 {
-        let i = self.instancing();
-        let textured: Vec<Draw> = self.draws_textured.iter().map(|(d, _)| d.clone()).collect();
-        // Textured draws change bind groups per draw: never merged.
-        draw_calls(&self.draws_opaque, i)
-            + draw_calls(&self.draws_vegetation, i)
-            + textured.len() as u32
+    /// The G-buffer's lists: every object (`view` None: probe cubes) or
+    /// those whose bounds may be inside the frustum `view` (the camera).
+    pub fn visible(&self, view: Option<glam::Mat4>) -> VisibleLists {
+        let Some(vp) = view else {
+            return VisibleLists {
+                opaque: self.draws_opaque.clone(),
+                vegetation: self.draws_vegetation.clone(),
+                textured: self.draws_textured.clone(),
+            };
+        };
+        let inside = |i: usize| self.bounds.get(i).is_some_and(|b| !b.outside_clip(vp));
+        let keep = |d: &&Draw| inside(d.object as usize);
+        VisibleLists {
+            opaque: self.draws_opaque.iter().filter(keep).cloned().collect(),
+            vegetation: self.draws_vegetation.iter().filter(keep).cloned().collect(),
+            textured: (self.draws_textured.iter())
+                .filter(|(d, _)| inside(d.object as usize))
+                .cloned()
+                .collect(),
+        }
     }
 
     /// Binds the geometry and records the opaque objects, glTF ones

@@ -9,6 +9,9 @@ use super::*;
 /// One rendered frame read back to the CPU.
 pub struct RenderedFrame {
     pub image: TextureData,
+    /// CPU time of the frame's halves (planning and culling, graph build
+    /// and recording, submit), without waiting for the GPU.
+    pub cpu: CpuTimes,
     /// G-buffer draw calls (V6: one per run of one mesh's objects).
     pub gbuffer_draws: u32,
     /// GPU time per pass (empty where the adapter has no timestamps).
@@ -17,6 +20,23 @@ pub struct RenderedFrame {
     pub shadows: ShadowStats,
     /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
     pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
+}
+
+/// CPU milliseconds of one frame's phases, timed on the render thread.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CpuTimes {
+    /// `plan_frame`: uniforms, shadow and sky-occlusion planning, culling.
+    pub plan_ms: f64,
+    /// Frame-graph build, compile and command recording.
+    pub record_ms: f64,
+    /// `Queue::submit`.
+    pub submit_ms: f64,
+}
+
+impl CpuTimes {
+    pub fn total_ms(&self) -> f64 {
+        self.plan_ms + self.record_ms + self.submit_ms
+    }
 }
 
 /// Fetches the pipeline that draws `view` into `format` into the cache
@@ -50,6 +70,9 @@ pub(super) struct FramePlan {
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
 /// presents it without a read-back).
 pub struct DrawnFrame {
+    /// CPU time of the frame's halves (planning and culling, graph build
+    /// and recording, submit), without waiting for the GPU.
+    pub cpu: CpuTimes,
     /// G-buffer draw calls (V6: one per run of one mesh's objects).
     pub gbuffer_draws: u32,
     /// GPU time per pass (empty where the adapter has no timestamps).
@@ -146,6 +169,7 @@ impl Renderer {
         settings: &FrameSettings,
     ) -> Result<RenderedFrame, Error> {
         let DrawnFrame {
+            cpu,
             gbuffer_draws,
             timings,
             shadows,
@@ -156,6 +180,7 @@ impl Renderer {
             .ok_or_else(|| Error::InvalidSettings("output not prepared".into()))?;
         Ok(RenderedFrame {
             image: read_texture(&self.ctx, output, 0, 0)?,
+            cpu,
             gbuffer_draws,
             timings,
             shadows,
@@ -312,6 +337,8 @@ impl Renderer {
     pub fn draw(&mut self, camera: &Camera, settings: &FrameSettings) -> Result<DrawnFrame, Error> {
         self.validate(settings)?;
         let size = (settings.width, settings.height);
+        let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
+        let t_plan = std::time::Instant::now();
         let FramePlan {
             format,
             jitter,
@@ -319,6 +346,8 @@ impl Renderer {
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,
         } = self.plan_frame(camera, settings)?;
+        let plan_ms = ms(t_plan);
+        let t_record = std::time::Instant::now();
         let Self {
             ctx,
             res,
@@ -342,7 +371,10 @@ impl Renderer {
                 return Err(e);
             }
         };
+        let record_ms = ms(t_record);
+        let t_submit = std::time::Instant::now();
         ctx.queue.submit([commands]);
+        let submit_ms = ms(t_submit);
         res.history.swap();
         ctx.check("frame")?;
         let mut timings = std::mem::take(sky_timings);
@@ -364,7 +396,13 @@ impl Renderer {
             self.aa_last_jitter = jitter;
         }
         Ok(DrawnFrame {
-            gbuffer_draws: self.res.scene.gbuffer_draw_calls(),
+            cpu: CpuTimes {
+                plan_ms,
+                record_ms,
+                submit_ms,
+            },
+            gbuffer_draws: (self.res.passes.gbuffer.visible)
+                .draw_calls(self.res.scene.instancing()),
             timings,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,

@@ -31,7 +31,7 @@ pub use crate::settings::{
 use post_state::PostState;
 
 use draw::prepare_view;
-pub use draw::{DrawnFrame, RenderedFrame};
+pub use draw::{CpuTimes, DrawnFrame, RenderedFrame};
 
 /// GPU resources the frame graph borrows (everything but the pool and timer,
 /// which execution borrows mutably).

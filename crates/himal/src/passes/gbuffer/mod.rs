@@ -9,7 +9,7 @@
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::gpu_scene::{SceneGpu, vertex_layout};
+use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
 use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 
@@ -97,6 +97,8 @@ impl GBufferKey {
 }
 
 pub struct GBufferPass {
+    /// The camera's visible objects this frame (`frame::plan`).
+    pub visible: VisibleLists,
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
@@ -105,6 +107,7 @@ pub struct GBufferPass {
 impl GBufferPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let pass = Self {
+            visible: VisibleLists::default(),
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
         };
@@ -174,15 +177,25 @@ impl GBufferPass {
     }
 
     /// The `gbuffer` node: clears the targets, then draws opaque per-vertex
-    /// objects, glTF materials and vegetation (`view` is the frame constant).
+    /// objects, glTF materials and vegetation (`view` is the frame constant):
+    /// `lists`, or every object of `scene` (probe cubes) when `None`.
     pub fn add<'a>(
         &'a self,
         ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         scene: &'a SceneGpu,
+        lists: Option<&'a VisibleLists>,
         mip_bias: bool,
     ) -> GBuffer {
+        let (opaque, vegetation, textured) = match lists {
+            Some(l) => (&l.opaque, &l.vegetation, &l.textured),
+            None => (
+                &scene.draws_opaque,
+                &scene.draws_vegetation,
+                &scene.draws_textured,
+            ),
+        };
         let (w, h) = size;
         let albedo =
             graph.create_texture("gbuffer.albedo", TextureDesc::new_2d(w, h, ALBEDO_FORMAT));
@@ -227,10 +240,10 @@ impl GBufferPass {
                 };
                 rp.set_pipeline(pipeline(GBufferKey::VERTEX)?);
                 scene.bind_geometry(rp);
-                scene.draw_list(rp, &scene.draws_opaque);
+                scene.draw_list(rp, opaque);
                 if let Some(m) = &scene.materials {
                     let groups = m.bind_groups(&self.textured, ctx.device)?;
-                    for (draw, material) in &scene.draws_textured {
+                    for (draw, material) in textured {
                         let Some((group, binding)) =
                             groups.get(*material).zip(m.materials.get(*material))
                         else {
@@ -244,9 +257,9 @@ impl GBufferPass {
                         scene.draw_list(rp, std::slice::from_ref(draw));
                     }
                 }
-                if !scene.draws_vegetation.is_empty() {
+                if !vegetation.is_empty() {
                     rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    scene.draw_list(rp, &scene.draws_vegetation);
+                    scene.draw_list(rp, vegetation);
                 }
                 Ok(())
             });
