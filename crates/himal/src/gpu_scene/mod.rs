@@ -231,7 +231,11 @@ impl SceneGpu {
             // scaled: a generous margin) beyond the mesh.
             let b = object.swept_bounds(&scene.meshes[object.mesh].bounds);
             let sway = object.foliage.map_or(0.0, |f| f.sway)
-                * object.transform.to_scale_rotation_translation().0.max_element();
+                * object
+                    .transform
+                    .to_scale_rotation_translation()
+                    .0
+                    .max_element();
             let margin = glam::Vec3::splat(sway);
             bounds.push(crate::scene::Aabb::new(b.min - margin, b.max + margin));
             if object.motion.is_some() {
