@@ -259,11 +259,7 @@ impl PostArgs {
                 settings.exposure_ev = v;
             }
         }
-        settings.bloom.enabled = match self.bloom.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--bloom {other}: expected on or off"),
-        };
+        settings.bloom.enabled = on_off("--bloom", &self.bloom)?;
         let finite = |v: f32, name: &str, lo: f32, hi: f32| {
             if v.is_finite() && (lo..=hi).contains(&v) {
                 Ok(v)
@@ -294,37 +290,22 @@ impl PostArgs {
             bail!("--white-point {w}: must be a positive finite luminance up to 1e6");
         }
         settings.white_point = self.white_point;
-        settings.environment_specular = match self.env_specular.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--env-specular {other}: expected on or off"),
-        };
-        settings.environment_probes = match self.env_probes.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--env-probes {other}: expected on or off"),
-        };
-        settings.sky_occlusion = match self.sky_occlusion.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--sky-occlusion {other}: expected on or off"),
-        };
-        settings.bent_normals = match self.bent_normals.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--bent-normals {other}: expected on or off"),
-        };
-        settings.instancing = match self.instancing.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--instancing {other}: expected on or off"),
-        };
-        settings.frustum_culling = match self.culling.as_str() {
-            "on" => true,
-            "off" => false,
-            other => bail!("--culling {other}: expected on or off"),
-        };
+        settings.environment_specular = on_off("--env-specular", &self.env_specular)?;
+        settings.environment_probes = on_off("--env-probes", &self.env_probes)?;
+        settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
+        settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
+        settings.instancing = on_off("--instancing", &self.instancing)?;
+        settings.frustum_culling = on_off("--culling", &self.culling)?;
         Ok(())
+    }
+}
+
+/// `on` / `off` of option `name`.
+fn on_off(name: &str, value: &str) -> Result<bool> {
+    match value {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => bail!("{name} {other}: expected on or off"),
     }
 }
 
