@@ -120,6 +120,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // Shadow draw calls per measured frame (S2: the static map saves them).
     let mut shadow_draws: Vec<u32> = Vec::new();
     let mut gbuffer_draws: Vec<u32> = Vec::new();
+    // The culling that ran (V6: GPU, or the CPU path where it cannot).
+    let mut culling = himal::Culling::Off;
     // CPU milliseconds per measured frame: plan, record, submit.
     let mut cpu: [Vec<f64>; 3] = Default::default();
     // L2 sky occlusion sectors rendered per measured frame.
@@ -136,6 +138,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         wall.push(t.elapsed().as_secs_f64() * 1e3);
         shadow_draws.push(frame.shadows.draws);
         gbuffer_draws.push(frame.gbuffer_draws);
+        culling = frame.culling;
         for (v, ms) in
             cpu.iter_mut()
                 .zip([frame.cpu.plan_ms, frame.cpu.record_ms, frame.cpu.submit_ms])
@@ -183,6 +186,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let adapter = renderer.context().info.to_string();
     let cache = renderer.context().pipelines.stats();
     crate::save_cache(renderer.context());
+    let culling = format!("{culling:?}").to_lowercase();
     if args.json {
         let passes: Vec<String> = rows
             .iter()
@@ -200,7 +204,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws_mean\":{g_mean:.2},\"cpu_ms_median\":{{\"plan\":{plan:.3},\"record\":{record:.3},\"submit\":{submit:.3}}},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws_mean\":{g_mean:.2},\"culling\":{culling:?},\"cpu_ms_median\":{{\"plan\":{plan:.3},\"record\":{record:.3},\"submit\":{submit:.3}}},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
             args.frames,
             renderer.scene_triangles(),
             cache.memory_hits,
@@ -264,7 +268,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             if total > 0.0 { 100.0 * ms / total } else { 0.0 }
         );
     }
-    println!("G-buffer draw calls per frame: mean {g_mean:.1}");
+    println!("G-buffer draw calls per frame: mean {g_mean:.1} (culling: {culling})");
     println!(
         "CPU per frame (median): plan + culling {plan:.2} ms, record {record:.2} ms, submit {submit:.2} ms"
     );

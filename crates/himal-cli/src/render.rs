@@ -178,12 +178,14 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub instancing: String,
-    /// Draw only the objects inside the camera's frustum in the G-buffer
-    /// (CPU, per object; off: every object).
+    /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
+    /// instance in a compute pass, drawn indirectly; the CPU path where the
+    /// adapter cannot), cpu (per object on the render thread), off (the
+    /// G-buffer draws every object).
     #[arg(
         long,
-        default_value = "on",
-        value_name = "on|off",
+        default_value = "gpu",
+        value_name = "gpu|cpu|off",
         allow_hyphen_values = true
     )]
     pub culling: String,
@@ -295,7 +297,12 @@ impl PostArgs {
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
-        settings.frustum_culling = on_off("--culling", &self.culling)?;
+        settings.culling = match self.culling.as_str() {
+            "gpu" => himal::Culling::Gpu,
+            "cpu" => himal::Culling::Cpu,
+            "off" => himal::Culling::Off,
+            other => bail!("--culling {other}: expected gpu, cpu or off"),
+        };
         Ok(())
     }
 }

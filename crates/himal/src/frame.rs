@@ -2,6 +2,7 @@
 //! technique's CPU half) and [`build`] (the graph).
 //!
 //! ```text
+//! cull (V6: camera + cascades) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
 //! skyocc.heightfieldN/groundN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static, shadows.hero ─┐
@@ -27,6 +28,7 @@ use crate::gpu_scene::SceneGpu;
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform};
+use crate::passes::cull::{CullPass, CullView};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
@@ -41,10 +43,12 @@ use crate::passes::shadows::{ShadowPass, ShadowStats};
 use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
 use crate::scene::Camera;
-use crate::settings::{FrameSettings, ViewBuffer};
+use crate::settings::{Culling, FrameSettings, ViewBuffer};
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
+    /// V6: per-instance frustum culling on the GPU.
+    pub cull: CullPass,
     pub shadows: ShadowPass,
     pub gbuffer: GBufferPass,
     pub ao: AoPass,
@@ -68,11 +72,17 @@ pub struct Passes {
 
 impl Passes {
     /// Every pass of the frame, its pipelines fetched for `scene`'s lights,
-    /// probes and sky-occlusion extent; output passes write `DISPLAY_FORMAT`.
-    pub fn new(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<Self, GpuError> {
+    /// probes and sky-occlusion extent, and its culling layout for `gpu`
+    /// (the scene uploaded); output passes write `DISPLAY_FORMAT`.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &crate::scene::Scene,
+        gpu: &SceneGpu,
+    ) -> Result<Self, GpuError> {
         use crate::passes::envmap::ENVMAP_SIZE;
         use crate::settings::DISPLAY_FORMAT;
         Ok(Self {
+            cull: CullPass::new(ctx, gpu)?,
             shadows: ShadowPass::new(ctx, scene)?,
             gbuffer: GBufferPass::new(ctx)?,
             ao: AoPass::new(ctx)?,
@@ -128,9 +138,15 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         .store(settings.instancing, std::sync::atomic::Ordering::Relaxed);
     let size = (settings.width, settings.height);
     let aspect = size.0 as f32 / size.1 as f32;
-    // The G-buffer's objects: inside the camera's frustum (V6 merges them).
-    let cull_view = settings.frustum_culling.then(|| p.proj * camera.view());
-    passes.gbuffer.visible = scene.visible(cull_view);
+    // V6: the G-buffer's objects inside the camera's frustum, culled on the
+    // GPU (view 0; the cascades are views 1..) or on the CPU; runs of one
+    // mesh's objects merge into instanced draws.
+    let view_proj = p.proj * camera.view();
+    let gpu_cull =
+        settings.culling == Culling::Gpu && settings.instancing && passes.cull.supported().is_ok();
+    let gpu_calls = gpu_cull.then(|| passes.cull.layout.draw_calls());
+    let cull_view = (settings.culling != Culling::Off).then_some(view_proj);
+    passes.gbuffer.visible = scene.visible(cull_view, gpu_calls.map(|c| (0, c)));
     // B1: reconstruction from depth and reprojection with this jitter.
     let ao = AoUniform::new(&settings.ao, p.proj, camera.near, size);
     passes
@@ -151,7 +167,19 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         settings.shadow_resolution,
         Some(&settings.shadows),
         settings.time_s,
+        gpu_calls,
     );
+    let mut views = Vec::new();
+    if gpu_cull {
+        views.push(CullView::clip(view_proj));
+        views.extend(
+            shadows
+                .fits
+                .iter()
+                .map(|f| CullView::caster(f.light_view_proj)),
+        );
+    }
+    passes.cull.plan(ctx, &views);
     // L2: the sectors the camera wants; jobs for the ones not resident.
     let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
     if settings.sky_occlusion_every_frame {
@@ -229,11 +257,20 @@ pub fn build<'a>(
     let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
     g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
+    // V6: the camera's and the cascades' objects, culled on the GPU.
+    let culled = passes.cull.add(&mut g);
     let visible = Some(&passes.gbuffer.visible);
-    let gbuffer = passes
-        .gbuffer
-        .add(ctx, &mut g, size, scene, visible, mip_bias);
-    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, scene);
+    let camera_list = culled.filter(|_| passes.gbuffer.visible.gpu_view.is_some());
+    let gbuffer = (passes.gbuffer).add(
+        ctx,
+        &mut g,
+        size,
+        scene,
+        visible,
+        camera_list.map(|c| (c, 0)),
+        mip_bias,
+    );
+    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, scene, culled);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {
@@ -283,7 +320,7 @@ pub fn build<'a>(
         Some(probe) if passes.envmap.dirty => {
             let edge = (passes.probes.size, passes.probes.size);
             let gbuffer =
-                |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, None, false);
+                |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, None, None, false);
             let relight = |g: &mut FrameGraph<'a>, stored: GBuffer, env_before| {
                 let inputs = LightingInputs {
                     shadow_mask: None,

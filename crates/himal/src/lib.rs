@@ -30,6 +30,7 @@ pub mod shader;
 pub mod soak;
 
 pub use renderer::{DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer};
+pub use settings::Culling;
 
 /// Every error the library returns; each names what failed and where.
 #[derive(thiserror::Error, Debug)]

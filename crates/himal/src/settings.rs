@@ -138,9 +138,11 @@ pub struct FrameSettings {
     /// V6: draw runs of consecutive objects of one mesh as one instanced
     /// draw (on by default); off: one draw per object (comparisons).
     pub instancing: bool,
-    /// Draw only the objects whose bounds may be inside the camera's
-    /// frustum in the G-buffer (on by default; CPU, per object).
-    pub frustum_culling: bool,
+    /// Which objects the G-buffer and the sun cascades draw (V6): those
+    /// whose bounds may be inside the view, culled on the GPU (default)
+    /// or the CPU, or every object (`Off`: the G-buffer; cascades still
+    /// cull on the CPU).
+    pub culling: Culling,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -161,6 +163,21 @@ pub struct FrameSettings {
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
+}
+
+/// Frustum culling of the G-buffer and the cascades (V6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Culling {
+    /// Every object in the G-buffer.
+    Off,
+    /// Per object on the render thread (the path of adapters without
+    /// indirect draws).
+    Cpu,
+    /// Per instance on the GPU, drawn with multi-draw-indirect; the CPU
+    /// path where the adapter lacks indirect draws with a first instance,
+    /// or with instancing off.
+    #[default]
+    Gpu,
 }
 
 impl FrameSettings {
@@ -187,7 +204,7 @@ impl FrameSettings {
             sky_occlusion: false,
             bent_normals: true,
             instancing: true,
-            frustum_culling: true,
+            culling: Culling::Gpu,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -189,8 +189,10 @@ impl GpuContext {
         let wanted_features =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let timestamps = adapter.features() & wanted_features == wanted_features;
-        // PIPELINE_CACHE (Vulkan) lets compiled pipelines persist on disk (E1).
-        let features = adapter.features() & (wanted_features | wgpu::Features::PIPELINE_CACHE);
+        // PIPELINE_CACHE (Vulkan) lets compiled pipelines persist on disk (E1);
+        // INDIRECT_FIRST_INSTANCE lets V6's GPU culling draw its lists indirectly.
+        let optional = wgpu::Features::PIPELINE_CACHE | wgpu::Features::INDIRECT_FIRST_INSTANCE;
+        let features = adapter.features() & (wanted_features | optional);
         let desc = wgpu::DeviceDescriptor {
             label: Some("himal"),
             required_features: features,

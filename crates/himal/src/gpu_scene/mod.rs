@@ -1,5 +1,6 @@
 //! The scene's meshes and object transforms on the GPU: one vertex buffer,
-//! one index buffer, one storage buffer of objects (instance index = object).
+//! one index buffer, one storage buffer of objects (instance index -> object
+//! through `instances`).
 //! Draws come in two lists: opaque objects (early-Z, no discard) and
 //! vegetation (alpha-tested, swaying, double-sided), each drawn with its own
 //! pipeline. Moving objects are rewritten every frame by [`SceneGpu::update_objects`].
@@ -74,6 +75,9 @@ pub struct VisibleLists {
     pub vegetation: Vec<Draw>,
     /// glTF draws with their material.
     pub textured: Vec<(Draw, usize)>,
+    /// `Some((view, calls))`: opaque and vegetation objects come from view
+    /// `view` of the GPU-culled lists instead, `calls` multi-draws (V6).
+    pub gpu_view: Option<(u32, u32)>,
 }
 
 impl VisibleLists {
@@ -83,12 +87,13 @@ impl VisibleLists {
         draw_calls(&self.opaque, instancing)
             + draw_calls(&self.vegetation, instancing)
             + self.textured.len() as u32
+            + self.gpu_view.map_or(0, |(_, calls)| calls)
     }
 }
 
 /// Consecutive draws of one mesh with consecutive objects, as one
 /// instanced draw: (the first draw, instance count).
-fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
+pub fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
     let mut i = 0;
     std::iter::from_fn(move || {
         let first = draws.get(i)?;
@@ -153,6 +158,10 @@ pub struct SceneGpu {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub objects: wgpu::Buffer,
+    /// Instance -> object for draws recorded on the CPU: the identity, so a
+    /// draw of instances `k..k+n` draws objects `k..k+n` (the GPU-culled
+    /// passes bind `passes::cull`'s lists instead).
+    pub instances: wgpu::Buffer,
     /// Opaque objects (G-buffer and shadow pipelines without a discard).
     pub draws_opaque: Vec<Draw>,
     /// Alpha-tested, swaying vegetation (the `VEGETATION` pipelines).
@@ -274,6 +283,7 @@ impl SceneGpu {
             indices.extend([0, 0, 0]);
             vertices.push(Vertex::zeroed());
         }
+        let identity: Vec<u32> = (0..objects.len() as u32).collect();
         let materials = if scene.pbr.materials.is_empty() {
             None
         } else {
@@ -282,7 +292,8 @@ impl SceneGpu {
         let bytes = materials.as_ref().map_or(0, |m| m.bytes)
             + (std::mem::size_of_val(vertices.as_slice())
                 + std::mem::size_of_val(indices.as_slice())
-                + std::mem::size_of_val(objects.as_slice())) as u64;
+                + std::mem::size_of_val(objects.as_slice())
+                + std::mem::size_of_val(identity.as_slice())) as u64;
         ctx.scoped("scene upload", || {
             let init = |label, contents: &[u8], usage| {
                 ctx.device
@@ -309,6 +320,11 @@ impl SceneGpu {
                     wgpu::BufferUsages::STORAGE
                         | wgpu::BufferUsages::COPY_DST
                         | wgpu::BufferUsages::COPY_SRC,
+                ),
+                instances: init(
+                    "scene.instances",
+                    bytemuck::cast_slice(&identity),
+                    wgpu::BufferUsages::STORAGE,
                 ),
                 draws_opaque,
                 draws_vegetation,
@@ -370,23 +386,31 @@ impl SceneGpu {
 
     /// The G-buffer's lists: every object (`view` None: probe cubes) or
     /// those whose bounds may be inside the frustum `view` (the camera).
-    pub fn visible(&self, view: Option<glam::Mat4>) -> VisibleLists {
+    /// `gpu_view`: opaque and vegetation objects are culled on the GPU
+    /// (V6, `passes::cull`; view, calls), only glTF draws here.
+    pub fn visible(&self, view: Option<glam::Mat4>, gpu_view: Option<(u32, u32)>) -> VisibleLists {
         let Some(vp) = view else {
             return VisibleLists {
                 opaque: self.draws_opaque.clone(),
                 vegetation: self.draws_vegetation.clone(),
                 textured: self.draws_textured.clone(),
+                gpu_view: None,
             };
         };
         let inside = |i: usize| self.bounds.get(i).is_some_and(|b| !b.outside_clip(vp));
         let keep = |d: &&Draw| inside(d.object as usize);
+        let cpu = |draws: &[Draw]| match gpu_view {
+            Some(_) => Vec::new(),
+            None => draws.iter().filter(keep).cloned().collect(),
+        };
         VisibleLists {
-            opaque: self.draws_opaque.iter().filter(keep).cloned().collect(),
-            vegetation: self.draws_vegetation.iter().filter(keep).cloned().collect(),
+            opaque: cpu(&self.draws_opaque),
+            vegetation: cpu(&self.draws_vegetation),
             textured: (self.draws_textured.iter())
                 .filter(|(d, _)| inside(d.object as usize))
                 .cloned()
                 .collect(),
+            gpu_view,
         }
     }
 

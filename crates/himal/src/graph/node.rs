@@ -300,6 +300,13 @@ impl<'g, 'a> Node<'g, 'a> {
         self
     }
 
+    /// Reads graph buffer `h` as indirect draw arguments (raster: the
+    /// closure draws from it with `ctx.buffer(h)`; nothing is bound).
+    pub fn indirect(mut self, h: BufferHandle) -> Self {
+        self.pass.read_buffer(h, BufferAccess::Indirect);
+        self
+    }
+
     /// A buffer owned outside the graph (uniform or storage: object
     /// transforms, parameters).
     pub fn uniform(self, name: &str, buffer: &'a wgpu::Buffer) -> Self {

@@ -4,6 +4,7 @@
 pub mod aa;
 pub mod ao;
 pub mod common;
+pub mod cull;
 pub mod debug;
 pub mod envmap;
 pub mod forward;

@@ -5,6 +5,7 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::*;
+use crate::settings::Culling;
 
 /// One rendered frame read back to the CPU.
 pub struct RenderedFrame {
@@ -12,8 +13,11 @@ pub struct RenderedFrame {
     /// CPU time of the frame's halves (planning and culling, graph build
     /// and recording, submit), without waiting for the GPU.
     pub cpu: CpuTimes,
-    /// G-buffer draw calls (V6: one per run of one mesh's objects).
+    /// G-buffer draw calls (V6: one per run of one mesh's objects, or per
+    /// GPU-culled list).
     pub gbuffer_draws: u32,
+    /// The culling that ran (`Gpu` falls back to `Cpu` where it cannot).
+    pub culling: crate::settings::Culling,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
@@ -73,8 +77,11 @@ pub struct DrawnFrame {
     /// CPU time of the frame's halves (planning and culling, graph build
     /// and recording, submit), without waiting for the GPU.
     pub cpu: CpuTimes,
-    /// G-buffer draw calls (V6: one per run of one mesh's objects).
+    /// G-buffer draw calls (V6: one per run of one mesh's objects, or per
+    /// GPU-culled list).
     pub gbuffer_draws: u32,
+    /// The culling that ran (`Gpu` falls back to `Cpu` where it cannot).
+    pub culling: crate::settings::Culling,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
     /// Shadow draw calls and what the shadow passes rendered.
@@ -171,6 +178,7 @@ impl Renderer {
         let DrawnFrame {
             cpu,
             gbuffer_draws,
+            culling,
             timings,
             shadows,
             sky_occlusion,
@@ -182,6 +190,7 @@ impl Renderer {
             image: read_texture(&self.ctx, output, 0, 0)?,
             cpu,
             gbuffer_draws,
+            culling,
             timings,
             shadows,
             sky_occlusion,
@@ -403,6 +412,10 @@ impl Renderer {
             },
             gbuffer_draws: (self.res.passes.gbuffer.visible)
                 .draw_calls(self.res.scene.instancing()),
+            culling: match settings.culling {
+                Culling::Gpu if self.res.passes.cull.planned() == 0 => Culling::Cpu,
+                c => c,
+            },
             timings,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,

@@ -133,8 +133,8 @@ struct SunKey(f32, f32, u32, f32);
 impl Renderer {
     /// Creates every pipeline and uploads the scene.
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
-        let mut passes = Passes::new(&ctx, scene)?;
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        let mut passes = Passes::new(&ctx, scene, &scene_gpu)?;
         // Pre-warm the scene's permutations: a bad one fails here, not mid-frame.
         for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu) {
             passes.forward.pipeline(&ctx, key)?;

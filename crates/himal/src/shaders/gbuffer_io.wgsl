@@ -9,7 +9,8 @@ struct GBufferVertexIn {
     @location(3) uv: vec2f,
     @location(4) color: vec4f,
     @location(5) surface: vec4f,
-    @builtin(instance_index) object: u32,
+    // objects[instances[instance]] is the object drawn (V6)
+    @builtin(instance_index) instance: u32,
 }
 
 struct GBufferOut {

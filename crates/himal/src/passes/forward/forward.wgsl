@@ -29,6 +29,8 @@ struct Lighting {
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
+// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
+@group(0) @binding(6) var<storage, read> instances: array<u32>;
 @group(0) @binding(2) var<uniform> lighting: Lighting;
 @group(0) @binding(3) var env_specular: texture_cube<f32>;
 @group(0) @binding(4) var env_sampler: sampler;
@@ -47,7 +49,7 @@ struct VertexOut {
 
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
-    let o = objects[in.object];
+    let o = objects[instances[in.instance]];
     // The same call as textured.wgsl: the same clip position (@invariant).
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;

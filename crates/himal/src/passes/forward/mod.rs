@@ -250,6 +250,7 @@ impl ForwardPass {
         graph
             .raster(id, &self.program)
             .uniform("objects", &scene.objects)
+            .uniform("instances", &scene.instances)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &inputs.envmap.sampler)
             .external("dfg_lut", &inputs.envmap.dfg_view)

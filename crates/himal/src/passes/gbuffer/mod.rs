@@ -10,8 +10,9 @@
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
-use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
+use crate::graph::{BufferAccess, FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
+use crate::passes::cull::{Culled, List};
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -178,7 +179,11 @@ impl GBufferPass {
 
     /// The `gbuffer` node: clears the targets, then draws opaque per-vertex
     /// objects, glTF materials and vegetation (`view` is the frame constant):
-    /// `lists`, or every object of `scene` (probe cubes) when `None`.
+    /// `lists`, or every object of `scene` (probe cubes) when `None`. With
+    /// `culled` (V6 GPU culling: the lists, view), opaque and vegetation
+    /// objects come from the GPU's list of that view and `lists` holds only
+    /// the glTF draws.
+    #[allow(clippy::too_many_arguments)]
     pub fn add<'a>(
         &'a self,
         ctx: &GpuContext,
@@ -186,6 +191,7 @@ impl GBufferPass {
         size: (u32, u32),
         scene: &'a SceneGpu,
         lists: Option<&'a VisibleLists>,
+        culled: Option<(Culled, u32)>,
         mip_bias: bool,
     ) -> GBuffer {
         let (opaque, vegetation, textured) = match lists {
@@ -213,9 +219,16 @@ impl GBufferPass {
                 .map(|key| (key, self.pipeline(ctx, key)))
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
-        let written = graph
+        let node = graph
             .raster("gbuffer", &self.program)
-            .uniform("objects", &scene.objects)
+            .uniform("objects", &scene.objects);
+        let node = match culled {
+            Some((c, _)) => node
+                .read_buffer("instances", c.instances, BufferAccess::StorageRead)
+                .indirect(c.args),
+            None => node.uniform("instances", &scene.instances),
+        };
+        let written = node
             .color(albedo, clear)
             .color(frame, clear)
             .color(material, clear)
@@ -241,6 +254,9 @@ impl GBufferPass {
                 rp.set_pipeline(pipeline(GBufferKey::VERTEX)?);
                 scene.bind_geometry(rp);
                 scene.draw_list(rp, opaque);
+                if let Some((c, view)) = culled {
+                    c.draw(rp, ctx.buffer(c.args), view, List::Opaque);
+                }
                 if let Some(m) = &scene.materials {
                     let groups = m.bind_groups(&self.textured, ctx.device)?;
                     for (draw, material) in textured {
@@ -260,6 +276,12 @@ impl GBufferPass {
                 if !vegetation.is_empty() {
                     rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
                     scene.draw_list(rp, vegetation);
+                }
+                if let Some((c, view)) = culled
+                    && !scene.draws_vegetation.is_empty()
+                {
+                    rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
+                    c.draw(rp, ctx.buffer(c.args), view, List::Vegetation);
                 }
                 Ok(())
             });

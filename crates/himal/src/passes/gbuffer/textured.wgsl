@@ -14,6 +14,8 @@
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
+// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
+@group(0) @binding(2) var<storage, read> instances: array<u32>;
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -28,7 +30,7 @@ struct VertexOut {
 
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
-    let o = objects[in.object];
+    let o = objects[instances[in.instance]];
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;
     out.uv = in.uv;

@@ -6,11 +6,15 @@ use crate::scene::{Aabb, Object, Scene};
 
 use super::cascades::ShadowFit;
 
-/// The draws of one shadow map: opaque and vegetation (own pipeline).
+/// The draws of one shadow map: opaque and vegetation (own pipeline), and
+/// the GPU-culled view that adds its lists (V6, `passes::cull`).
 #[derive(Clone, Debug, Default)]
 pub struct DrawLists {
     pub opaque: Vec<Draw>,
     pub vegetation: Vec<Draw>,
+    /// `Some((view, calls))`: also draw view `view` of the culled lists,
+    /// `calls` multi-draws.
+    pub gpu_view: Option<(u32, u32)>,
 }
 
 impl DrawLists {
@@ -26,11 +30,13 @@ impl DrawLists {
     pub fn draw_calls(&self, instancing: bool) -> u32 {
         crate::gpu_scene::draw_calls(&self.opaque, instancing)
             + crate::gpu_scene::draw_calls(&self.vegetation, instancing)
+            + self.gpu_view.map_or(0, |(_, calls)| calls)
     }
 
     pub fn clear(&mut self) {
         self.opaque.clear();
         self.vegetation.clear();
+        self.gpu_view = None;
     }
 }
 

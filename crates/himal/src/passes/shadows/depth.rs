@@ -7,6 +7,7 @@ use super::casters::DrawLists;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, vertex_layout};
+use crate::passes::cull::{Culled, List};
 
 /// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
 const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
@@ -107,6 +108,24 @@ impl DepthPipelines {
     pub fn draw(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SceneGpu, lists: &DrawLists) {
         scene.bind_geometry(rp);
         self.draw_pipelines(rp, scene, lists);
+    }
+
+    /// Draws `lists` and, with `culled` (its args buffer), the GPU-culled
+    /// view the lists name (V6).
+    pub fn draw_culled(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        scene: &SceneGpu,
+        lists: &DrawLists,
+        culled: Option<(&Culled, &wgpu::Buffer)>,
+    ) {
+        self.draw(rp, scene, lists);
+        if let (Some((view, _)), Some((c, args))) = (lists.gpu_view, culled) {
+            rp.set_pipeline(&self.opaque);
+            c.draw(rp, args, view, List::Opaque);
+            rp.set_pipeline(&self.vegetation);
+            c.draw(rp, args, view, List::Vegetation);
+        }
     }
 
     /// Draws `lists` with the geometry already bound.

@@ -16,10 +16,12 @@ struct ShadowView {
 
 @group(0) @binding(0) var<uniform> shadow: ShadowView;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
+// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
+@group(0) @binding(2) var<storage, read> instances: array<u32>;
 
 @vertex
-fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> @builtin(position) vec4f {
-    let o = objects[object];
+fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {
+    let o = objects[instances[instance]];
     return shadow.light_view_proj * object_world(o, o.model, position, vec2f(0.0), false, 0.0);
 }
 
@@ -33,9 +35,9 @@ struct VegetationOut {
 fn vs_vegetation(
     @location(0) position: vec3f,
     @location(3) uv: vec2f,
-    @builtin(instance_index) object: u32,
+    @builtin(instance_index) instance: u32,
 ) -> VegetationOut {
-    let o = objects[object];
+    let o = objects[instances[instance]];
     var out: VegetationOut;
     out.clip = shadow.light_view_proj * object_world(o, o.model, position, uv, true, shadow.time.x);
     out.uv = uv;

@@ -245,7 +245,9 @@ impl ShadowPass {
     }
 
     /// Plans this frame (fits, culled draw lists, the static slice, the hero)
-    /// and uploads the uniforms; `None` settings = shadows off.
+    /// and uploads the uniforms; `None` settings = shadows off. `gpu_calls`:
+    /// the cascades are culled on the GPU (V6), cascade i as view `1 + i`
+    /// of the culled lists, with that many multi-draws per cascade.
     #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
@@ -257,6 +259,7 @@ impl ShadowPass {
         cascade_resolution: u32,
         settings: Option<&ShadowSettings>,
         time_s: f32,
+        gpu_calls: Option<u32>,
     ) -> ShadowStats {
         let on = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0);
         // S3: the light list (lit with or without shadows), tiles when on.
@@ -386,13 +389,16 @@ impl ShadowPass {
             params.depth_range[i] = fit.depth_range;
             if i < rendered {
                 let mut lists = DrawLists::default();
-                self.casters.cull_into(
-                    &scene.draws_opaque,
-                    &scene.draws_vegetation,
-                    &fit,
-                    |_| true,
-                    &mut lists,
-                );
+                match gpu_calls {
+                    Some(calls) => lists.gpu_view = Some((1 + i as u32, calls)),
+                    None => self.casters.cull_into(
+                        &scene.draws_opaque,
+                        &scene.draws_vegetation,
+                        &fit,
+                        |_| true,
+                        &mut lists,
+                    ),
+                }
                 write_view(i, fit.light_view_proj);
                 stats.fits.push(fit);
                 plan.cascades.push((fit, lists));

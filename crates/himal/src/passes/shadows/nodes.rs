@@ -2,18 +2,35 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::graph::Fallback;
+use crate::graph::{BufferAccess, Fallback};
+use crate::passes::cull::Culled;
+
+/// One sun view's depth node: `lists` (and, with `culled`, the GPU list
+/// they name) into layer `target.1` of `target.0` (cleared to the far
+/// plane first when `target.2`), seen through `ShadowPass::views[view]`.
+/// `keep`: never culled by the graph (read by a later frame).
+struct DepthNode<'s, 'a> {
+    id: &'s str,
+    view: usize,
+    target: (TextureHandle, u32, bool),
+    pipelines: &'a DepthPipelines,
+    lists: &'a DrawLists,
+    culled: Option<Culled>,
+    keep: bool,
+}
 use crate::passes::common::view_node;
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
     /// (no plan this frame). `view` is the frame constant.
+    /// `culled`: the GPU-culled lists the cascades draw (V6).
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         gbuffer: GBuffer,
         scene: &'a SceneGpu,
+        culled: Option<Culled>,
     ) -> Option<TextureHandle> {
         let plan = self.plan.as_ref()?;
         let n = self.cascade_resolution;
@@ -23,7 +40,16 @@ impl ShadowPass {
         for (i, (_, lists)) in plan.cascades.iter().enumerate() {
             let id = format!("shadows.cascade{i}");
             let target = (cascades, i as u32, true);
-            cascades = self.depth_node(graph, &id, i, target, &self.depth32, scene, lists, false);
+            let node = DepthNode {
+                id: &id,
+                view: i,
+                target,
+                pipelines: &self.depth32,
+                lists,
+                culled,
+                keep: false,
+            };
+            cascades = self.depth_node(graph, scene, node);
         }
         let cascades = (!plan.cascades.is_empty()).then_some(cascades);
         // The static slice writes the back map, outside the graph's pool.
@@ -38,16 +64,16 @@ impl ShadowPass {
             let target = (h, 0, update.clear);
             let depth16 = &self.depth16;
             // The back map is read in a later frame: keep the pass even unread.
-            let h = self.depth_node(
-                graph,
-                "shadows.static",
-                CASCADES,
+            let node = DepthNode {
+                id: "shadows.static",
+                view: CASCADES,
                 target,
-                depth16,
-                scene,
+                pipelines: depth16,
                 lists,
-                true,
-            );
+                culled: None,
+                keep: true,
+            };
+            let h = self.depth_node(graph, scene, node);
             static_written = Some((update.target, h));
         }
         let hero_map = plan.hero.as_ref().map(|(_, lists)| {
@@ -55,16 +81,16 @@ impl ShadowPass {
             let map = graph.create_texture("shadow.hero", TextureDesc::new_2d(r, r, SHADOW_FORMAT));
             let target = (map, 0, true);
             let depth32 = &self.depth32;
-            self.depth_node(
-                graph,
-                "shadows.hero",
-                CASCADES + 1,
+            let node = DepthNode {
+                id: "shadows.hero",
+                view: CASCADES + 1,
                 target,
-                depth32,
-                scene,
+                pipelines: depth32,
                 lists,
-                false,
-            )
+                culled: None,
+                keep: false,
+            };
+            self.depth_node(graph, scene, node)
         });
         let atlas_map = (!plan.projectors.is_empty()).then(|| self.add_atlas(graph, scene, plan));
         // The shown static map: this frame's slice when it just completed,
@@ -114,22 +140,23 @@ impl ShadowPass {
         written.colors.first().copied()
     }
 
-    /// One sun view's depth node: `lists` into layer `target.1` of
-    /// `target.0` (cleared to the far plane first when `target.2`), seen
-    /// through `self.views[view]`; returns the map's new version. `keep`:
-    /// never culled (read by a later frame).
-    #[allow(clippy::too_many_arguments)]
+    /// One sun view's depth node ([`DepthNode`]); returns the map's new version.
     fn depth_node<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
-        id: &str,
-        view: usize,
-        target: (TextureHandle, u32, bool),
-        pipelines: &'a DepthPipelines,
         scene: &'a SceneGpu,
-        lists: &'a DrawLists,
-        keep: bool,
+        node: DepthNode<'_, 'a>,
     ) -> TextureHandle {
+        let DepthNode {
+            id,
+            view,
+            target,
+            pipelines,
+            lists,
+            culled,
+            keep,
+        } = node;
+        let culled = culled.filter(|_| lists.gpu_view.is_some());
         let (map, layer, clear) = target;
         let ops = wgpu::Operations {
             load: if clear {
@@ -139,16 +166,23 @@ impl ShadowPass {
             },
             store: wgpu::StoreOp::Store,
         };
-        let mut node = graph
+        let node = graph
             .raster(id, &self.depth_program)
             .uniform("shadow", &self.views[view])
-            .uniform("objects", &scene.objects)
-            .depth(map, Some(layer_view_desc(layer)), ops);
+            .uniform("objects", &scene.objects);
+        let mut node = match culled {
+            Some(c) => node
+                .read_buffer("instances", c.instances, BufferAccess::StorageRead)
+                .indirect(c.args),
+            None => node.uniform("instances", &scene.instances),
+        }
+        .depth(map, Some(layer_view_desc(layer)), ops);
         if keep {
             node = node.side_effect();
         }
-        node.record(move |_, rp| {
-            pipelines.draw(rp, scene, lists);
+        node.record(move |ctx, rp| {
+            let culled = culled.as_ref().map(|c| (c, ctx.buffer(c.args)));
+            pipelines.draw_culled(rp, scene, lists, culled);
             Ok(())
         })
         .depth
@@ -183,6 +217,7 @@ impl ShadowPass {
                         &[
                             ("shadow", buffer.as_entire_binding()),
                             ("objects", scene.objects.as_entire_binding()),
+                            ("instances", scene.instances.as_entire_binding()),
                         ],
                     )?;
                     let t = p.tile;

@@ -14,6 +14,8 @@ struct SectorView {
 
 @group(0) @binding(0) var<uniform> sector: SectorView;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
+// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
+@group(0) @binding(2) var<storage, read> instances: array<u32>;
 
 struct HeightOut {
     @builtin(position) clip: vec4f,
@@ -21,8 +23,8 @@ struct HeightOut {
 }
 
 @vertex
-fn vs_main(@location(0) position: vec3f, @builtin(instance_index) object: u32) -> HeightOut {
-    let o = objects[object];
+fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> HeightOut {
+    let o = objects[instances[instance]];
     let world = object_world(o, o.model, position, vec2f(0.0), false, 0.0);
     var out: HeightOut;
     out.clip = sector.view_proj * world;

@@ -360,6 +360,7 @@ impl SkyOccPass {
                     .pipeline(Ok(self.height_pipeline.clone()))
                     .uniform("sector", &work.views[i])
                     .uniform("objects", &scene.objects)
+                    .uniform("instances", &scene.instances)
                     .color_view(target, Some(layer.clone()), clear)
                     .depth(depth, Some(layer), depth_ops)
                     .record(move |_, rp| {

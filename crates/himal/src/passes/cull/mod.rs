@@ -1,0 +1,478 @@
+//! V6 GPU culling (issue #17 item 5): per-instance frustum culling of the
+//! opaque and vegetation objects for the camera and each sun cascade in one
+//! compute node (`cull`, three dispatches, `cull.wgsl`), writing per view an
+//! instance list and one indirect draw per batch; the G-buffer and the
+//! cascades draw a whole list with one `multi_draw_indexed_indirect` per
+//! pipeline. No per-object work is left on the render thread.
+//!
+//! A batch is a run of consecutive objects of one mesh (the GPU order keeps
+//! each static mesh's objects together, `gpu_scene::gpu_order`); chunks split
+//! batches into 64 objects, one workgroup each. The layout is built once per
+//! scene; the per-frame buffers have a fixed size ([`MAX_VIEWS`] views).
+//! CPU twin: [`reference`]. Adapters without indirect draws with a first
+//! instance use the CPU path (`gpu_scene::SceneGpu::visible`, casters).
+
+pub mod reference;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+use wgpu::util::DeviceExt;
+
+use crate::gpu::pipeline::Program;
+use crate::gpu::{GpuContext, GpuError};
+use crate::gpu_scene::{Draw, SceneGpu};
+use crate::graph::{BufferDesc, BufferHandle, FrameGraph};
+
+/// Views culled per frame at most: the camera and four cascades, and room
+/// for three more (projectors, probe faces) without a new buffer size.
+pub const MAX_VIEWS: usize = 8;
+/// Objects per chunk (one workgroup; two 32-bit mask words).
+pub const CHUNK: u32 = 64;
+/// Bytes of one `DrawIndexedIndirectArgs`.
+pub const ARGS_BYTES: u64 = 20;
+
+/// Twin of `CullParams` in `cull.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct ParamsGpu {
+    views: u32,
+    chunks: u32,
+    batches: u32,
+    objects: u32,
+}
+
+/// One culling view: six planes `n . p + w >= 0` (twin of `CullView`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct CullView {
+    pub planes: [[f32; 4]; 6],
+}
+
+/// A plane that keeps everything.
+const KEEP_ALL: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
+
+impl CullView {
+    /// The clip volume of `view_proj` (x, y in [-w, w], z in [0, w]): the
+    /// camera (reverse-Z: z = 0 is the far plane). Same test as
+    /// [`crate::scene::Aabb::outside_clip`].
+    pub fn clip(view_proj: Mat4) -> Self {
+        let r = |i: usize| view_proj.row(i);
+        let planes = [
+            r(3) + r(0),
+            r(3) - r(0),
+            r(3) + r(1),
+            r(3) - r(1),
+            r(2),
+            r(3) - r(2),
+        ];
+        Self {
+            planes: planes.map(|p: Vec4| p.to_array()),
+        }
+    }
+
+    /// A sun map's volume without its near plane: casters between the sun
+    /// and the map still cast (as `ShadowFit::may_cast`).
+    pub fn caster(light_view_proj: Mat4) -> Self {
+        let mut v = Self::clip(light_view_proj);
+        v.planes[4] = KEEP_ALL;
+        v
+    }
+}
+
+/// Twin of `Bounds`: centre and half extent of an object's world box.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct BoundsGpu {
+    pub center: [f32; 4],
+    pub half_extent: [f32; 4],
+}
+
+impl BoundsGpu {
+    /// An empty box becomes a point at the origin (it draws nothing).
+    pub fn new(b: &crate::scene::Aabb) -> Self {
+        if b.is_empty() {
+            return Self::zeroed();
+        }
+        Self {
+            center: b.center().extend(1.0).to_array(),
+            half_extent: (b.extent() * 0.5).extend(0.0).to_array(),
+        }
+    }
+}
+
+/// Twin of `Chunk`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ChunkGpu {
+    pub batch: u32,
+    pub first_object: u32,
+    pub count: u32,
+    _pad: u32,
+}
+
+/// Twin of `Batch`: consecutive objects of one mesh, and the mesh's indices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct BatchGpu {
+    pub first_chunk: u32,
+    pub chunks: u32,
+    pub first_object: u32,
+    pub index_count: u32,
+    pub first_index: u32,
+    pub base_vertex: i32,
+    _pad: [u32; 2],
+}
+
+/// Which pipeline a batch draws with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum List {
+    Opaque,
+    Vegetation,
+}
+
+/// The scene's batches and chunks: opaque batches first, then vegetation.
+#[derive(Clone, Debug, Default)]
+pub struct CullLayout {
+    pub batches: Vec<BatchGpu>,
+    pub chunks: Vec<ChunkGpu>,
+    pub bounds: Vec<BoundsGpu>,
+    pub opaque_batches: u32,
+    pub vegetation_batches: u32,
+    /// Objects in the scene (the stride of the per-view instance lists).
+    pub objects: u32,
+}
+
+impl CullLayout {
+    /// Batches of `scene`'s opaque and vegetation lists (runs of one mesh
+    /// over consecutive objects), split into chunks of [`CHUNK`].
+    pub fn new(scene: &SceneGpu) -> Self {
+        let mut layout = Self {
+            bounds: scene.bounds.iter().map(BoundsGpu::new).collect(),
+            objects: scene.bounds.len() as u32,
+            ..Self::default()
+        };
+        layout.opaque_batches = layout.push_runs(&scene.draws_opaque);
+        layout.vegetation_batches = layout.push_runs(&scene.draws_vegetation);
+        layout
+    }
+
+    fn push_runs(&mut self, draws: &[Draw]) -> u32 {
+        let before = self.batches.len();
+        for (d, n) in crate::gpu_scene::runs(draws) {
+            let batch = self.batches.len() as u32;
+            let first_chunk = self.chunks.len() as u32;
+            for start in (0..n).step_by(CHUNK as usize) {
+                self.chunks.push(ChunkGpu {
+                    batch,
+                    first_object: d.object + start,
+                    count: (n - start).min(CHUNK),
+                    _pad: 0,
+                });
+            }
+            self.batches.push(BatchGpu {
+                first_chunk,
+                chunks: self.chunks.len() as u32 - first_chunk,
+                first_object: d.object,
+                index_count: d.index_count,
+                first_index: d.first_index,
+                base_vertex: d.base_vertex,
+                _pad: [0; 2],
+            });
+        }
+        (self.batches.len() - before) as u32
+    }
+
+    /// Multi-draws one culled view records: one per non-empty list.
+    pub fn draw_calls(&self) -> u32 {
+        u32::from(self.opaque_batches > 0) + u32::from(self.vegetation_batches > 0)
+    }
+
+    /// First batch and count of `list`.
+    pub fn range(&self, list: List) -> (u32, u32) {
+        match list {
+            List::Opaque => (0, self.opaque_batches),
+            List::Vegetation => (self.opaque_batches, self.vegetation_batches),
+        }
+    }
+}
+
+/// This frame's culled lists in the graph ([`CullPass::add`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Culled {
+    /// Instance -> object: the identity at `0..objects` (draws recorded on
+    /// the CPU in a culled pass), then per view `v` the lists at
+    /// `(v + 1) * objects + batch.first_object ..`.
+    pub instances: BufferHandle,
+    /// Per view: one `DrawIndexedIndirectArgs` per batch.
+    pub args: BufferHandle,
+    opaque: (u32, u32),
+    vegetation: (u32, u32),
+    batches: u32,
+}
+
+impl Culled {
+    /// Records view `view`'s draws of `list` from `args` (the graph buffer
+    /// of [`Self::args`]; pipeline and geometry bound): one multi-draw, or
+    /// none when the list is empty. Returns the calls recorded.
+    pub fn draw(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        args: &wgpu::Buffer,
+        view: u32,
+        list: List,
+    ) -> u32 {
+        let (first, count) = self.range(list);
+        if count == 0 {
+            return 0;
+        }
+        let offset = (u64::from(view) * u64::from(self.batches) + u64::from(first)) * ARGS_BYTES;
+        rp.multi_draw_indexed_indirect(args, offset, count);
+        1
+    }
+
+    fn range(&self, list: List) -> (u32, u32) {
+        match list {
+            List::Opaque => self.opaque,
+            List::Vegetation => self.vegetation,
+        }
+    }
+
+    /// Calls one view records: one per non-empty list.
+    pub fn draw_calls(&self) -> u32 {
+        u32::from(self.opaque.1 > 0) + u32::from(self.vegetation.1 > 0)
+    }
+}
+
+pub struct CullPass {
+    program: Program,
+    test: wgpu::ComputePipeline,
+    args: wgpu::ComputePipeline,
+    write: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    views: wgpu::Buffer,
+    bounds: wgpu::Buffer,
+    chunks: wgpu::Buffer,
+    batches: wgpu::Buffer,
+    /// The identity, then [`MAX_VIEWS`] lists of `objects` entries (fixed).
+    instances: wgpu::Buffer,
+    pub layout: CullLayout,
+    /// Why the GPU path cannot run here (`None`: it can).
+    unsupported: Option<String>,
+    /// Views planned this frame.
+    planned: u32,
+}
+
+impl CullPass {
+    /// Pipelines and `scene`'s layout (bounds, chunks, batches; uploaded once).
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Result<Self, GpuError> {
+        let program = Program::new(ctx, "passes/cull/cull.wgsl")?;
+        let layout = CullLayout::new(scene);
+        let storage = |label: &str, bytes: &[u8]| {
+            let mut contents = bytes.to_vec();
+            if contents.is_empty() {
+                contents.resize(16, 0);
+            }
+            ctx.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: &contents,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                })
+        };
+        let features = ctx.device.features();
+        let downlevel = ctx.adapter.get_downlevel_capabilities();
+        let max_groups = ctx.device.limits().max_compute_workgroups_per_dimension;
+        let unsupported = if !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
+            Some("the adapter has no indirect draws with a first instance".to_string())
+        } else if !downlevel
+            .flags
+            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+        {
+            Some("the adapter has no indirect execution".to_string())
+        } else if layout.chunks.len() as u64 > u64::from(max_groups) {
+            Some(format!(
+                "{} chunks exceed the adapter's {max_groups} workgroups per dimension",
+                layout.chunks.len()
+            ))
+        } else {
+            None
+        };
+        let views = vec![CullView::zeroed(); MAX_VIEWS];
+        let n = layout.objects.max(1) as usize;
+        let mut instances: Vec<u32> = (0..n as u32).collect();
+        instances.resize(n * (MAX_VIEWS + 1), 0);
+        Ok(Self {
+            test: program.compute_pipeline(ctx, "cs_test", &[])?,
+            args: program.compute_pipeline(ctx, "cs_args", &[])?,
+            write: program.compute_pipeline(ctx, "cs_write", &[])?,
+            program,
+            params: crate::gpu::pipeline::uniform_buffer(ctx, "cull.params", &ParamsGpu::default()),
+            views: storage("cull.views", bytemuck::cast_slice(&views)),
+            bounds: storage("cull.bounds", bytemuck::cast_slice(&layout.bounds)),
+            chunks: storage("cull.chunks", bytemuck::cast_slice(&layout.chunks)),
+            batches: storage("cull.batches", bytemuck::cast_slice(&layout.batches)),
+            instances: storage("cull.instances", bytemuck::cast_slice(&instances)),
+            layout,
+            unsupported,
+            planned: 0,
+        })
+    }
+
+    /// Whether the GPU path runs on this adapter and scene; else why not.
+    pub fn supported(&self) -> Result<(), &str> {
+        self.unsupported.as_deref().map_or(Ok(()), Err)
+    }
+
+    /// Uploads this frame's views (the first [`MAX_VIEWS`]); none: the
+    /// node is left out. Returns the views planned.
+    pub fn plan(&mut self, ctx: &GpuContext, views: &[CullView]) -> u32 {
+        let views = &views[..views.len().min(MAX_VIEWS)];
+        self.planned = if self.supported().is_ok() {
+            views.len() as u32
+        } else {
+            0
+        };
+        if self.planned > 0 {
+            let l = &self.layout;
+            let params = ParamsGpu {
+                views: self.planned,
+                chunks: l.chunks.len() as u32,
+                batches: l.batches.len() as u32,
+                objects: l.objects,
+            };
+            ctx.queue
+                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            ctx.queue
+                .write_buffer(&self.views, 0, bytemuck::cast_slice(views));
+        }
+        self.planned
+    }
+
+    /// Views planned this frame.
+    pub fn planned(&self) -> u32 {
+        self.planned
+    }
+
+    /// The `cull` node for the planned views; `None` when none are planned
+    /// or the scene has no opaque or vegetation objects.
+    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>) -> Option<Culled> {
+        let l = &self.layout;
+        if self.planned == 0 || l.batches.is_empty() {
+            return None;
+        }
+        // Fixed sizes (MAX_VIEWS): the graph's pool reuses one allocation.
+        let views = MAX_VIEWS as u64;
+        let masks = graph.create_buffer(
+            "cull.masks",
+            BufferDesc::new(views * l.chunks.len() as u64 * 16),
+        );
+        let args = graph.create_buffer(
+            "cull.args",
+            BufferDesc::new(views * l.batches.len() as u64 * ARGS_BYTES),
+        );
+        let instances = graph.import_buffer("cull.instances", &self.instances);
+        let (chunks, batches, n) = (l.chunks.len() as u32, l.batches.len() as u32, self.planned);
+        let (args_pipeline, write) = (&self.args, &self.write);
+        let written = graph
+            .compute("cull", &self.program)
+            .compute_pipeline(Ok(self.test.clone()))
+            .uniform("params", &self.params)
+            .uniform("views", &self.views)
+            .uniform("bounds", &self.bounds)
+            .uniform("chunks", &self.chunks)
+            .uniform("batches", &self.batches)
+            .write_buffer("masks", masks)
+            .write_buffer("args", args)
+            .write_buffer("instances", instances)
+            .dispatch_with(move |cp| {
+                cp.dispatch_workgroups(chunks, n, 1);
+                cp.set_pipeline(args_pipeline);
+                cp.dispatch_workgroups(batches.div_ceil(64), n, 1);
+                cp.set_pipeline(write);
+                cp.dispatch_workgroups(chunks, n, 1);
+            });
+        Some(Culled {
+            instances: written.buffer(instances),
+            args: written.buffer(args),
+            opaque: l.range(List::Opaque),
+            vegetation: l.range(List::Vegetation),
+            batches,
+        })
+    }
+
+    /// Runs the node for `views` alone and reads back each view's draw
+    /// arguments and instance lists (tests, statistics).
+    pub fn read_back(
+        &mut self,
+        ctx: &GpuContext,
+        views: &[CullView],
+    ) -> Result<reference::CullResult, crate::Error> {
+        let n = self.plan(ctx, views) as usize;
+        let l = &self.layout;
+        let mut result = reference::CullResult {
+            args: vec![[0; 5]; n * l.batches.len()],
+            instances: vec![Vec::new(); n * l.batches.len()],
+        };
+        let copy = |label, size: u64| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let args_size = MAX_VIEWS as u64 * l.batches.len() as u64 * ARGS_BYTES;
+        let inst_size = self.instances.size();
+        let (args_copy, inst_copy) = (
+            copy("cull.args.copy", args_size),
+            copy("cull.instances.copy", inst_size),
+        );
+        {
+            let mut graph = FrameGraph::new();
+            let Some(culled) = self.add(&mut graph) else {
+                return Ok(result);
+            };
+            let dst_args = graph.import_buffer("cull.args.copy", &args_copy);
+            let dst_inst = graph.import_buffer("cull.instances.copy", &inst_copy);
+            let mut pass = graph.add_pass("cull.read_back");
+            let src_args = pass.read_buffer(culled.args, crate::graph::BufferAccess::CopySrc);
+            let src_inst = pass.read_buffer(culled.instances, crate::graph::BufferAccess::CopySrc);
+            let dst_args = pass.write_buffer(dst_args, crate::graph::BufferAccess::CopyDst);
+            let dst_inst = pass.write_buffer(dst_inst, crate::graph::BufferAccess::CopyDst);
+            pass.execute(move |pc| {
+                let (a, i) = (pc.buffer(src_args), pc.buffer(src_inst));
+                let (da, di) = (pc.buffer(dst_args), pc.buffer(dst_inst));
+                pc.encoder.copy_buffer_to_buffer(a, 0, da, 0, args_size);
+                pc.encoder.copy_buffer_to_buffer(i, 0, di, 0, inst_size);
+                Ok(())
+            });
+            graph.mark_buffer_output(dst_args);
+            graph.mark_buffer_output(dst_inst);
+            let mut pool = crate::graph::TexturePool::new();
+            let commands = graph.compile()?.execute(&ctx.device, &mut pool, None)?;
+            ctx.queue.submit([commands]);
+        }
+        let args: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&crate::gpu::read_buffer(ctx, &args_copy)?);
+        let inst: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&crate::gpu::read_buffer(ctx, &inst_copy)?);
+        for v in 0..n {
+            for (b, batch) in l.batches.iter().enumerate() {
+                let k = v * l.batches.len() + b;
+                let a: [u32; 5] = std::array::from_fn(|j| args[k * 5 + j]);
+                let start = a[4] as usize;
+                let list = (a[4] == (v as u32 + 1) * l.objects + batch.first_object)
+                    .then(|| inst.get(start..start + a[1] as usize))
+                    .flatten()
+                    .ok_or_else(|| {
+                        GpuError::Other(format!("cull: view {v} batch {b} has arguments {a:?}"))
+                    })?;
+                result.instances[k] = list.to_vec();
+                result.args[k] = a;
+            }
+        }
+        Ok(result)
+    }
+}
