@@ -111,6 +111,14 @@ pub fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
     })
 }
 
+/// The draws of `object` in `draws` (a list in object order, as every
+/// list of [`SceneGpu`] is): a binary search, not a scan.
+pub fn draws_of(draws: &[Draw], object: u32) -> &[Draw] {
+    let start = draws.partition_point(|d| d.object < object);
+    let end = draws.partition_point(|d| d.object <= object);
+    &draws[start..end.max(start)]
+}
+
 /// Draw calls `draws` records: with instancing, one per run of
 /// consecutive objects of one mesh; without, one per draw.
 pub fn draw_calls(draws: &[Draw], instancing: bool) -> u32 {
@@ -473,5 +481,14 @@ mod tests {
         assert_eq!(draw_calls(&draws, true), 4);
         assert_eq!(draw_calls(&draws, false), 6);
         assert_eq!(draw_calls(&[], true), 0);
+        let objects = |o| {
+            draws_of(&draws, o)
+                .iter()
+                .map(|d| d.object)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(objects(4), vec![4]);
+        assert_eq!(objects(3), Vec::<u32>::new());
+        assert_eq!(objects(7), Vec::<u32>::new());
     }
 }

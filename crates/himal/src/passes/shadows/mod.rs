@@ -110,6 +110,8 @@ pub struct ShadowPass {
     pub sampler: wgpu::Sampler,
     casters: Casters,
     static_state: StaticMapState,
+    /// Every static object's draws in fill order, listed once.
+    static_all: Option<Vec<(crate::gpu_scene::Draw, bool)>>,
     /// The two static maps (shown and filling) and their edge.
     static_maps: Option<(u32, [wgpu::Texture; 2])>,
     plan: Option<FramePlan>,
@@ -221,6 +223,7 @@ impl ShadowPass {
             sampler,
             casters: Casters::from_scene(scene),
             static_state: StaticMapState::default(),
+            static_all: None,
             static_maps: None,
             plan: None,
             cascade_resolution: 0,
@@ -336,7 +339,10 @@ impl ShadowPass {
                 self.static_maps = Some((n, [make(0), make(1)]));
                 self.static_state.reset();
             }
-            let all = self.static_draws(scene);
+            if self.static_all.is_none() {
+                self.static_all = Some(static_draws(&self.casters, scene));
+            }
+            let all = self.static_all.as_deref().unwrap_or_default();
             let update = self.static_state.plan(
                 &bounds,
                 sun_direction,
@@ -345,7 +351,7 @@ impl ShadowPass {
                 s.static_draw_cap as usize,
             );
             if let Some(u) = update {
-                let slice = take_range(&all, &u.range);
+                let slice = take_range(all, &u.range);
                 stats.static_draws = slice.len() as u32;
                 write_view(CASCADES, u.fit.light_view_proj);
                 plan.static_update = Some((u, slice));
@@ -420,14 +426,12 @@ impl ShadowPass {
                 &bounds,
                 s.hero_resolution,
             );
-            let mut lists = DrawLists::default();
-            let is_hero = |d: &&crate::gpu_scene::Draw| d.object as usize == h;
-            lists
-                .opaque
-                .extend(scene.draws_opaque.iter().filter(is_hero).cloned());
-            lists
-                .vegetation
-                .extend(scene.draws_vegetation.iter().filter(is_hero).cloned());
+            let of_hero = |draws| crate::gpu_scene::draws_of(draws, h as u32).to_vec();
+            let lists = DrawLists {
+                opaque: of_hero(&scene.draws_opaque),
+                vegetation: of_hero(&scene.draws_vegetation),
+                gpu_view: None,
+            };
             write_view(CASCADES + 1, fit.light_view_proj);
             params.hero = fit.light_view_proj.to_cols_array_2d();
             params.hero_info = [1.0, fit.texel_world, fit.depth_range, 0.0];
@@ -470,29 +474,28 @@ impl ShadowPass {
         self.plan = Some(plan);
         stats
     }
+}
 
-    /// Every static object's draws, opaque first (the static map's fill order).
-    fn static_draws(&self, scene: &SceneGpu) -> Vec<(crate::gpu_scene::Draw, bool)> {
-        let keep = |d: &crate::gpu_scene::Draw| {
-            !self
-                .casters
-                .moving
-                .get(d.object as usize)
-                .copied()
-                .unwrap_or(true)
-        };
-        let opaque = scene
-            .draws_opaque
-            .iter()
-            .filter(|d| keep(d))
-            .map(|d| (d.clone(), false));
-        let veg = scene
-            .draws_vegetation
-            .iter()
-            .filter(|d| keep(d))
-            .map(|d| (d.clone(), true));
-        opaque.chain(veg).collect()
-    }
+/// Every static object's draws, opaque first (the static map's fill order).
+fn static_draws(casters: &Casters, scene: &SceneGpu) -> Vec<(crate::gpu_scene::Draw, bool)> {
+    let keep = |d: &crate::gpu_scene::Draw| {
+        !casters
+            .moving
+            .get(d.object as usize)
+            .copied()
+            .unwrap_or(true)
+    };
+    let opaque = scene
+        .draws_opaque
+        .iter()
+        .filter(|d| keep(d))
+        .map(|d| (d.clone(), false));
+    let veg = scene
+        .draws_vegetation
+        .iter()
+        .filter(|d| keep(d))
+        .map(|d| (d.clone(), true));
+    opaque.chain(veg).collect()
 }
 
 /// The draws of `all[range]` split back into opaque and vegetation lists.
