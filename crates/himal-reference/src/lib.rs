@@ -6,11 +6,14 @@
 //! so a shared mistake is unlikely.
 //!
 //! - [`ao`]: ray-traced ambient occlusion of analytic scenes (planes, spheres, boxes).
+//! - [`flip`]: the LDR-FLIP perceptual error map between two images
+//!   (Andersson et al. 2020).
 //! - [`integrate`]: Monte Carlo (importance sampling, two-strategy MIS) and
 //!   deterministic polar quadrature over the sphere.
 //! - [`microfacet`]: isotropic GGX D and Smith terms in f64, written in
 //!   theta form after Walter et al. 2007 and Heitz 2014.
 
 pub mod ao;
+pub mod flip;
 pub mod integrate;
 pub mod microfacet;
