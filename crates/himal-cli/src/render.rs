@@ -189,6 +189,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub culling: String,
+    /// E2 LOD by triangle size: an object switches to its next level where
+    /// its mean triangle covers fewer than PX pixels (later levels at
+    /// multiples of that distance); off: every object at full detail.
+    #[arg(
+        long,
+        default_value = "4",
+        value_name = "PX|off",
+        allow_hyphen_values = true
+    )]
+    pub lod_threshold: String,
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
     #[arg(
         long,
@@ -297,6 +307,13 @@ impl PostArgs {
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
+        settings.lod_threshold_px = match self.lod_threshold.as_str() {
+            "off" => 0.0,
+            v => match v.parse::<f32>() {
+                Ok(px) if px.is_finite() && (0.01..=1.0e6).contains(&px) => px,
+                _ => bail!("--lod-threshold {v}: expected pixels in 0.01..1000000, or off"),
+            },
+        };
         settings.culling = match self.culling.as_str() {
             "gpu" => himal::Culling::Gpu,
             "cpu" => himal::Culling::Cpu,

@@ -24,7 +24,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{GpuContext, GpuError};
-use crate::gpu_scene::SceneGpu;
+use crate::gpu_scene::{LodView, SceneGpu};
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform};
@@ -142,6 +142,18 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     // GPU (view 0; the cascades are views 1..) or on the CPU; runs of one
     // mesh's objects merge into instanced draws.
     let view_proj = p.proj * camera.view();
+    // E2: the levels every pass draws at, seen from the camera.
+    let lod = LodView {
+        eye: camera.position,
+        scale: crate::scene::lod::distance_scale(
+            camera.fov_y_deg,
+            settings.height,
+            settings.lod_threshold_px,
+        ),
+    };
+    if let Ok(mut l) = scene.lod.lock() {
+        *l = lod;
+    }
     let gpu_cull =
         settings.culling == Culling::Gpu && settings.instancing && passes.cull.supported().is_ok();
     let gpu_calls = gpu_cull.then(|| passes.cull.layout.draw_calls());
@@ -179,7 +191,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
                 .map(|f| CullView::caster(f.light_view_proj)),
         );
     }
-    passes.cull.plan(ctx, &views);
+    passes.cull.plan(ctx, &views, lod);
     // L2: the sectors the camera wants; jobs for the ones not resident.
     let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
     if settings.sky_occlusion_every_frame {

@@ -143,6 +143,11 @@ pub struct FrameSettings {
     /// or the CPU, or every object (`Off`: the G-buffer; cascades still
     /// cull on the CPU).
     pub culling: Culling,
+    /// E2 LOD by triangle size: an object draws its next level once its
+    /// mean triangle would cover fewer than this many pixels; 0 = LOD0
+    /// everywhere (the library's default, so references stay exact; the
+    /// CLI turns it on).
+    pub lod_threshold_px: f32,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -205,6 +210,7 @@ impl FrameSettings {
             bent_normals: true,
             instancing: true,
             culling: Culling::Gpu,
+            lod_threshold_px: 0.0,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

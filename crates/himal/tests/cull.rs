@@ -7,7 +7,7 @@
 mod common;
 
 use glam::Vec3;
-use himal::gpu_scene::SceneGpu;
+use himal::gpu_scene::{LodView, SceneGpu};
 use himal::passes::cull::{CullPass, CullView, reference};
 use himal::scene::Scene;
 
@@ -33,28 +33,47 @@ fn views(scene: &Scene) -> Vec<CullView> {
 #[test]
 fn gpu_lists_match_the_twin_and_the_cpu_path() {
     // The valley: many meshes, vegetation, moving objects (97 objects, 54
-    // chunks); the box grid: one batch of 10,000 boxes in 157 chunks.
-    compare(&Scene::demo().expect("demo scene"));
-    compare(&common::scene("instancing_boxes"));
+    // chunks); the box grid: one batch of 10,000 boxes in 157 chunks; the
+    // sphere rows with E2 levels chosen from their first camera.
+    let off = LodView::default();
+    compare(&Scene::demo().expect("demo scene"), off);
+    compare(&common::scene("instancing_boxes"), off);
+    let spheres = common::scene("lod_spheres");
+    let c = &spheres.cameras[0].camera;
+    let lod = LodView {
+        eye: c.position,
+        scale: himal::scene::lod::distance_scale(c.fov_y_deg, 720, 4.0),
+    };
+    let levels = compare(&spheres, lod);
+    assert!(levels >= 3, "the rows reach {levels} levels");
 }
 
-fn compare(scene: &Scene) {
+/// Compares the GPU's lists with the twin's; returns how many levels drew.
+fn compare(scene: &Scene, lod: LodView) -> usize {
     let ctx = common::context();
     let gpu = SceneGpu::upload(&ctx, scene).expect("upload");
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull pass");
     cull.supported()
         .expect("lavapipe draws indirectly with a first instance");
     let views = views(scene);
-    let got = cull.read_back(&ctx, &views).expect("GPU lists");
-    let want = reference::cull(&cull.layout, &views);
+    let got = cull.read_back(&ctx, &views, lod).expect("GPU lists");
+    let want = reference::cull(&cull.layout, &views, &lod);
     let layout = &cull.layout;
-    let batches = layout.batches.len();
+    let lods = himal::scene::lod::MAX_LODS;
+    let batches = layout.batches.len() * lods;
     assert!(!layout.batches.is_empty());
     assert_eq!(got.args.len(), views.len() * batches);
     // Boxes this close to a plane may fall either way in f32 (the GPU may
     // fuse multiply-adds): tolerated, counted, and none measured so far.
-    let near_plane =
-        |o: u32, v: usize| reference::margin(&layout.bounds[o as usize], &views[v]).abs() < 1e-3;
+    // The same holds for boxes at a level's transition distance.
+    let near_plane = |o: u32, v: usize| {
+        let b = &layout.bounds[o as usize];
+        let d = himal::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
+        let steps = d / (b.center[3] * lod.scale).max(1e-9);
+        reference::margin(b, &views[v]).abs() < 1e-3
+            || (lod.scale > 0.0 && (steps - steps.round()).abs() < 1e-4)
+    };
+    let mut used = [false; himal::scene::lod::MAX_LODS];
     let mut ties = 0;
     for v in 0..views.len() {
         let (mut kept, mut total) = (0, 0);
@@ -84,7 +103,10 @@ fn compare(scene: &Scene) {
                 assert!(got.instances[k].windows(2).all(|w| w[0] < w[1]));
             }
             kept += g[1];
-            total += layout.batches[b].chunks; // chunks, for the printout
+            used[b % lods] |= g[1] > 0;
+            if b % lods == 0 {
+                total += layout.batches[b / lods].chunks; // for the printout
+            }
         }
         let all = layout.objects;
         eprintln!("view {v}: {kept} of {all} objects kept ({total} chunks)");
@@ -97,6 +119,7 @@ fn compare(scene: &Scene) {
         }
     }
     eprintln!("{ties} objects on a plane within 1e-3");
+    let levels = used.iter().filter(|&&u| u).count();
     // The twin's test is the CPU path's: the eight-corner clip test.
     let cameras = scene.cameras.len().min(views.len() - 1);
     for (v, c) in scene.cameras.iter().take(cameras).enumerate() {
@@ -108,6 +131,7 @@ fn compare(scene: &Scene) {
             }
         }
     }
+    levels
 }
 
 #[test]
@@ -117,7 +141,11 @@ fn the_lists_are_deterministic() {
     let gpu = SceneGpu::upload(&ctx, &scene).expect("upload");
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull pass");
     let views = views(&scene);
-    let a = cull.read_back(&ctx, &views).expect("first");
-    let b = cull.read_back(&ctx, &views).expect("second");
+    let lod = LodView {
+        eye: scene.cameras[0].camera.position,
+        scale: 30.0,
+    };
+    let a = cull.read_back(&ctx, &views, lod).expect("first");
+    let b = cull.read_back(&ctx, &views, lod).expect("second");
     assert_eq!(a, b, "same views, same lists");
 }

@@ -81,11 +81,12 @@ pub struct VisibleLists {
 }
 
 impl VisibleLists {
-    /// Draw calls these lists record; textured draws change bind groups per
-    /// draw and are never merged.
-    pub fn draw_calls(&self, instancing: bool) -> u32 {
-        draw_calls(&self.opaque, instancing)
-            + draw_calls(&self.vegetation, instancing)
+    /// Draw calls these lists record in `scene` (its instancing and LOD
+    /// settings); textured draws change bind groups per draw and are never
+    /// merged.
+    pub fn draw_calls(&self, scene: &SceneGpu) -> u32 {
+        scene.draw_calls(&self.opaque)
+            + scene.draw_calls(&self.vegetation)
             + self.textured.len() as u32
             + self.gpu_view.map_or(0, |(_, calls)| calls)
     }
@@ -153,6 +154,44 @@ impl ObjectGpu {
     }
 }
 
+/// Twin of `Bounds` in `passes/cull/cull.wgsl`: centre (w: the object's
+/// triangle size in metres, E2) and half extent of its world box.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ObjectBounds {
+    pub center: [f32; 4],
+    pub half_extent: [f32; 4],
+}
+
+impl ObjectBounds {
+    /// An empty box becomes a point at the origin (it draws nothing).
+    pub fn new(b: &crate::scene::Aabb, size: f32) -> Self {
+        if b.is_empty() {
+            return Self::zeroed();
+        }
+        Self {
+            center: b.center().extend(size).to_array(),
+            half_extent: (b.extent() * 0.5).extend(0.0).to_array(),
+        }
+    }
+
+    pub fn center(&self) -> glam::Vec3 {
+        glam::Vec3::from_slice(&self.center[..3])
+    }
+
+    pub fn half_extent(&self) -> glam::Vec3 {
+        glam::Vec3::from_slice(&self.half_extent[..3])
+    }
+}
+
+/// E2 LOD selection of one frame: the eye and `scene::lod::distance_scale`
+/// (0: every object at LOD0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LodView {
+    pub eye: glam::Vec3,
+    pub scale: f32,
+}
+
 /// One indexed draw of one object.
 #[derive(Clone, Debug)]
 pub struct Draw {
@@ -188,6 +227,17 @@ pub struct SceneGpu {
     pub animated: Vec<(u32, Object)>,
     /// World bounds of each object over all time (GPU order): culling.
     pub bounds: Vec<crate::scene::Aabb>,
+    /// The same as centre and half extent, `w` of the centre the object's
+    /// triangle size (E2): what the GPU culls and selects LODs with, and the
+    /// CPU path's LOD selection too.
+    pub cull_bounds: Vec<ObjectBounds>,
+    /// Mesh of each object (GPU order).
+    pub object_mesh: Vec<u32>,
+    /// E2: per mesh its levels' (first index, index count), LOD0 first.
+    pub lods: Vec<Vec<(u32, u32)>>,
+    /// E2: this frame's LOD selection for draws recorded on the CPU (set by
+    /// `frame::plan`; scale 0 = LOD0 everywhere).
+    pub lod: std::sync::Mutex<LodView>,
     pub triangles: u64,
     pub bytes: u64,
     /// V6: merge runs of consecutive objects into instanced draws
@@ -213,14 +263,29 @@ impl SceneGpu {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut ranges = Vec::with_capacity(scene.meshes.len());
+        let mut lods = Vec::with_capacity(scene.meshes.len());
+        let mut mean_area = Vec::with_capacity(scene.meshes.len());
         for mesh in &scene.meshes {
             ranges.push((
                 indices.len() as u32,
                 mesh.indices.len() as u32,
                 vertices.len() as i32,
             ));
+            let mut levels = vec![(indices.len() as u32, mesh.indices.len() as u32)];
             vertices.extend_from_slice(&mesh.vertices);
             indices.extend_from_slice(&mesh.indices);
+            // E2: terrain-sized meshes are always near somewhere; no chain.
+            if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
+                for lod in crate::scene::lod::lod_chain(mesh) {
+                    levels.push((indices.len() as u32, lod.len() as u32));
+                    indices.extend_from_slice(&lod);
+                }
+            }
+            lods.push(levels);
+            mean_area.push(crate::scene::lod::geometric_mean_area(
+                &mesh.vertices,
+                &mesh.indices,
+            ));
         }
         let mut objects = Vec::with_capacity(scene.objects.len());
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
@@ -228,6 +293,8 @@ impl SceneGpu {
             (Vec::new(), Vec::new(), Vec::new());
         let mut animated = Vec::new();
         let mut bounds = Vec::with_capacity(scene.objects.len());
+        let mut cull_bounds = Vec::with_capacity(scene.objects.len());
+        let mut object_mesh = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
         for (i, object) in gpu_order(scene)
             .into_iter()
@@ -254,7 +321,14 @@ impl SceneGpu {
                     .0
                     .max_element();
             let margin = glam::Vec3::splat(sway);
-            bounds.push(crate::scene::Aabb::new(b.min - margin, b.max + margin));
+            let b = crate::scene::Aabb::new(b.min - margin, b.max + margin);
+            let size = crate::scene::lod::object_size(
+                mean_area.get(object.mesh).copied().unwrap_or(0.0),
+                &object.transform,
+            );
+            cull_bounds.push(ObjectBounds::new(&b, size));
+            bounds.push(b);
+            object_mesh.push(object.mesh as u32);
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
@@ -342,6 +416,10 @@ impl SceneGpu {
                 materials,
                 animated,
                 bounds,
+                cull_bounds,
+                object_mesh,
+                lods,
+                lod: std::sync::Mutex::new(LodView::default()),
                 triangles,
                 bytes,
                 instancing: AtomicBool::new(true),
@@ -370,10 +448,54 @@ impl SceneGpu {
         rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
     }
 
-    /// Records `draws` (geometry bound), instance index = object: with
-    /// instancing one draw per run of consecutive objects of one mesh
-    /// (V6), else one draw per object.
+    /// The level `object` draws at under `lod` (E2; 0 without a chain).
+    pub fn lod_level(&self, object: u32, lod: &LodView) -> u32 {
+        let (Some(b), Some(&mesh)) = (
+            self.cull_bounds.get(object as usize),
+            self.object_mesh.get(object as usize),
+        ) else {
+            return 0;
+        };
+        let levels = self.lods.get(mesh as usize).map_or(1, |l| l.len() as u32);
+        let d = crate::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
+        crate::scene::lod::level(d, b.center[3], lod.scale, levels)
+    }
+
+    /// `draws` at this frame's LOD (E2): each draw's index range replaced
+    /// by its object's level; borrowed unchanged when LOD is off or no
+    /// mesh has a chain.
+    pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
+        let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
+        if lod.scale <= 0.0 || self.lods.iter().all(|l| l.len() < 2) {
+            return std::borrow::Cow::Borrowed(draws);
+        }
+        let at = |d: &Draw| {
+            let level = self.lod_level(d.object, &lod) as usize;
+            let range = (self.object_mesh.get(d.object as usize))
+                .and_then(|&m| self.lods.get(m as usize)?.get(level));
+            match range {
+                Some(&(first_index, index_count)) if level > 0 => Draw {
+                    first_index,
+                    index_count,
+                    ..d.clone()
+                },
+                _ => d.clone(),
+            }
+        };
+        std::borrow::Cow::Owned(draws.iter().map(at).collect())
+    }
+
+    /// Draw calls [`Self::draw_list`] records for `draws`.
+    pub fn draw_calls(&self, draws: &[Draw]) -> u32 {
+        draw_calls(&self.at_lod(draws), self.instancing())
+    }
+
+    /// Records `draws` (geometry bound) at this frame's LOD: with
+    /// instancing one draw per run of consecutive objects of one mesh and
+    /// level (V6), else one draw per object.
     pub fn draw_list(&self, rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
+        let draws = self.at_lod(draws);
+        let draws = &draws[..];
         if self.instancing.load(Ordering::Relaxed) {
             for (d, n) in runs(draws) {
                 let indices = d.first_index..d.first_index + d.index_count;

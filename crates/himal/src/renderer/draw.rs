@@ -410,8 +410,7 @@ impl Renderer {
                 record_ms,
                 submit_ms,
             },
-            gbuffer_draws: (self.res.passes.gbuffer.visible)
-                .draw_calls(self.res.scene.instancing()),
+            gbuffer_draws: (self.res.passes.gbuffer.visible).draw_calls(&self.res.scene),
             culling: match settings.culling {
                 Culling::Gpu if self.res.passes.cull.planned() == 0 => Culling::Cpu,
                 c => c,

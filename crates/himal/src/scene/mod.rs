@@ -116,6 +116,7 @@ mod file;
 pub mod gltf;
 pub mod heightfield;
 mod lights;
+pub mod lod;
 mod motion;
 pub mod noise;
 mod place;

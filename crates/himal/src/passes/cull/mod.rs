@@ -1,9 +1,11 @@
 //! V6 GPU culling (issue #17 item 5): per-instance frustum culling of the
 //! opaque and vegetation objects for the camera and each sun cascade in one
-//! compute node (`cull`, three dispatches, `cull.wgsl`), writing per view an
-//! instance list and one indirect draw per batch; the G-buffer and the
-//! cascades draw a whole list with one `multi_draw_indexed_indirect` per
-//! pipeline. No per-object work is left on the render thread.
+//! compute node (`cull`, three dispatches, `cull.wgsl`), with each kept
+//! object's E2 level chosen by its triangle size and distance, writing per
+//! view an instance list and one indirect draw per batch and level; the
+//! G-buffer and the cascades draw a whole list with one
+//! `multi_draw_indexed_indirect` per pipeline. No per-object work is left
+//! on the render thread.
 //!
 //! A batch is a run of consecutive objects of one mesh (the GPU order keeps
 //! each static mesh's objects together, `gpu_scene::gpu_order`); chunks split
@@ -20,8 +22,9 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
-use crate::gpu_scene::{Draw, SceneGpu};
+use crate::gpu_scene::{Draw, LodView, ObjectBounds, SceneGpu};
 use crate::graph::{BufferDesc, BufferHandle, FrameGraph};
+use crate::scene::lod::MAX_LODS;
 
 /// Views culled per frame at most: the camera and four cascades, and room
 /// for three more (projectors, probe faces) without a new buffer size.
@@ -30,6 +33,8 @@ pub const MAX_VIEWS: usize = 8;
 pub const CHUNK: u32 = 64;
 /// Bytes of one `DrawIndexedIndirectArgs`.
 pub const ARGS_BYTES: u64 = 20;
+/// Bytes of one `ChunkMask` (per view and chunk).
+const MASK_BYTES: u64 = 64;
 
 /// Twin of `CullParams` in `cull.wgsl`.
 #[repr(C)]
@@ -39,6 +44,8 @@ struct ParamsGpu {
     chunks: u32,
     batches: u32,
     objects: u32,
+    /// xyz the eye, w the E2 distance scale (0: LOD0).
+    eye: [f32; 4],
 }
 
 /// One culling view: six planes `n . p + w >= 0` (twin of `CullView`).
@@ -79,27 +86,6 @@ impl CullView {
     }
 }
 
-/// Twin of `Bounds`: centre and half extent of an object's world box.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct BoundsGpu {
-    pub center: [f32; 4],
-    pub half_extent: [f32; 4],
-}
-
-impl BoundsGpu {
-    /// An empty box becomes a point at the origin (it draws nothing).
-    pub fn new(b: &crate::scene::Aabb) -> Self {
-        if b.is_empty() {
-            return Self::zeroed();
-        }
-        Self {
-            center: b.center().extend(1.0).to_array(),
-            half_extent: (b.extent() * 0.5).extend(0.0).to_array(),
-        }
-    }
-}
-
 /// Twin of `Chunk`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -110,17 +96,19 @@ pub struct ChunkGpu {
     _pad: u32,
 }
 
-/// Twin of `Batch`: consecutive objects of one mesh, and the mesh's indices.
+/// Twin of `Batch`: consecutive objects of one mesh, and its levels'
+/// index ranges (E2; unused levels are empty).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BatchGpu {
     pub first_chunk: u32,
     pub chunks: u32,
     pub first_object: u32,
-    pub index_count: u32,
-    pub first_index: u32,
+    pub lods: u32,
     pub base_vertex: i32,
-    _pad: [u32; 2],
+    _pad: [u32; 3],
+    /// Per level: first index, index count.
+    pub lod: [[u32; 2]; MAX_LODS],
 }
 
 /// Which pipeline a batch draws with.
@@ -135,7 +123,7 @@ pub enum List {
 pub struct CullLayout {
     pub batches: Vec<BatchGpu>,
     pub chunks: Vec<ChunkGpu>,
-    pub bounds: Vec<BoundsGpu>,
+    pub bounds: Vec<ObjectBounds>,
     pub opaque_batches: u32,
     pub vegetation_batches: u32,
     /// Objects in the scene (the stride of the per-view instance lists).
@@ -147,16 +135,16 @@ impl CullLayout {
     /// over consecutive objects), split into chunks of [`CHUNK`].
     pub fn new(scene: &SceneGpu) -> Self {
         let mut layout = Self {
-            bounds: scene.bounds.iter().map(BoundsGpu::new).collect(),
-            objects: scene.bounds.len() as u32,
+            bounds: scene.cull_bounds.clone(),
+            objects: scene.cull_bounds.len() as u32,
             ..Self::default()
         };
-        layout.opaque_batches = layout.push_runs(&scene.draws_opaque);
-        layout.vegetation_batches = layout.push_runs(&scene.draws_vegetation);
+        layout.opaque_batches = layout.push_runs(scene, &scene.draws_opaque);
+        layout.vegetation_batches = layout.push_runs(scene, &scene.draws_vegetation);
         layout
     }
 
-    fn push_runs(&mut self, draws: &[Draw]) -> u32 {
+    fn push_runs(&mut self, scene: &SceneGpu, draws: &[Draw]) -> u32 {
         let before = self.batches.len();
         for (d, n) in crate::gpu_scene::runs(draws) {
             let batch = self.batches.len() as u32;
@@ -169,14 +157,26 @@ impl CullLayout {
                     _pad: 0,
                 });
             }
+            // The mesh's levels (E2); LOD0 is the draw's own range.
+            let mesh = scene.object_mesh.get(d.object as usize);
+            let levels = mesh.and_then(|&m| scene.lods.get(m as usize));
+            let mut lod = [[0; 2]; MAX_LODS];
+            lod[0] = [d.first_index, d.index_count];
+            let mut lods = 1;
+            for (l, &(first, count)) in levels.into_iter().flatten().enumerate().skip(1) {
+                if l < MAX_LODS {
+                    lod[l] = [first, count];
+                    lods = l as u32 + 1;
+                }
+            }
             self.batches.push(BatchGpu {
                 first_chunk,
                 chunks: self.chunks.len() as u32 - first_chunk,
                 first_object: d.object,
-                index_count: d.index_count,
-                first_index: d.first_index,
+                lods,
                 base_vertex: d.base_vertex,
-                _pad: [0; 2],
+                _pad: [0; 3],
+                lod,
             });
         }
         (self.batches.len() - before) as u32
@@ -187,7 +187,7 @@ impl CullLayout {
         u32::from(self.opaque_batches > 0) + u32::from(self.vegetation_batches > 0)
     }
 
-    /// First batch and count of `list`.
+    /// First batch and count of `list` (each batch has [`MAX_LODS`] draws).
     pub fn range(&self, list: List) -> (u32, u32) {
         match list {
             List::Opaque => (0, self.opaque_batches),
@@ -203,7 +203,7 @@ pub struct Culled {
     /// the CPU in a culled pass), then per view `v` the lists at
     /// `(v + 1) * objects + batch.first_object ..`.
     pub instances: BufferHandle,
-    /// Per view: one `DrawIndexedIndirectArgs` per batch.
+    /// Per view: one `DrawIndexedIndirectArgs` per batch and level.
     pub args: BufferHandle,
     opaque: (u32, u32),
     vegetation: (u32, u32),
@@ -225,8 +225,9 @@ impl Culled {
         if count == 0 {
             return 0;
         }
-        let offset = (u64::from(view) * u64::from(self.batches) + u64::from(first)) * ARGS_BYTES;
-        rp.multi_draw_indexed_indirect(args, offset, count);
+        let lods = MAX_LODS as u64;
+        let offset = (u64::from(view) * u64::from(self.batches) + u64::from(first)) * lods;
+        rp.multi_draw_indexed_indirect(args, offset * ARGS_BYTES, count * MAX_LODS as u32);
         1
     }
 
@@ -325,9 +326,11 @@ impl CullPass {
         self.unsupported.as_deref().map_or(Ok(()), Err)
     }
 
-    /// Uploads this frame's views (the first [`MAX_VIEWS`]); none: the
-    /// node is left out. Returns the views planned.
-    pub fn plan(&mut self, ctx: &GpuContext, views: &[CullView]) -> u32 {
+    /// Uploads this frame's views (the first [`MAX_VIEWS`]) and the LOD
+    /// selection (every view draws at the levels seen from `lod.eye`, so
+    /// shadows match the G-buffer); no views: the node is left out.
+    /// Returns the views planned.
+    pub fn plan(&mut self, ctx: &GpuContext, views: &[CullView], lod: LodView) -> u32 {
         let views = &views[..views.len().min(MAX_VIEWS)];
         self.planned = if self.supported().is_ok() {
             views.len() as u32
@@ -341,6 +344,7 @@ impl CullPass {
                 chunks: l.chunks.len() as u32,
                 batches: l.batches.len() as u32,
                 objects: l.objects,
+                eye: lod.eye.extend(lod.scale).to_array(),
             };
             ctx.queue
                 .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -366,11 +370,11 @@ impl CullPass {
         let views = MAX_VIEWS as u64;
         let masks = graph.create_buffer(
             "cull.masks",
-            BufferDesc::new(views * l.chunks.len() as u64 * 16),
+            BufferDesc::new(views * l.chunks.len() as u64 * MASK_BYTES),
         );
         let args = graph.create_buffer(
             "cull.args",
-            BufferDesc::new(views * l.batches.len() as u64 * ARGS_BYTES),
+            BufferDesc::new(views * l.batches.len() as u64 * MAX_LODS as u64 * ARGS_BYTES),
         );
         let instances = graph.import_buffer("cull.instances", &self.instances);
         let (chunks, batches, n) = (l.chunks.len() as u32, l.batches.len() as u32, self.planned);
@@ -408,12 +412,14 @@ impl CullPass {
         &mut self,
         ctx: &GpuContext,
         views: &[CullView],
+        lod: LodView,
     ) -> Result<reference::CullResult, crate::Error> {
-        let n = self.plan(ctx, views) as usize;
+        let n = self.plan(ctx, views, lod) as usize;
         let l = &self.layout;
+        let draws = l.batches.len() * MAX_LODS;
         let mut result = reference::CullResult {
-            args: vec![[0; 5]; n * l.batches.len()],
-            instances: vec![Vec::new(); n * l.batches.len()],
+            args: vec![[0; 5]; n * draws],
+            instances: vec![Vec::new(); n * draws],
         };
         let copy = |label, size: u64| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -423,7 +429,7 @@ impl CullPass {
                 mapped_at_creation: false,
             })
         };
-        let args_size = MAX_VIEWS as u64 * l.batches.len() as u64 * ARGS_BYTES;
+        let args_size = (MAX_VIEWS * draws) as u64 * ARGS_BYTES;
         let inst_size = self.instances.size();
         let (args_copy, inst_copy) = (
             copy("cull.args.copy", args_size),
@@ -460,17 +466,22 @@ impl CullPass {
             bytemuck::pod_collect_to_vec(&crate::gpu::read_buffer(ctx, &inst_copy)?);
         for v in 0..n {
             for (b, batch) in l.batches.iter().enumerate() {
-                let k = v * l.batches.len() + b;
-                let a: [u32; 5] = std::array::from_fn(|j| args[k * 5 + j]);
-                let start = a[4] as usize;
-                let list = (a[4] == (v as u32 + 1) * l.objects + batch.first_object)
-                    .then(|| inst.get(start..start + a[1] as usize))
-                    .flatten()
-                    .ok_or_else(|| {
-                        GpuError::Other(format!("cull: view {v} batch {b} has arguments {a:?}"))
-                    })?;
-                result.instances[k] = list.to_vec();
-                result.args[k] = a;
+                for lod in 0..MAX_LODS {
+                    let k = (v * l.batches.len() + b) * MAX_LODS + lod;
+                    let a: [u32; 5] = std::array::from_fn(|j| args[k * 5 + j]);
+                    let start = a[4] as usize;
+                    let region = (v as u32 + 1) * l.objects + batch.first_object;
+                    let list = (a[4] >= region)
+                        .then(|| inst.get(start..start + a[1] as usize))
+                        .flatten()
+                        .ok_or_else(|| {
+                            GpuError::Other(format!(
+                                "cull: view {v} batch {b} level {lod} has arguments {a:?}"
+                            ))
+                        })?;
+                    result.instances[k] = list.to_vec();
+                    result.args[k] = a;
+                }
             }
         }
         Ok(result)

@@ -1,11 +1,13 @@
 //! CPU twin of `cull.wgsl`: the same plane test, offsets and ranks, in the
 //! same order, so the GPU's lists can be compared entry by entry.
 
-use super::{BoundsGpu, CullLayout, CullView};
+use super::{CullLayout, CullView};
+use crate::gpu_scene::{LodView, ObjectBounds as BoundsGpu};
+use crate::scene::lod::{MAX_LODS, distance_to_box, level};
 
-/// Per (view, batch), view-major: the indirect arguments (index count,
-/// instance count, first index, base vertex, first instance) and the
-/// instance list (objects, in order).
+/// Per (view, batch, level), view-major: the indirect arguments (index
+/// count, instance count, first index, base vertex, first instance) and
+/// the instance list (objects, in order).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CullResult {
     pub args: Vec<[u32; 5]>,
@@ -31,30 +33,43 @@ pub fn outside(b: &BoundsGpu, view: &CullView) -> bool {
     margin(b, view) < 0.0
 }
 
-/// The culled lists of `views` over `layout`.
-pub fn cull(layout: &CullLayout, views: &[CullView]) -> CullResult {
+/// The level the box draws at under `lod` with `levels` levels (as
+/// `lod_level` in `cull.wgsl`).
+pub fn lod_of(b: &BoundsGpu, levels: u32, lod: &LodView) -> u32 {
+    let d = distance_to_box(lod.eye, b.center(), b.half_extent());
+    level(d, b.center[3], lod.scale, levels)
+}
+
+/// The culled lists of `views` over `layout`, levels chosen from `lod`.
+pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResult {
     let mut result = CullResult::default();
     for (v, view) in views.iter().enumerate() {
         for batch in &layout.batches {
             let chunks = &layout.chunks[batch.first_chunk as usize..][..batch.chunks as usize];
-            let list: Vec<u32> = chunks
+            let mut lists: [Vec<u32>; MAX_LODS] = Default::default();
+            for o in chunks
                 .iter()
                 .flat_map(|c| c.first_object..c.first_object + c.count)
-                .filter(|&o| {
-                    layout
-                        .bounds
-                        .get(o as usize)
-                        .is_some_and(|b| !outside(b, view))
-                })
-                .collect();
-            result.args.push([
-                batch.index_count,
-                list.len() as u32,
-                batch.first_index,
-                batch.base_vertex as u32,
-                (v as u32 + 1) * layout.objects + batch.first_object,
-            ]);
-            result.instances.push(list);
+            {
+                let Some(b) = layout.bounds.get(o as usize) else {
+                    continue;
+                };
+                if !outside(b, view) {
+                    lists[lod_of(b, batch.lods, lod) as usize].push(o);
+                }
+            }
+            let mut base = 0;
+            for (l, list) in lists.into_iter().enumerate() {
+                result.args.push([
+                    batch.lod[l][1],
+                    list.len() as u32,
+                    batch.lod[l][0],
+                    batch.base_vertex as u32,
+                    (v as u32 + 1) * layout.objects + batch.first_object + base,
+                ]);
+                base += list.len() as u32;
+                result.instances.push(list);
+            }
         }
     }
     result

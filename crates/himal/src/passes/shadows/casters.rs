@@ -1,7 +1,7 @@
 //! Shadow casters on the CPU: per-object bounds, which objects are static
 //! (S2) and the per-map draw lists culled against a sun view.
 
-use crate::gpu_scene::{Draw, cull};
+use crate::gpu_scene::{Draw, SceneGpu, cull};
 use crate::scene::{Aabb, Object, Scene};
 
 use super::cascades::ShadowFit;
@@ -26,10 +26,10 @@ impl DrawLists {
         self.len() == 0
     }
 
-    /// Draw calls these lists record ([`crate::gpu_scene::draw_calls`]).
-    pub fn draw_calls(&self, instancing: bool) -> u32 {
-        crate::gpu_scene::draw_calls(&self.opaque, instancing)
-            + crate::gpu_scene::draw_calls(&self.vegetation, instancing)
+    /// Draw calls these lists record in `scene` ([`SceneGpu::draw_calls`]).
+    pub fn draw_calls(&self, scene: &SceneGpu) -> u32 {
+        scene.draw_calls(&self.opaque)
+            + scene.draw_calls(&self.vegetation)
             + self.gpu_view.map_or(0, |(_, calls)| calls)
     }
 

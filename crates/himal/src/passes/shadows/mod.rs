@@ -453,21 +453,20 @@ impl ShadowPass {
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
 
-        let inst = scene.instancing();
         stats.draws = plan
             .cascades
             .iter()
-            .map(|(_, l)| l.draw_calls(inst))
+            .map(|(_, l)| l.draw_calls(scene))
             .sum::<u32>()
             + plan
                 .static_update
                 .as_ref()
-                .map_or(0, |(_, l)| l.draw_calls(inst))
-            + plan.hero.as_ref().map_or(0, |(_, l)| l.draw_calls(inst))
+                .map_or(0, |(_, l)| l.draw_calls(scene))
+            + plan.hero.as_ref().map_or(0, |(_, l)| l.draw_calls(scene))
             + plan
                 .projectors
                 .iter()
-                .map(|p| p.draws.draw_calls(inst))
+                .map(|p| p.draws.draw_calls(scene))
                 .sum::<u32>();
         self.cascade_resolution = cascade_resolution;
         self.hero_resolution = s.hero_resolution;

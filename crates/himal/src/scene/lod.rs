@@ -1,0 +1,216 @@
+//! E2 LOD by triangle size, the offline half (Ryse, SIGGRAPH 2014,
+//! `seeds/004_...`): each mesh's geometric-mean triangle area and its
+//! chain of simplified index lists (meshoptimizer's edge-collapse
+//! simplifier over the mesh's own vertices). The selection (transition
+//! distances from the area, the view and `--lod-threshold`) runs per
+//! instance in `passes/cull` and on the CPU path; math and figures in
+//! `docs/techniques/E2.md`.
+
+use super::{Mesh, Vertex};
+
+/// Levels per mesh at most, LOD0 (the mesh) included.
+pub const MAX_LODS: usize = 4;
+/// Meshes with fewer triangles keep one level: halving them saves nothing
+/// a draw call does not cost anyway.
+pub const MIN_TRIANGLES: usize = 96;
+/// A level is kept only if it has at most this fraction of the previous
+/// level's triangles (the simplifier stops early on locked topology).
+const MIN_REDUCTION: f32 = 0.8;
+
+/// Objects whose meshes extend further than this (m) are terrain-sized:
+/// they are always near the camera somewhere, so they get no chain.
+pub const MAX_EXTENT: f32 = 256.0;
+
+/// `f / sqrt(T)`: the first transition distance per metre of an object's
+/// triangle size. A triangle of world area `A` facing the camera at
+/// distance `d` covers `A (f / d)^2` pixels, `f = height / (2 tan(fov/2))`
+/// the focal length in pixels; it falls below `threshold_px` (T, pixels)
+/// at `d_1 = f sqrt(A / T)`. Zero when LOD is off.
+pub fn distance_scale(fov_y_deg: f32, height_px: u32, threshold_px: f32) -> f32 {
+    if threshold_px <= 0.0 || !threshold_px.is_finite() {
+        return 0.0;
+    }
+    let f = height_px as f32 / (2.0 * (0.5 * fov_y_deg.to_radians()).tan());
+    f / threshold_px.sqrt()
+}
+
+/// The level an object draws at: `floor(d / d_1)` with `d_1 = size * scale`
+/// (`size` the square root of its world geometric-mean triangle area),
+/// later levels at multiples of `d_1` as the talk does, clamped to its
+/// `levels`. The same expression as `lod_level` in `passes/cull/cull.wgsl`.
+pub fn level(distance: f32, size: f32, scale: f32, levels: u32) -> u32 {
+    let d1 = size * scale;
+    if levels <= 1 || d1 <= 0.0 {
+        return 0;
+    }
+    let l = (distance / d1).floor();
+    if l >= (levels - 1) as f32 {
+        levels - 1
+    } else {
+        l.max(0.0) as u32
+    }
+}
+
+/// An object's triangle size (m): the square root of its mesh's
+/// geometric-mean area scaled by the transform (`|det|^(2/3)`).
+pub fn object_size(mean_area: f32, transform: &glam::Mat4) -> f32 {
+    let det = glam::Mat3::from_mat4(*transform).determinant().abs();
+    (mean_area * det.powf(2.0 / 3.0)).sqrt()
+}
+
+/// Distance from `p` to the box (0 inside).
+pub fn distance_to_box(p: glam::Vec3, center: glam::Vec3, half_extent: glam::Vec3) -> f32 {
+    ((p - center).abs() - half_extent)
+        .max(glam::Vec3::ZERO)
+        .length()
+}
+
+/// Geometric mean (log-average) of the mesh's non-degenerate triangle
+/// areas in its own units squared: `exp(mean ln A_i)`. Many tiny triangles
+/// pull it down, a few large ones barely raise it (the talk's choice).
+/// Zero for a mesh without area.
+pub fn geometric_mean_area(vertices: &[Vertex], indices: &[u32]) -> f32 {
+    let p = |i: u32| {
+        vertices
+            .get(i as usize)
+            .map(|v| glam::Vec3::from(v.position))
+    };
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for t in indices.chunks_exact(3) {
+        let (Some(a), Some(b), Some(c)) = (p(t[0]), p(t[1]), p(t[2])) else {
+            continue;
+        };
+        let area = 0.5 * (b - a).cross(c - a).length();
+        if area > 1e-12 {
+            sum += f64::from(area).ln();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        (sum / n as f64).exp() as f32
+    }
+}
+
+/// The mesh's LODs after LOD0: index lists over the same vertices, each
+/// about a quarter of the previous level's triangles (its mean triangle
+/// about four times larger: at the transition distances `k d_1` level `k`'s
+/// triangles stay above the threshold up to `2 k d_1`), with the
+/// simplifier's error bound growing per level (2 %, 4 %, 8 % of the mesh's
+/// extent). Empty for small meshes or ones the simplifier cannot reduce.
+pub fn lod_chain(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let mut chain: Vec<Vec<u32>> = Vec::new();
+    if mesh.triangle_count() < MIN_TRIANGLES || mesh.vertices.is_empty() {
+        return chain;
+    }
+    let bytes: &[u8] = bytemuck::cast_slice(&mesh.vertices);
+    let Ok(adapter) = meshopt::VertexDataAdapter::new(bytes, std::mem::size_of::<Vertex>(), 0)
+    else {
+        return chain;
+    };
+    for level in 1..MAX_LODS {
+        let previous = chain.last().unwrap_or(&mesh.indices);
+        let target = (previous.len() / 12) * 3;
+        let error = 0.02 * (1u32 << (level - 1)) as f32;
+        let indices = meshopt::simplify(
+            previous,
+            &adapter,
+            target,
+            error,
+            meshopt::SimplifyOptions::empty(),
+            None,
+        );
+        let reduced = indices.len() as f32 <= MIN_REDUCTION * previous.len() as f32;
+        if indices.len() < 3 || !reduced {
+            break;
+        }
+        chain.push(indices);
+    }
+    chain
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::primitives;
+
+    fn sphere(segments: u32, rings: u32) -> Mesh {
+        let m = crate::scene::MaterialDesc::default();
+        primitives::uv_sphere("s".into(), 1.0, segments, rings, &m)
+    }
+
+    #[test]
+    fn geometric_mean_of_equal_triangles_is_their_area() {
+        let v = |x: f32, y: f32| Vertex {
+            position: [x, y, 0.0],
+            ..bytemuck::Zeroable::zeroed()
+        };
+        let vertices = [v(0.0, 0.0), v(2.0, 0.0), v(0.0, 2.0), v(2.0, 2.0)];
+        // Two right triangles of area 2, and a degenerate one ignored.
+        let a = geometric_mean_area(&vertices, &[0, 1, 2, 1, 3, 2, 0, 0, 1]);
+        assert!((a - 2.0).abs() < 1e-5, "{a}");
+        // Areas 2 and 8: geometric mean 4 (the arithmetic mean would be 5).
+        let big = [v(0.0, 0.0), v(4.0, 0.0), v(0.0, 4.0)];
+        let all = [&vertices[..3], &big[..]].concat();
+        let a = geometric_mean_area(&all, &[0, 1, 2, 3, 4, 5]);
+        assert!((a - 4.0).abs() < 1e-4, "{a}");
+        assert_eq!(geometric_mean_area(&vertices, &[]), 0.0);
+    }
+
+    #[test]
+    fn levels_step_at_multiples_of_the_first_distance() {
+        // f = 100 / (2 tan 45) = 50 px; T = 4 px: scale 25 per metre of size.
+        let k = distance_scale(90.0, 100, 4.0);
+        assert!((k - 25.0).abs() < 1e-4, "{k}");
+        // Size 0.1 m: d_1 = 2.5 m; a 0.01 m^2 triangle at 2.5 m covers
+        // 0.01 * (50 / 2.5)^2 = 4 px, the threshold.
+        let at = |d| level(d, 0.1, k, 4);
+        assert_eq!(
+            [at(0.0), at(2.4), at(2.6), at(5.1), at(7.6), at(1e6)],
+            [0, 0, 1, 2, 3, 3]
+        );
+        assert_eq!(level(100.0, 0.1, 0.0, 4), 0, "LOD off");
+        assert_eq!(level(100.0, 0.1, k, 1), 0, "one level");
+        assert_eq!(distance_scale(90.0, 100, 0.0), 0.0);
+        // A uniform scale s multiplies the size by s.
+        let m = glam::Mat4::from_scale(glam::Vec3::splat(3.0));
+        assert!((object_size(4.0, &m) - 6.0).abs() < 1e-4);
+        let c = glam::Vec3::ZERO;
+        assert_eq!(
+            distance_to_box(glam::Vec3::new(0.5, 0.0, 0.0), c, glam::Vec3::ONE),
+            0.0
+        );
+        assert!(
+            (distance_to_box(glam::Vec3::new(4.0, 5.0, 0.0), c, glam::Vec3::ONE) - 5.0).abs()
+                < 1e-5
+        );
+    }
+
+    #[test]
+    fn chains_quarter_the_triangles_and_keep_the_shape() {
+        let mesh = sphere(64, 32);
+        let chain = lod_chain(&mesh);
+        assert!(chain.len() >= 2, "{} levels", chain.len());
+        let mut previous = mesh.indices.len();
+        for (l, lod) in chain.iter().enumerate() {
+            assert_eq!(lod.len() % 3, 0);
+            assert!(lod.iter().all(|&i| (i as usize) < mesh.vertices.len()));
+            assert!(
+                lod.len() as f32 <= MIN_REDUCTION * previous as f32,
+                "level {}",
+                l + 1
+            );
+            // Every kept vertex is on the unit sphere: the shape stays.
+            for &i in lod {
+                let r = glam::Vec3::from(mesh.vertices[i as usize].position).length();
+                assert!((r - 1.0).abs() < 1e-4);
+            }
+            previous = lod.len();
+        }
+        // A box has too few triangles for a chain.
+        let m = crate::scene::MaterialDesc::default();
+        let cube = primitives::cuboid("b".into(), glam::Vec3::ONE, &m);
+        assert!(lod_chain(&cube).is_empty());
+    }
+}
