@@ -150,15 +150,17 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
             settings.height,
             settings.lod_threshold_px,
         ),
+        band: settings.lod_band,
     };
     if let Ok(mut l) = scene.lod.lock() {
         *l = lod;
     }
     let gpu_cull =
         settings.culling == Culling::Gpu && settings.instancing && passes.cull.supported().is_ok();
-    let gpu_calls = gpu_cull.then(|| passes.cull.layout.draw_calls());
+    let layout = &passes.cull.layout;
+    let gpu_calls = gpu_cull.then(|| (layout.draw_calls(true), layout.draw_calls(false)));
     let cull_view = (settings.culling != Culling::Off).then_some(view_proj);
-    passes.gbuffer.visible = scene.visible(cull_view, gpu_calls.map(|c| (0, c)));
+    passes.gbuffer.visible = scene.visible(cull_view, gpu_calls.map(|(g, _)| (0, g)));
     // B1: reconstruction from depth and reprojection with this jitter.
     let ao = AoUniform::new(&settings.ao, p.proj, camera.near, size);
     passes
@@ -179,7 +181,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         settings.shadow_resolution,
         Some(&settings.shadows),
         settings.time_s,
-        gpu_calls,
+        gpu_calls.map(|(_, shadow)| shadow),
     );
     let mut views = Vec::new();
     if gpu_cull {

@@ -148,6 +148,10 @@ pub struct FrameSettings {
     /// everywhere (the library's default, so references stay exact; the
     /// CLI turns it on).
     pub lod_threshold_px: f32,
+    /// E2 transitions: over this fraction of the first transition distance
+    /// before each switch, the GPU path draws both levels with
+    /// complementary screen-door masks (0: levels pop).
+    pub lod_band: f32,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -211,6 +215,7 @@ impl FrameSettings {
             instancing: true,
             culling: Culling::Gpu,
             lod_threshold_px: 0.0,
+            lod_band: 0.2,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -43,13 +43,19 @@ fn gpu_lists_match_the_twin_and_the_cpu_path() {
     let lod = LodView {
         eye: c.position,
         scale: himal::scene::lod::distance_scale(c.fov_y_deg, 720, 4.0),
+        band: 0.2,
     };
-    let levels = compare(&spheres, lod);
+    let (levels, fading) = compare(&spheres, lod);
     assert!(levels >= 3, "the rows reach {levels} levels");
+    assert!(fading > 0, "no sphere is in a transition band");
+    // Without a band nothing fades.
+    let (_, fading) = compare(&spheres, LodView { band: 0.0, ..lod });
+    assert_eq!(fading, 0);
 }
 
-/// Compares the GPU's lists with the twin's; returns how many levels drew.
-fn compare(scene: &Scene, lod: LodView) -> usize {
+/// Compares the GPU's lists with the twin's; returns how many levels drew
+/// and how many entries fade.
+fn compare(scene: &Scene, lod: LodView) -> (usize, u32) {
     let ctx = common::context();
     let gpu = SceneGpu::upload(&ctx, scene).expect("upload");
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull pass");
@@ -60,7 +66,8 @@ fn compare(scene: &Scene, lod: LodView) -> usize {
     let want = reference::cull(&cull.layout, &views, &lod);
     let layout = &cull.layout;
     let lods = himal::scene::lod::MAX_LODS;
-    let batches = layout.batches.len() * lods;
+    let lists = himal::passes::cull::LISTS;
+    let batches = layout.batches.len() * lists;
     assert!(!layout.batches.is_empty());
     assert_eq!(got.args.len(), views.len() * batches);
     // Boxes this close to a plane may fall either way in f32 (the GPU may
@@ -70,9 +77,14 @@ fn compare(scene: &Scene, lod: LodView) -> usize {
         let b = &layout.bounds[o as usize];
         let d = himal::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
         let steps = d / (b.center[3] * lod.scale).max(1e-9);
+        let frac = steps - steps.floor();
+        // Level switches, band starts and fade-step edges.
+        let edge = |x: f32| (x - x.round()).abs() < 1e-4;
+        let in_band = (frac - (1.0 - lod.band)) / lod.band.max(1e-9);
         reference::margin(b, &views[v]).abs() < 1e-3
-            || (lod.scale > 0.0 && (steps - steps.round()).abs() < 1e-4)
+            || (lod.scale > 0.0 && (edge(steps) || edge(steps - lod.band) || edge(in_band * 127.0)))
     };
+    let mut fading = 0;
     let mut used = [false; himal::scene::lod::MAX_LODS];
     let mut ties = 0;
     for v in 0..views.len() {
@@ -95,22 +107,40 @@ fn compare(scene: &Scene, lod: LodView) -> usize {
                     got.instances[k].iter().copied().collect(),
                     want.instances[k].iter().copied().collect(),
                 );
-                for &o in a.symmetric_difference(&c) {
-                    assert!(near_plane(o, v), "view {v}: object {o} differs");
+                for &e in a.symmetric_difference(&c) {
+                    let o = e & 0xff_ffff;
+                    assert!(near_plane(o, v), "view {v}: entry {e:#x} differs");
                     ties += 1;
                 }
-                // Kept objects stay in object order (draw order = CPU path).
-                assert!(got.instances[k].windows(2).all(|w| w[0] < w[1]));
             }
-            kept += g[1];
+            // Kept objects stay in object order (draw order = CPU path).
+            let objects = got.instances[k].iter().map(|e| e & 0xff_ffff);
+            assert!(objects.clone().zip(objects.skip(1)).all(|(a, b)| a < b));
+            // Steady entries carry no code; fading ones a code of their kind.
+            let kind = (b % lists) / lods;
+            for e in &got.instances[k] {
+                let code = e >> 24;
+                match kind {
+                    0 => assert_eq!(code, 0),
+                    1 => assert!((1..128).contains(&code), "{code}"),
+                    _ => assert!((128..255).contains(&code), "{code}"),
+                }
+            }
+            if kind == 0 {
+                kept += g[1];
+            } else {
+                fading += g[1];
+            }
             used[b % lods] |= g[1] > 0;
-            if b % lods == 0 {
-                total += layout.batches[b / lods].chunks; // for the printout
+            if b % lists == 0 {
+                total += layout.batches[b / lists].chunks; // for the printout
             }
         }
         let all = layout.objects;
-        eprintln!("view {v}: {kept} of {all} objects kept ({total} chunks)");
-        assert!(kept > 0, "view {v} keeps nothing");
+        eprintln!(
+            "view {v}: {kept} of {all} objects kept steady, {fading} fading entries so far ({total} chunks)"
+        );
+        assert!(kept > 0, "view {v} keeps nothing steady");
         if v + 1 == views.len() {
             assert!(
                 kept < all,
@@ -131,7 +161,7 @@ fn compare(scene: &Scene, lod: LodView) -> usize {
             }
         }
     }
-    levels
+    (levels, fading)
 }
 
 #[test]
@@ -144,6 +174,7 @@ fn the_lists_are_deterministic() {
     let lod = LodView {
         eye: scene.cameras[0].camera.position,
         scale: 30.0,
+        band: 0.2,
     };
     let a = cull.read_back(&ctx, &views, lod).expect("first");
     let b = cull.read_back(&ctx, &views, lod).expect("second");

@@ -184,12 +184,15 @@ impl ObjectBounds {
     }
 }
 
-/// E2 LOD selection of one frame: the eye and `scene::lod::distance_scale`
-/// (0: every object at LOD0).
+/// E2 LOD selection of one frame: the eye, `scene::lod::distance_scale`
+/// (0: every object at LOD0) and the transition band, a fraction of the
+/// first distance over which the GPU path dithers between two levels (0:
+/// levels pop; the CPU path always pops).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LodView {
     pub eye: glam::Vec3,
     pub scale: f32,
+    pub band: f32,
 }
 
 /// One indexed draw of one object.

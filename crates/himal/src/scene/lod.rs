@@ -51,6 +51,31 @@ pub fn level(distance: f32, size: f32, scale: f32, levels: u32) -> u32 {
     }
 }
 
+/// The GPU path's choice with a transition band (`lod_choice` in
+/// `passes/cull/cull.wgsl`): the level as [`level`], and in the last
+/// `band` (a fraction of `d_1`) of a level's interval the fade `t` in
+/// [0, 1) toward the next level, where both levels draw with
+/// complementary screen-door masks; `None` when steady.
+pub fn choice(distance: f32, size: f32, scale: f32, levels: u32, band: f32) -> (u32, Option<f32>) {
+    let d1 = size * scale;
+    if levels <= 1 || d1 <= 0.0 {
+        return (0, None);
+    }
+    let s = distance / d1;
+    let l = s.floor();
+    if l >= (levels - 1) as f32 {
+        return (levels - 1, None);
+    }
+    let start = 1.0 - band;
+    let fade = (band > 0.0 && s - l > start).then(|| (s - l - start) / band);
+    (l.max(0.0) as u32, fade)
+}
+
+/// The fade step (0..=126) of `t`, as the instance entries carry it.
+pub fn fade_step(t: f32) -> u32 {
+    ((t * 127.0) as u32).min(126)
+}
+
 /// An object's triangle size (m): the square root of its mesh's
 /// geometric-mean area scaled by the transform (`|det|^(2/3)`).
 pub fn object_size(mean_area: f32, transform: &glam::Mat4) -> f32 {
@@ -171,6 +196,22 @@ mod tests {
             [0, 0, 1, 2, 3, 3]
         );
         assert_eq!(level(100.0, 0.1, 0.0, 4), 0, "LOD off");
+        // With a band of 0.2: fading from 0.8 d_1 to d_1, steady after.
+        assert_eq!(choice(1.9, 0.1, k, 4, 0.2), (0, None));
+        let (l, t) = choice(2.25, 0.1, k, 4, 0.2);
+        assert_eq!(l, 0);
+        assert!((t.unwrap_or(-1.0) - 0.5).abs() < 1e-4);
+        assert_eq!(choice(2.6, 0.1, k, 4, 0.2), (1, None));
+        assert_eq!(
+            choice(1e6, 0.1, k, 4, 0.2),
+            (3, None),
+            "no fade past the last"
+        );
+        assert_eq!(choice(2.25, 0.1, k, 4, 0.0), (0, None), "band 0 pops");
+        assert_eq!(
+            [fade_step(0.0), fade_step(0.5), fade_step(0.999)],
+            [0, 63, 126]
+        );
         assert_eq!(level(100.0, 0.1, k, 1), 0, "one level");
         assert_eq!(distance_scale(90.0, 100, 0.0), 0.0);
         // A uniform scale s multiplies the size by s.

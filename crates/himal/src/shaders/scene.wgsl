@@ -105,3 +105,31 @@ fn foliage_alpha(pattern: u32, uv: vec2f) -> f32 {
         default: { return 1.0; }
     }
 }
+
+// V6 / E2: an instance entry (passes/cull) is the object (bits 0-23) and
+// its LOD fade code (bits 24-31; 0 steady, and always in the identity list).
+fn instance_object(entry: u32) -> u32 {
+    return entry & 0xffffffu;
+}
+
+fn instance_fade(entry: u32) -> u32 {
+    return entry >> 24u;
+}
+
+// E2 dithered transitions: a 4x4 ordered (Bayer) threshold at `pixel`.
+// Code 1 + q (fading out) keeps where the threshold is >= q / 126, code
+// 128 + q (fading in) where it is below: one object's two levels cover
+// complementary pixels, so the change spreads over the band, not one frame.
+fn lod_dither_keep(code: u32, pixel: vec2f) -> bool {
+    if (code == 0u) {
+        return true;
+    }
+    let bayer = array<f32, 16>(0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0,
+                               3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
+    let p = vec2u(pixel) % vec2u(4u);
+    let threshold = (bayer[p.y * 4u + p.x] + 0.5) / 16.0;
+    if (code < 128u) {
+        return threshold >= f32(code - 1u) / 126.0;
+    }
+    return threshold < f32(code - 128u) / 126.0;
+}

@@ -7,9 +7,16 @@
 //   cs_args  (batch, view): each chunk's offset per level in its batch, the draws' arguments
 //   cs_write (chunk, view): each kept object at offset + rank -> instances
 // A batch is the consecutive objects of one mesh; chunks split a batch in 64s.
-// A batch's list holds its levels one after the other; one draw per (batch, level).
+// Near a transition (the last `band` of a level's distance interval) an
+// object is in two lists: fading out at its level and fading in at the next,
+// with complementary screen-door masks (lod_dither_keep, shaders/scene.wgsl).
+// Lists per batch: kind (steady, fade-out, fade-in) x level; one draw each.
+// Arguments per view: opaque batches' [kind][batch][level], then vegetation's,
+// so a pipeline draws a range of kinds with one multi-draw.
 // instances[0 .. objects] is the identity (the pass's CPU-recorded draws, glTF
-// materials); view v's list of batch b starts at (v + 1) * objects + b.first_object.
+// materials); view v's lists of batch b start at objects + v * 2 objects +
+// 2 b.first_object (an object is in at most two). An entry is the object
+// (bits 0-23) and its fade code (bits 24-31, 0 steady).
 // Twin: reference.rs; the test: docs/techniques/V6.md.
 
 struct CullParams {
@@ -17,9 +24,15 @@ struct CullParams {
     chunks: u32,
     batches: u32,
     objects: u32,
+    opaque_batches: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
     // xyz: the camera (LOD distances for every view), w: E2 distance scale
     // f / sqrt(T) (0: LOD0 everywhere)
     eye: vec4f,
+    // x: transition band, a fraction of d1 (0: levels pop)
+    lod: vec4f,
 }
 
 // Six planes (xyz . p + w >= 0 inside); a disabled plane is (0, 0, 0, 1).
@@ -41,6 +54,11 @@ struct Chunk {
 }
 
 const MAX_LODS: u32 = 4u;
+// Lists per batch: 3 kinds x MAX_LODS levels.
+const LISTS: u32 = 12u;
+const STEADY: u32 = 0u;
+const FADE_OUT: u32 = 1u;
+const FADE_IN: u32 = 2u;
 
 struct Batch {
     first_chunk: u32,
@@ -55,12 +73,12 @@ struct Batch {
     lod: array<vec2u, 4>,
 }
 
-// Per (view, chunk): kept bits per level (0-31, 32-63), count and offset in
-// the batch's list per level.
+// Per (view, chunk) and list (kind * MAX_LODS + level): kept bits (0-31,
+// 32-63), count, and offset in the batch's lists.
 struct ChunkMask {
-    bits: array<vec2u, 4>,
-    count: vec4u,
-    offset: vec4u,
+    bits: array<vec2u, 12>,
+    count: array<u32, 12>,
+    offset: array<u32, 12>,
 }
 
 // wgpu::util::DrawIndexedIndirectArgs
@@ -81,8 +99,6 @@ struct DrawArgs {
 @group(0) @binding(6) var<storage, read_write> args: array<DrawArgs>;
 @group(0) @binding(7) var<storage, read_write> instances: array<u32>;
 
-const CHUNK: u32 = 64u;
-
 // The box is wholly outside a plane when even its farthest corner along the
 // plane's normal is: dot(n, c) + w + dot(|n|, e) < 0 (exactly the eight-corner test).
 fn outside(b: Bounds, v: CullView) -> bool {
@@ -95,44 +111,75 @@ fn outside(b: Bounds, v: CullView) -> bool {
     return false;
 }
 
-// E2: floor(d / d1), d1 = size * scale, clamped to the batch's levels
-// (scene/lod.rs `level`); d from the eye to the box.
-fn lod_level(b: Bounds, levels: u32) -> u32 {
+// E2 (scene/lod.rs `choice`): x the level floor(d / d1), d1 = size * scale,
+// clamped to the batch's levels, d from the eye to the box; y the fade
+// t in [0, 1) toward the next level in the band before it, -1 steady.
+fn lod_choice(b: Bounds, levels: u32) -> vec2f {
     let d1 = b.center.w * params.eye.w;
     if (levels <= 1u || d1 <= 0.0) {
-        return 0u;
+        return vec2f(0.0, -1.0);
     }
     let d = length(max(abs(params.eye.xyz - b.center.xyz) - b.half_extent.xyz, vec3f(0.0)));
-    let l = floor(d / d1);
+    let s = d / d1;
+    let l = floor(s);
     if (l >= f32(levels - 1u)) {
-        return levels - 1u;
+        return vec2f(f32(levels - 1u), -1.0);
     }
-    return u32(max(l, 0.0));
+    let band = params.lod.x;
+    let start = 1.0 - band;
+    if (band > 0.0 && s - l > start) {
+        return vec2f(max(l, 0.0), (s - l - start) / band);
+    }
+    return vec2f(max(l, 0.0), -1.0);
 }
 
-var<workgroup> kept: array<atomic<u32>, 8>;
+// The fade step (0..126) of t: codes 1 + q (out) and 128 + q (in).
+fn fade_step(t: f32) -> u32 {
+    return min(u32(t * 127.0), 126u);
+}
+
+// Index of the arguments of (batch, kind, level) in view `view`.
+fn args_index(view: u32, batch: u32, kind: u32, level: u32) -> u32 {
+    let opaque = params.opaque_batches;
+    var i = (kind * opaque + batch) * MAX_LODS + level;
+    if (batch >= opaque) {
+        let vegetation = params.batches - opaque;
+        i = LISTS * opaque + (kind * vegetation + batch - opaque) * MAX_LODS + level;
+    }
+    return view * params.batches * LISTS + i;
+}
+
+var<workgroup> kept: array<atomic<u32>, 24>;
 
 @compute @workgroup_size(64)
 fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i: u32) {
     let chunk = chunks[wg.x];
     let view = wg.y;
-    if (i < 8u) {
+    if (i < 2u * LISTS) {
         atomicStore(&kept[i], 0u);
     }
     workgroupBarrier();
     if (i < chunk.count) {
         let b = bounds[chunk.first_object + i];
         if (!outside(b, views[view])) {
-            let l = lod_level(b, batches[chunk.batch].lods);
-            atomicOr(&kept[l * 2u + i / 32u], 1u << (i % 32u));
+            let c = lod_choice(b, batches[chunk.batch].lods);
+            let l = u32(c.x);
+            let bit = 1u << (i % 32u);
+            if (c.y < 0.0) {
+                atomicOr(&kept[(STEADY * MAX_LODS + l) * 2u + i / 32u], bit);
+            } else {
+                atomicOr(&kept[(FADE_OUT * MAX_LODS + l) * 2u + i / 32u], bit);
+                atomicOr(&kept[(FADE_IN * MAX_LODS + l + 1u) * 2u + i / 32u], bit);
+            }
         }
     }
     workgroupBarrier();
     if (i == 0u) {
         var m: ChunkMask;
-        for (var l = 0u; l < MAX_LODS; l++) {
-            m.bits[l] = vec2u(atomicLoad(&kept[l * 2u]), atomicLoad(&kept[l * 2u + 1u]));
-            m.count[l] = countOneBits(m.bits[l].x) + countOneBits(m.bits[l].y);
+        for (var k = 0u; k < LISTS; k++) {
+            m.bits[k] = vec2u(atomicLoad(&kept[k * 2u]), atomicLoad(&kept[k * 2u + 1u]));
+            m.count[k] = countOneBits(m.bits[k].x) + countOneBits(m.bits[k].y);
+            m.offset[k] = 0u;
         }
         masks[view * params.chunks + wg.x] = m;
     }
@@ -145,26 +192,38 @@ fn cs_args(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let batch = batches[id.x];
-    // Each level's total, then its place after the lower levels.
-    var total = vec4u(0u);
+    // Each list's total, then its place after the earlier lists.
+    var total: array<u32, 12>;
     for (var k = 0u; k < batch.chunks; k++) {
-        total += masks[view * params.chunks + batch.first_chunk + k].count;
+        let m = view * params.chunks + batch.first_chunk + k;
+        for (var j = 0u; j < LISTS; j++) {
+            total[j] += masks[m].count[j];
+        }
     }
-    let base = vec4u(0u, total.x, total.x + total.y, total.x + total.y + total.z);
+    var base: array<u32, 12>;
+    var sum = 0u;
+    for (var j = 0u; j < LISTS; j++) {
+        base[j] = sum;
+        sum += total[j];
+    }
     var offset = base;
     for (var k = 0u; k < batch.chunks; k++) {
         let m = view * params.chunks + batch.first_chunk + k;
-        masks[m].offset = offset;
-        offset += masks[m].count;
+        for (var j = 0u; j < LISTS; j++) {
+            masks[m].offset[j] = offset[j];
+            offset[j] += masks[m].count[j];
+        }
     }
-    for (var l = 0u; l < MAX_LODS; l++) {
+    let region = params.objects + view * 2u * params.objects + 2u * batch.first_object;
+    for (var j = 0u; j < LISTS; j++) {
+        let level = j % MAX_LODS;
         var a: DrawArgs;
-        a.index_count = batch.lod[l].y;
-        a.instance_count = total[l];
-        a.first_index = batch.lod[l].x;
+        a.index_count = batch.lod[level].y;
+        a.instance_count = total[j];
+        a.first_index = batch.lod[level].x;
         a.base_vertex = batch.base_vertex;
-        a.first_instance = (view + 1u) * params.objects + batch.first_object + base[l];
-        args[(view * params.batches + id.x) * MAX_LODS + l] = a;
+        a.first_instance = region + base[j];
+        args[args_index(view, id.x, j / MAX_LODS, level)] = a;
     }
 }
 
@@ -176,19 +235,31 @@ fn cs_write(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i
         return;
     }
     let m = masks[view * params.chunks + wg.x];
+    let batch = batches[chunk.batch];
+    let region = params.objects + view * 2u * params.objects + 2u * batch.first_object;
     let bit = i % 32u;
-    for (var l = 0u; l < MAX_LODS; l++) {
-        let word = select(m.bits[l].x, m.bits[l].y, i >= 32u);
+    // The fade code, recomputed exactly as cs_test chose the lists.
+    let c = lod_choice(bounds[chunk.first_object + i], batch.lods);
+    var q = 0u;
+    if (c.y >= 0.0) {
+        q = fade_step(c.y);
+    }
+    for (var k = 0u; k < LISTS; k++) {
+        let word = select(m.bits[k].x, m.bits[k].y, i >= 32u);
         if (((word >> bit) & 1u) == 0u) {
             continue;
         }
-        // Rank among the chunk's objects kept at this level: the bits below i.
+        // Rank among the chunk's objects in this list: the bits below i.
         var rank = countOneBits(word & ((1u << bit) - 1u));
         if (i >= 32u) {
-            rank += countOneBits(m.bits[l].x);
+            rank += countOneBits(m.bits[k].x);
         }
-        let batch = batches[chunk.batch];
-        let slot = (view + 1u) * params.objects + batch.first_object + m.offset[l] + rank;
-        instances[slot] = chunk.first_object + i;
+        var code = 0u;
+        if (k / MAX_LODS == FADE_OUT) {
+            code = 1u + q;
+        } else if (k / MAX_LODS == FADE_IN) {
+            code = 128u + q;
+        }
+        instances[region + m.offset[k] + rank] = (chunk.first_object + i) | (code << 24u);
     }
 }

@@ -34,7 +34,20 @@ pub const CHUNK: u32 = 64;
 /// Bytes of one `DrawIndexedIndirectArgs`.
 pub const ARGS_BYTES: u64 = 20;
 /// Bytes of one `ChunkMask` (per view and chunk).
-const MASK_BYTES: u64 = 64;
+const MASK_BYTES: u64 = 192;
+/// Lists per batch: kinds (steady, fading out, fading in) x levels.
+pub const LISTS: usize = 3 * MAX_LODS;
+/// Objects the instance entries can name (24 bits; 8 hold the fade code).
+pub const MAX_OBJECTS: u32 = 1 << 24;
+
+/// Which of an object's E2 lists: drawn whole, fading out of its level, or
+/// fading into the next (complementary screen-door masks).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Steady = 0,
+    FadeOut = 1,
+    FadeIn = 2,
+}
 
 /// Twin of `CullParams` in `cull.wgsl`.
 #[repr(C)]
@@ -44,8 +57,12 @@ struct ParamsGpu {
     chunks: u32,
     batches: u32,
     objects: u32,
+    opaque_batches: u32,
+    _pad: [u32; 3],
     /// xyz the eye, w the E2 distance scale (0: LOD0).
     eye: [f32; 4],
+    /// x the E2 transition band, a fraction of d1 (0: levels pop).
+    lod: [f32; 4],
 }
 
 /// One culling view: six planes `n . p + w >= 0` (twin of `CullView`).
@@ -182,9 +199,28 @@ impl CullLayout {
         (self.batches.len() - before) as u32
     }
 
-    /// Multi-draws one culled view records: one per non-empty list.
-    pub fn draw_calls(&self) -> u32 {
-        u32::from(self.opaque_batches > 0) + u32::from(self.vegetation_batches > 0)
+    /// Whether some batch has more than one level (E2 fading lists exist).
+    pub fn has_lods(&self) -> bool {
+        self.batches.iter().any(|b| b.lods > 1)
+    }
+
+    /// Multi-draws one culled view records in the G-buffer (`true`: the
+    /// opaque steady and fading lists, vegetation) or a shadow map.
+    pub fn draw_calls(&self, gbuffer: bool) -> u32 {
+        let fading = u32::from(gbuffer && self.has_lods() && self.opaque_batches > 0);
+        u32::from(self.opaque_batches > 0) + fading + u32::from(self.vegetation_batches > 0)
+    }
+
+    /// Index of the arguments of (`batch`, `kind`, `level`) in view `view`
+    /// (`args_index` in `cull.wgsl`).
+    pub fn args_index(&self, view: usize, batch: usize, kind: usize, level: usize) -> usize {
+        let (opaque, all) = (self.opaque_batches as usize, self.batches.len());
+        let i = if batch < opaque {
+            (kind * opaque + batch) * MAX_LODS + level
+        } else {
+            LISTS * opaque + (kind * (all - opaque) + batch - opaque) * MAX_LODS + level
+        };
+        view * all * LISTS + i
     }
 
     /// First batch and count of `list` (each batch has [`MAX_LODS`] draws).
@@ -203,31 +239,49 @@ pub struct Culled {
     /// the CPU in a culled pass), then per view `v` the lists at
     /// `(v + 1) * objects + batch.first_object ..`.
     pub instances: BufferHandle,
-    /// Per view: one `DrawIndexedIndirectArgs` per batch and level.
+    /// Per view: one `DrawIndexedIndirectArgs` per batch, kind and level.
     pub args: BufferHandle,
     opaque: (u32, u32),
     vegetation: (u32, u32),
     batches: u32,
+    /// Some batch has more than one level: fading lists may be non-empty.
+    pub has_lods: bool,
 }
 
+/// The kinds the G-buffer's opaque pipeline draws (no discard: early-Z).
+pub const STEADY: std::ops::Range<u32> = 0..1;
+/// The kinds the G-buffer's dithering pipeline draws.
+pub const FADING: std::ops::Range<u32> = 1..3;
+/// What shadow maps draw: steady and fading-out lists, undithered (a
+/// transition shows in the shadow only when it ends).
+pub const SHADOW: std::ops::Range<u32> = 0..2;
+/// Every kind (vegetation, which tests its fade code anyway).
+pub const ALL: std::ops::Range<u32> = 0..3;
+
 impl Culled {
-    /// Records view `view`'s draws of `list` from `args` (the graph buffer
-    /// of [`Self::args`]; pipeline and geometry bound): one multi-draw, or
-    /// none when the list is empty. Returns the calls recorded.
+    /// Records view `view`'s draws of `list`'s `kinds` ([`STEADY`],
+    /// [`FADING`], [`SHADOW`], [`ALL`]) from `args` (the graph buffer of
+    /// [`Self::args`]; pipeline and geometry bound): one multi-draw, or none
+    /// when the list is empty. Returns the calls recorded.
     pub fn draw(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
         args: &wgpu::Buffer,
         view: u32,
         list: List,
+        kinds: std::ops::Range<u32>,
     ) -> u32 {
         let (first, count) = self.range(list);
-        if count == 0 {
+        if count == 0 || kinds.is_empty() {
             return 0;
         }
-        let lods = MAX_LODS as u64;
-        let offset = (u64::from(view) * u64::from(self.batches) + u64::from(first)) * lods;
-        rp.multi_draw_indexed_indirect(args, offset * ARGS_BYTES, count * MAX_LODS as u32);
+        let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
+        // [view][opaque: kind, batch, level][vegetation: kind, batch, level]
+        let start = u64::from(view) * u64::from(self.batches) * lists
+            + u64::from(first) * lists
+            + u64::from(kinds.start) * u64::from(count) * lods;
+        let draws = (kinds.end - kinds.start) * count * MAX_LODS as u32;
+        rp.multi_draw_indexed_indirect(args, start * ARGS_BYTES, draws);
         1
     }
 
@@ -236,11 +290,6 @@ impl Culled {
             List::Opaque => self.opaque,
             List::Vegetation => self.vegetation,
         }
-    }
-
-    /// Calls one view records: one per non-empty list.
-    pub fn draw_calls(&self) -> u32 {
-        u32::from(self.opaque.1 > 0) + u32::from(self.vegetation.1 > 0)
     }
 }
 
@@ -292,6 +341,11 @@ impl CullPass {
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
         {
             Some("the adapter has no indirect execution".to_string())
+        } else if layout.objects >= MAX_OBJECTS {
+            Some(format!(
+                "{} objects exceed the {MAX_OBJECTS} an instance entry can name",
+                layout.objects
+            ))
         } else if layout.chunks.len() as u64 > u64::from(max_groups) {
             Some(format!(
                 "{} chunks exceed the adapter's {max_groups} workgroups per dimension",
@@ -303,7 +357,7 @@ impl CullPass {
         let views = vec![CullView::zeroed(); MAX_VIEWS];
         let n = layout.objects.max(1) as usize;
         let mut instances: Vec<u32> = (0..n as u32).collect();
-        instances.resize(n * (MAX_VIEWS + 1), 0);
+        instances.resize(n * (1 + 2 * MAX_VIEWS), 0);
         Ok(Self {
             test: program.compute_pipeline(ctx, "cs_test", &[])?,
             args: program.compute_pipeline(ctx, "cs_args", &[])?,
@@ -344,7 +398,10 @@ impl CullPass {
                 chunks: l.chunks.len() as u32,
                 batches: l.batches.len() as u32,
                 objects: l.objects,
+                opaque_batches: l.opaque_batches,
+                _pad: [0; 3],
                 eye: lod.eye.extend(lod.scale).to_array(),
+                lod: [lod.band, 0.0, 0.0, 0.0],
             };
             ctx.queue
                 .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -374,7 +431,7 @@ impl CullPass {
         );
         let args = graph.create_buffer(
             "cull.args",
-            BufferDesc::new(views * l.batches.len() as u64 * MAX_LODS as u64 * ARGS_BYTES),
+            BufferDesc::new(views * (l.batches.len() * LISTS) as u64 * ARGS_BYTES),
         );
         let instances = graph.import_buffer("cull.instances", &self.instances);
         let (chunks, batches, n) = (l.chunks.len() as u32, l.batches.len() as u32, self.planned);
@@ -403,11 +460,13 @@ impl CullPass {
             opaque: l.range(List::Opaque),
             vegetation: l.range(List::Vegetation),
             batches,
+            has_lods: l.has_lods(),
         })
     }
 
     /// Runs the node for `views` alone and reads back each view's draw
-    /// arguments and instance lists (tests, statistics).
+    /// arguments and instance lists, per (view, batch, kind, level) as
+    /// [`reference::cull`] orders them (tests, statistics).
     pub fn read_back(
         &mut self,
         ctx: &GpuContext,
@@ -416,7 +475,7 @@ impl CullPass {
     ) -> Result<reference::CullResult, crate::Error> {
         let n = self.plan(ctx, views, lod) as usize;
         let l = &self.layout;
-        let draws = l.batches.len() * MAX_LODS;
+        let draws = l.batches.len() * LISTS;
         let mut result = reference::CullResult {
             args: vec![[0; 5]; n * draws],
             instances: vec![Vec::new(); n * draws],
@@ -466,11 +525,13 @@ impl CullPass {
             bytemuck::pod_collect_to_vec(&crate::gpu::read_buffer(ctx, &inst_copy)?);
         for v in 0..n {
             for (b, batch) in l.batches.iter().enumerate() {
-                for lod in 0..MAX_LODS {
-                    let k = (v * l.batches.len() + b) * MAX_LODS + lod;
-                    let a: [u32; 5] = std::array::from_fn(|j| args[k * 5 + j]);
+                for list in 0..LISTS {
+                    let (kind, lod) = (list / MAX_LODS, list % MAX_LODS);
+                    let k = (v * l.batches.len() + b) * LISTS + list;
+                    let at = l.args_index(v, b, kind, lod);
+                    let a: [u32; 5] = std::array::from_fn(|j| args[at * 5 + j]);
                     let start = a[4] as usize;
-                    let region = (v as u32 + 1) * l.objects + batch.first_object;
+                    let region = l.objects + 2 * (v as u32 * l.objects + batch.first_object);
                     let list = (a[4] >= region)
                         .then(|| inst.get(start..start + a[1] as usize))
                         .flatten()

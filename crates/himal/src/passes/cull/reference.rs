@@ -1,13 +1,15 @@
 //! CPU twin of `cull.wgsl`: the same plane test, offsets and ranks, in the
 //! same order, so the GPU's lists can be compared entry by entry.
 
+use super::LISTS;
 use super::{CullLayout, CullView};
 use crate::gpu_scene::{LodView, ObjectBounds as BoundsGpu};
-use crate::scene::lod::{MAX_LODS, distance_to_box, level};
+use crate::scene::lod::{MAX_LODS, choice, distance_to_box, fade_step};
 
-/// Per (view, batch, level), view-major: the indirect arguments (index
-/// count, instance count, first index, base vertex, first instance) and
-/// the instance list (objects, in order).
+/// Per (view, batch, kind, level), view-major, `kind` as
+/// [`super::Kind`]: the indirect arguments (index count, instance count,
+/// first index, base vertex, first instance) and the instance entries
+/// (object | fade code << 24, in object order).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CullResult {
     pub args: Vec<[u32; 5]>,
@@ -33,11 +35,11 @@ pub fn outside(b: &BoundsGpu, view: &CullView) -> bool {
     margin(b, view) < 0.0
 }
 
-/// The level the box draws at under `lod` with `levels` levels (as
-/// `lod_level` in `cull.wgsl`).
-pub fn lod_of(b: &BoundsGpu, levels: u32, lod: &LodView) -> u32 {
+/// The level and fade the box draws at under `lod` with `levels` levels
+/// (as `lod_choice` in `cull.wgsl`).
+pub fn lod_of(b: &BoundsGpu, levels: u32, lod: &LodView) -> (u32, Option<f32>) {
     let d = distance_to_box(lod.eye, b.center(), b.half_extent());
-    level(d, b.center[3], lod.scale, levels)
+    choice(d, b.center[3], lod.scale, levels, lod.band)
 }
 
 /// The culled lists of `views` over `layout`, levels chosen from `lod`.
@@ -46,7 +48,7 @@ pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResul
     for (v, view) in views.iter().enumerate() {
         for batch in &layout.batches {
             let chunks = &layout.chunks[batch.first_chunk as usize..][..batch.chunks as usize];
-            let mut lists: [Vec<u32>; MAX_LODS] = Default::default();
+            let mut lists: [Vec<u32>; LISTS] = Default::default();
             for o in chunks
                 .iter()
                 .flat_map(|c| c.first_object..c.first_object + c.count)
@@ -54,18 +56,28 @@ pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResul
                 let Some(b) = layout.bounds.get(o as usize) else {
                     continue;
                 };
-                if !outside(b, view) {
-                    lists[lod_of(b, batch.lods, lod) as usize].push(o);
+                if outside(b, view) {
+                    continue;
+                }
+                match lod_of(b, batch.lods, lod) {
+                    (l, None) => lists[l as usize].push(o),
+                    (l, Some(t)) => {
+                        let q = fade_step(t);
+                        lists[MAX_LODS + l as usize].push(o | ((1 + q) << 24));
+                        lists[2 * MAX_LODS + l as usize + 1].push(o | ((128 + q) << 24));
+                    }
                 }
             }
+            let region = layout.objects + 2 * (v as u32 * layout.objects + batch.first_object);
             let mut base = 0;
-            for (l, list) in lists.into_iter().enumerate() {
+            for (j, list) in lists.into_iter().enumerate() {
+                let l = j % MAX_LODS;
                 result.args.push([
                     batch.lod[l][1],
                     list.len() as u32,
                     batch.lod[l][0],
                     batch.base_vertex as u32,
-                    (v as u32 + 1) * layout.objects + batch.first_object + base,
+                    region + base,
                 ]);
                 base += list.len() as u32;
                 result.instances.push(list);

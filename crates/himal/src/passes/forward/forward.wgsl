@@ -49,7 +49,7 @@ struct VertexOut {
 
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
-    let o = objects[instances[in.instance]];
+    let o = objects[instance_object(instances[in.instance])];
     // The same call as textured.wgsl: the same clip position (@invariant).
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;

@@ -19,6 +19,9 @@
 @group(0) @binding(2) var<storage, read> instances: array<u32>;
 
 override VEGETATION: bool = false;
+// E2: the pipeline of the GPU lists fading between levels (screen-door
+// discard by the instance's fade code); vegetation always applies it.
+override DITHER: bool = false;
 
 struct VertexOut {
     @builtin(position) clip: vec4f,
@@ -30,15 +33,18 @@ struct VertexOut {
     @location(5) prev_clip: vec4f,
     @location(6) uv: vec2f,
     @location(7) @interpolate(flat) pattern: u32,
+    @location(8) @interpolate(flat) fade: u32,
 }
 
 @vertex
 fn vs_main(in: GBufferVertexIn) -> VertexOut {
-    let o = objects[instances[in.instance]];
+    let entry = instances[in.instance];
+    let o = objects[instance_object(entry)];
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, VEGETATION, view.time.xy);
     var out: VertexOut;
     out.uv = in.uv;
     out.pattern = 0u;
+    out.fade = instance_fade(entry);
     if (VEGETATION) {
         out.pattern = foliage_pattern(o);
     }
@@ -55,6 +61,9 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var n = normalize(in.normal);
+    if ((DITHER || VEGETATION) && !lod_dither_keep(in.fade, in.clip.xy)) {
+        discard;
+    }
     if (VEGETATION) {
         if (foliage_alpha(in.pattern, in.uv) < 0.5) {
             discard;

@@ -12,7 +12,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
 use crate::graph::{BufferAccess, FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
-use crate::passes::cull::{Culled, List};
+use crate::passes::cull::{ALL, Culled, FADING, List, STEADY};
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -49,6 +49,9 @@ pub struct GBufferKey {
     pub double_sided: bool,
     /// Textured materials sample with mip bias -0.5.
     pub mip_bias: bool,
+    /// E2: the per-vertex pipeline of the GPU lists fading between levels
+    /// (screen-door discard; the plain one keeps early-Z).
+    pub dither: bool,
 }
 
 /// Mip bias of textured materials under temporal anti-aliasing (A2).
@@ -59,12 +62,19 @@ impl GBufferKey {
         material: MaterialType::Vertex,
         double_sided: false,
         mip_bias: false,
+        dither: false,
+    };
+    /// E2 transitions of per-vertex objects.
+    pub const VERTEX_DITHER: Self = Self {
+        dither: true,
+        ..Self::VERTEX
     };
     /// Cards are seen from both sides.
     pub const VEGETATION: Self = Self {
         material: MaterialType::Vegetation,
         double_sided: true,
         mip_bias: false,
+        dither: false,
     };
 
     pub const fn textured(double_sided: bool, mip_bias: bool) -> Self {
@@ -72,6 +82,7 @@ impl GBufferKey {
             material: MaterialType::Textured,
             double_sided,
             mip_bias,
+            dither: false,
         }
     }
 
@@ -80,6 +91,9 @@ impl GBufferKey {
     /// temporal anti-aliasing.
     pub fn for_scene(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
         let mut keys = vec![Self::VERTEX];
+        if scene.lods.iter().any(|l| l.len() > 1) {
+            keys.push(Self::VERTEX_DITHER);
+        }
         if !scene.draws_vegetation.is_empty() {
             keys.push(Self::VEGETATION);
         }
@@ -156,6 +170,9 @@ impl GBufferPass {
             Some(wgpu::Face::Back)
         };
         match key.material {
+            MaterialType::Vertex if key.dither => self
+                .program
+                .render_pipeline(ctx, &spec("gbuffer.dither", cull, &[("DITHER", 1.0)])),
             MaterialType::Vertex => self
                 .program
                 .render_pipeline(ctx, &spec("gbuffer", cull, &[])),
@@ -255,7 +272,12 @@ impl GBufferPass {
                 scene.bind_geometry(rp);
                 scene.draw_list(rp, opaque);
                 if let Some((c, view)) = culled {
-                    c.draw(rp, ctx.buffer(c.args), view, List::Opaque);
+                    let args = ctx.buffer(c.args);
+                    c.draw(rp, args, view, List::Opaque, STEADY);
+                    if c.has_lods {
+                        rp.set_pipeline(pipeline(GBufferKey::VERTEX_DITHER)?);
+                        c.draw(rp, args, view, List::Opaque, FADING);
+                    }
                 }
                 if let Some(m) = &scene.materials {
                     let groups = m.bind_groups(&self.textured, ctx.device)?;
@@ -281,7 +303,7 @@ impl GBufferPass {
                     && !scene.draws_vegetation.is_empty()
                 {
                     rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    c.draw(rp, ctx.buffer(c.args), view, List::Vegetation);
+                    c.draw(rp, ctx.buffer(c.args), view, List::Vegetation, ALL);
                 }
                 Ok(())
             });

@@ -7,7 +7,7 @@ use super::casters::DrawLists;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, vertex_layout};
-use crate::passes::cull::{Culled, List};
+use crate::passes::cull::{Culled, List, SHADOW};
 
 /// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
 const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
@@ -122,9 +122,9 @@ impl DepthPipelines {
         self.draw(rp, scene, lists);
         if let (Some((view, _)), Some((c, args))) = (lists.gpu_view, culled) {
             rp.set_pipeline(&self.opaque);
-            c.draw(rp, args, view, List::Opaque);
+            c.draw(rp, args, view, List::Opaque, SHADOW);
             rp.set_pipeline(&self.vegetation);
-            c.draw(rp, args, view, List::Vegetation);
+            c.draw(rp, args, view, List::Vegetation, SHADOW);
         }
     }
 

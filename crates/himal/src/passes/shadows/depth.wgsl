@@ -21,7 +21,7 @@ struct ShadowView {
 
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {
-    let o = objects[instances[instance]];
+    let o = objects[instance_object(instances[instance])];
     return shadow.light_view_proj * object_world(o, o.model, position, vec2f(0.0), false, 0.0);
 }
 
@@ -37,7 +37,7 @@ fn vs_vegetation(
     @location(3) uv: vec2f,
     @builtin(instance_index) instance: u32,
 ) -> VegetationOut {
-    let o = objects[instances[instance]];
+    let o = objects[instance_object(instances[instance])];
     var out: VegetationOut;
     out.clip = shadow.light_view_proj * object_world(o, o.model, position, uv, true, shadow.time.x);
     out.uv = uv;
