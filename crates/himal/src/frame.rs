@@ -145,12 +145,16 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     // E2: the levels every pass draws at, seen from the camera.
     let lod = LodView {
         eye: camera.position,
-        scale: crate::scene::lod::distance_scale(
-            camera.fov_y_deg,
-            settings.height,
-            settings.lod_threshold_px,
-        ),
-        band: settings.lod_band,
+        selection: crate::scene::lod::Selection {
+            scale: crate::scene::lod::distance_scale(
+                camera.fov_y_deg,
+                settings.height,
+                settings.lod_threshold_px,
+            ),
+            focal_px: crate::scene::lod::focal_px(camera.fov_y_deg, settings.height),
+            max_error_px: settings.lod_error_px,
+            band: settings.lod_band,
+        },
     };
     if let Ok(mut l) = scene.lod.lock() {
         *l = lod;

@@ -152,6 +152,9 @@ pub struct FrameSettings {
     /// before each switch, the GPU path draws both levels with
     /// complementary screen-door masks (0: levels pop).
     pub lod_band: f32,
+    /// E2 guard (himal's, beside the talk's triangle size): no level whose
+    /// simplification error would show more than this many pixels (0: none).
+    pub lod_error_px: f32,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -216,6 +219,7 @@ impl FrameSettings {
             culling: Culling::Gpu,
             lod_threshold_px: 0.0,
             lod_band: 0.2,
+            lod_error_px: 1.0,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -10,6 +10,7 @@ use glam::Vec3;
 use himal::gpu_scene::{LodView, SceneGpu};
 use himal::passes::cull::{CullPass, CullView, reference};
 use himal::scene::Scene;
+use himal::scene::lod::Selection;
 
 /// Views of a scene: each named camera at 16:9, and orthographic sun views
 /// 300 m and 80 m across looking down at 50 degrees.
@@ -42,14 +43,28 @@ fn gpu_lists_match_the_twin_and_the_cpu_path() {
     let c = &spheres.cameras[0].camera;
     let lod = LodView {
         eye: c.position,
-        scale: himal::scene::lod::distance_scale(c.fov_y_deg, 720, 4.0),
-        band: 0.2,
+        selection: Selection {
+            scale: himal::scene::lod::distance_scale(c.fov_y_deg, 720, 4.0),
+            focal_px: himal::scene::lod::focal_px(c.fov_y_deg, 720),
+            max_error_px: 1.0,
+            band: 0.2,
+        },
     };
     let (levels, fading) = compare(&spheres, lod);
     assert!(levels >= 3, "the rows reach {levels} levels");
     assert!(fading > 0, "no sphere is in a transition band");
     // Without a band nothing fades.
-    let (_, fading) = compare(&spheres, LodView { band: 0.0, ..lod });
+    let pop = Selection {
+        band: 0.0,
+        ..lod.selection
+    };
+    let (_, fading) = compare(
+        &spheres,
+        LodView {
+            selection: pop,
+            ..lod
+        },
+    );
     assert_eq!(fading, 0);
 }
 
@@ -76,13 +91,14 @@ fn compare(scene: &Scene, lod: LodView) -> (usize, u32) {
     let near_plane = |o: u32, v: usize| {
         let b = &layout.bounds[o as usize];
         let d = himal::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
-        let steps = d / (b.center[3] * lod.scale).max(1e-9);
+        let (scale, band) = (lod.selection.scale, lod.selection.band);
+        let steps = d / (b.center[3] * scale).max(1e-9);
         let frac = steps - steps.floor();
         // Level switches, band starts and fade-step edges.
         let edge = |x: f32| (x - x.round()).abs() < 1e-4;
-        let in_band = (frac - (1.0 - lod.band)) / lod.band.max(1e-9);
+        let in_band = (frac - (1.0 - band)) / band.max(1e-9);
         reference::margin(b, &views[v]).abs() < 1e-3
-            || (lod.scale > 0.0 && (edge(steps) || edge(steps - lod.band) || edge(in_band * 127.0)))
+            || (scale > 0.0 && (edge(steps) || edge(steps - band) || edge(in_band * 127.0)))
     };
     let mut fading = 0;
     let mut used = [false; himal::scene::lod::MAX_LODS];
@@ -173,8 +189,12 @@ fn the_lists_are_deterministic() {
     let views = views(&scene);
     let lod = LodView {
         eye: scene.cameras[0].camera.position,
-        scale: 30.0,
-        band: 0.2,
+        selection: Selection {
+            scale: 30.0,
+            focal_px: 400.0,
+            max_error_px: 1.0,
+            band: 0.2,
+        },
     };
     let a = cull.read_back(&ctx, &views, lod).expect("first");
     let b = cull.read_back(&ctx, &views, lod).expect("second");

@@ -155,7 +155,8 @@ impl ObjectGpu {
 }
 
 /// Twin of `Bounds` in `passes/cull/cull.wgsl`: centre (w: the object's
-/// triangle size in metres, E2) and half extent of its world box.
+/// triangle size in metres, E2) and half extent (w: its linear scale) of
+/// its world box.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct ObjectBounds {
@@ -164,14 +165,16 @@ pub struct ObjectBounds {
 }
 
 impl ObjectBounds {
-    /// An empty box becomes a point at the origin (it draws nothing).
-    pub fn new(b: &crate::scene::Aabb, size: f32) -> Self {
+    /// `size`: the object's triangle size (m), `scale` its linear scale (w
+    /// of the half extent: geometric errors). An empty box becomes a point
+    /// at the origin (it draws nothing).
+    pub fn new(b: &crate::scene::Aabb, size: f32, scale: f32) -> Self {
         if b.is_empty() {
             return Self::zeroed();
         }
         Self {
             center: b.center().extend(size).to_array(),
-            half_extent: (b.extent() * 0.5).extend(0.0).to_array(),
+            half_extent: (b.extent() * 0.5).extend(scale).to_array(),
         }
     }
 
@@ -184,15 +187,22 @@ impl ObjectBounds {
     }
 }
 
-/// E2 LOD selection of one frame: the eye, `scene::lod::distance_scale`
-/// (0: every object at LOD0) and the transition band, a fraction of the
-/// first distance over which the GPU path dithers between two levels (0:
-/// levels pop; the CPU path always pops).
+/// E2 LOD selection of one frame: the eye and how levels are chosen
+/// (`scale` 0: every object at LOD0; the band dithers on the GPU path
+/// only, the CPU path pops).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LodView {
     pub eye: glam::Vec3,
-    pub scale: f32,
-    pub band: f32,
+    pub selection: crate::scene::lod::Selection,
+}
+
+/// One level of a mesh in the index buffer (E2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodRange {
+    pub first_index: u32,
+    pub index_count: u32,
+    /// Geometric error (mesh units; 0 for LOD0).
+    pub error: f32,
 }
 
 /// One indexed draw of one object.
@@ -236,8 +246,8 @@ pub struct SceneGpu {
     pub cull_bounds: Vec<ObjectBounds>,
     /// Mesh of each object (GPU order).
     pub object_mesh: Vec<u32>,
-    /// E2: per mesh its levels' (first index, index count), LOD0 first.
-    pub lods: Vec<Vec<(u32, u32)>>,
+    /// E2: per mesh its levels, LOD0 first.
+    pub lods: Vec<Vec<LodRange>>,
     /// E2: this frame's LOD selection for draws recorded on the CPU (set by
     /// `frame::plan`; scale 0 = LOD0 everywhere).
     pub lod: std::sync::Mutex<LodView>,
@@ -274,14 +284,22 @@ impl SceneGpu {
                 mesh.indices.len() as u32,
                 vertices.len() as i32,
             ));
-            let mut levels = vec![(indices.len() as u32, mesh.indices.len() as u32)];
+            let mut levels = vec![LodRange {
+                first_index: indices.len() as u32,
+                index_count: mesh.indices.len() as u32,
+                error: 0.0,
+            }];
             vertices.extend_from_slice(&mesh.vertices);
             indices.extend_from_slice(&mesh.indices);
             // E2: terrain-sized meshes are always near somewhere; no chain.
             if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
                 for lod in crate::scene::lod::lod_chain(mesh) {
-                    levels.push((indices.len() as u32, lod.len() as u32));
-                    indices.extend_from_slice(&lod);
+                    levels.push(LodRange {
+                        first_index: indices.len() as u32,
+                        index_count: lod.indices.len() as u32,
+                        error: lod.error,
+                    });
+                    indices.extend_from_slice(&lod.indices);
                 }
             }
             lods.push(levels);
@@ -329,7 +347,8 @@ impl SceneGpu {
                 mean_area.get(object.mesh).copied().unwrap_or(0.0),
                 &object.transform,
             );
-            cull_bounds.push(ObjectBounds::new(&b, size));
+            let scale = crate::scene::lod::linear_scale(&object.transform);
+            cull_bounds.push(ObjectBounds::new(&b, size, scale));
             bounds.push(b);
             object_mesh.push(object.mesh as u32);
             if object.motion.is_some() {
@@ -459,9 +478,21 @@ impl SceneGpu {
         ) else {
             return 0;
         };
-        let levels = self.lods.get(mesh as usize).map_or(1, |l| l.len() as u32);
+        let Some(levels) = self.lods.get(mesh as usize) else {
+            return 0;
+        };
+        let mut errors = [0.0; crate::scene::lod::MAX_LODS];
+        let n = levels.len().min(errors.len());
+        for (e, l) in errors.iter_mut().zip(levels) {
+            *e = l.error;
+        }
         let d = crate::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
-        crate::scene::lod::level(d, b.center[3], lod.scale, levels)
+        // The CPU path pops: no band.
+        let selection = crate::scene::lod::Selection {
+            band: 0.0,
+            ..lod.selection
+        };
+        crate::scene::lod::choice(d, b.center[3], b.half_extent[3], &errors[..n], &selection).0
     }
 
     /// `draws` at this frame's LOD (E2): each draw's index range replaced
@@ -469,7 +500,7 @@ impl SceneGpu {
     /// mesh has a chain.
     pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        if lod.scale <= 0.0 || self.lods.iter().all(|l| l.len() < 2) {
+        if lod.selection.scale <= 0.0 || self.lods.iter().all(|l| l.len() < 2) {
             return std::borrow::Cow::Borrowed(draws);
         }
         let at = |d: &Draw| {
@@ -477,9 +508,9 @@ impl SceneGpu {
             let range = (self.object_mesh.get(d.object as usize))
                 .and_then(|&m| self.lods.get(m as usize)?.get(level));
             match range {
-                Some(&(first_index, index_count)) if level > 0 => Draw {
-                    first_index,
-                    index_count,
+                Some(r) if level > 0 => Draw {
+                    first_index: r.first_index,
+                    index_count: r.index_count,
                     ..d.clone()
                 },
                 _ => d.clone(),

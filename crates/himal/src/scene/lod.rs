@@ -30,45 +30,70 @@ pub fn distance_scale(fov_y_deg: f32, height_px: u32, threshold_px: f32) -> f32 
     if threshold_px <= 0.0 || !threshold_px.is_finite() {
         return 0.0;
     }
-    let f = height_px as f32 / (2.0 * (0.5 * fov_y_deg.to_radians()).tan());
-    f / threshold_px.sqrt()
+    focal_px(fov_y_deg, height_px) / threshold_px.sqrt()
 }
 
-/// The level an object draws at: `floor(d / d_1)` with `d_1 = size * scale`
-/// (`size` the square root of its world geometric-mean triangle area),
-/// later levels at multiples of `d_1` as the talk does, clamped to its
-/// `levels`. The same expression as `lod_level` in `passes/cull/cull.wgsl`.
-pub fn level(distance: f32, size: f32, scale: f32, levels: u32) -> u32 {
-    let d1 = size * scale;
-    if levels <= 1 || d1 <= 0.0 {
-        return 0;
-    }
-    let l = (distance / d1).floor();
-    if l >= (levels - 1) as f32 {
-        levels - 1
-    } else {
-        l.max(0.0) as u32
-    }
+/// The focal length in pixels, `f = H / (2 tan(fov_y / 2))`.
+pub fn focal_px(fov_y_deg: f32, height_px: u32) -> f32 {
+    height_px as f32 / (2.0 * (0.5 * fov_y_deg.to_radians()).tan())
 }
 
-/// The GPU path's choice with a transition band (`lod_choice` in
-/// `passes/cull/cull.wgsl`): the level as [`level`], and in the last
-/// `band` (a fraction of `d_1`) of a level's interval the fade `t` in
-/// [0, 1) toward the next level, where both levels draw with
-/// complementary screen-door masks; `None` when steady.
-pub fn choice(distance: f32, size: f32, scale: f32, levels: u32, band: f32) -> (u32, Option<f32>) {
-    let d1 = size * scale;
+/// How a frame selects levels (`gpu_scene::LodView` carries it with the eye).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Selection {
+    /// [`distance_scale`] (0: LOD0 everywhere).
+    pub scale: f32,
+    /// [`focal_px`].
+    pub focal_px: f32,
+    /// Largest geometric error a level may show, in pixels (0: no guard).
+    pub max_error_px: f32,
+    /// Transition band, a fraction of `d_1` (0: levels pop).
+    pub band: f32,
+}
+
+/// The level an object draws at and its fade (`lod_choice` in
+/// `passes/cull/cull.wgsl`, the same steps). Level `l` takes over at
+///
+/// `S_l = max(l d_1, e_l s f / E)`:
+///
+/// the talk's multiples of the first distance `d_1 = size * scale`, and
+/// himal's guard that the level's geometric error `e_l` (mesh units, times
+/// the object's linear scale `s`) projects to at most `E` pixels. In the
+/// last `band * d_1` before the next level's `S`, the fade `t` in [0, 1)
+/// toward it (both draw with complementary screen-door masks); `None` when
+/// steady. `errors` holds each level's error, LOD0's first (0).
+pub fn choice(
+    distance: f32,
+    size: f32,
+    object_scale: f32,
+    errors: &[f32],
+    p: &Selection,
+) -> (u32, Option<f32>) {
+    let d1 = size * p.scale;
+    let levels = errors.len().min(MAX_LODS);
     if levels <= 1 || d1 <= 0.0 {
         return (0, None);
     }
-    let s = distance / d1;
-    let l = s.floor();
-    if l >= (levels - 1) as f32 {
-        return (levels - 1, None);
+    let switch = |l: usize| {
+        let guard = if p.max_error_px > 0.0 {
+            errors[l] * object_scale * p.focal_px / p.max_error_px
+        } else {
+            0.0
+        };
+        (l as f32 * d1).max(guard)
+    };
+    let mut l = 0;
+    while l + 1 < levels && distance >= switch(l + 1) {
+        l += 1;
     }
-    let start = 1.0 - band;
-    let fade = (band > 0.0 && s - l > start).then(|| (s - l - start) / band);
-    (l.max(0.0) as u32, fade)
+    let mut fade = None;
+    if p.band > 0.0 && l + 1 < levels {
+        let start = switch(l + 1) - p.band * d1;
+        if distance > start {
+            fade = Some((distance - start) / (p.band * d1));
+        }
+    }
+    (l as u32, fade)
 }
 
 /// The fade step (0..=126) of `t`, as the instance entries carry it.
@@ -79,8 +104,23 @@ pub fn fade_step(t: f32) -> u32 {
 /// An object's triangle size (m): the square root of its mesh's
 /// geometric-mean area scaled by the transform (`|det|^(2/3)`).
 pub fn object_size(mean_area: f32, transform: &glam::Mat4) -> f32 {
-    let det = glam::Mat3::from_mat4(*transform).determinant().abs();
-    (mean_area * det.powf(2.0 / 3.0)).sqrt()
+    (mean_area * linear_scale(transform).powi(2)).sqrt()
+}
+
+/// The transform's mean linear scale, `|det|^(1/3)` (geometric errors).
+pub fn linear_scale(transform: &glam::Mat4) -> f32 {
+    glam::Mat3::from_mat4(*transform)
+        .determinant()
+        .abs()
+        .powf(1.0 / 3.0)
+}
+
+/// A simplified level: its indices and its geometric error (mesh units,
+/// accumulated over the chain).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Level {
+    pub indices: Vec<u32>,
+    pub error: f32,
 }
 
 /// Distance from `p` to the box (0 inside).
@@ -124,8 +164,8 @@ pub fn geometric_mean_area(vertices: &[Vertex], indices: &[u32]) -> f32 {
 /// triangles stay above the threshold up to `2 k d_1`), with the
 /// simplifier's error bound growing per level (2 %, 4 %, 8 % of the mesh's
 /// extent). Empty for small meshes or ones the simplifier cannot reduce.
-pub fn lod_chain(mesh: &Mesh) -> Vec<Vec<u32>> {
-    let mut chain: Vec<Vec<u32>> = Vec::new();
+pub fn lod_chain(mesh: &Mesh) -> Vec<Level> {
+    let mut chain: Vec<Level> = Vec::new();
     if mesh.triangle_count() < MIN_TRIANGLES || mesh.vertices.is_empty() {
         return chain;
     }
@@ -134,23 +174,31 @@ pub fn lod_chain(mesh: &Mesh) -> Vec<Vec<u32>> {
     else {
         return chain;
     };
+    // meshoptimizer's errors are relative to this extent.
+    let extent = meshopt::simplify_scale(&adapter);
     for level in 1..MAX_LODS {
-        let previous = chain.last().unwrap_or(&mesh.indices);
+        let (previous, previous_error) = chain
+            .last()
+            .map_or((&mesh.indices, 0.0), |l| (&l.indices, l.error));
         let target = (previous.len() / 12) * 3;
-        let error = 0.02 * (1u32 << (level - 1)) as f32;
+        let limit = 0.02 * (1u32 << (level - 1)) as f32;
+        let mut error = 0.0f32;
         let indices = meshopt::simplify(
             previous,
             &adapter,
             target,
-            error,
+            limit,
             meshopt::SimplifyOptions::empty(),
-            None,
+            Some(&mut error),
         );
         let reduced = indices.len() as f32 <= MIN_REDUCTION * previous.len() as f32;
         if indices.len() < 3 || !reduced {
             break;
         }
-        chain.push(indices);
+        chain.push(Level {
+            indices,
+            error: previous_error + error * extent,
+        });
     }
     chain
 }
@@ -190,42 +238,59 @@ mod tests {
         assert!((k - 25.0).abs() < 1e-4, "{k}");
         // Size 0.1 m: d_1 = 2.5 m; a 0.01 m^2 triangle at 2.5 m covers
         // 0.01 * (50 / 2.5)^2 = 4 px, the threshold.
-        let at = |d| level(d, 0.1, k, 4);
+        let errors = [0.0; 4];
+        let pop = Selection {
+            scale: k,
+            focal_px: focal_px(90.0, 100),
+            ..Selection::default()
+        };
+        let at = |d| choice(d, 0.1, 1.0, &errors, &pop).0;
         assert_eq!(
             [at(0.0), at(2.4), at(2.6), at(5.1), at(7.6), at(1e6)],
             [0, 0, 1, 2, 3, 3]
         );
-        assert_eq!(level(100.0, 0.1, 0.0, 4), 0, "LOD off");
+        let off = Selection { scale: 0.0, ..pop };
+        assert_eq!(choice(100.0, 0.1, 1.0, &errors, &off).0, 0, "LOD off");
+        assert_eq!(choice(100.0, 0.1, 1.0, &[0.0], &pop).0, 0, "one level");
+        assert_eq!(distance_scale(90.0, 100, 0.0), 0.0);
+        // The error guard at 1 px: level 1's 0.01 m error is 1 px at
+        // 0.01 * 50 / 1 = 0.5 m (before d_1), levels 2 and 3's 0.2 m at 10 m
+        // (after 2 d_1 = 5 m and 3 d_1 = 7.5 m).
+        let guarded = Selection {
+            max_error_px: 1.0,
+            ..pop
+        };
+        let guard = [0.0, 0.01, 0.2, 0.2];
+        let g = |d| choice(d, 0.1, 1.0, &guard, &guarded).0;
+        assert_eq!([g(2.6), g(5.1), g(9.9), g(10.1)], [1, 1, 1, 3]);
+        // A twice larger object shows its error twice as large.
+        assert_eq!(choice(10.1, 0.1, 2.0, &guard, &guarded).0, 1);
         // With a band of 0.2: fading from 0.8 d_1 to d_1, steady after.
-        assert_eq!(choice(1.9, 0.1, k, 4, 0.2), (0, None));
-        let (l, t) = choice(2.25, 0.1, k, 4, 0.2);
+        let band = Selection { band: 0.2, ..pop };
+        let c = |d| choice(d, 0.1, 1.0, &errors, &band);
+        assert_eq!(c(1.9), (0, None));
+        let (l, t) = c(2.25);
         assert_eq!(l, 0);
         assert!((t.unwrap_or(-1.0) - 0.5).abs() < 1e-4);
-        assert_eq!(choice(2.6, 0.1, k, 4, 0.2), (1, None));
+        assert_eq!(c(2.6), (1, None));
+        assert_eq!(c(1e6), (3, None), "no fade past the last");
         assert_eq!(
-            choice(1e6, 0.1, k, 4, 0.2),
-            (3, None),
-            "no fade past the last"
+            choice(2.25, 0.1, 1.0, &errors, &pop),
+            (0, None),
+            "band 0 pops"
         );
-        assert_eq!(choice(2.25, 0.1, k, 4, 0.0), (0, None), "band 0 pops");
         assert_eq!(
             [fade_step(0.0), fade_step(0.5), fade_step(0.999)],
             [0, 63, 126]
         );
-        assert_eq!(level(100.0, 0.1, k, 1), 0, "one level");
-        assert_eq!(distance_scale(90.0, 100, 0.0), 0.0);
         // A uniform scale s multiplies the size by s.
         let m = glam::Mat4::from_scale(glam::Vec3::splat(3.0));
         assert!((object_size(4.0, &m) - 6.0).abs() < 1e-4);
+        assert!((linear_scale(&m) - 3.0).abs() < 1e-5);
         let c = glam::Vec3::ZERO;
-        assert_eq!(
-            distance_to_box(glam::Vec3::new(0.5, 0.0, 0.0), c, glam::Vec3::ONE),
-            0.0
-        );
-        assert!(
-            (distance_to_box(glam::Vec3::new(4.0, 5.0, 0.0), c, glam::Vec3::ONE) - 5.0).abs()
-                < 1e-5
-        );
+        let e = glam::Vec3::ONE;
+        assert_eq!(distance_to_box(glam::Vec3::new(0.5, 0.0, 0.0), c, e), 0.0);
+        assert!((distance_to_box(glam::Vec3::new(4.0, 5.0, 0.0), c, e) - 5.0).abs() < 1e-5);
     }
 
     #[test]
@@ -234,7 +299,12 @@ mod tests {
         let chain = lod_chain(&mesh);
         assert!(chain.len() >= 2, "{} levels", chain.len());
         let mut previous = mesh.indices.len();
-        for (l, lod) in chain.iter().enumerate() {
+        let mut error = 0.0;
+        for (l, level) in chain.iter().enumerate() {
+            let lod = &level.indices;
+            // Errors grow along the chain and stay small on a unit sphere.
+            assert!(level.error >= error && level.error < 0.3, "{}", level.error);
+            error = level.error;
             assert_eq!(lod.len() % 3, 0);
             assert!(lod.iter().all(|&i| (i as usize) < mesh.vertices.len()));
             assert!(

@@ -31,7 +31,8 @@ struct CullParams {
     // xyz: the camera (LOD distances for every view), w: E2 distance scale
     // f / sqrt(T) (0: LOD0 everywhere)
     eye: vec4f,
-    // x: transition band, a fraction of d1 (0: levels pop)
+    // x: transition band, a fraction of d1 (0: levels pop); y: focal length
+    // (px); z: largest geometric error a level may show (px; 0: no guard)
     lod: vec4f,
 }
 
@@ -40,7 +41,8 @@ struct CullView {
     planes: array<vec4f, 6>,
 }
 
-// w of center: the object's triangle size (m), sqrt of its geometric-mean area
+// w of center: the object's triangle size (m), sqrt of its geometric-mean
+// area; w of half_extent: its linear scale
 struct Bounds {
     center: vec4f,
     half_extent: vec4f,
@@ -71,6 +73,8 @@ struct Batch {
     _pad2: u32,
     // per level: first index, index count
     lod: array<vec2u, 4>,
+    // per level: geometric error (mesh units)
+    error: vec4f,
 }
 
 // Per (view, chunk) and list (kind * MAX_LODS + level): kept bits (0-31,
@@ -111,26 +115,38 @@ fn outside(b: Bounds, v: CullView) -> bool {
     return false;
 }
 
-// E2 (scene/lod.rs `choice`): x the level floor(d / d1), d1 = size * scale,
-// clamped to the batch's levels, d from the eye to the box; y the fade
-// t in [0, 1) toward the next level in the band before it, -1 steady.
-fn lod_choice(b: Bounds, levels: u32) -> vec2f {
+// E2 (scene/lod.rs `choice`, the same steps): x the level, y the fade t in
+// [0, 1) toward the next level in the band before it, -1 steady. Level l
+// takes over at S_l = max(l d1, e_l s f / E): multiples of d1 = size *
+// scale, and no level whose error e_l (times the object's scale s) would
+// show more than E pixels.
+fn switch_distance(b: Bounds, batch: Batch, l: u32, d1: f32) -> f32 {
+    var guard = 0.0;
+    if (params.lod.z > 0.0) {
+        guard = batch.error[l] * b.half_extent.w * params.lod.y / params.lod.z;
+    }
+    return max(f32(l) * d1, guard);
+}
+
+fn lod_choice(b: Bounds, batch: Batch) -> vec2f {
     let d1 = b.center.w * params.eye.w;
+    let levels = min(batch.lods, MAX_LODS);
     if (levels <= 1u || d1 <= 0.0) {
         return vec2f(0.0, -1.0);
     }
     let d = length(max(abs(params.eye.xyz - b.center.xyz) - b.half_extent.xyz, vec3f(0.0)));
-    let s = d / d1;
-    let l = floor(s);
-    if (l >= f32(levels - 1u)) {
-        return vec2f(f32(levels - 1u), -1.0);
+    var l = 0u;
+    while (l + 1u < levels && d >= switch_distance(b, batch, l + 1u, d1)) {
+        l += 1u;
     }
     let band = params.lod.x;
-    let start = 1.0 - band;
-    if (band > 0.0 && s - l > start) {
-        return vec2f(max(l, 0.0), (s - l - start) / band);
+    if (band > 0.0 && l + 1u < levels) {
+        let start = switch_distance(b, batch, l + 1u, d1) - band * d1;
+        if (d > start) {
+            return vec2f(f32(l), (d - start) / (band * d1));
+        }
     }
-    return vec2f(max(l, 0.0), -1.0);
+    return vec2f(f32(l), -1.0);
 }
 
 // The fade step (0..126) of t: codes 1 + q (out) and 128 + q (in).
@@ -162,7 +178,7 @@ fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i:
     if (i < chunk.count) {
         let b = bounds[chunk.first_object + i];
         if (!outside(b, views[view])) {
-            let c = lod_choice(b, batches[chunk.batch].lods);
+            let c = lod_choice(b, batches[chunk.batch]);
             let l = u32(c.x);
             let bit = 1u << (i % 32u);
             if (c.y < 0.0) {
@@ -239,7 +255,7 @@ fn cs_write(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i
     let region = params.objects + view * 2u * params.objects + 2u * batch.first_object;
     let bit = i % 32u;
     // The fade code, recomputed exactly as cs_test chose the lists.
-    let c = lod_choice(bounds[chunk.first_object + i], batch.lods);
+    let c = lod_choice(bounds[chunk.first_object + i], batch);
     var q = 0u;
     if (c.y >= 0.0) {
         q = fade_step(c.y);

@@ -61,7 +61,8 @@ struct ParamsGpu {
     _pad: [u32; 3],
     /// xyz the eye, w the E2 distance scale (0: LOD0).
     eye: [f32; 4],
-    /// x the E2 transition band, a fraction of d1 (0: levels pop).
+    /// E2: x the transition band (a fraction of d1; 0: levels pop), y the
+    /// focal length (px), z the largest geometric error (px; 0: no guard).
     lod: [f32; 4],
 }
 
@@ -126,6 +127,8 @@ pub struct BatchGpu {
     _pad: [u32; 3],
     /// Per level: first index, index count.
     pub lod: [[u32; 2]; MAX_LODS],
+    /// Per level: geometric error (mesh units).
+    pub error: [f32; MAX_LODS],
 }
 
 /// Which pipeline a batch draws with.
@@ -178,11 +181,13 @@ impl CullLayout {
             let mesh = scene.object_mesh.get(d.object as usize);
             let levels = mesh.and_then(|&m| scene.lods.get(m as usize));
             let mut lod = [[0; 2]; MAX_LODS];
+            let mut error = [0.0; MAX_LODS];
             lod[0] = [d.first_index, d.index_count];
             let mut lods = 1;
-            for (l, &(first, count)) in levels.into_iter().flatten().enumerate().skip(1) {
+            for (l, r) in levels.into_iter().flatten().enumerate().skip(1) {
                 if l < MAX_LODS {
-                    lod[l] = [first, count];
+                    lod[l] = [r.first_index, r.index_count];
+                    error[l] = r.error;
                     lods = l as u32 + 1;
                 }
             }
@@ -194,6 +199,7 @@ impl CullLayout {
                 base_vertex: d.base_vertex,
                 _pad: [0; 3],
                 lod,
+                error,
             });
         }
         (self.batches.len() - before) as u32
@@ -400,8 +406,13 @@ impl CullPass {
                 objects: l.objects,
                 opaque_batches: l.opaque_batches,
                 _pad: [0; 3],
-                eye: lod.eye.extend(lod.scale).to_array(),
-                lod: [lod.band, 0.0, 0.0, 0.0],
+                eye: lod.eye.extend(lod.selection.scale).to_array(),
+                lod: [
+                    lod.selection.band,
+                    lod.selection.focal_px,
+                    lod.selection.max_error_px,
+                    0.0,
+                ],
             };
             ctx.queue
                 .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));

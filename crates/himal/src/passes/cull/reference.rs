@@ -35,11 +35,12 @@ pub fn outside(b: &BoundsGpu, view: &CullView) -> bool {
     margin(b, view) < 0.0
 }
 
-/// The level and fade the box draws at under `lod` with `levels` levels
-/// (as `lod_choice` in `cull.wgsl`).
-pub fn lod_of(b: &BoundsGpu, levels: u32, lod: &LodView) -> (u32, Option<f32>) {
+/// The level and fade the box draws at under `lod` in `batch` (as
+/// `lod_choice` in `cull.wgsl`).
+pub fn lod_of(b: &BoundsGpu, batch: &super::BatchGpu, lod: &LodView) -> (u32, Option<f32>) {
     let d = distance_to_box(lod.eye, b.center(), b.half_extent());
-    choice(d, b.center[3], lod.scale, levels, lod.band)
+    let errors = &batch.error[..(batch.lods as usize).min(MAX_LODS)];
+    choice(d, b.center[3], b.half_extent[3], errors, &lod.selection)
 }
 
 /// The culled lists of `views` over `layout`, levels chosen from `lod`.
@@ -59,7 +60,7 @@ pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResul
                 if outside(b, view) {
                     continue;
                 }
-                match lod_of(b, batch.lods, lod) {
+                match lod_of(b, batch, lod) {
                     (l, None) => lists[l as usize].push(o),
                     (l, Some(t)) => {
                         let q = fade_step(t);
