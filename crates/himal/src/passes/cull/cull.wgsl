@@ -4,7 +4,7 @@
 // Each kept object draws at its E2 level (triangle size; docs/techniques/E2.md).
 // Three dispatches in one node, deterministic (no atomic order reaches memory):
 //   cs_test  (chunk, view): which of a chunk's <= 64 objects the view keeps, per level -> masks
-//   cs_args  (batch, view): each chunk's offset per level in its batch, the draws' arguments
+//   cs_args  (batch, view): each chunk's offset per list in its batch (a scan), the draws' arguments
 //   cs_write (chunk, view): each kept object at offset + rank -> instances
 // A batch is the consecutive objects of one mesh; chunks split a batch in 64s.
 // Near a transition (the last `band` of a level's distance interval) an
@@ -201,45 +201,97 @@ fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i:
     }
 }
 
+// cs_args: one workgroup per (batch, view). The lists' offsets over the
+// batch's chunks are a scan: totals first (strided sums, then a reduction),
+// then blocks of 64 chunks, each an inclusive Hillis-Steele scan added to the
+// running offsets, so a batch of 100,000 objects is not one thread's loop.
+var<workgroup> scan: array<array<u32, 12>, 64>;
+var<workgroup> totals: array<u32, 12>;
+var<workgroup> base: array<u32, 12>;
+var<workgroup> running: array<u32, 12>;
+var<workgroup> batch_chunks: u32;
+
 @compute @workgroup_size(64)
-fn cs_args(@builtin(global_invocation_id) id: vec3u) {
-    let view = id.y;
-    if (id.x >= params.batches) {
-        return;
+fn cs_args(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) t: u32) {
+    let view = wg.y;
+    let batch = batches[wg.x];
+    let first = view * params.chunks + batch.first_chunk;
+    if (t == 0u) {
+        batch_chunks = batch.chunks;
     }
-    let batch = batches[id.x];
-    // Each list's total, then its place after the earlier lists.
-    var total: array<u32, 12>;
-    for (var k = 0u; k < batch.chunks; k++) {
-        let m = view * params.chunks + batch.first_chunk + k;
+    let n = workgroupUniformLoad(&batch_chunks);
+    // Each list's total.
+    var sum: array<u32, 12>;
+    for (var k = t; k < n; k += 64u) {
+        let count = masks[first + k].count;
         for (var j = 0u; j < LISTS; j++) {
-            total[j] += masks[m].count[j];
+            sum[j] += count[j];
         }
     }
-    var base: array<u32, 12>;
-    var sum = 0u;
-    for (var j = 0u; j < LISTS; j++) {
-        base[j] = sum;
-        sum += total[j];
+    scan[t] = sum;
+    workgroupBarrier();
+    if (t < LISTS) {
+        var total = 0u;
+        for (var i = 0u; i < 64u; i++) {
+            total += scan[i][t];
+        }
+        totals[t] = total;
     }
-    var offset = base;
-    for (var k = 0u; k < batch.chunks; k++) {
-        let m = view * params.chunks + batch.first_chunk + k;
+    workgroupBarrier();
+    // The lists one after the other in the batch's region.
+    if (t == 0u) {
+        var at = 0u;
         for (var j = 0u; j < LISTS; j++) {
-            masks[m].offset[j] = offset[j];
-            offset[j] += masks[m].count[j];
+            base[j] = at;
+            running[j] = at;
+            at += totals[j];
         }
     }
-    let region = params.objects + view * 2u * params.objects + 2u * batch.first_object;
-    for (var j = 0u; j < LISTS; j++) {
-        let level = j % MAX_LODS;
+    workgroupBarrier();
+    if (t < LISTS) {
+        let level = t % MAX_LODS;
+        let region = params.objects + view * 2u * params.objects + 2u * batch.first_object;
         var a: DrawArgs;
         a.index_count = batch.lod[level].y;
-        a.instance_count = total[j];
+        a.instance_count = totals[t];
         a.first_index = batch.lod[level].x;
         a.base_vertex = batch.base_vertex;
-        a.first_instance = region + base[j];
-        args[args_index(view, id.x, j / MAX_LODS, level)] = a;
+        a.first_instance = region + base[t];
+        args[args_index(view, wg.x, t / MAX_LODS, level)] = a;
+    }
+    // Each chunk's offset per list.
+    for (var block = 0u; block < n; block += 64u) {
+        let k = block + t;
+        var own: array<u32, 12>;
+        if (k < n) {
+            own = masks[first + k].count;
+        }
+        scan[t] = own;
+        workgroupBarrier();
+        for (var step = 1u; step < 64u; step <<= 1u) {
+            var v = scan[t];
+            if (t >= step) {
+                let o = scan[t - step];
+                for (var j = 0u; j < LISTS; j++) {
+                    v[j] += o[j];
+                }
+            }
+            workgroupBarrier();
+            scan[t] = v;
+            workgroupBarrier();
+        }
+        if (k < n) {
+            var offset: array<u32, 12>;
+            for (var j = 0u; j < LISTS; j++) {
+                offset[j] = running[j] + scan[t][j] - own[j];
+            }
+            masks[first + k].offset = offset;
+        }
+        workgroupBarrier();
+        if (t < LISTS) {
+            running[t] += scan[63][t];
+        }
+        workgroupBarrier();
     }
 }
 

@@ -352,10 +352,11 @@ impl CullPass {
                 "{} objects exceed the {MAX_OBJECTS} an instance entry can name",
                 layout.objects
             ))
-        } else if layout.chunks.len() as u64 > u64::from(max_groups) {
+        } else if layout.chunks.len().max(layout.batches.len()) as u64 > u64::from(max_groups) {
             Some(format!(
-                "{} chunks exceed the adapter's {max_groups} workgroups per dimension",
-                layout.chunks.len()
+                "{} chunks or {} batches exceed the adapter's {max_groups} workgroups per dimension",
+                layout.chunks.len(),
+                layout.batches.len()
             ))
         } else {
             None
@@ -461,7 +462,7 @@ impl CullPass {
             .dispatch_with(move |cp| {
                 cp.dispatch_workgroups(chunks, n, 1);
                 cp.set_pipeline(args_pipeline);
-                cp.dispatch_workgroups(batches.div_ceil(64), n, 1);
+                cp.dispatch_workgroups(batches, n, 1);
                 cp.set_pipeline(write);
                 cp.dispatch_workgroups(chunks, n, 1);
             });
