@@ -248,6 +248,8 @@ pub struct SceneGpu {
     pub object_mesh: Vec<u32>,
     /// E2: per mesh its levels, LOD0 first.
     pub lods: Vec<Vec<LodRange>>,
+    /// Some mesh has more than one level (checked once, at upload).
+    pub has_lods: bool,
     /// E2: this frame's LOD selection for draws recorded on the CPU (set by
     /// `frame::plan`; scale 0 = LOD0 everywhere).
     pub lod: std::sync::Mutex<LodView>,
@@ -440,6 +442,7 @@ impl SceneGpu {
                 bounds,
                 cull_bounds,
                 object_mesh,
+                has_lods: lods.iter().any(|l| l.len() > 1),
                 lods,
                 lod: std::sync::Mutex::new(LodView::default()),
                 triangles,
@@ -500,7 +503,7 @@ impl SceneGpu {
     /// mesh has a chain.
     pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        if lod.selection.scale <= 0.0 || self.lods.iter().all(|l| l.len() < 2) {
+        if lod.selection.scale <= 0.0 || !self.has_lods {
             return std::borrow::Cow::Borrowed(draws);
         }
         let at = |d: &Draw| {

@@ -91,7 +91,7 @@ impl GBufferKey {
     /// temporal anti-aliasing.
     pub fn for_scene(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
         let mut keys = vec![Self::VERTEX];
-        if scene.lods.iter().any(|l| l.len() > 1) {
+        if scene.has_lods {
             keys.push(Self::VERTEX_DITHER);
         }
         if !scene.draws_vegetation.is_empty() {
