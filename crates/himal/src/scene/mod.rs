@@ -123,6 +123,7 @@ mod place;
 pub mod primitives;
 mod terrain;
 pub mod vegetation;
+pub mod world;
 
 use std::path::{Path, PathBuf};
 

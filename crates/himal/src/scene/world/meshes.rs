@@ -1,0 +1,216 @@
+//! The world's shared meshes, one per [`InstanceKind`], built once: the
+//! instances only move, turn, scale and tint them. Each mesh's local origin
+//! is at its base (where it meets the ground), not its centre.
+
+use glam::Vec3;
+
+use super::InstanceKind;
+use crate::scene::noise;
+use crate::scene::primitives::{self, MeshBuilder};
+use crate::scene::{Aabb, MaterialDesc, Mesh};
+
+fn material(name: &str, albedo: [f32; 3], glossiness: f32) -> MaterialDesc {
+    MaterialDesc {
+        name: name.into(),
+        albedo: Vec3::from(albedo),
+        glossiness,
+        ..MaterialDesc::default()
+    }
+}
+
+/// Moves every vertex by `d` (centred primitives to base origins).
+fn offset(mut m: Mesh, d: Vec3) -> Mesh {
+    for v in &mut m.vertices {
+        v.position = (Vec3::from(v.position) + d).to_array();
+    }
+    m.bounds = Aabb::new(m.bounds.min + d, m.bounds.max + d);
+    m
+}
+
+/// Appends `b`'s triangles to `a`.
+fn merge(mut a: Mesh, b: Mesh) -> Mesh {
+    let base = a.vertices.len() as u32;
+    a.indices.extend(b.indices.iter().map(|i| i + base));
+    a.vertices.extend(b.vertices);
+    a.bounds = a.bounds.union(&b.bounds);
+    a
+}
+
+/// A boulder: a sphere displaced by seeded noise, normals recomputed, unit size.
+fn rock(seed: u32) -> Mesh {
+    let m = material("rock", [0.36, 0.35, 0.33], 0.28);
+    let mut mesh = primitives::uv_sphere(format!("rock{seed}"), 0.5, 28, 14, &m);
+    let f = noise::Fractal {
+        octaves: 4,
+        ..Default::default()
+    };
+    for v in &mut mesh.vertices {
+        let n = Vec3::from(v.normal);
+        let k = noise::fbm(seed, n.x * 1.7 + n.y * 0.3, n.z * 1.7 - n.y * 0.9, f);
+        // Flattened underside, lumpy top.
+        let p = n * 0.5 * (1.0 + 0.45 * k);
+        v.position = [p.x, p.y.max(-0.28), p.z];
+    }
+    recompute_normals(&mut mesh);
+    let b = Aabb::from_points(mesh.vertices.iter().map(|v| Vec3::from(v.position)));
+    let lift = Vec3::Y * -b.min.y;
+    let mesh = Mesh { bounds: b, ..mesh };
+    offset(mesh, lift)
+}
+
+/// Area-weighted vertex normals (shared vertices; seams keep their own).
+fn recompute_normals(m: &mut Mesh) {
+    let mut acc = vec![Vec3::ZERO; m.vertices.len()];
+    for t in m.indices.chunks_exact(3) {
+        let p = |i: u32| Vec3::from(m.vertices[i as usize].position);
+        let n = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
+        for &i in t {
+            acc[i as usize] += n;
+        }
+    }
+    for (v, n) in m.vertices.iter_mut().zip(acc) {
+        let n = n.normalize_or(Vec3::Y);
+        let t = Vec3::from_slice(&v.tangent[..3]);
+        let t = (t - n * n.dot(t)).normalize_or(n.any_orthonormal_vector());
+        v.normal = n.to_array();
+        v.tangent = [t.x, t.y, t.z, 1.0];
+    }
+}
+
+/// Unit walls (1 x 1 x 1 m box standing on its base); instances scale it.
+fn house() -> Mesh {
+    let m = material("plaster", [0.95, 0.95, 0.95], 0.25);
+    offset(
+        primitives::cuboid("house".into(), Vec3::ONE, &m),
+        Vec3::Y * 0.5,
+    )
+}
+
+/// Unit roof prism on its base; instances scale it to the house.
+fn roof() -> Mesh {
+    let tiles = material("roof", [0.95, 0.95, 0.95], 0.35);
+    let gable = material("gable", [0.8, 0.78, 0.74], 0.25);
+    offset(
+        primitives::prism("roof".into(), Vec3::ONE, &tiles, &gable),
+        Vec3::Y * 0.5,
+    )
+}
+
+/// A 1 x 1 m field of 16 crop rows along x: alternating crop and soil strips.
+fn field() -> Mesh {
+    let crop = material("crop", [1.0, 1.0, 1.0], 0.15);
+    let soil = material("soil", [0.55, 0.45, 0.38], 0.1);
+    let mut b = MeshBuilder::new(&crop);
+    let rows = 16;
+    for r in 0..rows {
+        b.set_material(if r % 2 == 0 { &crop } else { &soil });
+        let (z0, z1) = (
+            r as f32 / rows as f32 - 0.5,
+            (r + 1) as f32 / rows as f32 - 0.5,
+        );
+        b.planar_polygon(
+            &[
+                Vec3::new(-0.5, 0.0, z0),
+                Vec3::new(-0.5, 0.0, z1),
+                Vec3::new(0.5, 0.0, z1),
+                Vec3::new(0.5, 0.0, z0),
+            ],
+            Vec3::Y,
+            Vec3::X,
+        );
+    }
+    b.finish("field".into())
+}
+
+/// A 4 m fence segment along x: two posts and two rails.
+fn fence() -> Mesh {
+    let wood = material("wood", [0.42, 0.32, 0.22], 0.2);
+    let post = |x: f32| {
+        offset(
+            primitives::cuboid("post".into(), Vec3::new(0.12, 1.2, 0.12), &wood),
+            Vec3::new(x, 0.6, 0.0),
+        )
+    };
+    let rail = |y: f32| {
+        offset(
+            primitives::cuboid("rail".into(), Vec3::new(4.0, 0.1, 0.06), &wood),
+            Vec3::new(0.0, y, 0.0),
+        )
+    };
+    let mut m = merge(merge(post(-1.9), post(1.9)), merge(rail(0.55), rail(1.0)));
+    m.name = "fence".into();
+    m
+}
+
+/// A 16 m conifer stand-in: a trunk and a cone of foliage (opaque).
+fn tree() -> Mesh {
+    let bark = material("bark", [0.30, 0.22, 0.16], 0.15);
+    let needles = material("needles", [0.09, 0.16, 0.07], 0.2);
+    let trunk = offset(
+        primitives::cylinder("trunk".into(), 0.28, 4.0, 10, &bark),
+        Vec3::Y * 2.0,
+    );
+    let mut b = MeshBuilder::new(&needles);
+    let (segments, base, top, radius) = (16u32, 2.5f32, 16.0f32, 3.0f32);
+    let slope = radius / (top - base);
+    for i in 0..segments {
+        let a0 = std::f32::consts::TAU * i as f32 / segments as f32;
+        let a1 = std::f32::consts::TAU * (i + 1) as f32 / segments as f32;
+        let rim = |a: f32| Vec3::new(a.cos() * radius, base, -a.sin() * radius);
+        let normal = |a: f32| Vec3::new(a.cos(), slope, -a.sin()).normalize();
+        let tangent = |a: f32| Vec3::new(-a.sin(), 0.0, -a.cos());
+        let am = 0.5 * (a0 + a1);
+        let v0 = b.vertex(rim(a0), normal(a0), tangent(a0), [a0 * radius, 0.0]);
+        let v1 = b.vertex(rim(a1), normal(a1), tangent(a1), [a1 * radius, 0.0]);
+        let apex = b.vertex(Vec3::Y * top, normal(am), tangent(am), [am * radius, top]);
+        b.triangle(v0, v1, apex);
+        // The cone's underside.
+        let c = b.vertex(Vec3::Y * base, Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
+        let u0 = b.vertex(rim(a0), Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
+        let u1 = b.vertex(rim(a1), Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
+        b.triangle(c, u1, u0);
+    }
+    let mut m = merge(trunk, b.finish("crown".into()));
+    m.name = "tree".into();
+    m
+}
+
+/// The mesh of every kind, in [`InstanceKind::ALL`] order.
+pub fn world_meshes() -> Vec<Mesh> {
+    InstanceKind::ALL
+        .iter()
+        .map(|k| match k {
+            InstanceKind::Rock0 => rock(11),
+            InstanceKind::Rock1 => rock(23),
+            InstanceKind::Rock2 => rock(37),
+            InstanceKind::HouseWalls => house(),
+            InstanceKind::Roof => roof(),
+            InstanceKind::Field => field(),
+            InstanceKind::Fence => fence(),
+            InstanceKind::Tree => tree(),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn meshes_stand_on_their_base_and_are_well_formed() {
+        for (k, m) in InstanceKind::ALL.iter().zip(world_meshes()) {
+            assert!(
+                m.bounds.min.y.abs() < 1e-4,
+                "{} starts at y {}",
+                k.name(),
+                m.bounds.min.y
+            );
+            assert_eq!(m.indices.len() % 3, 0);
+            assert!(m.indices.iter().all(|&i| (i as usize) < m.vertices.len()));
+            for v in &m.vertices {
+                let n = Vec3::from(v.normal);
+                assert!((n.length() - 1.0).abs() < 1e-3, "{}: normal {n}", k.name());
+            }
+        }
+    }
+}
