@@ -193,10 +193,10 @@ fn settling_is_the_same_on_every_run() {
     let w = world_with(300.0, 128);
     let eye = Vec2::new(-700.0, 1200.0);
     let layout = |s: &Streamer| {
-        let mut v: Vec<(SectorCoord, u32, Vec<u32>)> = s
+        let mut v: Vec<(SectorCoord, u32, Vec<Vec<u32>>)> = s
             .resident()
             .iter()
-            .map(|(c, r)| (*c, r.tile, r.blocks.clone()))
+            .map(|(c, r)| (*c, r.tile, r.slots.clone()))
             .collect();
         v.sort_by_key(|e| e.0);
         v

@@ -5,7 +5,8 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec2;
-use himal::scene::world::{World, WorldDesc, stream::Streamer};
+use himal::scene::world::stream::{StreamUpdate, Streamer};
+use himal::scene::world::{InstanceKind, World, WorldDesc};
 
 fn world_with(radius: f32, tiles: u32) -> Arc<World> {
     let mut desc = WorldDesc::default();
@@ -52,6 +53,9 @@ fn flight_streaming_keeps_pools_flat_and_the_surroundings_resident() {
             }
         }
         assert!(u.stats.tiles_used <= u.stats.tiles_total);
+        if f % 100 == 0 {
+            check_instance_slots(&s, &u);
+        }
         assert!(u.stats.in_flight as usize <= 4 * himal::scene::world::worker_count(0));
         // Warm-up: until the resident ring behind the camera (the unload
         // margin, 128 m) has formed.
@@ -79,4 +83,20 @@ fn flight_streaming_keeps_pools_flat_and_the_surroundings_resident() {
     // few ms only when the tests beside it take the core: the caller's
     // thread does bookkeeping only. 0.5 ms would be a thirtieth of a frame.
     assert!(median < 0.0005, "Streamer::update median {median} s");
+}
+
+/// Every resident instance sits at the slot its sector records, the slot
+/// names it back, and the regions are packed (live = resident instances).
+fn check_instance_slots(s: &Streamer, u: &StreamUpdate) {
+    let mut live = [0u32; InstanceKind::ALL.len()];
+    for r in s.resident().values() {
+        for (k, slots) in r.slots.iter().enumerate() {
+            live[k] += slots.len() as u32;
+            for (i, &slot) in slots.iter().enumerate() {
+                let want = &r.data.instances[r.by_kind[k][i] as usize];
+                assert_eq!(s.instance(InstanceKind::ALL[k], slot), Some(want));
+            }
+        }
+    }
+    assert_eq!(live.to_vec(), u.live, "regions not packed");
 }

@@ -165,6 +165,13 @@ pub struct ObjectBounds {
 }
 
 impl ObjectBounds {
+    /// Bounds no view keeps: every plane with a normal has the box wholly
+    /// behind it (a pool slot streaming has not filled).
+    pub const NONE: ObjectBounds = ObjectBounds {
+        center: [0.0; 4],
+        half_extent: [-1e30, -1e30, -1e30, 0.0],
+    };
+
     /// `size`: the object's triangle size (m), `scale` its linear scale (w
     /// of the half extent: geometric errors). An empty box becomes a point
     /// at the origin (it draws nothing).
@@ -195,6 +202,27 @@ pub struct LodView {
     pub eye: glam::Vec3,
     pub selection: crate::scene::lod::Selection,
 }
+
+/// A streamed region of the objects buffer (the open world, V6): objects
+/// `first_object..first_object + capacity` draw mesh `mesh`; streaming
+/// writes their records ([`SceneGpu::write_objects`]) and bounds, packed
+/// from the front; only the GPU-culled path draws them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoolRegion {
+    pub mesh: u32,
+    pub first_object: u32,
+    pub capacity: u32,
+}
+
+/// `Object.params.x` of an opaque object whose albedo is multiplied by
+/// `params.yzw` (`OBJECT_TINTED` in `shaders/scene.wgsl`).
+pub const OBJECT_TINTED: f32 = 3.0;
+
+// scene::world sizes its upload budget by these records.
+const _: () = assert!(
+    std::mem::size_of::<ObjectGpu>() + std::mem::size_of::<ObjectBounds>()
+        == crate::scene::world::GPU_INSTANCE_BYTES
+);
 
 /// One level of a mesh in the index buffer (E2).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -253,6 +281,10 @@ pub struct SceneGpu {
     /// E2: this frame's LOD selection for draws recorded on the CPU (set by
     /// `frame::plan`; scale 0 = LOD0 everywhere).
     pub lod: std::sync::Mutex<LodView>,
+    /// Streamed regions after the scene's own objects (empty: none).
+    pub pool: Vec<PoolRegion>,
+    /// Per mesh: first index, index count and base vertex of LOD0.
+    pub mesh_ranges: Vec<(u32, u32, i32)>,
     pub triangles: u64,
     pub bytes: u64,
     /// V6: merge runs of consecutive objects into instanced draws
@@ -275,6 +307,16 @@ pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
 
 impl SceneGpu {
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        Self::upload_with_pool(ctx, scene, &[])
+    }
+
+    /// [`Self::upload`] with streamed regions (`pool`: mesh, capacity)
+    /// after the scene's objects, empty until written.
+    pub fn upload_with_pool(
+        ctx: &GpuContext,
+        scene: &Scene,
+        pool: &[(usize, u32)],
+    ) -> Result<Self, GpuError> {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut ranges = Vec::with_capacity(scene.meshes.len());
@@ -382,6 +424,25 @@ impl SceneGpu {
             }
             triangles += index_count as u64 / 3;
         }
+        let mut regions = Vec::with_capacity(pool.len());
+        for &(mesh, capacity) in pool {
+            if mesh >= scene.meshes.len() {
+                return Err(GpuError::Other(format!(
+                    "pool region names mesh {mesh} of {}",
+                    scene.meshes.len()
+                )));
+            }
+            regions.push(PoolRegion {
+                mesh: mesh as u32,
+                first_object: objects.len() as u32,
+                capacity,
+            });
+            let n = capacity as usize;
+            objects.resize(objects.len() + n, ObjectGpu::zeroed());
+            cull_bounds.resize(cull_bounds.len() + n, ObjectBounds::NONE);
+            bounds.resize(bounds.len() + n, crate::scene::Aabb::EMPTY);
+            object_mesh.resize(object_mesh.len() + n, mesh as u32);
+        }
         if objects.is_empty() {
             objects.push(ObjectGpu::zeroed());
         }
@@ -445,6 +506,8 @@ impl SceneGpu {
                 has_lods: lods.iter().any(|l| l.len() > 1),
                 lods,
                 lod: std::sync::Mutex::new(LodView::default()),
+                pool: regions,
+                mesh_ranges: ranges,
                 triangles,
                 bytes,
                 instancing: AtomicBool::new(true),
@@ -465,6 +528,12 @@ impl SceneGpu {
             let offset = *i as u64 * std::mem::size_of::<ObjectGpu>() as u64;
             queue.write_buffer(&self.objects, offset, bytemuck::bytes_of(&gpu));
         }
+    }
+
+    /// Writes object records from `first_object` on (streamed regions).
+    pub fn write_objects(&self, queue: &wgpu::Queue, first_object: u32, objects: &[ObjectGpu]) {
+        let offset = first_object as u64 * std::mem::size_of::<ObjectGpu>() as u64;
+        queue.write_buffer(&self.objects, offset, bytemuck::cast_slice(objects));
     }
 
     /// Binds the shared vertex and index buffers.

@@ -4,6 +4,8 @@
 mod draw;
 pub mod environment;
 pub mod post_state;
+mod world;
+pub use world::WorldState;
 
 use std::collections::HashMap;
 
@@ -122,6 +124,8 @@ pub struct Renderer {
     aa_last: Option<crate::passes::aa::AaMode>,
     /// Sample offset of the last frame written to the colour TAA's ring.
     aa_last_jitter: [f32; 2],
+    /// The streamed open world (`Renderer::with_world`).
+    world: Option<world::WorldState>,
 }
 
 /// The largest single texture the renderer asks a driver for (bytes).
@@ -134,6 +138,11 @@ impl Renderer {
     /// Creates every pipeline and uploads the scene.
     pub fn new(ctx: GpuContext, scene: &Scene) -> Result<Self, Error> {
         let scene_gpu = SceneGpu::upload(&ctx, scene)?;
+        Self::from_upload(ctx, scene, scene_gpu)
+    }
+
+    /// Creates every pipeline for `scene`, uploaded as `scene_gpu`.
+    fn from_upload(ctx: GpuContext, scene: &Scene, scene_gpu: SceneGpu) -> Result<Self, Error> {
         let mut passes = Passes::new(&ctx, scene, &scene_gpu)?;
         // Pre-warm the scene's permutations: a bad one fails here, not mid-frame.
         for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu) {
@@ -204,6 +213,7 @@ impl Renderer {
             sky_table_sizes: crate::passes::sky::bruneton::TableSizes::DEFAULT,
             aa_last: None,
             aa_last_jitter: [0.0, 0.0],
+            world: None,
         })
     }
 

@@ -8,8 +8,9 @@ struct Object {
     // inverse transpose of model (for normals), 3x3 part used
     normal_matrix: mat4x4f,
     prev_model: mat4x4f,
-    // x: alpha pattern (0 opaque, 1 grass, 2 leaves); y: sway amplitude (m);
-    // zw: leaves' sway weight (local y of the bottom, 1 / height)
+    // x: alpha pattern (0 opaque, 1 grass, 2 leaves, 3 tinted opaque); y: sway
+    // amplitude (m); zw: leaves' sway weight (local y of the bottom, 1 / height);
+    // tinted: yzw the albedo tint
     params: vec4f,
 }
 
@@ -18,6 +19,17 @@ const FOLIAGE_LEAVES: u32 = 2u;
 
 fn foliage_pattern(o: Object) -> u32 {
     return u32(o.params.x + 0.5);
+}
+
+// An opaque object whose albedo params.yzw multiplies (streamed world
+// instances, gpu_scene OBJECT_TINTED).
+const OBJECT_TINTED: u32 = 3u;
+
+fn object_tint(o: Object) -> vec3f {
+    if (foliage_pattern(o) == OBJECT_TINTED) {
+        return o.params.yzw;
+    }
+    return vec3f(1.0);
 }
 
 // Sway weight: 0 at the root, 1 at the tip, quadratic (stiff base, supple tip).

@@ -148,6 +148,8 @@ pub struct CullLayout {
     pub vegetation_batches: u32,
     /// Objects in the scene (the stride of the per-view instance lists).
     pub objects: u32,
+    /// The batch of each streamed region (`SceneGpu::pool`), opaque.
+    pub pool_batches: Vec<u32>,
 }
 
 impl CullLayout {
@@ -160,6 +162,28 @@ impl CullLayout {
             ..Self::default()
         };
         layout.opaque_batches = layout.push_runs(scene, &scene.draws_opaque);
+        // Streamed regions: one batch each, chunks empty until streaming fills them.
+        for r in &scene.pool {
+            let Some(&(first_index, index_count, base_vertex)) =
+                scene.mesh_ranges.get(r.mesh as usize)
+            else {
+                continue;
+            };
+            let d = Draw {
+                first_index,
+                index_count,
+                base_vertex,
+                object: r.first_object,
+            };
+            layout.pool_batches.push(layout.batches.len() as u32);
+            layout.push_batch(scene, &d, r.capacity);
+            let b = layout.batches.len() - 1;
+            let first = layout.batches[b].first_chunk as usize;
+            for c in &mut layout.chunks[first..] {
+                c.count = 0;
+            }
+            layout.opaque_batches += 1;
+        }
         layout.vegetation_batches = layout.push_runs(scene, &scene.draws_vegetation);
         layout
     }
@@ -167,6 +191,14 @@ impl CullLayout {
     fn push_runs(&mut self, scene: &SceneGpu, draws: &[Draw]) -> u32 {
         let before = self.batches.len();
         for (d, n) in crate::gpu_scene::runs(draws) {
+            self.push_batch(scene, d, n);
+        }
+        (self.batches.len() - before) as u32
+    }
+
+    /// One batch of `n` consecutive objects from `d.object`, drawing `d`'s mesh.
+    fn push_batch(&mut self, scene: &SceneGpu, d: &Draw, n: u32) {
+        {
             let batch = self.batches.len() as u32;
             let first_chunk = self.chunks.len() as u32;
             for start in (0..n).step_by(CHUNK as usize) {
@@ -202,7 +234,6 @@ impl CullLayout {
                 error,
             });
         }
-        (self.batches.len() - before) as u32
     }
 
     /// Whether some batch has more than one level (E2 fading lists exist).
@@ -380,6 +411,45 @@ impl CullPass {
             unsupported,
             planned: 0,
         })
+    }
+
+    /// Writes the culling bounds of objects from `first_object` on
+    /// (streamed regions; the CPU copy in `layout` follows).
+    pub fn write_bounds(
+        &mut self,
+        queue: &wgpu::Queue,
+        first_object: u32,
+        bounds: &[ObjectBounds],
+    ) {
+        let at = first_object as usize;
+        let Some(dst) = self.layout.bounds.get_mut(at..at + bounds.len()) else {
+            return;
+        };
+        dst.copy_from_slice(bounds);
+        let offset = at as u64 * std::mem::size_of::<ObjectBounds>() as u64;
+        queue.write_buffer(&self.bounds, offset, bytemuck::cast_slice(bounds));
+    }
+
+    /// Streamed region `region` holds `live` objects packed from its front:
+    /// its chunks' counts cover them and no more (empty chunks cost a
+    /// workgroup that exits at once).
+    pub fn set_live(&mut self, queue: &wgpu::Queue, region: usize, live: u32) {
+        let Some(&b) = self.layout.pool_batches.get(region) else {
+            return;
+        };
+        let batch = self.layout.batches[b as usize];
+        let first = batch.first_chunk as usize;
+        let chunks = &mut self.layout.chunks[first..first + batch.chunks as usize];
+        let mut changed = false;
+        for (i, c) in chunks.iter_mut().enumerate() {
+            let count = live.saturating_sub(i as u32 * CHUNK).min(CHUNK);
+            changed |= c.count != count;
+            c.count = count;
+        }
+        if changed {
+            let offset = first as u64 * std::mem::size_of::<ChunkGpu>() as u64;
+            queue.write_buffer(&self.chunks, offset, bytemuck::cast_slice(chunks));
+        }
     }
 
     /// Whether the GPU path runs on this adapter and scene; else why not.

@@ -53,7 +53,7 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     out.clip = v.clip;
     out.normal = v.normal;
     out.tangent = vec4f(v.tangent, in.tangent.w);
-    out.color = in.color;
+    out.color = vec4f(in.color.rgb * object_tint(o), in.color.a);
     out.surface = in.surface;
     return out;
 }

@@ -21,37 +21,36 @@ pub mod terrain;
 
 use std::sync::Arc;
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 pub use path::FlightPath;
-pub use sector::{
-    GpuInstance, Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, TILE_RES,
-};
+pub use sector::{Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, TILE_RES};
 pub use terrain::{HeightSource, Village, WorldShape, WorldTerrain};
 
-use crate::scene::NamedCamera;
+use crate::scene::{Aabb, NamedCamera, Scene, SunDesc};
 
-/// Bytes of one instance as the GPU pool stores it.
-pub const GPU_INSTANCE_BYTES: usize = std::mem::size_of::<GpuInstance>();
+/// Bytes of one instance as the GPU pool stores it: its object record
+/// (model, normal and previous matrices, parameters) and its culling
+/// bounds (checked against `gpu_scene`'s types there).
+pub const GPU_INSTANCE_BYTES: usize = 208 + 32;
 
 /// Sizes of the fixed GPU pools (set by the scene file).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PoolSizes {
     /// Terrain tiles (`TILE_RES`^2 heights each).
     pub tiles: u32,
-    /// Instance records.
-    pub instances: u32,
-    /// Instances per allocation block (a sector takes whole blocks; a
-    /// block is one culling chunk).
-    pub block: u32,
+    /// Instance slots per kind, in [`InstanceKind::ALL`] order.
+    pub instances: [u32; InstanceKind::ALL.len()],
 }
 
 impl Default for PoolSizes {
+    /// Room for the default 1 km radius (about 800 sectors) where forests
+    /// and villages are densest, measured over the flight (docs/world.md).
     fn default() -> Self {
         PoolSizes {
             tiles: 1024,
-            instances: 1 << 18,
-            block: 64,
+            // rock0..2, house, roof, field, fence, tree
+            instances: [16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536],
         }
     }
 }
@@ -197,6 +196,29 @@ impl World {
             }
         });
         out
+    }
+}
+
+impl World {
+    /// The world as a [`Scene`] for the renderer: its shared meshes (one per
+    /// [`InstanceKind`], drawn from the streamed pool), its cameras, the
+    /// default sun and its bounds; no objects of its own (instances stream).
+    pub fn scene(&self) -> Scene {
+        let half = self.extent() * 0.5;
+        let top = self.desc.shape.mountain_height + self.desc.shape.hill_height + 200.0;
+        Scene {
+            path: None,
+            meshes: meshes::world_meshes(),
+            objects: Vec::new(),
+            materials: Vec::new(),
+            cameras: self.cameras.clone(),
+            sun: SunDesc::default(),
+            lights: Vec::new(),
+            bounds: Aabb::new(Vec3::new(-half, 0.0, -half), Vec3::new(half, top, half)),
+            pbr: Default::default(),
+            probes: Vec::new(),
+            environment: None,
+        }
     }
 }
 

@@ -89,36 +89,6 @@ impl Instance {
     }
 }
 
-/// An instance as the GPU pool stores it (48 bytes): the shader builds the
-/// transform from these, so a record is a quarter of a full object's.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuInstance {
-    pub position: [f32; 3],
-    pub yaw: f32,
-    pub size: [f32; 3],
-    pub bend: f32,
-    /// RGBA8 tint, little-endian.
-    pub tint: u32,
-    /// [`InstanceKind`] as u32.
-    pub kind: u32,
-    pub _pad: [u32; 2],
-}
-
-impl From<&Instance> for GpuInstance {
-    fn from(i: &Instance) -> Self {
-        GpuInstance {
-            position: i.position.to_array(),
-            yaw: i.yaw,
-            size: i.size.to_array(),
-            bend: i.bend,
-            tint: u32::from_le_bytes(i.tint),
-            kind: i.kind as u32,
-            _pad: [0; 2],
-        }
-    }
-}
-
 /// A generated sector: what streaming uploads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SectorData {

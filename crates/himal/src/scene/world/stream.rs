@@ -15,8 +15,11 @@ use std::time::{Duration, Instant};
 
 use glam::Vec2;
 
-use super::pool::SlotPool;
-use super::{SECTOR_SIZE, SectorCoord, SectorData, World};
+use super::pool::{DensePool, SlotPool};
+use super::{Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, World};
+
+/// Instance kinds (one dense pool region each).
+pub const KINDS: usize = InstanceKind::ALL.len();
 
 /// Where a resident sector lives in the GPU pools.
 #[derive(Clone, Debug)]
@@ -24,24 +27,25 @@ pub struct Residency {
     pub data: Arc<SectorData>,
     /// Layer of the terrain tile array.
     pub tile: u32,
-    /// Instance blocks (each `PoolSizes::block` records), in instance order.
-    pub blocks: Vec<u32>,
+    /// Per kind: the indices into `data.instances` of that kind, in order ...
+    pub by_kind: Vec<Vec<u32>>,
+    /// ... and the slot of each in the kind's pool region (moves as other
+    /// sectors leave).
+    pub slots: Vec<Vec<u32>>,
 }
 
-/// A sector to write into the pools.
+/// A sector whose terrain tile to write (its instances are in `dirty`).
 #[derive(Clone, Debug)]
 pub struct Upload {
     pub data: Arc<SectorData>,
     pub tile: u32,
-    pub blocks: Vec<u32>,
 }
 
-/// A sector whose pool entries are free again.
+/// A sector whose tile is free again.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Eviction {
     pub coord: SectorCoord,
     pub tile: u32,
-    pub blocks: Vec<u32>,
 }
 
 /// This frame's streaming figures.
@@ -55,9 +59,11 @@ pub struct StreamStats {
     pub in_flight: u32,
     pub tiles_used: u32,
     pub tiles_total: u32,
-    pub blocks_used: u32,
-    pub blocks_total: u32,
+    /// Live instances in all kinds' regions, and their capacity.
     pub instances: u32,
+    pub instances_total: u32,
+    /// Instance slots rewritten this frame (new, moved or emptied).
+    pub instance_writes: u32,
     pub uploaded: u32,
     pub upload_bytes: u64,
     pub evicted: u32,
@@ -72,6 +78,11 @@ pub struct StreamStats {
 pub struct StreamUpdate {
     pub evictions: Vec<Eviction>,
     pub uploads: Vec<Upload>,
+    /// Per kind: slots whose content changed, sorted, once each; a slot at
+    /// or beyond `live[kind]` is empty now ([`Streamer::instance`]).
+    pub dirty: Vec<Vec<u32>>,
+    /// Per kind: live instances (packed at the front of the region).
+    pub live: Vec<u32>,
     pub stats: StreamStats,
 }
 
@@ -86,8 +97,7 @@ pub struct Streamer {
     ready: Vec<SectorData>,
     max_in_flight: usize,
     tiles: SlotPool,
-    blocks: SlotPool,
-    block: u32,
+    kinds: Vec<DensePool<SectorCoord>>,
 }
 
 impl Drop for Streamer {
@@ -104,7 +114,6 @@ impl Streamer {
     /// Starts the worker threads; nothing is resident yet.
     pub fn new(world: Arc<World>) -> Streamer {
         let pools = world.desc.pools;
-        let block = pools.block.max(1);
         let workers = super::worker_count(world.desc.stream.workers);
         let (request_tx, request_rx) = channel::<SectorCoord>();
         let (result_tx, results) = channel::<SectorData>();
@@ -139,8 +148,7 @@ impl Streamer {
             ready: Vec::new(),
             max_in_flight,
             tiles: SlotPool::new(pools.tiles),
-            blocks: SlotPool::new(pools.instances / block),
-            block,
+            kinds: pools.instances.iter().map(|&n| DensePool::new(n)).collect(),
         }
     }
 
@@ -151,6 +159,19 @@ impl Streamer {
     /// Resident sectors and where they live.
     pub fn resident(&self) -> &HashMap<SectorCoord, Residency> {
         &self.resident
+    }
+
+    /// The instance in `kind`'s region at `slot`; `None` past the live ones.
+    pub fn instance(&self, kind: InstanceKind, slot: u32) -> Option<&Instance> {
+        let (c, i) = self.kinds.get(kind as usize)?.owner(slot)?;
+        let r = self.resident.get(&c)?;
+        let at = *r.by_kind.get(kind as usize)?.get(i as usize)?;
+        r.data.instances.get(at as usize)
+    }
+
+    /// Capacity of each kind's region.
+    pub fn capacities(&self) -> Vec<u32> {
+        self.kinds.iter().map(|k| k.capacity()).collect()
     }
 
     /// Whether the worker threads started (none where the platform has no threads).
@@ -258,17 +279,23 @@ impl Streamer {
     }
 
     fn evict(&mut self, c: SectorCoord, u: &mut StreamUpdate) {
-        if let Some(r) = self.resident.remove(&c) {
-            self.tiles.free(r.tile);
-            for &b in &r.blocks {
-                self.blocks.free(b);
-            }
-            u.evictions.push(Eviction {
-                coord: c,
-                tile: r.tile,
-                blocks: r.blocks,
+        let Some(r) = self.resident.remove(&c) else {
+            return;
+        };
+        self.tiles.free(r.tile);
+        u.dirty.resize(KINDS, Vec::new());
+        for (k, slots) in r.slots.iter().enumerate() {
+            let resident = &mut self.resident;
+            self.kinds[k].remove(slots, &mut u.dirty[k], |owner, i, slot| {
+                if let Some(o) = resident.get_mut(&owner) {
+                    o.slots[k][i as usize] = slot;
+                }
             });
         }
+        u.evictions.push(Eviction {
+            coord: c,
+            tile: r.tile,
+        });
     }
 
     /// Takes finished sectors from the workers without waiting.
@@ -304,12 +331,20 @@ impl Streamer {
                 waiting.push(data);
                 continue;
             }
-            let blocks_needed = (data.instances.len() as u32).div_ceil(self.block);
+            let mut by_kind = vec![Vec::new(); KINDS];
+            for (i, inst) in data.instances.iter().enumerate() {
+                by_kind[inst.kind as usize].push(i as u32);
+            }
+            let fits = |s: &Self| {
+                s.tiles.available() > 0
+                    && by_kind
+                        .iter()
+                        .zip(&s.kinds)
+                        .all(|(v, k)| v.len() as u32 <= k.available())
+            };
             let placed = loop {
-                if self.tiles.available() > 0 && self.blocks.available() >= blocks_needed {
-                    let tile = self.tiles.alloc();
-                    let blocks = self.blocks.alloc_n(blocks_needed);
-                    break tile.zip(blocks);
+                if fits(self) {
+                    break self.tiles.alloc();
                 }
                 // Farthest resident first, only if it is farther than this one.
                 let victim = self
@@ -324,20 +359,33 @@ impl Streamer {
                 }
             };
             self.in_flight.remove(&data.coord);
-            let Some((tile, blocks)) = placed else {
+            let Some(tile) = placed else {
                 continue;
             };
             spent += bytes;
+            u.dirty.resize(KINDS, Vec::new());
+            let slots: Vec<Vec<u32>> = by_kind
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    let s = self.kinds[k]
+                        .push(data.coord, v.len() as u32)
+                        .unwrap_or_default();
+                    u.dirty[k].extend_from_slice(&s);
+                    s
+                })
+                .collect();
             let data = Arc::new(data);
             self.resident.insert(
                 data.coord,
                 Residency {
                     data: data.clone(),
                     tile,
-                    blocks: blocks.clone(),
+                    by_kind,
+                    slots,
                 },
             );
-            u.uploads.push(Upload { data, tile, blocks });
+            u.uploads.push(Upload { data, tile });
         }
         u.stats.upload_bytes += spent;
         self.ready = waiting;
@@ -361,7 +409,14 @@ impl Streamer {
     }
 
     fn finish_stats(&self, wanted: &[(f32, SectorCoord)], over: u32, u: &mut StreamUpdate) {
+        u.dirty.resize(KINDS, Vec::new());
+        for d in &mut u.dirty {
+            d.sort_unstable();
+            d.dedup();
+        }
+        u.live = self.kinds.iter().map(|k| k.live()).collect();
         let st = &mut u.stats;
+        st.instance_writes = u.dirty.iter().map(|d| d.len() as u32).sum();
         st.wanted = wanted.len() as u32;
         st.missing = wanted
             .iter()
@@ -371,13 +426,8 @@ impl Streamer {
         st.in_flight = self.in_flight.len() as u32;
         st.tiles_used = self.tiles.used();
         st.tiles_total = self.tiles.capacity();
-        st.blocks_used = self.blocks.used();
-        st.blocks_total = self.blocks.capacity();
-        st.instances = self
-            .resident
-            .values()
-            .map(|r| r.data.instances.len() as u32)
-            .sum();
+        st.instances = self.kinds.iter().map(|k| k.live()).sum();
+        st.instances_total = self.kinds.iter().map(|k| k.capacity()).sum();
         st.uploaded = u.uploads.len() as u32;
         st.evicted = u.evictions.len() as u32;
         st.over_capacity = over;

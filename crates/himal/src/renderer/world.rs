@@ -1,0 +1,168 @@
+//! The streamed world in the renderer (`--scene world`): each frame the
+//! streamer's changes become object records and culling bounds in the
+//! scene's pool regions (one per instance kind), and the regions' live
+//! counts become the culling chunks' counts. Sector generation runs on the
+//! streamer's workers; this thread only copies what changed.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use glam::Vec2;
+
+use super::*;
+use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
+use crate::passes::cull::CullPass;
+use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
+use crate::scene::world::{Instance, InstanceKind, World};
+use crate::scene::{Aabb, lod};
+
+/// The world's streaming state between frames: the streamer and what the
+/// pool records need of each kind's mesh.
+pub struct WorldState {
+    pub streamer: Streamer,
+    /// The last applied update's figures.
+    pub stats: StreamStats,
+    /// Per kind: its mesh's bounds and geometric-mean triangle area (E2).
+    meshes: Vec<(Aabb, f32)>,
+}
+
+impl WorldState {
+    pub fn new(world: Arc<World>, scene: &Scene) -> Self {
+        let meshes = scene
+            .meshes
+            .iter()
+            .map(|m| (m.bounds, lod::geometric_mean_area(&m.vertices, &m.indices)))
+            .collect();
+        WorldState {
+            streamer: Streamer::new(world),
+            stats: StreamStats::default(),
+            meshes,
+        }
+    }
+
+    /// The GPU record and culling bounds of `instance`.
+    fn records(&self, i: &Instance) -> (ObjectGpu, ObjectBounds) {
+        let m = i.transform();
+        let (bounds, area) = self.meshes[i.kind as usize];
+        let t = i.tint.map(|c| c as f32 / 255.0);
+        let object = ObjectGpu::new(m, m, [OBJECT_TINTED, t[0], t[1], t[2]]);
+        let b = ObjectBounds::new(
+            &bounds.transform(&m),
+            lod::object_size(area, &m),
+            lod::linear_scale(&m),
+        );
+        (object, b)
+    }
+
+    /// Writes `u`'s dirty slots into `scene`'s pool regions (runs of consecutive slots, one write each)
+    /// and the regions' live counts.
+    pub fn apply(
+        &mut self,
+        u: &StreamUpdate,
+        scene: &SceneGpu,
+        cull: &mut CullPass,
+        queue: &wgpu::Queue,
+    ) {
+        for (k, dirty) in u.dirty.iter().enumerate() {
+            let (Some(&kind), Some(region)) = (InstanceKind::ALL.get(k), scene.pool.get(k)) else {
+                continue;
+            };
+            let live = u.live.get(k).copied().unwrap_or(0);
+            let mut run: Vec<(ObjectGpu, ObjectBounds)> = Vec::new();
+            let mut start = 0u32;
+            let flush = |start: u32,
+                         run: &mut Vec<(ObjectGpu, ObjectBounds)>,
+                         cull: &mut CullPass| {
+                if run.is_empty() {
+                    return;
+                }
+                let first = region.first_object + start;
+                let (objects, bounds): (Vec<ObjectGpu>, Vec<ObjectBounds>) = run.drain(..).unzip();
+                scene.write_objects(queue, first, &objects);
+                cull.write_bounds(queue, first, &bounds);
+            };
+            for &slot in dirty.iter().filter(|&&s| s < region.capacity) {
+                if !run.is_empty() && slot != start + run.len() as u32 {
+                    flush(start, &mut run, cull);
+                }
+                if run.is_empty() {
+                    start = slot;
+                }
+                let record = match self.streamer.instance(kind, slot).filter(|_| slot < live) {
+                    Some(i) => self.records(i),
+                    None => (bytemuck::Zeroable::zeroed(), ObjectBounds::NONE),
+                };
+                run.push(record);
+            }
+            flush(start, &mut run, cull);
+            cull.set_live(queue, k, live.min(region.capacity));
+        }
+        self.stats = u.stats;
+    }
+}
+
+/// The pool regions of a world scene: one per kind, its mesh is the kind's.
+pub(super) fn pool_of(world: &World) -> Vec<(usize, u32)> {
+    world
+        .desc
+        .pools
+        .instances
+        .iter()
+        .enumerate()
+        .map(|(k, &capacity)| (k, capacity))
+        .collect()
+}
+
+impl Renderer {
+    /// A renderer for the streamed `world` (`--scene world`): its meshes and
+    /// fixed pools uploaded, nothing resident until the first frame (or
+    /// [`Renderer::settle_world`]).
+    pub fn with_world(ctx: GpuContext, world: Arc<World>) -> Result<Self, Error> {
+        let scene = world.scene();
+        let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &pool_of(&world))?;
+        let mut r = Self::from_upload(ctx, &scene, scene_gpu)?;
+        r.world = Some(WorldState::new(world, &scene));
+        Ok(r)
+    }
+
+    /// Streams every sector around `camera` in (blocking, up to
+    /// `timeout`) so the next frame is complete and the same on every run.
+    pub fn settle_world(&mut self, camera: &Camera, timeout: Duration) -> Option<StreamStats> {
+        let w = self.world.as_mut()?;
+        let u = w
+            .streamer
+            .settle(Vec2::new(camera.position.x, camera.position.z), timeout);
+        w.apply(
+            &u,
+            &self.res.scene,
+            &mut self.res.passes.cull,
+            &self.ctx.queue,
+        );
+        Some(w.stats)
+    }
+
+    /// One frame of streaming for `camera` (inside `plan_frame`).
+    pub(super) fn stream_world(&mut self, camera: &Camera) {
+        if let Some(w) = self.world.as_mut() {
+            let u = w
+                .streamer
+                .update(Vec2::new(camera.position.x, camera.position.z));
+            w.apply(
+                &u,
+                &self.res.scene,
+                &mut self.res.passes.cull,
+                &self.ctx.queue,
+            );
+        }
+    }
+
+    /// The last frame's streaming figures (`None`: not a world).
+    pub fn world_stats(&self) -> Option<StreamStats> {
+        self.world.as_ref().map(|w| w.stats)
+    }
+
+    /// The streamed world (`None`: a plain scene).
+    pub fn world(&self) -> Option<&World> {
+        self.world.as_ref().map(|w| w.streamer.world())
+    }
+}
