@@ -476,6 +476,14 @@ impl TerrainPass {
         for (i, l) in desc.layers.iter().enumerate() {
             layers[i] = LayerGpu::new(l, i);
         }
+        // Grazing views want anisotropic filtering; lavapipe's (Mesa 22-24)
+        // returns per-pixel noise with it, so the CPU adapter filters
+        // trilinearly.
+        let anisotropy = if ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+            1
+        } else {
+            8
+        };
         let made = ctx.scoped("terrain", || {
             let texture = |label: &str, size: (u32, u32, u32), format, mips: u32| {
                 ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -523,7 +531,7 @@ impl TerrainPass {
                 mag_filter: wgpu::FilterMode::Linear,
                 min_filter: wgpu::FilterMode::Linear,
                 mipmap_filter: wgpu::MipmapFilterMode::Linear,
-                anisotropy_clamp: 8,
+                anisotropy_clamp: anisotropy,
                 ..Default::default()
             });
             let storage = |label: &str, bytes: &[u8]| {
