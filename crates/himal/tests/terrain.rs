@@ -765,3 +765,61 @@ fn shadow_depth_matches_the_twin() {
         "{close} of {covered}"
     );
 }
+
+/// Makes a description invalid in one way.
+type Breaker = fn(&mut TerrainDesc);
+
+#[test]
+fn bad_descriptions_and_tiles_are_errors() {
+    let _gpu = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let ctx = ctx();
+    let good = desc(4);
+    let cases: [(&str, Breaker); 6] = [
+        ("coarse grid", |d| {
+            d.coarse.pop();
+        }),
+        ("sectors", |d| d.sectors = 0),
+        ("power of two", |d| d.coarse_spacing = 12.0),
+        ("not finite", |d| d.coarse[3] = f32::NAN),
+        ("layers", |d| d.layers.clear()),
+        ("slots", |d| d.fine_slots = 0),
+    ];
+    for (what, break_it) in cases {
+        let mut d = good.clone();
+        break_it(&mut d);
+        assert!(TerrainPass::new(ctx, &d).is_err(), "{what}: accepted");
+    }
+    let pass = TerrainPass::new(ctx, &good).expect("good description");
+    let tile = good.tile_from_fn(1, 2, ground);
+    let q = &ctx.queue;
+    assert!(pass.upload_tile(q, good.fine_slots, 1, 2, &tile).is_err());
+    assert!(pass.upload_tile(q, 0, 4, 2, &tile).is_err());
+    assert!(pass.upload_tile(q, 0, 1, 2, &tile[1..]).is_err());
+    let mut nan = tile.clone();
+    nan[7] = f32::INFINITY;
+    assert!(pass.upload_tile(q, 0, 1, 2, &nan).is_err());
+    assert!(pass.evict(q, good.fine_slots).is_err());
+    // Nothing changed; then a good upload lands, moves and is evicted.
+    assert!(
+        pass.cpu()
+            .heights
+            .pages
+            .iter()
+            .all(|&p| p == reference::NONE)
+    );
+    pass.upload_tile(q, 3, 1, 2, &tile).expect("upload");
+    assert_eq!(pass.cpu().heights.pages[2 * 4 + 1], 3);
+    pass.upload_tile(q, 5, 1, 2, &tile)
+        .expect("same sector, other slot");
+    assert_eq!(pass.cpu().heights.slots[3], None);
+    assert_eq!(pass.cpu().heights.pages[2 * 4 + 1], 5);
+    pass.evict(q, 5).expect("evict");
+    assert!(
+        pass.cpu()
+            .heights
+            .pages
+            .iter()
+            .all(|&p| p == reference::NONE)
+    );
+    ctx.check("terrain errors").expect("no GPU error");
+}

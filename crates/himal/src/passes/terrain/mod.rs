@@ -125,7 +125,6 @@ impl TerrainLayerDesc {
                 detail: DetailKind::Snow,
                 detail_scale: 4.0,
                 normal_strength: 0.4,
-                ..any
             },
         ]
     }
@@ -209,7 +208,7 @@ pub struct TerrainSettings {
 impl Default for TerrainSettings {
     fn default() -> Self {
         Self {
-            target_px: 8.0,
+            target_px: 12.0,
             lod_bias: 0.0,
             morph: true,
             morph_fraction: 0.3,
