@@ -14,3 +14,4 @@ pub mod post;
 pub mod shadows;
 pub mod sky;
 pub mod skyocc;
+pub mod terrain;
