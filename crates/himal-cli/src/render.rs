@@ -13,11 +13,11 @@ use crate::GpuArgs;
 
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
-    /// Scene file (TOML), or `demo` for the built-in demo world.
+    /// Scene file (TOML), `demo` (the valley) or `world` (the streamed 10 km world).
     #[arg(
         long,
         default_value = "demo",
-        value_name = "FILE|demo",
+        value_name = "FILE|demo|world",
         allow_hyphen_values = true
     )]
     pub scene: String,
@@ -417,11 +417,31 @@ impl ShadowArgs {
     }
 }
 
-/// Loads `demo`, a glTF model (.gltf / .glb) or a scene file.
+/// The built-in streamed open world (`--scene world`).
+pub const WORLD: &str = "world";
+
+/// The world of `--scene world` (generated per sector from its seed).
+pub fn world() -> std::sync::Arc<himal::scene::world::World> {
+    std::sync::Arc::new(himal::scene::world::World::new(Default::default()))
+}
+
+/// The renderer for `spec` (see [`load_scene`]): the streamed world or `scene`.
+pub fn open_renderer(spec: &str, ctx: himal::gpu::GpuContext, scene: &Scene) -> Result<Renderer> {
+    Ok(if spec == WORLD {
+        Renderer::with_world(ctx, world())?
+    } else {
+        Renderer::new(ctx, scene)?
+    })
+}
+
+/// Loads `demo`, `world` (its meshes and cameras; sectors stream in the
+/// renderer), a glTF model (.gltf / .glb) or a scene file.
 pub fn load_scene(spec: &str) -> Result<Scene> {
     let lower = spec.to_ascii_lowercase();
     Ok(if spec == "demo" {
         Scene::demo()?
+    } else if spec == WORLD {
+        world().scene()
     } else if lower.ends_with(".gltf") || lower.ends_with(".glb") {
         Scene::from_gltf(Path::new(spec))?
     } else {
@@ -527,6 +547,10 @@ pub fn setup(
         sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
     }
     let mut settings = FrameSettings::new(width, height, sun);
+    if args.gltf.is_none() && args.scene == WORLD {
+        // Haze for a 10 km world: a third of the light left at 14 km, not 4 km.
+        settings.aerial_extinction = 8e-5;
+    }
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
     args.post.apply(&mut settings)?;
@@ -625,7 +649,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .as_deref()
         .map(parse_time_lapse)
         .transpose()?;
-    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    let spec = args.gltf.as_deref().unwrap_or(&args.scene);
+    let mut renderer = open_renderer(spec, args.gpu.context()?, &scene)?;
     args.post.configure(&mut renderer, &args.gpu)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
@@ -654,6 +679,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         // Animation (moving objects, sway) at 30 frames per second of sequence time.
         settings.time_s = i as f32 / 30.0;
+        // Offline frames wait for every sector in range: the same image on every run.
+        renderer.settle_world(&cam, std::time::Duration::from_secs(600))?;
         let frame = renderer.render(&cam, &settings)?;
         let path = if args.frames > 1 {
             sequence_path(&args.out, i)

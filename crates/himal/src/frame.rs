@@ -42,6 +42,7 @@ use crate::passes::post::{
 use crate::passes::shadows::{ShadowPass, ShadowStats};
 use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
+use crate::passes::terrain::{TerrainPass, TerrainView};
 use crate::scene::Camera;
 use crate::settings::{Culling, FrameSettings, ViewBuffer};
 
@@ -68,6 +69,8 @@ pub struct Passes {
     /// A3 TAA on the AO and the motion vectors (`--aa-buffers`).
     pub aa_buffers: BufferTaaPass,
     pub debug: DebugPass,
+    /// The world's CDLOD terrain (`--scene world`; `None` for plain scenes).
+    pub terrain: Option<TerrainPass>,
 }
 
 impl Passes {
@@ -101,6 +104,7 @@ impl Passes {
             temporal: TemporalPass::new(ctx, DISPLAY_FORMAT)?,
             aa_buffers: BufferTaaPass::new(ctx)?,
             debug: DebugPass::new(ctx)?,
+            terrain: None,
         })
     }
 }
@@ -198,6 +202,11 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         );
     }
     passes.cull.plan(ctx, &views, lod);
+    // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
+    if let Some(t) = passes.terrain.as_mut() {
+        let fits: Vec<Mat4> = shadows.fits.iter().map(|f| f.light_view_proj).collect();
+        t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits);
+    }
     // L2: the sectors the camera wants; jobs for the ones not resident.
     let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
     if settings.sky_occlusion_every_frame {
@@ -288,7 +297,18 @@ pub fn build<'a>(
         camera_list.map(|c| (c, 0)),
         mip_bias,
     );
-    let shadow_mask = passes.shadows.add(&mut g, size, gbuffer, scene, culled);
+    // The world's terrain after the objects, into the same targets.
+    let gbuffer = match &passes.terrain {
+        Some(t) => t.add(ctx, &mut g, gbuffer, view),
+        None => gbuffer,
+    };
+    let terrain = passes
+        .terrain
+        .as_ref()
+        .map(|t| t as &dyn crate::passes::shadows::CascadeCaster);
+    let shadow_mask = passes
+        .shadows
+        .add(&mut g, size, gbuffer, scene, culled, terrain);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {

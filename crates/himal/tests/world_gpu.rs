@@ -20,7 +20,7 @@ fn small_world() -> Arc<World> {
     let mut desc = WorldDesc::default();
     desc.stream.radius = 256.0;
     desc.pools.tiles = 128;
-    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 4096];
+    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 4096, 256];
     Arc::new(World::new(desc))
 }
 
@@ -50,12 +50,16 @@ fn streamed_pool_lists_match_the_twin() {
     let u = state
         .streamer
         .settle(Vec2::new(eye.x, eye.z), Duration::from_secs(120));
-    state.apply(&u, &gpu, &mut cull, &ctx.queue);
+    state
+        .apply(&u, &gpu, &mut cull, None, &ctx.queue)
+        .expect("apply");
     // Then fly 300 m on: sectors leave, slots move, new ones arrive.
     let on = Vec2::new(eye.x + 300.0, eye.z - 100.0);
     let u2 = state.streamer.settle(on, Duration::from_secs(120));
     assert!(!u2.evictions.is_empty() && !u2.uploads.is_empty());
-    state.apply(&u2, &gpu, &mut cull, &ctx.queue);
+    state
+        .apply(&u2, &gpu, &mut cull, None, &ctx.queue)
+        .expect("apply");
     let live: u32 = u2.live.iter().sum();
     assert!(live > 200, "only {live} instances resident");
     let cam = camera.camera.clone();
@@ -136,6 +140,7 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
         let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
         let stats = r
             .settle_world(&camera, Duration::from_secs(120))
+            .expect("streaming")
             .expect("a world");
         assert_eq!(stats.missing, 0);
         r.render(&camera, &settings).expect("frame")

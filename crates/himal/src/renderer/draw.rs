@@ -219,7 +219,7 @@ impl Renderer {
         let size = (settings.width, settings.height);
         let format = self.prepare_output(settings)?;
         self.update_sky(&settings.sun, settings.sky_model)?;
-        self.stream_world(camera);
+        self.stream_world(camera)?;
         let probe = if settings.environment_probes && self.res.environment.is_none() {
             (self.res.passes.probes).select(camera.position, self.res.active_probe)
         } else {

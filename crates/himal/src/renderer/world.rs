@@ -12,6 +12,7 @@ use glam::Vec2;
 use super::*;
 use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
 use crate::passes::cull::CullPass;
+use crate::passes::terrain::{DetailKind, TerrainDesc, TerrainLayerDesc, TerrainPass};
 use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
 use crate::scene::world::{Instance, InstanceKind, World};
 use crate::scene::{Aabb, lod};
@@ -61,8 +62,19 @@ impl WorldState {
         u: &StreamUpdate,
         scene: &SceneGpu,
         cull: &mut CullPass,
+        terrain: Option<&TerrainPass>,
         queue: &wgpu::Queue,
-    ) {
+    ) -> Result<(), GpuError> {
+        // Freed tiles first: an upload this frame may reuse the slot.
+        if let Some(t) = terrain {
+            for e in &u.evictions {
+                t.evict(queue, e.tile)?;
+            }
+            for up in &u.uploads {
+                let c = up.data.coord;
+                t.upload_tile(queue, up.tile, c.x.into(), c.z.into(), &up.data.heights)?;
+            }
+        }
         for (k, dirty) in u.dirty.iter().enumerate() {
             let (Some(&kind), Some(region)) = (InstanceKind::ALL.get(k), scene.pool.get(k)) else {
                 continue;
@@ -98,6 +110,37 @@ impl WorldState {
             cull.set_live(queue, k, live.min(region.capacity));
         }
         self.stats = u.stats;
+        Ok(())
+    }
+}
+
+/// The terrain's material layers for `world`: meadow, soil on slopes,
+/// rock on cliffs, snow above the snow line on what is not a cliff.
+fn terrain_layers(world: &World) -> Vec<TerrainLayerDesc> {
+    let mut layers = TerrainLayerDesc::alpine();
+    for l in &mut layers {
+        if l.detail == DetailKind::Snow {
+            l.height = [world.desc.shape.snow_line, f32::INFINITY];
+            l.height_blend = 60.0;
+            l.jitter = 50.0;
+        }
+    }
+    layers
+}
+
+/// The CDLOD terrain of `world`: its whole coarse grid (computed here on
+/// the machine's cores), an empty tile pool of the scene file's size.
+fn terrain_desc(world: &World) -> TerrainDesc {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    TerrainDesc {
+        origin: world.origin,
+        sectors: world.desc.sectors.into(),
+        sector_size: crate::scene::world::SECTOR_SIZE,
+        tile_res: crate::scene::world::TILE_RES as u32,
+        coarse_spacing: world.desc.coarse_spacing,
+        coarse: world.coarse_grid(threads, &|_| {}),
+        fine_slots: world.desc.pools.tiles,
+        layers: terrain_layers(world),
     }
 }
 
@@ -120,40 +163,53 @@ impl Renderer {
     pub fn with_world(ctx: GpuContext, world: Arc<World>) -> Result<Self, Error> {
         let scene = world.scene();
         let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &pool_of(&world))?;
+        let terrain = TerrainPass::new(&ctx, &terrain_desc(&world))?;
         let mut r = Self::from_upload(ctx, &scene, scene_gpu)?;
+        r.res.passes.terrain = Some(terrain);
         r.world = Some(WorldState::new(world, &scene));
         Ok(r)
     }
 
     /// Streams every sector around `camera` in (blocking, up to
     /// `timeout`) so the next frame is complete and the same on every run.
-    pub fn settle_world(&mut self, camera: &Camera, timeout: Duration) -> Option<StreamStats> {
-        let w = self.world.as_mut()?;
+    pub fn settle_world(
+        &mut self,
+        camera: &Camera,
+        timeout: Duration,
+    ) -> Result<Option<StreamStats>, Error> {
+        let Some(w) = self.world.as_mut() else {
+            return Ok(None);
+        };
         let u = w
             .streamer
             .settle(Vec2::new(camera.position.x, camera.position.z), timeout);
+        let p = &mut self.res.passes;
         w.apply(
             &u,
             &self.res.scene,
-            &mut self.res.passes.cull,
+            &mut p.cull,
+            p.terrain.as_ref(),
             &self.ctx.queue,
-        );
-        Some(w.stats)
+        )?;
+        Ok(Some(w.stats))
     }
 
     /// One frame of streaming for `camera` (inside `plan_frame`).
-    pub(super) fn stream_world(&mut self, camera: &Camera) {
+    pub(super) fn stream_world(&mut self, camera: &Camera) -> Result<(), Error> {
         if let Some(w) = self.world.as_mut() {
             let u = w
                 .streamer
                 .update(Vec2::new(camera.position.x, camera.position.z));
+            let p = &mut self.res.passes;
             w.apply(
                 &u,
                 &self.res.scene,
-                &mut self.res.passes.cull,
+                &mut p.cull,
+                p.terrain.as_ref(),
                 &self.ctx.queue,
-            );
+            )?;
         }
+        Ok(())
     }
 
     /// The last frame's streaming figures (`None`: not a world).

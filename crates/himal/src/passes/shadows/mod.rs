@@ -33,6 +33,19 @@ use casters::{Casters, DrawLists};
 use depth::{DepthPipelines, ShadowViewGpu};
 use local::{LocalLightGpu, Projector, ShadowTileGpu};
 pub use settings::{ShadowMode, ShadowSettings, ShadowView};
+
+/// Geometry outside the scene's objects that casts into the sun cascades
+/// (the world's terrain): a node after cascade `layer`'s, drawing with that
+/// cascade's view uniform.
+pub trait CascadeCaster {
+    fn add_cascade<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        cascades: TextureHandle,
+        layer: u32,
+        view: &'a wgpu::Buffer,
+    ) -> TextureHandle;
+}
 use static_map::{STATIC_FORMAT, StaticMapState, StaticUpdate};
 
 /// Depth format of the cascades and the hero map.

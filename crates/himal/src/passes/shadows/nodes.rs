@@ -31,6 +31,7 @@ impl ShadowPass {
         gbuffer: GBuffer,
         scene: &'a SceneGpu,
         culled: Option<Culled>,
+        extra: Option<&'a dyn CascadeCaster>,
     ) -> Option<TextureHandle> {
         let plan = self.plan.as_ref()?;
         let n = self.cascade_resolution;
@@ -50,6 +51,9 @@ impl ShadowPass {
                 keep: false,
             };
             cascades = self.depth_node(graph, scene, node);
+            if let Some(c) = extra {
+                cascades = c.add_cascade(graph, cascades, i as u32, &self.views[i]);
+            }
         }
         let cascades = (!plan.cascades.is_empty()).then_some(cascades);
         // The static slice writes the back map, outside the graph's pool.

@@ -1079,3 +1079,15 @@ impl TerrainPass {
         written.depth.unwrap_or(cascades)
     }
 }
+
+impl crate::passes::shadows::CascadeCaster for TerrainPass {
+    fn add_cascade<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        cascades: TextureHandle,
+        layer: u32,
+        view: &'a wgpu::Buffer,
+    ) -> TextureHandle {
+        self.add_shadow(graph, cascades, layer, view, layer as usize)
+    }
+}

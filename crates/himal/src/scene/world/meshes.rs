@@ -175,6 +175,16 @@ fn tree() -> Mesh {
     m
 }
 
+/// A unit water quad (1 x 1 m, facing +Y, at y = 0): dark, glossy, the
+/// sky's reflection does the rest.
+fn water() -> Mesh {
+    let m = MaterialDesc {
+        reflectance: 0.02,
+        ..material("water", [0.02, 0.045, 0.05], 0.92)
+    };
+    primitives::plane("water".into(), [1.0, 1.0], [1, 1], &m)
+}
+
 /// The mesh of every kind, in [`InstanceKind::ALL`] order.
 pub fn world_meshes() -> Vec<Mesh> {
     InstanceKind::ALL
@@ -188,6 +198,7 @@ pub fn world_meshes() -> Vec<Mesh> {
             InstanceKind::Field => field(),
             InstanceKind::Fence => fence(),
             InstanceKind::Tree => tree(),
+            InstanceKind::Water => water(),
         })
         .collect()
 }

@@ -49,8 +49,8 @@ impl Default for PoolSizes {
     fn default() -> Self {
         PoolSizes {
             tiles: 1024,
-            // rock0..2, house, roof, field, fence, tree
-            instances: [16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536],
+            // rock0..2, house, roof, field, fence, tree, water
+            instances: [16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536, 1024],
         }
     }
 }

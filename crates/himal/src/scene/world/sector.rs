@@ -33,10 +33,12 @@ pub enum InstanceKind {
     Fence,
     /// Where a forest tree stands; the vegetation issue replaces the mesh.
     Tree,
+    /// A 16 m stretch of the river's surface.
+    Water,
 }
 
 impl InstanceKind {
-    pub const ALL: [InstanceKind; 8] = [
+    pub const ALL: [InstanceKind; 9] = [
         InstanceKind::Rock0,
         InstanceKind::Rock1,
         InstanceKind::Rock2,
@@ -45,6 +47,7 @@ impl InstanceKind {
         InstanceKind::Field,
         InstanceKind::Fence,
         InstanceKind::Tree,
+        InstanceKind::Water,
     ];
 
     pub fn name(self) -> &'static str {
@@ -57,6 +60,7 @@ impl InstanceKind {
             InstanceKind::Field => "field",
             InstanceKind::Fence => "fence",
             InstanceKind::Tree => "tree",
+            InstanceKind::Water => "water",
         }
     }
 }
@@ -163,6 +167,7 @@ pub fn generate(terrain: &WorldTerrain, world_origin: Vec2, c: SectorCoord) -> S
     let mut instances = Vec::new();
     scatter_rocks(terrain, &tile, seed, &mut instances);
     scatter_trees(terrain, &tile, seed, &mut instances);
+    place_water(terrain, &tile, &mut instances);
     let centre = o + Vec2::splat(SECTOR_SIZE * 0.5);
     for v in terrain.villages_near(centre, SECTOR_SIZE * std::f32::consts::FRAC_1_SQRT_2) {
         instances.extend(
@@ -273,6 +278,39 @@ fn scatter_rocks(t: &WorldTerrain, tile: &Tile, seed: u32, out: &mut Vec<Instanc
                 tint: tint([shade, shade * (0.97 + 0.05 * r4), shade * 0.95]),
             });
         }
+    }
+}
+
+/// The river's surface: a quad per 16 m of its course whose centre line
+/// crosses this sector (each stretch belongs to exactly one sector: the
+/// course is a function of z), turned along the course, 0.4 m below the
+/// banks' water level so the channel's sides hide its edges.
+fn place_water(t: &WorldTerrain, tile: &Tile, out: &mut Vec<Instance>) {
+    if !matches!(t.source, super::HeightSource::Procedural) {
+        return;
+    }
+    let s = &t.shape;
+    let step = 16.0;
+    for k in 0..(SECTOR_SIZE / step) as usize {
+        let z = tile.o.y + (k as f32 + 0.5) * step;
+        let x = t.river_x(z);
+        if x < tile.o.x || x >= tile.o.x + SECTOR_SIZE {
+            continue;
+        }
+        let slope = (t.river_x(z + 4.0) - t.river_x(z - 4.0)) / 8.0;
+        out.push(Instance {
+            kind: InstanceKind::Water,
+            position: Vec3::new(x, t.river_level(z) - 0.4, z),
+            // Local +z along the course (x' = slope per metre of z).
+            yaw: slope.atan(),
+            size: Vec3::new(
+                3.0 * s.river_width,
+                1.0,
+                step * (1.0 + slope * slope).sqrt() + 1.0,
+            ),
+            bend: 0.0,
+            tint: [255; 4],
+        });
     }
 }
 
