@@ -177,39 +177,29 @@ impl Renderer {
         camera: &Camera,
         timeout: Duration,
     ) -> Result<Option<StreamStats>, Error> {
-        let Some(w) = self.world.as_mut() else {
-            return Ok(None);
-        };
-        let u = w
-            .streamer
-            .settle(Vec2::new(camera.position.x, camera.position.z), timeout);
-        let p = &mut self.res.passes;
-        w.apply(
-            &u,
-            &self.res.scene,
-            &mut p.cull,
-            p.terrain.as_ref(),
-            &self.ctx.queue,
-        )?;
-        Ok(Some(w.stats))
+        let eye = Vec2::new(camera.position.x, camera.position.z);
+        self.stream_with(|s| s.settle(eye, timeout))
     }
 
     /// One frame of streaming for `camera` (inside `plan_frame`).
     pub(super) fn stream_world(&mut self, camera: &Camera) -> Result<(), Error> {
-        if let Some(w) = self.world.as_mut() {
-            let u = w
-                .streamer
-                .update(Vec2::new(camera.position.x, camera.position.z));
-            let p = &mut self.res.passes;
-            w.apply(
-                &u,
-                &self.res.scene,
-                &mut p.cull,
-                p.terrain.as_ref(),
-                &self.ctx.queue,
-            )?;
-        }
-        Ok(())
+        let eye = Vec2::new(camera.position.x, camera.position.z);
+        self.stream_with(|s| s.update(eye)).map(drop)
+    }
+
+    /// Runs `step` on the streamer and applies its update to the pools.
+    fn stream_with(
+        &mut self,
+        step: impl FnOnce(&mut Streamer) -> StreamUpdate,
+    ) -> Result<Option<StreamStats>, Error> {
+        let Some(w) = self.world.as_mut() else {
+            return Ok(None);
+        };
+        let u = step(&mut w.streamer);
+        let p = &mut self.res.passes;
+        let terrain = p.terrain.as_ref();
+        w.apply(&u, &self.res.scene, &mut p.cull, terrain, &self.ctx.queue)?;
+        Ok(Some(w.stats))
     }
 
     /// The last frame's streaming figures (`None`: not a world).
