@@ -42,7 +42,7 @@ use crate::passes::post::{
 use crate::passes::shadows::{ShadowPass, ShadowStats};
 use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
-use crate::passes::terrain::{TerrainPass, TerrainView};
+use crate::passes::terrain::{TerrainPass, TerrainStats, TerrainView};
 use crate::scene::Camera;
 use crate::settings::{Culling, FrameSettings, ViewBuffer};
 
@@ -127,6 +127,26 @@ pub struct PlanInputs<'a> {
 pub struct Planned {
     pub shadows: ShadowStats,
     pub sky_occlusion: SkyOccStats,
+    /// The world's terrain selection (`None`: no terrain).
+    pub terrain: Option<TerrainStats>,
+}
+
+/// E2: the levels every pass draws at, seen from `camera`.
+pub fn lod_view(camera: &crate::scene::Camera, settings: &FrameSettings) -> LodView {
+    use crate::scene::lod;
+    LodView {
+        eye: camera.position,
+        selection: lod::Selection {
+            scale: lod::distance_scale(
+                camera.fov_y_deg,
+                settings.height,
+                settings.lod_threshold_px,
+            ),
+            focal_px: lod::focal_px(camera.fov_y_deg, settings.height),
+            max_error_px: settings.lod_error_px,
+            band: settings.lod_band,
+        },
+    }
 }
 
 /// The CPU half of the frame: each technique's planning (parameters,
@@ -146,20 +166,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     // GPU (view 0; the cascades are views 1..) or on the CPU; runs of one
     // mesh's objects merge into instanced draws.
     let view_proj = p.proj * camera.view();
-    // E2: the levels every pass draws at, seen from the camera.
-    let lod = LodView {
-        eye: camera.position,
-        selection: crate::scene::lod::Selection {
-            scale: crate::scene::lod::distance_scale(
-                camera.fov_y_deg,
-                settings.height,
-                settings.lod_threshold_px,
-            ),
-            focal_px: crate::scene::lod::focal_px(camera.fov_y_deg, settings.height),
-            max_error_px: settings.lod_error_px,
-            band: settings.lod_band,
-        },
-    };
+    let lod = lod_view(camera, settings);
     if let Ok(mut l) = scene.lod.lock() {
         *l = lod;
     }
@@ -203,10 +210,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     }
     passes.cull.plan(ctx, &views, lod);
     // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
-    if let Some(t) = passes.terrain.as_mut() {
+    let terrain = passes.terrain.as_mut().map(|t| {
         let fits: Vec<Mat4> = shadows.fits.iter().map(|f| f.light_view_proj).collect();
-        t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits);
-    }
+        t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits)
+    });
     // L2: the sectors the camera wants; jobs for the ones not resident.
     let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
     if settings.sky_occlusion_every_frame {
@@ -218,6 +225,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     Planned {
         shadows,
         sky_occlusion,
+        terrain,
     }
 }
 

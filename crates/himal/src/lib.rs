@@ -29,7 +29,9 @@ pub mod settings;
 pub mod shader;
 pub mod soak;
 
-pub use renderer::{DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer};
+pub use renderer::{
+    DrawnCounts, DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer, WorldFrame,
+};
 pub use settings::Culling;
 
 /// Every error the library returns; each names what failed and where.

@@ -24,6 +24,8 @@ pub struct RenderedFrame {
     pub shadows: ShadowStats,
     /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
     pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
+    /// The streamed world's frame: streaming and terrain (`None`: a plain scene).
+    pub world: Option<super::world::WorldFrame>,
 }
 
 /// CPU milliseconds of one frame's phases, timed on the render thread.
@@ -69,6 +71,7 @@ pub(super) struct FramePlan {
     view_proj: Mat4,
     shadows: ShadowStats,
     sky_occlusion: crate::passes::skyocc::SkyOccStats,
+    terrain: Option<crate::passes::terrain::TerrainStats>,
 }
 
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
@@ -88,6 +91,8 @@ pub struct DrawnFrame {
     pub shadows: ShadowStats,
     /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
     pub sky_occlusion: crate::passes::skyocc::SkyOccStats,
+    /// The streamed world's frame: streaming and terrain (`None`: a plain scene).
+    pub world: Option<super::world::WorldFrame>,
 }
 
 impl Renderer {
@@ -182,6 +187,7 @@ impl Renderer {
             timings,
             shadows,
             sky_occlusion,
+            world,
         } = self.draw(camera, settings)?;
         let output = self
             .output(settings)
@@ -194,6 +200,7 @@ impl Renderer {
             timings,
             shadows,
             sky_occlusion,
+            world,
         })
     }
 
@@ -339,6 +346,7 @@ impl Renderer {
             view_proj,
             shadows: planned.shadows,
             sky_occlusion: planned.sky_occlusion,
+            terrain: planned.terrain,
         })
     }
 
@@ -355,6 +363,7 @@ impl Renderer {
             view_proj,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,
+            terrain,
         } = self.plan_frame(camera, settings)?;
         let plan_ms = ms(t_plan);
         let t_record = std::time::Instant::now();
@@ -419,6 +428,65 @@ impl Renderer {
             timings,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,
+            world: self.world.as_ref().map(|w| world::WorldFrame {
+                stream: w.stats,
+                stream_ms: w.stream_ms,
+                terrain,
+            }),
         })
+    }
+}
+
+/// What the camera's culled lists draw (V6, E2): instances and triangles
+/// per LOD level, a level in transition counted in both lists.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DrawnCounts {
+    pub instances: [u64; crate::scene::lod::MAX_LODS],
+    pub triangles: [u64; crate::scene::lod::MAX_LODS],
+}
+
+impl DrawnCounts {
+    /// Sums draw arguments `[index_count, instance_count, ..]` in
+    /// `reference::cull`'s order (lists of each batch, level = list % levels).
+    pub fn from_args(args: &[[u32; 5]]) -> Self {
+        use crate::scene::lod::MAX_LODS;
+        let mut c = Self::default();
+        for (j, a) in args.iter().enumerate() {
+            let l = j % crate::passes::cull::LISTS % MAX_LODS;
+            c.instances[l] += u64::from(a[1]);
+            c.triangles[l] += u64::from(a[0] / 3) * u64::from(a[1]);
+        }
+        c
+    }
+
+    pub fn total_instances(&self) -> u64 {
+        self.instances.iter().sum()
+    }
+
+    pub fn total_triangles(&self) -> u64 {
+        self.triangles.iter().sum()
+    }
+}
+
+impl Renderer {
+    /// Runs the camera's culling alone and counts what its G-buffer lists
+    /// draw (the GPU's lists read back; the CPU twin's where the GPU path
+    /// cannot run). Statistics only: it stalls for the read-back.
+    pub fn count_drawn(
+        &mut self,
+        camera: &Camera,
+        settings: &FrameSettings,
+    ) -> Result<DrawnCounts, Error> {
+        use crate::passes::cull::{CullView, reference};
+        let aspect = settings.width as f32 / settings.height as f32;
+        let view = CullView::clip(camera.projection(aspect) * camera.view());
+        let lod = frame::lod_view(camera, settings);
+        let cull = &mut self.res.passes.cull;
+        let result = if cull.supported().is_ok() {
+            cull.read_back(&self.ctx, &[view], lod)?
+        } else {
+            reference::cull(&cull.layout, &[view], &lod)
+        };
+        Ok(DrawnCounts::from_args(&result.args))
     }
 }

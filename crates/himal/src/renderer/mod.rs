@@ -5,7 +5,7 @@ mod draw;
 pub mod environment;
 pub mod post_state;
 mod world;
-pub use world::WorldState;
+pub use world::{WorldFrame, WorldState};
 
 use std::collections::HashMap;
 
@@ -33,7 +33,7 @@ pub use crate::settings::{
 use post_state::PostState;
 
 use draw::prepare_view;
-pub use draw::{CpuTimes, DrawnFrame, RenderedFrame};
+pub use draw::{CpuTimes, DrawnCounts, DrawnFrame, RenderedFrame};
 
 /// GPU resources the frame graph borrows (everything but the pool and timer,
 /// which execution borrows mutably).

@@ -17,12 +17,24 @@ use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
 use crate::scene::world::{Instance, InstanceKind, World};
 use crate::scene::{Aabb, lod};
 
+/// One frame of the streamed world, as [`Renderer::draw`] reports it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldFrame {
+    pub stream: StreamStats,
+    /// Render-thread milliseconds of streaming (inside `CpuTimes::plan_ms`).
+    pub stream_ms: f64,
+    /// The terrain's CDLOD selection for the camera and the cascades.
+    pub terrain: Option<crate::passes::terrain::TerrainStats>,
+}
+
 /// The world's streaming state between frames: the streamer and what the
 /// pool records need of each kind's mesh.
 pub struct WorldState {
     pub streamer: Streamer,
-    /// The last applied update's figures.
+    /// The last applied update's figures ...
     pub stats: StreamStats,
+    /// ... and the render thread's time for it (update and pool writes, ms).
+    pub stream_ms: f64,
     /// Per kind: its mesh's bounds and geometric-mean triangle area (E2).
     meshes: Vec<(Aabb, f32)>,
 }
@@ -37,6 +49,7 @@ impl WorldState {
         WorldState {
             streamer: Streamer::new(world),
             stats: StreamStats::default(),
+            stream_ms: 0.0,
             meshes,
         }
     }
@@ -195,10 +208,12 @@ impl Renderer {
         let Some(w) = self.world.as_mut() else {
             return Ok(None);
         };
+        let t = std::time::Instant::now();
         let u = step(&mut w.streamer);
         let p = &mut self.res.passes;
         let terrain = p.terrain.as_ref();
         w.apply(&u, &self.res.scene, &mut p.cull, terrain, &self.ctx.queue)?;
+        w.stream_ms = t.elapsed().as_secs_f64() * 1e3;
         Ok(Some(w.stats))
     }
 

@@ -29,6 +29,10 @@ pub use terrain::{HeightSource, Village, WorldShape, WorldTerrain};
 
 use crate::scene::{Aabb, NamedCamera, Scene, SunDesc};
 
+/// Aerial-perspective extinction (1/m) for a 10 km world: a third of the
+/// light left at 14 km (the valley's default leaves a third at 4 km).
+pub const HAZE_EXTINCTION: f32 = 8e-5;
+
 /// Bytes of one instance as the GPU pool stores it: its object record
 /// (model, normal and previous matrices, parameters) and its culling
 /// bounds (checked against `gpu_scene`'s types there).

@@ -137,7 +137,9 @@ impl Streamer {
             })
             .collect::<Option<Vec<_>>>()
             .unwrap_or_default();
-        let max_in_flight = 4 * workers.len().max(1);
+        // Deep enough that slow frames (software adapters, benches) do not
+        // starve the workers; short enough that requests stay nearest-first.
+        let max_in_flight = 16 * workers.len().max(1);
         Streamer {
             world,
             requests: Some(request_tx),
