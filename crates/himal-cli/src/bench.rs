@@ -6,10 +6,12 @@ use std::time::Instant;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use himal::{FrameSettings, Renderer};
+use himal::FrameSettings;
 
 use crate::GpuArgs;
-use crate::render::{PostArgs, ShadowArgs, load_scene, parse_size, pick_camera};
+use crate::render::{
+    PostArgs, ShadowArgs, load_scene, open_renderer, parse_size, pick_camera, world_haze,
+};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -53,6 +55,18 @@ pub struct BenchArgs {
     /// when one becomes visible), to time `skyocc.*` (L2).
     #[arg(long)]
     pub skyocc_every_frame: bool,
+    /// Fly the world's named path (`--scene world --path across`) instead
+    /// of the dolly, and report per-frame CPU, GPU, draws, triangles,
+    /// streaming and pool use; `--frames` frames spread over the path.
+    #[arg(long, value_name = "NAME", allow_hyphen_values = true)]
+    pub path: Option<String>,
+    /// With --path: seconds of the path per frame (default: the frames
+    /// cover the whole path).
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub dt: Option<f32>,
+    /// With --path: write one row per frame to this CSV file.
+    #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
+    pub csv: Option<std::path::PathBuf>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -99,13 +113,29 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     settings.envmap_every_frame = args.envmap_every_frame;
     settings.sky_occlusion_every_frame = args.skyocc_every_frame;
     settings.ao = args.ao.settings()?;
+    if args.path.is_none() && (args.dt.is_some() || args.csv.is_some()) {
+        bail!("--dt and --csv need --path NAME (a world's flight path)");
+    }
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
     }
     if args.compare_envmap {
         return crate::bench_envmap::run(&args.gpu, &scene, &camera, &settings, args.frames);
     }
-    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    let mut renderer = open_renderer(&args.scene, args.gpu.context()?, &scene)?;
+    world_haze(&renderer, &mut settings);
+    if let Some(name) = &args.path {
+        renderer.set_sky_table_sizes(args.post.table_sizes()?);
+        let run = crate::bench_path::PathRun {
+            name,
+            frames: args.frames,
+            dt: args.dt,
+            fov_y_deg: camera.fov_y_deg,
+            csv: args.csv.as_deref(),
+            json: args.json,
+        };
+        return crate::bench_path::run(&mut renderer, &settings, &run);
+    }
     // No table cache: the warm-up frame times the table computation.
     renderer.set_sky_table_sizes(args.post.table_sizes()?);
     let warm_up = renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs

@@ -7,6 +7,7 @@ mod bake;
 mod bench;
 mod bench_ao;
 mod bench_envmap;
+mod bench_path;
 mod prewarm;
 mod render;
 mod soak;

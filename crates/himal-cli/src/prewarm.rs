@@ -4,7 +4,6 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
-use himal::Renderer;
 
 use crate::GpuArgs;
 use crate::render::load_scene;
@@ -31,7 +30,7 @@ pub fn run(args: &PrewarmArgs) -> Result<()> {
         );
     };
     let scene = load_scene(&args.scene)?;
-    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    let mut renderer = crate::render::open_renderer(&args.scene, args.gpu.context()?, &scene)?;
     renderer.prewarm()?;
     // L1: the Bruneton tables (cache file beside the pipelines) and pipelines.
     renderer.set_sky_table_cache(Some(dir.clone()));

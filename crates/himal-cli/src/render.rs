@@ -547,16 +547,20 @@ pub fn setup(
         sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
     }
     let mut settings = FrameSettings::new(width, height, sun);
-    if args.gltf.is_none() && args.scene == WORLD {
-        // Haze for a 10 km world: a third of the light left at 14 km, not 4 km.
-        settings.aerial_extinction = 8e-5;
-    }
     settings.view = view;
     settings.raw = kind == ImageKind::Exr;
     args.post.apply(&mut settings)?;
     args.shadows.apply(&mut settings)?;
     settings.ao = args.ao.settings()?;
     Ok((scene, camera, settings))
+}
+
+/// A streamed world's haze in `settings` when `renderer` draws one
+/// (after [`open_renderer`]).
+pub fn world_haze(renderer: &Renderer, settings: &mut FrameSettings) {
+    if renderer.world().is_some() {
+        settings.aerial_extinction = himal::scene::world::HAZE_EXTINCTION;
+    }
 }
 
 /// A sequence that cannot fit on the output's file system is refused
@@ -651,6 +655,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .transpose()?;
     let spec = args.gltf.as_deref().unwrap_or(&args.scene);
     let mut renderer = open_renderer(spec, args.gpu.context()?, &scene)?;
+    world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);

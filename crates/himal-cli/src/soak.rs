@@ -3,7 +3,6 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
-use himal::Renderer;
 use himal::soak::{SoakSample, resident_bytes, slope};
 
 use crate::render::{RenderArgs, setup};
@@ -47,7 +46,9 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         );
     }
     let (scene, camera, mut settings) = setup(r)?;
-    let mut renderer = Renderer::new(r.gpu.context()?, &scene)?;
+    let spec = r.gltf.as_deref().unwrap_or(&r.scene);
+    let mut renderer = crate::render::open_renderer(spec, r.gpu.context()?, &scene)?;
+    crate::render::world_haze(&renderer, &mut settings);
     r.post.configure(&mut renderer, &r.gpu)?;
     let every = args.every.unwrap_or((r.frames / 20).max(1)).max(1);
     println!(

@@ -27,7 +27,7 @@ use crate::render::RenderArgs;
 
 pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
-7 TAA on AO and motion, 8 sky model, H HUD, P screenshot, Esc quit";
+7 TAA on AO and motion, 8 sky model, F fly the world's path, H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -44,6 +44,10 @@ pub struct ViewArgs {
     /// and HUD, read back from the swapchain or the CPU buffer) to FILE.
     #[arg(long, value_name = "FILE")]
     pub window_out: Option<std::path::PathBuf>,
+    /// Start flying the world's named path (`--scene world --path across`;
+    /// F toggles flying).
+    #[arg(long, value_name = "NAME", allow_hyphen_values = true)]
+    pub path: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -98,6 +102,10 @@ struct Viewer {
     fps: f32,
     screenshot: bool,
     error: Option<anyhow::Error>,
+    /// The world's flight path F flies, and whether it is flying and where (s).
+    path: Option<himal::scene::world::FlightPath>,
+    flying: bool,
+    path_t: f32,
 }
 
 impl Viewer {
@@ -155,12 +163,15 @@ impl Viewer {
             }
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
+            KeyCode::KeyF => self.flying = self.path.is_some() && !self.flying,
             _ => {}
         }
     }
 
     fn step_camera(&mut self, dt: f32) {
-        let speed = if self.held.fast { 20.0 } else { 4.0 } * dt;
+        // A 10 km world is crossed at flying speed, a valley at walking speed.
+        let base = if self.path.is_some() { 40.0 } else { 4.0 };
+        let speed = if self.held.fast { 5.0 * base } else { base } * dt;
         let c = &mut self.camera;
         let right = c.forward.cross(Vec3::Y).normalize_or(Vec3::X);
         c.position += (c.forward * self.held.forward + right * self.held.right) * speed
@@ -183,7 +194,12 @@ impl Viewer {
     }
 
     /// The HUD's text: state, then the GPU time of every pass in frame order.
-    fn hud_text(&self, settings: &FrameSettings, timings: &[himal::graph::PassTiming]) -> Hud {
+    fn hud_text(
+        &self,
+        settings: &FrameSettings,
+        timings: &[himal::graph::PassTiming],
+        world: Option<&himal::WorldFrame>,
+    ) -> Hud {
         let s = settings;
         let on = |b: bool| if b { "on" } else { "off" };
         let total: f64 = timings.iter().map(|t| t.gpu_ms).sum();
@@ -215,6 +231,25 @@ impl Viewer {
                 view_name(s.view)
             ),
         ];
+        if let Some(w) = world {
+            let s = &w.stream;
+            lines.push(format!(
+                "world {} sectors +{}  tiles {}/{}  inst {}k/{}k",
+                s.resident,
+                s.missing,
+                s.tiles_used,
+                s.tiles_total,
+                s.instances / 1000,
+                s.instances_total / 1000
+            ));
+            lines.push(format!(
+                "stream {:.1} ms {:.0} KiB  terrain {}k tris  [F] fly {}",
+                w.stream_ms,
+                s.upload_bytes as f64 / 1024.0,
+                w.terrain.as_ref().map_or(0, |t| t.triangles() / 1000),
+                on(self.flying)
+            ));
+        }
         if timings.is_empty() {
             lines.push("no GPU timestamps on this adapter".into());
         }
@@ -256,7 +291,9 @@ impl Viewer {
         );
         // The presentation holds the old device's surface: drop it first.
         let window = self.window.take().map(|(w, _)| w);
-        let mut renderer = Renderer::new(self.args.gpu.context()?, &self.scene)?;
+        let spec = self.args.gltf.as_deref().unwrap_or(&self.args.scene);
+        let mut renderer =
+            crate::render::open_renderer(spec, self.args.gpu.context()?, &self.scene)?;
         self.args.post.configure(&mut renderer, &self.args.gpu)?;
         self.renderer = renderer;
         if let Some(window) = window {
@@ -293,10 +330,14 @@ impl Viewer {
         settings.height = h;
         settings.raw = false;
         settings.time_s = self.clock;
+        if let Some(path) = self.path.as_ref().filter(|_| self.flying) {
+            self.path_t = (self.path_t + dt) % path.duration().max(1.0);
+            self.camera = path.camera_at(self.path_t, self.camera.fov_y_deg);
+        }
         let drawn = self.renderer.draw(&self.camera, &settings)?;
         let overlay = self
             .hud
-            .then(|| Overlay::hud(&self.hud_text(&settings, &drawn.timings)));
+            .then(|| Overlay::hud(&self.hud_text(&settings, &drawn.timings, drawn.world.as_ref())));
         let overlay = overlay.as_ref().map(|o| (o, [8, 8]));
         let frame = self
             .renderer
@@ -580,9 +621,26 @@ impl ApplicationHandler for Viewer {
 /// to `--out` and exits (automated runs, e.g. under Xvfb).
 pub fn run(view: &ViewArgs) -> Result<()> {
     let args = &view.render;
-    let (scene, camera, settings) = crate::render::setup(args)?;
-    let mut renderer = Renderer::new(args.gpu.context()?, &scene)?;
+    let (scene, camera, mut settings) = crate::render::setup(args)?;
+    let spec = args.gltf.as_deref().unwrap_or(&args.scene);
+    let mut renderer = crate::render::open_renderer(spec, args.gpu.context()?, &scene)?;
+    crate::render::world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
+    let paths = renderer
+        .world()
+        .map(|w| w.paths.clone())
+        .unwrap_or_default();
+    let path = match &view.path {
+        Some(name) => Some(paths.iter().find(|p| &p.name == name).cloned().with_context(|| {
+            let names: Vec<&str> = paths.iter().map(|p| p.name.as_str()).collect();
+            if names.is_empty() {
+                format!("--path {name}: the scene has no flight paths (a world scene has: --scene world)")
+            } else {
+                format!("--path {name}: no such path (this world has: {})", names.join(", "))
+            }
+        })?),
+        None => paths.first().cloned(),
+    };
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow::anyhow!("himal view needs a display (X11; e.g. xvfb-run for automated runs): {e}")
     })?;
@@ -614,6 +672,9 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         fps: 0.0,
         screenshot: false,
         error: None,
+        flying: view.path.is_some(),
+        path,
+        path_t: 0.0,
     };
     event_loop
         .run_app(&mut viewer)

@@ -136,3 +136,37 @@ fn viewer_recreates_a_lost_device() {
     check_window(&frame, &window);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue #17: `view --scene world --path across` flies the path with
+/// streaming live: sectors arrive while frames are drawn (no settling),
+/// and the last frame shows sky above the streamed ground.
+#[test]
+fn viewer_flies_the_world_streaming_live() {
+    let dir = std::env::temp_dir().join(format!("himal-view-world-{}", std::process::id()));
+    let shot = dir.join("view.png");
+    let out = Command::new("xvfb-run")
+        .args([
+            "-a",
+            env!("CARGO_BIN_EXE_himal"),
+            "view",
+            "--scene",
+            "world",
+        ])
+        .args(["--path", "across", "--size", "160x90", "--frames", "4"])
+        .arg("--out")
+        .arg(&shot)
+        .env("HIMAL_CACHE_DIR", dir.join("cache"))
+        .output()
+        .expect("xvfb-run (apt-get install xvfb; ./run test installs it)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "himal view --scene world failed:\n{stderr}"
+    );
+    let frame = image::open(&shot).expect("an image").to_rgb8();
+    let (w, h) = frame.dimensions();
+    let (top, bottom) = (frame.get_pixel(w / 2, 2), frame.get_pixel(w / 2, h - 2));
+    assert!(top[2] > top[0], "sky at the top: {top:?}");
+    assert_ne!(top, bottom, "ground below the sky");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,424 @@
+//! `himal bench --scene world --path NAME`: flies a world's named path and
+//! reports, per frame, the CPU halves (planning with culling and
+//! streaming, recording, submit), GPU time, draw calls, triangles,
+//! resident sectors, pool use and upload bytes (issue #17, V6 and E2).
+
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use himal::scene::Camera;
+use himal::{FrameSettings, Renderer};
+
+use crate::bench::median;
+
+/// One measured frame of the flight.
+#[derive(Clone, Debug, Default)]
+pub struct PathFrame {
+    /// Seconds along the path.
+    pub t: f32,
+    pub plan_ms: f64,
+    /// Streaming on the render thread (inside `plan_ms`).
+    pub stream_ms: f64,
+    pub record_ms: f64,
+    pub submit_ms: f64,
+    pub gpu_ms: f64,
+    pub gbuffer_draws: u32,
+    pub shadow_draws: u32,
+    /// Triangles of the culled object lists (all levels) and of the terrain.
+    pub object_triangles: u64,
+    pub terrain_triangles: u64,
+    /// Instances drawn per LOD level.
+    pub instances: [u64; 4],
+    pub resident: u32,
+    pub missing: u32,
+    pub tiles_used: u32,
+    pub tiles_total: u32,
+    pub instances_live: u32,
+    pub instances_total: u32,
+    pub uploaded: u32,
+    pub upload_bytes: u64,
+    pub evicted: u32,
+    /// Process resident memory after the frame (bytes; 0 where unknown).
+    pub memory: u64,
+}
+
+impl PathFrame {
+    pub fn cpu_ms(&self) -> f64 {
+        self.plan_ms + self.record_ms + self.submit_ms
+    }
+}
+
+const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,record_ms,submit_ms,cpu_ms,gpu_ms,gbuffer_draws,shadow_draws,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
+
+fn csv_row(i: usize, f: &PathFrame) -> String {
+    format!(
+        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        f.t,
+        f.plan_ms,
+        f.stream_ms,
+        f.record_ms,
+        f.submit_ms,
+        f.cpu_ms(),
+        f.gpu_ms,
+        f.gbuffer_draws,
+        f.shadow_draws,
+        f.object_triangles,
+        f.terrain_triangles,
+        f.instances[0],
+        f.instances[1],
+        f.instances[2],
+        f.instances[3],
+        f.resident,
+        f.missing,
+        f.tiles_used,
+        f.tiles_total,
+        f.instances_live,
+        f.instances_total,
+        f.uploaded,
+        f.upload_bytes,
+        f.evicted,
+        f.memory
+    )
+}
+
+/// What to fly.
+pub struct PathRun<'a> {
+    pub name: &'a str,
+    pub frames: u32,
+    /// Path seconds per frame (`None`: the frames spread over the whole path).
+    pub dt: Option<f32>,
+    pub fov_y_deg: f32,
+    pub csv: Option<&'a Path>,
+    pub json: bool,
+}
+
+/// Flies `run` in `renderer`'s world with `settings` and prints the report.
+pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>) -> Result<()> {
+    let Some(world) = renderer.world() else {
+        bail!(
+            "--path {}: the scene has no flight paths (a world scene has: --scene world)",
+            run.name
+        );
+    };
+    let Some(path) = world.paths.iter().find(|p| p.name == run.name).cloned() else {
+        let names: Vec<&str> = world.paths.iter().map(|p| p.name.as_str()).collect();
+        bail!(
+            "--path {}: no such path (this world has: {})",
+            run.name,
+            names.join(", ")
+        );
+    };
+    let duration = path.duration();
+    let dt = run.dt.unwrap_or(duration / (run.frames.max(2) - 1) as f32);
+    if !(dt.is_finite() && dt > 0.0) {
+        bail!("--dt {dt}: must be a positive number of seconds");
+    }
+    let camera_at = |i: u32| -> (f32, Camera) {
+        let t = (i as f32 * dt).min(duration);
+        (t, path.camera_at(t, run.fov_y_deg))
+    };
+    // Warm-up: everything around the start resident, pipelines compiled.
+    let (_, start) = camera_at(0);
+    renderer.settle_world(&start, Duration::from_secs(600))?;
+    renderer.render(&start, settings)?;
+    renderer.reset_history();
+    let mut csv = match run.csv {
+        Some(p) => {
+            let mut f = std::fs::File::create(p)
+                .with_context(|| format!("--csv {}: cannot create the file", p.display()))?;
+            writeln!(f, "{CSV_HEADER}")?;
+            Some((p, f))
+        }
+        None => None,
+    };
+    let bar = indicatif::ProgressBar::new(u64::from(run.frames));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:40}] {pos}/{len} frames, {elapsed} (eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message(format!("flying {}", run.name));
+    let mut frames = Vec::with_capacity(run.frames as usize);
+    let wall = Instant::now();
+    for i in 0..run.frames {
+        let (t, camera) = camera_at(i);
+        let frame = renderer.draw(&camera, settings)?;
+        // Counting stalls on a read-back: after the timed frame, not in it.
+        let counts = renderer.count_drawn(&camera, settings)?;
+        let world = frame.world.clone().unwrap_or_else(|| himal::WorldFrame {
+            stream: Default::default(),
+            stream_ms: 0.0,
+            terrain: None,
+        });
+        let s = world.stream;
+        let f = PathFrame {
+            t,
+            plan_ms: frame.cpu.plan_ms,
+            stream_ms: world.stream_ms,
+            record_ms: frame.cpu.record_ms,
+            submit_ms: frame.cpu.submit_ms,
+            gpu_ms: frame.timings.iter().map(|t| t.gpu_ms).sum(),
+            gbuffer_draws: frame.gbuffer_draws,
+            shadow_draws: frame.shadows.draws,
+            object_triangles: counts.total_triangles(),
+            terrain_triangles: world.terrain.as_ref().map_or(0, |t| t.triangles().into()),
+            instances: counts.instances,
+            resident: s.resident,
+            missing: s.missing,
+            tiles_used: s.tiles_used,
+            tiles_total: s.tiles_total,
+            instances_live: s.instances,
+            instances_total: s.instances_total,
+            uploaded: s.uploaded,
+            upload_bytes: s.upload_bytes,
+            evicted: s.evicted,
+            memory: himal::soak::resident_bytes().unwrap_or(0),
+        };
+        if let Some((p, file)) = csv.as_mut() {
+            writeln!(file, "{}", csv_row(i as usize, &f))
+                .with_context(|| format!("--csv {}: cannot write", p.display()))?;
+        }
+        frames.push(f);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let report = Report::new(&frames);
+    let adapter = renderer.context().info.to_string();
+    crate::save_cache(renderer.context());
+    let flown = path.camera_at(0.0, 60.0).position.distance(
+        path.camera_at((run.frames.saturating_sub(1)) as f32 * dt, 60.0)
+            .position,
+    );
+    if run.json {
+        println!("{}", report.json(&adapter, run.name, dt, flown));
+    } else {
+        report.print(&adapter, run.name, dt, flown, settings, wall.elapsed());
+    }
+    Ok(())
+}
+
+/// Median, max and min of one column.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Stat {
+    pub median: f64,
+    pub max: f64,
+    pub min: f64,
+}
+
+impl Stat {
+    fn of(frames: &[PathFrame], f: impl Fn(&PathFrame) -> f64) -> Stat {
+        let mut v: Vec<f64> = frames.iter().map(f).collect();
+        let max = v.iter().copied().fold(f64::MIN, f64::max);
+        let min = v.iter().copied().fold(f64::MAX, f64::min);
+        Stat {
+            median: median(&mut v),
+            max: if v.is_empty() { 0.0 } else { max },
+            min: if v.is_empty() { 0.0 } else { min },
+        }
+    }
+
+    /// max / min (1 for a flat or empty column).
+    pub fn spread(&self) -> f64 {
+        if self.min > 0.0 {
+            self.max / self.min
+        } else if self.max > 0.0 {
+            f64::INFINITY
+        } else {
+            1.0
+        }
+    }
+
+    fn json(&self) -> String {
+        format!(
+            "{{\"median\":{:.4},\"max\":{:.4},\"min\":{:.4}}}",
+            self.median, self.max, self.min
+        )
+    }
+}
+
+/// The flight's summary.
+pub struct Report {
+    pub frames: usize,
+    pub plan: Stat,
+    pub stream: Stat,
+    pub record: Stat,
+    pub submit: Stat,
+    pub cpu: Stat,
+    pub gpu: Stat,
+    pub gbuffer_draws: Stat,
+    pub shadow_draws: Stat,
+    pub object_triangles: Stat,
+    pub terrain_triangles: Stat,
+    pub instances: Stat,
+    pub resident: Stat,
+    pub missing: Stat,
+    pub tiles: Stat,
+    pub instances_live: Stat,
+    pub upload_bytes: Stat,
+    pub memory: Stat,
+    pub tiles_total: u32,
+    pub instances_total: u32,
+    pub uploaded: u64,
+    pub upload_total: u64,
+    pub evicted: u64,
+    /// Frames whose CPU time exceeds twice the median, and how many of
+    /// them uploaded sectors.
+    pub slow: usize,
+    pub slow_streaming: usize,
+}
+
+impl Report {
+    pub fn new(f: &[PathFrame]) -> Report {
+        let cpu = Stat::of(f, PathFrame::cpu_ms);
+        let slow: Vec<&PathFrame> = f.iter().filter(|x| x.cpu_ms() > 2.0 * cpu.median).collect();
+        Report {
+            frames: f.len(),
+            plan: Stat::of(f, |x| x.plan_ms),
+            stream: Stat::of(f, |x| x.stream_ms),
+            record: Stat::of(f, |x| x.record_ms),
+            submit: Stat::of(f, |x| x.submit_ms),
+            cpu,
+            gpu: Stat::of(f, |x| x.gpu_ms),
+            gbuffer_draws: Stat::of(f, |x| x.gbuffer_draws.into()),
+            shadow_draws: Stat::of(f, |x| x.shadow_draws.into()),
+            object_triangles: Stat::of(f, |x| x.object_triangles as f64),
+            terrain_triangles: Stat::of(f, |x| x.terrain_triangles as f64),
+            instances: Stat::of(f, |x| x.instances.iter().sum::<u64>() as f64),
+            resident: Stat::of(f, |x| x.resident.into()),
+            missing: Stat::of(f, |x| x.missing.into()),
+            tiles: Stat::of(f, |x| x.tiles_used.into()),
+            instances_live: Stat::of(f, |x| x.instances_live.into()),
+            upload_bytes: Stat::of(f, |x| x.upload_bytes as f64),
+            memory: Stat::of(f, |x| x.memory as f64),
+            tiles_total: f.first().map_or(0, |x| x.tiles_total),
+            instances_total: f.first().map_or(0, |x| x.instances_total),
+            uploaded: f.iter().map(|x| u64::from(x.uploaded)).sum(),
+            upload_total: f.iter().map(|x| x.upload_bytes).sum(),
+            evicted: f.iter().map(|x| u64::from(x.evicted)).sum(),
+            slow: slow.len(),
+            slow_streaming: slow.iter().filter(|x| x.uploaded > 0).count(),
+        }
+    }
+
+    fn print(
+        &self,
+        adapter: &str,
+        name: &str,
+        dt: f32,
+        flown: f32,
+        settings: &FrameSettings,
+        wall: Duration,
+    ) {
+        let mib = |b: f64| b / (1024.0 * 1024.0);
+        println!(
+            "himal bench --path {name}: {adapter}, {}x{}, {} frames, {dt:.3} s of path per frame, {:.2} km flown, {:.0} s wall",
+            settings.width,
+            settings.height,
+            self.frames,
+            flown / 1000.0,
+            wall.as_secs_f64()
+        );
+        println!(
+            "{:<34} {:>12} {:>12} {:>12}",
+            "per frame", "median", "max", "min"
+        );
+        let row = |label: &str, s: &Stat, unit: f64| {
+            println!(
+                "{:<34} {:>12.3} {:>12.3} {:>12.3}",
+                label,
+                s.median / unit,
+                s.max / unit,
+                s.min / unit
+            );
+        };
+        row("CPU plan + culling (ms)", &self.plan, 1.0);
+        row("  of which streaming (ms)", &self.stream, 1.0);
+        row("CPU record (ms)", &self.record, 1.0);
+        row("CPU submit (ms)", &self.submit, 1.0);
+        row("CPU total (ms)", &self.cpu, 1.0);
+        row("GPU total (ms)", &self.gpu, 1.0);
+        row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
+        row("shadow draw calls", &self.shadow_draws, 1.0);
+        row("object triangles (k)", &self.object_triangles, 1e3);
+        row("terrain triangles (k)", &self.terrain_triangles, 1e3);
+        row("instances drawn (camera)", &self.instances, 1.0);
+        row("resident sectors", &self.resident, 1.0);
+        row("wanted sectors not resident", &self.missing, 1.0);
+        row("terrain tiles in use", &self.tiles, 1.0);
+        row("instance slots in use", &self.instances_live, 1.0);
+        row("upload (KiB)", &self.upload_bytes, 1024.0);
+        row("process resident (MiB)", &self.memory, 1024.0 * 1024.0);
+        println!(
+            "pools: tiles {:.0}..{:.0} of {} (max/min {:.3}), instance slots {:.0}..{:.0} of {} (max/min {:.3})",
+            self.tiles.min,
+            self.tiles.max,
+            self.tiles_total,
+            self.tiles.spread(),
+            self.instances_live.min,
+            self.instances_live.max,
+            self.instances_total,
+            self.instances_live.spread()
+        );
+        println!(
+            "streaming: {} sectors uploaded ({:.1} MiB), {} evicted; process resident max/min {:.3}",
+            self.uploaded,
+            mib(self.upload_total as f64),
+            self.evicted,
+            self.memory.spread()
+        );
+        println!(
+            "CPU frame time max/median {:.2}; frames over 2x the median: {} ({} of them uploading sectors)",
+            if self.cpu.median > 0.0 {
+                self.cpu.max / self.cpu.median
+            } else {
+                0.0
+            },
+            self.slow,
+            self.slow_streaming
+        );
+        if self.gpu.max == 0.0 {
+            println!("(this adapter has no timestamp queries: no GPU times)");
+        }
+    }
+
+    fn json(&self, adapter: &str, name: &str, dt: f32, flown: f32) -> String {
+        let stats = [
+            ("plan_ms", &self.plan),
+            ("stream_ms", &self.stream),
+            ("record_ms", &self.record),
+            ("submit_ms", &self.submit),
+            ("cpu_ms", &self.cpu),
+            ("gpu_ms", &self.gpu),
+            ("gbuffer_draws", &self.gbuffer_draws),
+            ("shadow_draws", &self.shadow_draws),
+            ("object_triangles", &self.object_triangles),
+            ("terrain_triangles", &self.terrain_triangles),
+            ("instances_drawn", &self.instances),
+            ("resident_sectors", &self.resident),
+            ("missing_sectors", &self.missing),
+            ("tiles_used", &self.tiles),
+            ("instances_live", &self.instances_live),
+            ("upload_bytes", &self.upload_bytes),
+            ("resident_bytes", &self.memory),
+        ];
+        let body: Vec<String> = stats
+            .iter()
+            .map(|(k, s)| format!("\"{k}\":{}", s.json()))
+            .collect();
+        format!(
+            "{{\"adapter\":{adapter:?},\"path\":{name:?},\"frames\":{},\"dt_s\":{dt},\"flown_m\":{flown:.1},\"tiles_total\":{},\"instances_total\":{},\"uploaded\":{},\"upload_total_bytes\":{},\"evicted\":{},\"slow_frames\":{},\"slow_frames_streaming\":{},{}}}",
+            self.frames,
+            self.tiles_total,
+            self.instances_total,
+            self.uploaded,
+            self.upload_total,
+            self.evicted,
+            self.slow,
+            self.slow_streaming,
+            body.join(",")
+        )
+    }
+}
