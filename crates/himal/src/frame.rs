@@ -210,7 +210,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     }
     passes.cull.plan(ctx, &views, lod);
     // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
+    let lod_view = settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Lod);
+    passes.gbuffer.lod_view = lod_view;
     let terrain = passes.terrain.as_mut().map(|t| {
+        t.lod_view = lod_view;
         let fits: Vec<Mat4> = shadows.fits.iter().map(|f| f.light_view_proj).collect();
         t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits)
     });

@@ -36,7 +36,7 @@ pub enum ViewBuffer {
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 22] = [
+    pub const NAMES: [&'static str; 24] = [
         "final",
         "albedo",
         "normal",
@@ -59,6 +59,8 @@ impl ViewBuffer {
         "env-mirror",
         "sky-visibility",
         "bent-normal",
+        "sectors",
+        "lod",
     ];
 }
 
@@ -89,6 +91,8 @@ impl std::str::FromStr for ViewBuffer {
             "env-mirror" => ViewBuffer::Env(EnvView::Mirror),
             "sky-visibility" => ViewBuffer::SkyOcc(SkyOccView::Visibility),
             "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
+            "sectors" => ViewBuffer::Debug(D::Sectors),
+            "lod" => ViewBuffer::Debug(D::Lod),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",

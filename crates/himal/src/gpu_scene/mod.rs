@@ -591,6 +591,22 @@ impl SceneGpu {
         std::borrow::Cow::Owned(draws.iter().map(at).collect())
     }
 
+    /// `draws` by the level [`Self::draw_list`] draws each at this frame
+    /// (`--view lod`); all at 0 when LOD is off.
+    pub fn split_levels(&self, draws: &[Draw]) -> [Vec<Draw>; crate::scene::lod::MAX_LODS] {
+        let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
+        let mut out: [Vec<Draw>; crate::scene::lod::MAX_LODS] = Default::default();
+        for d in draws {
+            let level = if lod.selection.scale > 0.0 && self.has_lods {
+                self.lod_level(d.object, &lod) as usize
+            } else {
+                0
+            };
+            out[level.min(out.len() - 1)].push(d.clone());
+        }
+        out
+    }
+
     /// Draw calls [`Self::draw_list`] records for `draws`.
     pub fn draw_calls(&self, draws: &[Draw]) -> u32 {
         draw_calls(&self.at_lod(draws), self.instancing())

@@ -29,3 +29,15 @@ fn gbuffer_motion(curr_clip: vec4f, prev_clip: vec4f) -> vec2f {
     let prev = prev_clip.xy / prev_clip.w;
     return (prev - curr) * vec2f(0.5, -0.5);
 }
+
+// `--view lod`: the albedo of a surface drawn at `level` (mesh LOD or
+// terrain quadtree level), one hue per level over the surface's own
+// brightness, so shapes stay readable.
+fn lod_view_albedo(level: u32, albedo: vec3f) -> vec3f {
+    let hues = array<vec3f, 8>(
+        vec3f(0.9, 0.15, 0.1), vec3f(0.95, 0.6, 0.05), vec3f(0.85, 0.85, 0.1),
+        vec3f(0.2, 0.75, 0.2), vec3f(0.1, 0.7, 0.8), vec3f(0.15, 0.3, 0.9),
+        vec3f(0.6, 0.2, 0.85), vec3f(0.85, 0.85, 0.85));
+    let l = dot(albedo, vec3f(0.2126, 0.7152, 0.0722));
+    return hues[level % 8u] * clamp(0.45 + 1.5 * l, 0.45, 1.0);
+}

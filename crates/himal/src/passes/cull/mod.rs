@@ -322,6 +322,34 @@ impl Culled {
         1
     }
 
+    /// [`Self::draw`] of `level`'s lists alone, one indirect draw per
+    /// batch and kind (`--view lod`, a pipeline per level).
+    pub fn draw_level(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        args: &wgpu::Buffer,
+        view: u32,
+        list: List,
+        kinds: std::ops::Range<u32>,
+        level: u32,
+    ) -> u32 {
+        let (first, count) = self.range(list);
+        let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
+        let base = u64::from(view) * u64::from(self.batches) * lists + u64::from(first) * lists;
+        let mut calls = 0;
+        for kind in kinds {
+            for b in 0..count {
+                let at = base
+                    + u64::from(kind) * u64::from(count) * lods
+                    + u64::from(b) * lods
+                    + u64::from(level);
+                rp.draw_indexed_indirect(args, at * ARGS_BYTES);
+                calls += 1;
+            }
+        }
+        calls
+    }
+
     fn range(&self, list: List) -> (u32, u32) {
         match list {
             List::Opaque => self.opaque,

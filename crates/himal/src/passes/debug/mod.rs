@@ -25,6 +25,11 @@ pub enum DebugView {
     Luminance = 11,
     /// The bloom chain's output (H2), upsampled.
     Bloom = 12,
+    /// The world's 64 m sectors (V6): one hue per sector over the albedo, edges dark.
+    Sectors = 13,
+    /// Each surface's LOD level (E2) or terrain quadtree level, as a hue
+    /// over its albedo (the G-buffer draws each level with its own pipeline).
+    Lod = 14,
 }
 
 pub struct DebugPass {

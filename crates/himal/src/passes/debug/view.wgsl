@@ -40,7 +40,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var raw = vec4f(0.0, 0.0, 0.0, 1.0);
     var disp = vec3f(0.0);
     switch VIEW {
-        case 1u: { // albedo (linear; the sRGB target encodes it)
+        case 1u, 14u: { // albedo (linear; the sRGB target encodes it); 14: lod, hues by level
             raw = vec4f(textureLoad(gbuffer_albedo, px, 0).rgb, 1.0);
             return select(raw, vec4f(0.0, 0.0, 0.0, 1.0), sky);
         }
@@ -60,6 +60,22 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             let mv = textureLoad(motion, px, 0).xy * view.viewport.xy;
             raw = vec4f(mv, 0.0, 1.0);
             disp = vec3f(0.5 + mv / 16.0, 0.5);
+        }
+        case 13u: { // sectors: the 64 m grid (world origin on a sector corner)
+            let p = world_from_depth(view, frag.xy * view.viewport.zw, d);
+            let s = p.xz / 64.0;
+            let cell = vec2i(floor(s));
+            var h = u32(cell.x) * 0x8da6b343u ^ u32(cell.y) * 0xd8163841u;
+            h = (h ^ (h >> 15u)) * 0x2c1b3c6du;
+            h = h ^ (h >> 12u);
+            let hue = vec3f(f32(h & 255u), f32((h >> 8u) & 255u), f32((h >> 16u) & 255u)) / 255.0;
+            let albedo = textureLoad(gbuffer_albedo, px, 0).rgb;
+            let l = dot(albedo, vec3f(0.2126, 0.7152, 0.0722));
+            // Edges about 1.5 px wide at any distance.
+            let f = abs(fract(s + 0.5) - 0.5) / max(fwidth(s), vec2f(1e-6));
+            let edge = 1.0 - smoothstep(0.75, 1.5, min(f.x, f.y));
+            raw = vec4f(vec2f(cell), 0.0, 1.0);
+            disp = mix((0.25 + 0.75 * hue) * clamp(0.4 + 1.5 * l, 0.4, 1.0), vec3f(0.02), edge);
         }
         case 11u: { // luminance (H3); display: log2(L_w / L_exposure) over +-8 EV, grey
             let l_w = luminance(textureLoad(hdr, px, 0).rgb);

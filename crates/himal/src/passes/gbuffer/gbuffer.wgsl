@@ -22,6 +22,8 @@ override VEGETATION: bool = false;
 // E2: the pipeline of the GPU lists fading between levels (screen-door
 // discard by the instance's fade code); vegetation always applies it.
 override DITHER: bool = false;
+// `--view lod`: the level these draws are at (< 0: not that view).
+override LOD_VIEW: f32 = -1.0;
 
 struct VertexOut {
     @builtin(position) clip: vec4f,
@@ -80,6 +82,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let tbn = shading_frame(n, in.tangent);
     var out: GBufferOut;
     out.albedo = in.color;
+    if (LOD_VIEW >= 0.0) {
+        out.albedo = vec4f(lod_view_albedo(u32(LOD_VIEW), in.color.rgb), in.color.a);
+    }
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     out.material = clamp(in.surface, vec4f(0.0), vec4f(1.0));
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);

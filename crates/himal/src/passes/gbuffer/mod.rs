@@ -13,6 +13,7 @@ use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
 use crate::graph::{BufferAccess, FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 use crate::passes::cull::{ALL, Culled, FADING, List, STEADY};
+use crate::scene::lod::MAX_LODS;
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
@@ -52,6 +53,8 @@ pub struct GBufferKey {
     /// E2: the per-vertex pipeline of the GPU lists fading between levels
     /// (screen-door discard; the plain one keeps early-Z).
     pub dither: bool,
+    /// `--view lod`: the level these draws are at, shown as the albedo's hue.
+    pub lod_view: Option<u8>,
 }
 
 /// Mip bias of textured materials under temporal anti-aliasing (A2).
@@ -63,6 +66,7 @@ impl GBufferKey {
         double_sided: false,
         mip_bias: false,
         dither: false,
+        lod_view: None,
     };
     /// E2 transitions of per-vertex objects.
     pub const VERTEX_DITHER: Self = Self {
@@ -75,6 +79,7 @@ impl GBufferKey {
         double_sided: true,
         mip_bias: false,
         dither: false,
+        lod_view: None,
     };
 
     pub const fn textured(double_sided: bool, mip_bias: bool) -> Self {
@@ -83,6 +88,15 @@ impl GBufferKey {
             double_sided,
             mip_bias,
             dither: false,
+            lod_view: None,
+        }
+    }
+
+    /// This permutation for `--view lod` at `level`.
+    pub const fn at_level(self, level: u8) -> Self {
+        Self {
+            lod_view: Some(level),
+            ..self
         }
     }
 
@@ -90,6 +104,27 @@ impl GBufferKey {
     /// also clears the targets when nothing else draws); `mip_bias`: under
     /// temporal anti-aliasing.
     pub fn for_scene(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
+        Self::for_view(scene, mip_bias, false)
+    }
+
+    /// [`Self::for_scene`], with `lod_view`: the per-vertex and textured
+    /// permutations at every level instead (`--view lod`).
+    pub fn for_view(scene: &SceneGpu, mip_bias: bool, lod_view: bool) -> Vec<GBufferKey> {
+        let mut keys = Self::base_keys(scene, mip_bias);
+        if lod_view {
+            let levels = if scene.has_lods { MAX_LODS as u8 } else { 1 };
+            keys = keys
+                .into_iter()
+                .flat_map(|k| match k.material {
+                    MaterialType::Vegetation => vec![k],
+                    _ => (0..levels).map(|l| k.at_level(l)).collect(),
+                })
+                .collect();
+        }
+        keys
+    }
+
+    fn base_keys(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
         let mut keys = vec![Self::VERTEX];
         if scene.has_lods {
             keys.push(Self::VERTEX_DITHER);
@@ -114,6 +149,8 @@ impl GBufferKey {
 pub struct GBufferPass {
     /// The camera's visible objects this frame (`frame::plan`).
     pub visible: VisibleLists,
+    /// `--view lod` this frame: albedo shows each draw's level (`frame::plan`).
+    pub lod_view: bool,
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
@@ -123,6 +160,7 @@ impl GBufferPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let pass = Self {
             visible: VisibleLists::default(),
+            lod_view: false,
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
         };
@@ -169,13 +207,22 @@ impl GBufferPass {
         } else {
             Some(wgpu::Face::Back)
         };
+        let lod: Vec<(&str, f64)> = key
+            .lod_view
+            .map(|l| ("LOD_VIEW", f64::from(l)))
+            .into_iter()
+            .collect();
+        let with_lod = |c: &[(&'static str, f64)]| -> Vec<(&str, f64)> {
+            c.iter().copied().chain(lod.iter().copied()).collect()
+        };
         match key.material {
-            MaterialType::Vertex if key.dither => self
-                .program
-                .render_pipeline(ctx, &spec("gbuffer.dither", cull, &[("DITHER", 1.0)])),
+            MaterialType::Vertex if key.dither => self.program.render_pipeline(
+                ctx,
+                &spec("gbuffer.dither", cull, &with_lod(&[("DITHER", 1.0)])),
+            ),
             MaterialType::Vertex => self
                 .program
-                .render_pipeline(ctx, &spec("gbuffer", cull, &[])),
+                .render_pipeline(ctx, &spec("gbuffer", cull, &with_lod(&[]))),
             MaterialType::Vegetation => self.program.render_pipeline(
                 ctx,
                 &spec("gbuffer.vegetation", cull, &[("VEGETATION", 1.0)]),
@@ -188,7 +235,11 @@ impl GBufferPass {
                 };
                 self.textured.render_pipeline(
                     ctx,
-                    &spec("gbuffer.textured", cull, &[("MIP_BIAS", f64::from(bias))]),
+                    &spec(
+                        "gbuffer.textured",
+                        cull,
+                        &with_lod(&[("MIP_BIAS", f64::from(bias))]),
+                    ),
                 )
             }
         }
@@ -231,11 +282,12 @@ impl GBufferPass {
         let depth = graph.create_texture("depth", TextureDesc::new_2d(w, h, DEPTH_FORMAT));
         // The permutations this scene draws with, from the shared cache.
         let pipelines: Vec<(GBufferKey, Result<wgpu::RenderPipeline, GpuError>)> =
-            GBufferKey::for_scene(scene, mip_bias)
+            GBufferKey::for_view(scene, mip_bias, self.lod_view)
                 .into_iter()
                 .map(|key| (key, self.pipeline(ctx, key)))
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
+        let lod_view = self.lod_view;
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects);
@@ -268,15 +320,35 @@ impl GBufferPass {
                         "G-buffer permutation {key:?} is not one this scene draws with"
                     ))),
                 };
-                rp.set_pipeline(pipeline(GBufferKey::VERTEX)?);
+                // `--view lod`: every level's draws with that level's pipeline.
+                let levels = match (lod_view, scene.has_lods) {
+                    (false, _) => vec![None],
+                    (true, false) => vec![Some(0u8)],
+                    (true, true) => (0..MAX_LODS as u8).map(Some).collect(),
+                };
+                let at = |key: GBufferKey, level: Option<u8>| match level {
+                    Some(l) => key.at_level(l),
+                    None => key,
+                };
+                let by_level = lod_view.then(|| scene.split_levels(opaque));
                 scene.bind_geometry(rp);
-                scene.draw_list(rp, opaque);
-                if let Some((c, view)) = culled {
-                    let args = ctx.buffer(c.args);
-                    c.draw(rp, args, view, List::Opaque, STEADY);
-                    if c.has_lods {
-                        rp.set_pipeline(pipeline(GBufferKey::VERTEX_DITHER)?);
-                        c.draw(rp, args, view, List::Opaque, FADING);
+                for &level in &levels {
+                    rp.set_pipeline(pipeline(at(GBufferKey::VERTEX, level))?);
+                    match (&by_level, level) {
+                        (Some(split), Some(l)) => scene.draw_list(rp, &split[l as usize]),
+                        _ => scene.draw_list(rp, opaque),
+                    }
+                    if let Some((c, view)) = culled {
+                        let args = ctx.buffer(c.args);
+                        let draw = |rp: &mut wgpu::RenderPass<'_>, kinds| match level {
+                            Some(l) => c.draw_level(rp, args, view, List::Opaque, kinds, l.into()),
+                            None => c.draw(rp, args, view, List::Opaque, kinds),
+                        };
+                        draw(rp, STEADY);
+                        if c.has_lods {
+                            rp.set_pipeline(pipeline(at(GBufferKey::VERTEX_DITHER, level))?);
+                            draw(rp, FADING);
+                        }
                     }
                 }
                 if let Some(m) = &scene.materials {
@@ -287,12 +359,15 @@ impl GBufferPass {
                         else {
                             continue;
                         };
-                        rp.set_pipeline(pipeline(GBufferKey::textured(
-                            binding.double_sided,
-                            mip_bias,
-                        ))?);
+                        let key = GBufferKey::textured(binding.double_sided, mip_bias);
+                        let one = std::slice::from_ref(draw);
+                        let level = lod_view.then(|| {
+                            let split = scene.split_levels(one);
+                            split.iter().position(|l| !l.is_empty()).unwrap_or(0) as u8
+                        });
+                        rp.set_pipeline(pipeline(at(key, level))?);
                         rp.set_bind_group(1, group, &[]);
-                        scene.draw_list(rp, std::slice::from_ref(draw));
+                        scene.draw_list(rp, one);
                     }
                 }
                 if !vegetation.is_empty() {

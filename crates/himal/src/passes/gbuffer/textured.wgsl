@@ -48,6 +48,8 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
 // over frames A and B sharpen what a full-rate mip would blur); an E1
 // permutation (GBufferKey::mip_bias).
 override MIP_BIAS: f32 = 0.0;
+// `--view lod`: the level these draws are at (< 0: not that view).
+override LOD_VIEW: f32 = -1.0;
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
@@ -95,5 +97,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     // Emissive is sampled so its binding stays in the reflected layout (the
     // material bind group is shared with passes/forward, which draws it).
     out.albedo.a = out.albedo.a + 0.0 * emissive.r * material.emissive.r;
+    if (LOD_VIEW >= 0.0) {
+        out.albedo = vec4f(lod_view_albedo(u32(LOD_VIEW), out.albedo.rgb), out.albedo.a);
+    }
     return out;
 }

@@ -346,6 +346,8 @@ pub struct TerrainCpu {
 }
 
 pub struct TerrainPass {
+    /// `--view lod` this frame (`frame::plan`).
+    pub lod_view: bool,
     pub geometry: Geometry,
     pub settings: TerrainSettings,
     program: Program,
@@ -642,6 +644,7 @@ impl TerrainPass {
         }
         ctx.check("terrain")?;
         Ok(Self {
+            lod_view: false,
             geometry: g,
             settings: TerrainSettings::default(),
             program,
@@ -897,8 +900,13 @@ impl TerrainPass {
             .to_vec())
     }
 
-    /// The G-buffer pipeline, through the shared cache.
-    pub fn pipeline(&self, ctx: &GpuContext) -> Result<wgpu::RenderPipeline, GpuError> {
+    /// The G-buffer pipeline, through the shared cache (`lod_view`: albedo
+    /// shows each patch's level, `--view lod`).
+    pub fn pipeline(
+        &self,
+        ctx: &GpuContext,
+        lod_view: bool,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [
             target(ALBEDO_FORMAT),
             target(FRAME_FORMAT),
@@ -925,7 +933,7 @@ impl TerrainPass {
                     cull_mode: Some(wgpu::Face::Back),
                     ..Default::default()
                 },
-                constants: &[],
+                constants: if lod_view { &[("LOD_VIEW", 1.0)] } else { &[] },
             },
         )
     }
@@ -956,7 +964,7 @@ impl TerrainPass {
         gbuffer: GBuffer,
         view: &'a wgpu::Buffer,
     ) -> GBuffer {
-        let pipeline = self.pipeline(ctx);
+        let pipeline = self.pipeline(ctx, self.lod_view);
         let load = wgpu::LoadOp::Load;
         let written = graph
             .raster("terrain", &self.program)

@@ -13,6 +13,9 @@
 #import tangent_frame
 #import terrain
 
+// `--view lod`: albedo shows the patch's quadtree level.
+override LOD_VIEW: bool = false;
+
 struct TerrainLayer {
     // rgb linear albedo, a glossiness
     albedo: vec4f,
@@ -41,6 +44,7 @@ struct VertexOut {
     @location(0) world: vec3f,
     @location(1) curr_clip: vec4f,
     @location(2) prev_clip: vec4f,
+    @location(3) @interpolate(flat) level: u32,
 }
 
 @vertex
@@ -54,6 +58,7 @@ fn vs_main(@location(0) origin: vec2f, @location(1) level: u32,
     // Static ground: last frame's matrix on the same point (as objects do).
     out.prev_clip = view.prev_view_proj * vec4f(w, 1.0);
     out.clip = out.curr_clip;
+    out.level = level;
     return out;
 }
 
@@ -190,6 +195,9 @@ fn fs_main(in: VertexOut) -> GBufferOut {
     let tbn = shading_frame(n, vec4f(1.0, grad.x, 0.0, 1.0));
     var out: GBufferOut;
     out.albedo = vec4f(clamp(albedo, vec3f(0.0), vec3f(1.0)), 1.0);
+    if (LOD_VIEW) {
+        out.albedo = vec4f(lod_view_albedo(in.level, out.albedo.rgb), 1.0);
+    }
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     out.material = vec4f(gloss, 0.5, 0.0, 0.0);
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
