@@ -467,6 +467,32 @@ fn env_budget() -> Result<MemoryBudget, SceneError> {
     })
 }
 
+/// The text of the scene file at `path`, refusing what is not a regular
+/// file of at most [`MAX_SCENE_FILE_BYTES`].
+pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    // A directory, a device or an endless pipe is not read.
+    if !meta.is_file() || meta.len() > MAX_SCENE_FILE_BYTES {
+        return Err(SceneError::Invalid {
+            file: path.display().to_string(),
+            message: format!(
+                "not a scene file: {} (at most {} MiB of TOML)",
+                if meta.is_file() {
+                    "too large"
+                } else {
+                    "not a regular file"
+                },
+                MAX_SCENE_FILE_BYTES >> 20
+            ),
+        });
+    }
+    std::fs::read_to_string(path).map_err(io)
+}
+
 /// Text of the demo world, embedded so the renderer runs from anywhere.
 const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
@@ -480,27 +506,7 @@ impl Scene {
 
     /// [`Scene::load`] with an explicit memory budget.
     pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
-        let io = |source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let meta = std::fs::metadata(path).map_err(io)?;
-        // A directory, a device or an endless pipe is not read.
-        if !meta.is_file() || meta.len() > MAX_SCENE_FILE_BYTES {
-            return Err(SceneError::Invalid {
-                file: path.display().to_string(),
-                message: format!(
-                    "not a scene file: {} (at most {} MiB of TOML)",
-                    if meta.is_file() {
-                        "too large"
-                    } else {
-                        "not a regular file"
-                    },
-                    MAX_SCENE_FILE_BYTES >> 20
-                ),
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        let text = read_scene_file(path)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
         let mut scene = build::build_scene(&text, &path.display().to_string(), base_dir, budget)?;
         scene.path = Some(path.to_path_buf());

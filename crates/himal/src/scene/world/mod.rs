@@ -8,10 +8,12 @@
 //! - [`stream`]: residency around the camera, worker threads, fixed pools,
 //!   farthest-first eviction, a per-frame upload budget.
 //! - [`path`]: named cameras and the flight path across the world.
+//! - [`file`]: a world from a scene file's `[world]` table.
 //!
 //! Nothing here touches the GPU; the renderer applies the uploads that
 //! [`stream::Streamer::update`] hands it. See `docs/world.md`.
 
+pub mod file;
 pub mod meshes;
 pub mod path;
 pub mod pool;
@@ -23,6 +25,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+pub use file::WorldFile;
 pub use path::FlightPath;
 pub use sector::{
     Instance, InstanceKind, PlacementRules, SECTOR_SIZE, SectorCoord, SectorData, TILE_RES,
