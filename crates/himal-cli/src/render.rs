@@ -425,25 +425,43 @@ pub fn world() -> std::sync::Arc<himal::scene::world::World> {
     std::sync::Arc::new(himal::scene::world::World::new(Default::default()))
 }
 
+fn is_gltf(spec: &str) -> bool {
+    let lower = spec.to_ascii_lowercase();
+    lower.ends_with(".gltf") || lower.ends_with(".glb")
+}
+
+/// The streamed world `spec` names: the built-in one, or a scene file with
+/// a `[world]` table (its cameras first, then the world's); `None` for a
+/// scene of objects. The file is parsed again on each call.
+pub fn world_of(spec: &str) -> Result<Option<std::sync::Arc<himal::scene::world::World>>> {
+    if spec == WORLD {
+        return Ok(Some(world()));
+    }
+    if spec == "demo" || is_gltf(spec) {
+        return Ok(None);
+    }
+    let file = himal::scene::world::WorldFile::load(Path::new(spec))?;
+    Ok(file.map(|f| std::sync::Arc::new(f.into_world())))
+}
+
 /// The renderer for `spec` (see [`load_scene`]): the streamed world or `scene`.
 pub fn open_renderer(spec: &str, ctx: himal::gpu::GpuContext, scene: &Scene) -> Result<Renderer> {
-    Ok(if spec == WORLD {
-        Renderer::with_world(ctx, world())?
-    } else {
-        Renderer::new(ctx, scene)?
+    Ok(match world_of(spec)? {
+        Some(world) => Renderer::with_world(ctx, world)?,
+        None => Renderer::new(ctx, scene)?,
     })
 }
 
-/// Loads `demo`, `world` (its meshes and cameras; sectors stream in the
-/// renderer), a glTF model (.gltf / .glb) or a scene file.
+/// Loads `demo`, `world` or a scene file with a `[world]` table (its
+/// meshes, cameras and sun; sectors stream in the renderer), a glTF model
+/// (.gltf / .glb) or a scene file.
 pub fn load_scene(spec: &str) -> Result<Scene> {
-    let lower = spec.to_ascii_lowercase();
     Ok(if spec == "demo" {
         Scene::demo()?
-    } else if spec == WORLD {
-        world().scene()
-    } else if lower.ends_with(".gltf") || lower.ends_with(".glb") {
+    } else if is_gltf(spec) {
         Scene::from_gltf(Path::new(spec))?
+    } else if let Some(world) = world_of(spec)? {
+        world.scene()
     } else {
         Scene::load(Path::new(spec))?
     })

@@ -23,6 +23,41 @@ pub const MESH_BYTES_PER_INDEX: u64 = 3 * 4;
 /// 512x512 and resident memory 143; charged at 160.
 pub const FRAME_BYTES_PER_PIXEL: u64 = 160;
 
+/// A size in bytes: `4GiB`, `512MiB`, `1.5MB`, `100000` (a unit of B, KiB,
+/// MiB, GiB, TiB, KB, MB, GB or TB, case-insensitive; none is bytes).
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let scale: f64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" => 1e3,
+        "kib" => 1024.0,
+        "m" | "mb" => 1e6,
+        "mib" => 1024.0 * 1024.0,
+        "g" | "gb" => 1e9,
+        "gib" => 1024.0 * 1024.0 * 1024.0,
+        "t" | "tb" => 1e12,
+        "tib" => 1024f64.powi(4),
+        other => {
+            return Err(format!(
+                "unknown unit \"{other}\" (use B, KiB, MiB, GiB, TiB, KB, MB, GB or TB)"
+            ));
+        }
+    };
+    let n: f64 = number
+        .parse()
+        .map_err(|_| "expected a size such as 4GiB or 512MiB".to_string())?;
+    let bytes = n * scale;
+    // Past 1e18 an f64 no longer converts to u64 without saturating.
+    if !(bytes.is_finite() && bytes <= 1e18) {
+        return Err("must be at most 1000000TB".into());
+    }
+    Ok(bytes as u64)
+}
+
 /// How many bytes the scene and frame may plan to hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryBudget {
@@ -56,37 +91,11 @@ impl MemoryBudget {
 
     /// `4GiB`, `512MiB`, `2GB`, `100000` (bytes); at least 1 MiB.
     pub fn parse(s: &str) -> Result<Self, String> {
-        let t = s.trim();
-        let split = t
-            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-            .unwrap_or(t.len());
-        let (number, unit) = t.split_at(split);
-        let scale: f64 = match unit.trim().to_ascii_lowercase().as_str() {
-            "" | "b" => 1.0,
-            "k" | "kb" => 1e3,
-            "kib" => 1024.0,
-            "m" | "mb" => 1e6,
-            "mib" => 1024.0 * 1024.0,
-            "g" | "gb" => 1e9,
-            "gib" => 1024.0 * 1024.0 * 1024.0,
-            "t" | "tb" => 1e12,
-            "tib" => 1024f64.powi(4),
-            other => {
-                return Err(format!(
-                    "unknown unit \"{other}\" (use B, KiB, MiB, GiB, TiB, KB, MB, GB or TB)"
-                ));
-            }
-        };
-        let n: f64 = number
-            .parse()
-            .map_err(|_| "expected a size such as 4GiB or 512MiB".to_string())?;
-        let bytes = n * scale;
-        if !(bytes.is_finite() && (1024.0 * 1024.0..=1e18).contains(&bytes)) {
+        let bytes = parse_bytes(s)?;
+        if !(1 << 20..=1_000_000_000_000_000_000).contains(&bytes) {
             return Err("must lie between 1MiB and 1000000TB".into());
         }
-        Ok(Self {
-            bytes: bytes as u64,
-        })
+        Ok(Self { bytes })
     }
 
     /// An error when `bytes` for `what` exceed the budget.

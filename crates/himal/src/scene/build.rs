@@ -151,6 +151,13 @@ pub(crate) fn build_scene(
         src: SourceMap { origin, text },
     };
     let file: FileScene = toml::from_str(text).map_err(|e| ck.src.toml_error(&e))?;
+    if let Some(w) = &file.world {
+        return Err(ck.err(
+            &w.span(),
+            "[world] describes a streamed world, not a scene of objects: load it with \
+             scene::world::WorldFile::load (as `himal render --scene FILE` does)",
+        ));
+    }
     let sun = build_sun(&ck, file.sun.as_ref())?;
     let materials = build_materials(&ck, &file.material)?;
     let cameras = build_cameras(&ck, &file.camera)?;
@@ -213,7 +220,7 @@ pub(crate) fn build_scene(
     })
 }
 
-fn build_sun(ck: &Checker, sun: Option<&FileSun>) -> Result<SunDesc> {
+pub(crate) fn build_sun(ck: &Checker, sun: Option<&FileSun>) -> Result<SunDesc> {
     let mut out = SunDesc::default();
     let Some(s) = sun else { return Ok(out) };
     if let Some(t) = &s.time {
@@ -287,7 +294,7 @@ fn build_materials(ck: &Checker, file: &[FileMaterial]) -> Result<Vec<MaterialDe
     Ok(out)
 }
 
-fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<NamedCamera>> {
+pub(crate) fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<NamedCamera>> {
     let mut out: Vec<NamedCamera> = Vec::new();
     for c in file {
         let name = c.name.get_ref();

@@ -25,6 +25,86 @@ pub(crate) struct FileScene {
     pub environment: Option<FileEnvironment>,
     #[serde(default)]
     pub gltf: Vec<FileGltf>,
+    pub world: Option<Spanned<FileWorld>>,
+}
+
+/// `[world]`: the streamed open world (`scene/world/file.rs` builds it).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileWorld {
+    pub seed: Option<Spanned<i64>>,
+    pub sectors: Option<Spanned<i64>>,
+    pub height_map: Option<Spanned<FileHeightMap>>,
+    pub mountain_height: Option<Spanned<f32>>,
+    pub hill_height: Option<Spanned<f32>>,
+    pub snow_line: Option<Spanned<f32>>,
+    pub rules: Option<FileRules>,
+    pub stream: Option<FileStream>,
+    /// Keyed by `tiles` and instance kind names; unknown names are checked later.
+    pub pools: Option<std::collections::BTreeMap<String, Spanned<i64>>>,
+}
+
+/// `height_map = { file, min, max }`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileHeightMap {
+    pub file: Spanned<String>,
+    pub min: Option<Spanned<f32>>,
+    pub max: Spanned<f32>,
+}
+
+/// `[world.rules]`: what sectors place.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileRules {
+    pub rock_density: Option<Spanned<f32>>,
+    pub tree_density: Option<Spanned<f32>>,
+    pub tree_max_slope: Option<Spanned<f32>>,
+    pub tree_line: Option<Spanned<f32>>,
+    pub village_chance: Option<Spanned<f32>>,
+    pub village_max_rise: Option<Spanned<f32>>,
+    pub houses: Option<bool>,
+    pub fields: Option<bool>,
+    pub fences: Option<bool>,
+}
+
+/// `[world.stream]`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileStream {
+    pub radius: Option<Spanned<f32>>,
+    pub unload_margin: Option<Spanned<f32>>,
+    pub workers: Option<Spanned<i64>>,
+    pub upload_budget: Option<Spanned<ByteSize>>,
+}
+
+/// `4194304` (bytes) or `"4MiB"` ([`crate::budget::parse_bytes`]).
+pub(crate) struct ByteSize(pub u64);
+
+impl<'de> Deserialize<'de> for ByteSize {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = ByteSize;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("bytes as an integer or a size such as \"4MiB\"")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<ByteSize, E> {
+                crate::budget::parse_bytes(s)
+                    .map(ByteSize)
+                    .map_err(|e| E::custom(format!("\"{s}\": {e}")))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ByteSize, E> {
+                u64::try_from(v)
+                    .map(ByteSize)
+                    .map_err(|_| E::custom(format!("{v} bytes: must not be negative")))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ByteSize, E> {
+                Ok(ByteSize(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// `[[gltf]]`: a glTF model placed in the scene (`scene/gltf/placement.rs`).

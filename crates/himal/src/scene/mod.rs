@@ -1,4 +1,5 @@
-//! Scene description: meshes, materials, cameras, TOML scene files, procedural demo world.
+//! Scene description: meshes, materials, cameras, TOML scene files, procedural demo world,
+//! the streamed open world ([`world`]).
 //!
 //! A [`Scene`] is a flat list of [`Object`]s (a mesh index and a transform),
 //! the meshes they share, named cameras and the sun. Materials are baked into
@@ -104,6 +105,62 @@
 //!
 //! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
 //! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).
+//!
+//! `[world]`: instead of objects, the file describes a streamed open world
+//! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
+//! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
+//! cameras come first (the default view), then the world's own (`air`,
+//! `river`, `village`, `peak`, `grazing`, `top`) except those they rename;
+//! `[[object]]`, `[[material]]`, `[[light]]`, `[[probe]]`, `[[gltf]]` and
+//! `[environment]` are errors. An empty `[world]` is the built-in world.
+//! Every key is optional except `height_map.file` and `.max`; defaults shown:
+//!
+//! ```toml
+//! [world]
+//! seed = 7                  # 0..=4294967295
+//! sectors = 160             # per side, 16..=160, each 64 m (160: 10.24 km)
+//! height_map = { file = "h.png", min = 0.0, max = 1200.0 }
+//!                           # none: procedural mountains, hills and river. A grayscale PNG
+//!                           # (16-bit; 8-bit works), relative to this file, 2..=8193 px a side,
+//!                           # stretched over the world (column 0 west/-x, row 0 north/-z);
+//!                           # black = min, white = max metres (min default 0, |h| <= 20000);
+//!                           # no river is carved
+//! mountain_height = 1150.0  # m, massifs' peaks above the river (procedural only)
+//! hill_height = 45.0        # m, rolling hills (procedural only)
+//! snow_line = 720.0         # m, snow above it; more rocks from 120 m below it
+//!
+//! [world.rules]             # what each sector places
+//! rock_density = 1.0        # [0, 100], scales each 8 m cell's rock chance (one rock per cell at most)
+//! tree_density = 1.0        # [0, 100], scales each 6.4 m cell's tree chance (one tree at most)
+//! tree_max_slope = 34.0     # degrees from horizontal, [0, 90]
+//! tree_line = 560.0         # m, forests thin over the 80 m below it (+-20 m jitter);
+//!                           # villages stand 40 m below it or lower
+//! village_chance = 0.55     # [0, 1], per 768 m cell
+//! village_max_rise = 24.0   # m, [0, 1000]: the largest rise or fall 110 m from a site's
+//!                           # centre that levelling takes (lower: fewer, flatter sites)
+//! houses = true             # village houses (walls and roofs)
+//! fields = true             # village fields (false also drops their fences)
+//! fences = true             # fences around the fields
+//!
+//! [world.stream]
+//! radius = 1000.0           # m, [1, world edge]: sectors this near the camera stream in
+//! unload_margin = 128.0     # m, [0, world edge]: resident sectors leave beyond radius + margin
+//! workers = 0               # generator threads, 0..=64 (0: the machine's cores, at most 8)
+//! upload_budget = "4MiB"    # per frame, bytes or "512KiB", "4MiB", "1MB"..., 1KiB..=1GiB
+//!
+//! [world.pools]             # fixed GPU pools, allocated once
+//! tiles = 1024              # terrain tiles (65^2 heights, 16.5 KiB each), 1..=2048; must hold
+//!                           # what the radius wants: (64^2 + 256 r + pi r^2) / 64^2 sectors
+//! rock0 = 16384             # instance slots per kind (240 bytes each), 1..=1048576
+//! rock1 = 16384
+//! rock2 = 16384
+//! house = 4096
+//! roof = 4096
+//! field = 1024
+//! fence = 16384
+//! tree = 65536
+//! water = 1024
+//! ```
 //!
 //! Mesh conventions (UVs, tangents, winding) are in [`primitives`].
 
@@ -467,6 +524,32 @@ fn env_budget() -> Result<MemoryBudget, SceneError> {
     })
 }
 
+/// The text of the scene file at `path`, refusing what is not a regular
+/// file of at most [`MAX_SCENE_FILE_BYTES`].
+pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    // A directory, a device or an endless pipe is not read.
+    if !meta.is_file() || meta.len() > MAX_SCENE_FILE_BYTES {
+        return Err(SceneError::Invalid {
+            file: path.display().to_string(),
+            message: format!(
+                "not a scene file: {} (at most {} MiB of TOML)",
+                if meta.is_file() {
+                    "too large"
+                } else {
+                    "not a regular file"
+                },
+                MAX_SCENE_FILE_BYTES >> 20
+            ),
+        });
+    }
+    std::fs::read_to_string(path).map_err(io)
+}
+
 /// Text of the demo world, embedded so the renderer runs from anywhere.
 const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
@@ -480,27 +563,7 @@ impl Scene {
 
     /// [`Scene::load`] with an explicit memory budget.
     pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
-        let io = |source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let meta = std::fs::metadata(path).map_err(io)?;
-        // A directory, a device or an endless pipe is not read.
-        if !meta.is_file() || meta.len() > MAX_SCENE_FILE_BYTES {
-            return Err(SceneError::Invalid {
-                file: path.display().to_string(),
-                message: format!(
-                    "not a scene file: {} (at most {} MiB of TOML)",
-                    if meta.is_file() {
-                        "too large"
-                    } else {
-                        "not a regular file"
-                    },
-                    MAX_SCENE_FILE_BYTES >> 20
-                ),
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        let text = read_scene_file(path)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
         let mut scene = build::build_scene(&text, &path.display().to_string(), base_dir, budget)?;
         scene.path = Some(path.to_path_buf());

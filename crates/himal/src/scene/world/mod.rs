@@ -8,10 +8,12 @@
 //! - [`stream`]: residency around the camera, worker threads, fixed pools,
 //!   farthest-first eviction, a per-frame upload budget.
 //! - [`path`]: named cameras and the flight path across the world.
+//! - [`file`]: a world from a scene file's `[world]` table.
 //!
 //! Nothing here touches the GPU; the renderer applies the uploads that
 //! [`stream::Streamer::update`] hands it. See `docs/world.md`.
 
+pub mod file;
 pub mod meshes;
 pub mod path;
 pub mod pool;
@@ -23,8 +25,11 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+pub use file::WorldFile;
 pub use path::FlightPath;
-pub use sector::{Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, TILE_RES};
+pub use sector::{
+    Instance, InstanceKind, PlacementRules, SECTOR_SIZE, SectorCoord, SectorData, TILE_RES,
+};
 pub use terrain::{HeightSource, Village, WorldShape, WorldTerrain};
 
 use crate::scene::{Aabb, NamedCamera, Scene, SunDesc};
@@ -90,6 +95,8 @@ pub struct WorldDesc {
     pub sectors: u16,
     pub shape: WorldShape,
     pub source: HeightSource,
+    /// What sectors place (rocks, trees, village parts).
+    pub rules: PlacementRules,
     pub stream: StreamSettings,
     pub pools: PoolSizes,
     /// Spacing of the whole-world coarse height grid (a multiple of 1 m
@@ -103,6 +110,7 @@ impl Default for WorldDesc {
             sectors: 160,
             shape: WorldShape::default(),
             source: HeightSource::Procedural,
+            rules: PlacementRules::default(),
             stream: StreamSettings::default(),
             pools: PoolSizes::default(),
             coarse_spacing: 16.0,
@@ -117,8 +125,12 @@ pub struct World {
     pub terrain: Arc<WorldTerrain>,
     /// Min corner (x, z); the world is centred on the origin.
     pub origin: Vec2,
+    /// Cameras placed from the terrain ([`path::cameras`]), after any the
+    /// scene file names ([`World::with_cameras`]).
     pub cameras: Vec<NamedCamera>,
     pub paths: Vec<FlightPath>,
+    /// The sun [`World::scene`] gives the frame (the scene file's `[sun]`).
+    pub sun: SunDesc,
 }
 
 impl World {
@@ -137,10 +149,20 @@ impl World {
             origin,
             cameras: Vec::new(),
             paths: Vec::new(),
+            sun: SunDesc::default(),
         };
         w.cameras = path::cameras(&w);
         w.paths = vec![path::flight(&w)];
         w
+    }
+
+    /// `cameras` first (so the first is the default view), then the
+    /// terrain-placed ones whose names they do not take.
+    pub fn with_cameras(mut self, cameras: Vec<NamedCamera>) -> World {
+        self.cameras
+            .retain(|c| cameras.iter().all(|f| f.name != c.name));
+        self.cameras.splice(0..0, cameras);
+        self
     }
 
     /// Edge length in metres.
@@ -150,7 +172,7 @@ impl World {
 
     /// Sector `c`, generated on its own.
     pub fn sector(&self, c: SectorCoord) -> SectorData {
-        sector::generate(&self.terrain, self.origin, c)
+        sector::generate(&self.terrain, &self.desc.rules, self.origin, c)
     }
 
     /// The sector under world (x, z), if inside the world.
@@ -205,20 +227,28 @@ impl World {
 
 impl World {
     /// The world as a [`Scene`] for the renderer: its shared meshes (one per
-    /// [`InstanceKind`], drawn from the streamed pool), its cameras, the
-    /// default sun and its bounds; no objects of its own (instances stream).
+    /// [`InstanceKind`], drawn from the streamed pool), its cameras, its
+    /// sun and its bounds; no objects of its own (instances stream).
     pub fn scene(&self) -> Scene {
         let half = self.extent() * 0.5;
-        let top = self.desc.shape.mountain_height + self.desc.shape.hill_height + 200.0;
+        let (bottom, top) = match &self.desc.source {
+            HeightSource::Procedural => (
+                0.0,
+                self.desc.shape.mountain_height + self.desc.shape.hill_height + 200.0,
+            ),
+            HeightSource::Image(g) => g.heights.iter().fold((0.0f32, 200.0f32), |(lo, hi), &h| {
+                (lo.min(h), hi.max(h + 200.0))
+            }),
+        };
         Scene {
             path: None,
             meshes: meshes::world_meshes(),
             objects: Vec::new(),
             materials: Vec::new(),
             cameras: self.cameras.clone(),
-            sun: SunDesc::default(),
+            sun: self.sun.clone(),
             lights: Vec::new(),
-            bounds: Aabb::new(Vec3::new(-half, 0.0, -half), Vec3::new(half, top, half)),
+            bounds: Aabb::new(Vec3::new(-half, bottom, -half), Vec3::new(half, top, half)),
             pbr: Default::default(),
             probes: Vec::new(),
             environment: None,

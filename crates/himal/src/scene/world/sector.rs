@@ -112,6 +112,49 @@ impl SectorData {
     }
 }
 
+/// Scene-file rules for what each sector places (`[world.rules]`). The
+/// rules that decide where villages stand (`village_chance`,
+/// `village_max_rise`) and the tree line are [`WorldShape`](super::WorldShape)'s:
+/// village sites are part of the height function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacementRules {
+    /// Scales each 8 m cell's chance of a rock (at most one per cell).
+    pub rock_density: f32,
+    /// Scales each 6.4 m cell's chance of a tree (at most one per cell).
+    pub tree_density: f32,
+    /// Steepest ground a tree stands on (degrees from horizontal).
+    pub tree_max_slope: f32,
+    /// Villages' houses (walls and roofs), fields and the fences around the fields.
+    pub houses: bool,
+    pub fields: bool,
+    pub fences: bool,
+}
+
+impl Default for PlacementRules {
+    fn default() -> Self {
+        PlacementRules {
+            rock_density: 1.0,
+            tree_density: 1.0,
+            tree_max_slope: 34.0,
+            houses: true,
+            fields: true,
+            fences: true,
+        }
+    }
+}
+
+impl PlacementRules {
+    /// Whether a village's instance of `kind` is placed (a fence needs its field).
+    fn keeps(&self, kind: InstanceKind) -> bool {
+        match kind {
+            InstanceKind::HouseWalls | InstanceKind::Roof => self.houses,
+            InstanceKind::Field => self.fields,
+            InstanceKind::Fence => self.fields && self.fences,
+            _ => true,
+        }
+    }
+}
+
 /// SplitMix64: a small, seedable, portable generator.
 struct Rng(u64);
 
@@ -151,7 +194,12 @@ pub fn sector_origin(world_origin: Vec2, c: SectorCoord) -> Vec2 {
 }
 
 /// Generates sector `c` of the world whose min corner is `world_origin`.
-pub fn generate(terrain: &WorldTerrain, world_origin: Vec2, c: SectorCoord) -> SectorData {
+pub fn generate(
+    terrain: &WorldTerrain,
+    rules: &PlacementRules,
+    world_origin: Vec2,
+    c: SectorCoord,
+) -> SectorData {
     let o = sector_origin(world_origin, c);
     let mut heights = Vec::with_capacity(TILE_RES * TILE_RES);
     for j in 0..TILE_RES {
@@ -165,16 +213,14 @@ pub fn generate(terrain: &WorldTerrain, world_origin: Vec2, c: SectorCoord) -> S
     let tile = Tile { o, h: &heights };
     let seed = noise::hash_lattice(terrain.shape.seed ^ 0x5ec7_0000, c.x as i32, c.z as i32);
     let mut instances = Vec::new();
-    scatter_rocks(terrain, &tile, seed, &mut instances);
-    scatter_trees(terrain, &tile, seed, &mut instances);
+    scatter_rocks(terrain, rules, &tile, seed, &mut instances);
+    scatter_trees(terrain, rules, &tile, seed, &mut instances);
     place_water(terrain, &tile, &mut instances);
     let centre = o + Vec2::splat(SECTOR_SIZE * 0.5);
     for v in terrain.villages_near(centre, SECTOR_SIZE * std::f32::consts::FRAC_1_SQRT_2) {
-        instances.extend(
-            village_layout(v)
-                .into_iter()
-                .filter(|i| tile.contains(Vec2::new(i.position.x, i.position.z))),
-        );
+        instances.extend(village_layout(v).into_iter().filter(|i| {
+            rules.keeps(i.kind) && tile.contains(Vec2::new(i.position.x, i.position.z))
+        }));
     }
     SectorData {
         coord: c,
@@ -225,7 +271,13 @@ impl Tile<'_> {
 }
 
 /// Rocks: boulders on steep scree, fewer on meadows and in the river bed.
-fn scatter_rocks(t: &WorldTerrain, tile: &Tile, seed: u32, out: &mut Vec<Instance>) {
+fn scatter_rocks(
+    t: &WorldTerrain,
+    rules: &PlacementRules,
+    tile: &Tile,
+    seed: u32,
+    out: &mut Vec<Instance>,
+) {
     let mut rng = Rng(seed as u64 ^ 0x0000_7a0c_0000_0000);
     let cell = 8.0;
     let n = (SECTOR_SIZE / cell) as usize;
@@ -258,7 +310,9 @@ fn scatter_rocks(t: &WorldTerrain, tile: &Tile, seed: u32, out: &mut Vec<Instanc
             } else {
                 (0.035, 0.3, 1.3)
             };
-            if roll >= chance {
+            // Every roll is drawn whatever the rules: a thinner scatter is a
+            // subset of the default one, and the default stays the same.
+            if roll >= chance * rules.rock_density {
                 continue;
             }
             let size = lo * (hi / lo).powf(r1);
@@ -326,8 +380,14 @@ pub fn forest_mask(t: &WorldTerrain, p: Vec2) -> f32 {
 }
 
 /// Trees where the forest mask is high, below the tree line, on slopes
-/// under 34 degrees, away from the river and outside villages.
-fn scatter_trees(t: &WorldTerrain, tile: &Tile, seed: u32, out: &mut Vec<Instance>) {
+/// under `tree_max_slope` (34 degrees), away from the river and outside villages.
+fn scatter_trees(
+    t: &WorldTerrain,
+    rules: &PlacementRules,
+    tile: &Tile,
+    seed: u32,
+    out: &mut Vec<Instance>,
+) {
     let mut rng = Rng(seed as u64 ^ 0x0000_0000_7ee5_0000);
     let cell = 6.4;
     let n = (SECTOR_SIZE / cell) as usize;
@@ -342,7 +402,7 @@ fn scatter_trees(t: &WorldTerrain, tile: &Tile, seed: u32, out: &mut Vec<Instanc
             // Density: the mask's strength, thinning over the last 80 m below the line.
             let density =
                 smoothstep(0.0, 0.35, forest_mask(t, p)) * (1.0 - smoothstep(line - 80.0, line, h));
-            if roll >= density || tile.slope(p) > 34.0 {
+            if roll >= density * rules.tree_density || tile.slope(p) > rules.tree_max_slope {
                 continue;
             }
             if t.river_distance(p.x, p.y) < s.river_width * 3.0

@@ -35,6 +35,9 @@ pub struct WorldShape {
     pub village_cell: f32,
     /// Probability that a cell's site holds a village (where the ground allows).
     pub village_chance: f32,
+    /// Largest rise or fall of the natural ground a village radius from a
+    /// site's centre that levelling may take (the blend makes it a bank).
+    pub village_max_rise: f32,
     /// Level ground radius of a village, and the blend back to the land.
     pub village_radius: f32,
     pub village_blend: f32,
@@ -59,6 +62,7 @@ impl Default for WorldShape {
             meander: 1100.0,
             village_cell: 768.0,
             village_chance: 0.55,
+            village_max_rise: 24.0,
             village_radius: 110.0,
             village_blend: 120.0,
             snow_line: 720.0,
@@ -295,9 +299,9 @@ impl WorldTerrain {
                 best = Some((rough, center, height));
             }
         }
-        // Levelling blends a rise of up to 24 m over the 120 m margin (a 1:5 bank).
+        // Levelling blends the rise over the blend margin (24 m over 120 m: a 1:5 bank).
         let (rough, center, height) = best?;
-        if rough > 24.0 {
+        if rough > s.village_max_rise {
             return None;
         }
         let street = noise::hash_to_unit(noise::hash_lattice(h, 3, 0)) * std::f32::consts::PI;
