@@ -18,6 +18,18 @@ use glam::Vec2;
 use super::pool::{DensePool, SlotPool};
 use super::{Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, World};
 
+/// Runs the calling thread at the lowest scheduling priority (Linux: a
+/// thread's nice value is its own), so sector generation never takes the
+/// render thread's core; elsewhere a no-op.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: setpriority with PRIO_PROCESS and who = 0 changes only the
+    // calling thread's nice value; a failure leaves it unchanged.
+    unsafe {
+        libc::setpriority(libc::PRIO_PROCESS, 0, 19);
+    }
+}
+
 /// Instance kinds (one dense pool region each).
 pub const KINDS: usize = InstanceKind::ALL.len();
 
@@ -124,6 +136,7 @@ impl Streamer {
                 std::thread::Builder::new()
                     .name(format!("himal-sector-{i}"))
                     .spawn(move || {
+                        lower_priority();
                         loop {
                             // The lock is held only to take one request.
                             let next = rx.lock().map(|r| r.recv());
