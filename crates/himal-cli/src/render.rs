@@ -13,7 +13,8 @@ use crate::GpuArgs;
 
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
-    /// Scene file (TOML), `demo` (the valley) or `world` (the streamed 10 km world).
+    /// Scene file (TOML; one with a `[world]` table is a streamed world),
+    /// `demo` (the valley) or `world` (the streamed 10 km world).
     #[arg(
         long,
         default_value = "demo",

@@ -29,14 +29,7 @@ fn streamed_pool_lists_match_the_twin() {
     let ctx = common::context();
     let world = small_world();
     let scene = world.scene();
-    let pool: Vec<(usize, u32)> = world
-        .desc
-        .pools
-        .instances
-        .iter()
-        .copied()
-        .enumerate()
-        .collect();
+    let pool = himal::renderer::world_pools(&world);
     let gpu = SceneGpu::upload_with_pool(&ctx, &scene, &pool).expect("upload");
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull pass");
     cull.supported().expect("lavapipe draws indirectly");
@@ -79,7 +72,12 @@ fn streamed_pool_lists_match_the_twin() {
             ),
         ),
     ];
-    let lod = LodView::default();
+    // The eye where the pools were streamed: every resident rock and fence
+    // is within its class's draw distance.
+    let lod = LodView {
+        eye: moved.position,
+        ..LodView::default()
+    };
     let got = cull.read_back(&ctx, &views, lod).expect("GPU lists");
     let want = reference::cull(&cull.layout, &views, &lod);
     assert_eq!(
@@ -118,9 +116,51 @@ fn streamed_pool_lists_match_the_twin() {
             }
         }
     }
+    // Per-class distance culling: from an eye 600 m on, rocks and fences
+    // beyond their draw distance leave every view; other kinds stay.
+    let far_eye = moved.position + glam::Vec3::new(600.0, 0.0, 0.0);
+    let far = LodView {
+        eye: far_eye,
+        ..LodView::default()
+    };
+    let all = &views[2..];
+    let got_far = cull.read_back(&ctx, all, far).expect("GPU lists");
+    let l = &cull.layout;
+    let want_far = reference::cull(&cull.layout, all, &far);
+    assert_eq!(
+        got_far.instances, want_far.instances,
+        "distance culling differs from the twin"
+    );
+    let mut dropped = 0;
+    for (k, r) in gpu.pool.iter().enumerate() {
+        let kind = InstanceKind::ALL[k];
+        let max = kind.draw_distance();
+        let within = (0..u2.live[k])
+            .filter(|&s| {
+                let b = &l.bounds[(r.first_object + s) as usize];
+                let d = himal::scene::lod::distance_to_box(far_eye, b.center(), b.half_extent());
+                max == 0.0 || d <= max
+            })
+            .count();
+        let region = r.first_object..r.first_object + r.capacity;
+        let listed = (got_far.instances.iter().flatten())
+            .filter(|&&e| region.contains(&(e & 0x00ff_ffff)))
+            .count();
+        assert_eq!(
+            listed,
+            within,
+            "{}: listed {listed}, within its draw distance {within}",
+            kind.name()
+        );
+        dropped += u2.live[k] as usize - within;
+    }
+    assert!(
+        dropped > 0,
+        "no instance was beyond its class's draw distance"
+    );
     eprintln!(
-        "pool: {live} live instances of {}; camera keeps {}",
-        pool.iter().map(|p| p.1).sum::<u32>(),
+        "pool: {live} live instances of {}; camera keeps {}; {dropped} culled by distance from 600 m on",
+        pool.iter().map(|p| p.capacity).sum::<u32>(),
         got.args[..per_view].iter().map(|a| a[1]).sum::<u32>()
     );
 }

@@ -207,11 +207,23 @@ pub struct LodView {
 /// `first_object..first_object + capacity` draw mesh `mesh`; streaming
 /// writes their records ([`SceneGpu::write_objects`]) and bounds, packed
 /// from the front; only the GPU-culled path draws them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoolRegion {
     pub mesh: u32,
     pub first_object: u32,
     pub capacity: u32,
+    /// Culled beyond this distance from the camera (m; 0: no limit).
+    pub max_distance: f32,
+}
+
+/// A streamed region to reserve ([`SceneGpu::upload_with_pool`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoolSpec {
+    /// The scene mesh every object of the region draws.
+    pub mesh: usize,
+    pub capacity: u32,
+    /// Per-class distance culling (m; 0: no limit).
+    pub max_distance: f32,
 }
 
 /// `Object.params.x` of an opaque object whose albedo is multiplied by
@@ -310,12 +322,12 @@ impl SceneGpu {
         Self::upload_with_pool(ctx, scene, &[])
     }
 
-    /// [`Self::upload`] with streamed regions (`pool`: mesh, capacity)
-    /// after the scene's objects, empty until written.
+    /// [`Self::upload`] with streamed regions after the scene's objects,
+    /// empty until written.
     pub fn upload_with_pool(
         ctx: &GpuContext,
         scene: &Scene,
-        pool: &[(usize, u32)],
+        pool: &[PoolSpec],
     ) -> Result<Self, GpuError> {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -425,7 +437,12 @@ impl SceneGpu {
             triangles += index_count as u64 / 3;
         }
         let mut regions = Vec::with_capacity(pool.len());
-        for &(mesh, capacity) in pool {
+        for &PoolSpec {
+            mesh,
+            capacity,
+            max_distance,
+        } in pool
+        {
             if mesh >= scene.meshes.len() {
                 return Err(GpuError::Other(format!(
                     "pool region names mesh {mesh} of {}",
@@ -436,6 +453,7 @@ impl SceneGpu {
                 mesh: mesh as u32,
                 first_object: objects.len() as u32,
                 capacity,
+                max_distance,
             });
             let n = capacity as usize;
             objects.resize(objects.len() + n, ObjectGpu::zeroed());

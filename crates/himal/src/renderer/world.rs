@@ -157,15 +157,16 @@ fn terrain_desc(world: &World) -> TerrainDesc {
     }
 }
 
-/// The pool regions of a world scene: one per kind, its mesh is the kind's.
-pub(super) fn pool_of(world: &World) -> Vec<(usize, u32)> {
-    world
-        .desc
-        .pools
-        .instances
-        .iter()
+/// The pool regions of `world`'s scene: one per kind (its mesh is the
+/// kind's), sized by the scene file, culled at the kind's draw distance.
+pub fn world_pools(world: &World) -> Vec<crate::gpu_scene::PoolSpec> {
+    (world.desc.pools.instances.iter().zip(InstanceKind::ALL))
         .enumerate()
-        .map(|(k, &capacity)| (k, capacity))
+        .map(|(k, (&capacity, kind))| crate::gpu_scene::PoolSpec {
+            mesh: k,
+            capacity,
+            max_distance: kind.draw_distance(),
+        })
         .collect()
 }
 
@@ -175,7 +176,7 @@ impl Renderer {
     /// [`Renderer::settle_world`]).
     pub fn with_world(ctx: GpuContext, world: Arc<World>) -> Result<Self, Error> {
         let scene = world.scene();
-        let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &pool_of(&world))?;
+        let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &world_pools(&world))?;
         let terrain = TerrainPass::new(&ctx, &terrain_desc(&world))?;
         let mut r = Self::from_upload(ctx, &scene, scene_gpu)?;
         r.res.passes.terrain = Some(terrain);

@@ -68,7 +68,8 @@ struct Batch {
     first_object: u32,
     lods: u32,
     base_vertex: i32,
-    _pad0: u32,
+    // culled beyond this distance from the LOD eye (m; 0: no limit)
+    max_distance: f32,
     _pad1: u32,
     _pad2: u32,
     // per level: first index, index count
@@ -128,13 +129,23 @@ fn switch_distance(b: Bounds, batch: Batch, l: u32, d1: f32) -> f32 {
     return max(f32(l) * d1, guard);
 }
 
+// The box's distance from the LOD eye (the camera, for every view).
+fn eye_distance(b: Bounds) -> f32 {
+    return length(max(abs(params.eye.xyz - b.center.xyz) - b.half_extent.xyz, vec3f(0.0)));
+}
+
+// Per-class distance culling: beyond the batch's max_distance.
+fn too_far(b: Bounds, batch: Batch) -> bool {
+    return batch.max_distance > 0.0 && eye_distance(b) > batch.max_distance;
+}
+
 fn lod_choice(b: Bounds, batch: Batch) -> vec2f {
     let d1 = b.center.w * params.eye.w;
     let levels = min(batch.lods, MAX_LODS);
     if (levels <= 1u || d1 <= 0.0) {
         return vec2f(0.0, -1.0);
     }
-    let d = length(max(abs(params.eye.xyz - b.center.xyz) - b.half_extent.xyz, vec3f(0.0)));
+    let d = eye_distance(b);
     var l = 0u;
     while (l + 1u < levels && d >= switch_distance(b, batch, l + 1u, d1)) {
         l += 1u;
@@ -177,8 +188,9 @@ fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i:
     workgroupBarrier();
     if (i < chunk.count) {
         let b = bounds[chunk.first_object + i];
-        if (!outside(b, views[view])) {
-            let c = lod_choice(b, batches[chunk.batch]);
+        let batch = batches[chunk.batch];
+        if (!outside(b, views[view]) && !too_far(b, batch)) {
+            let c = lod_choice(b, batch);
             let l = u32(c.x);
             let bit = 1u << (i % 32u);
             if (c.y < 0.0) {

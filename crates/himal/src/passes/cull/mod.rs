@@ -124,7 +124,9 @@ pub struct BatchGpu {
     pub first_object: u32,
     pub lods: u32,
     pub base_vertex: i32,
-    _pad: [u32; 3],
+    /// Culled beyond this distance from the LOD eye (m; 0: no limit).
+    pub max_distance: f32,
+    _pad: [u32; 2],
     /// Per level: first index, index count.
     pub lod: [[u32; 2]; MAX_LODS],
     /// Per level: geometric error (mesh units).
@@ -178,6 +180,7 @@ impl CullLayout {
             layout.pool_batches.push(layout.batches.len() as u32);
             layout.push_batch(scene, &d, r.capacity);
             let b = layout.batches.len() - 1;
+            layout.batches[b].max_distance = r.max_distance;
             let first = layout.batches[b].first_chunk as usize;
             for c in &mut layout.chunks[first..] {
                 c.count = 0;
@@ -229,7 +232,8 @@ impl CullLayout {
                 first_object: d.object,
                 lods,
                 base_vertex: d.base_vertex,
-                _pad: [0; 3],
+                max_distance: 0.0,
+                _pad: [0; 2],
                 lod,
                 error,
             });
@@ -308,15 +312,11 @@ impl Culled {
         list: List,
         kinds: std::ops::Range<u32>,
     ) -> u32 {
-        let (first, count) = self.range(list);
+        let count = self.range(list).1;
         if count == 0 || kinds.is_empty() {
             return 0;
         }
-        let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
-        // [view][opaque: kind, batch, level][vegetation: kind, batch, level]
-        let start = u64::from(view) * u64::from(self.batches) * lists
-            + u64::from(first) * lists
-            + u64::from(kinds.start) * u64::from(count) * lods;
+        let start = self.args_at(view, list, kinds.start, 0, 0);
         let draws = (kinds.end - kinds.start) * count * MAX_LODS as u32;
         rp.multi_draw_indexed_indirect(args, start * ARGS_BYTES, draws);
         1
@@ -333,21 +333,27 @@ impl Culled {
         kinds: std::ops::Range<u32>,
         level: u32,
     ) -> u32 {
-        let (first, count) = self.range(list);
-        let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
-        let base = u64::from(view) * u64::from(self.batches) * lists + u64::from(first) * lists;
+        let count = self.range(list).1;
         let mut calls = 0;
         for kind in kinds {
             for b in 0..count {
-                let at = base
-                    + u64::from(kind) * u64::from(count) * lods
-                    + u64::from(b) * lods
-                    + u64::from(level);
+                let at = self.args_at(view, list, kind, b, level);
                 rp.draw_indexed_indirect(args, at * ARGS_BYTES);
                 calls += 1;
             }
         }
         calls
+    }
+
+    /// Index of the arguments of (view, list, kind, batch of the list,
+    /// level): [view][opaque: kind, batch, level][vegetation: kind, batch, level].
+    fn args_at(&self, view: u32, list: List, kind: u32, batch: u32, level: u32) -> u64 {
+        let (first, count) = self.range(list);
+        let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
+        u64::from(view) * u64::from(self.batches) * lists
+            + u64::from(first) * lists
+            + (u64::from(kind) * u64::from(count) + u64::from(batch)) * lods
+            + u64::from(level)
     }
 
     fn range(&self, list: List) -> (u32, u32) {

@@ -43,6 +43,13 @@ pub fn lod_of(b: &BoundsGpu, batch: &super::BatchGpu, lod: &LodView) -> (u32, Op
     choice(d, b.center[3], b.half_extent[3], errors, &lod.selection)
 }
 
+/// Per-class distance culling: beyond `batch`'s distance from the LOD eye
+/// (as `too_far` in `cull.wgsl`).
+pub fn too_far(b: &BoundsGpu, batch: &super::BatchGpu, lod: &LodView) -> bool {
+    batch.max_distance > 0.0
+        && distance_to_box(lod.eye, b.center(), b.half_extent()) > batch.max_distance
+}
+
 /// The culled lists of `views` over `layout`, levels chosen from `lod`.
 pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResult {
     let mut result = CullResult::default();
@@ -57,7 +64,7 @@ pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResul
                 let Some(b) = layout.bounds.get(o as usize) else {
                     continue;
                 };
-                if outside(b, view) {
+                if outside(b, view) || too_far(b, batch, lod) {
                     continue;
                 }
                 match lod_of(b, batch, lod) {

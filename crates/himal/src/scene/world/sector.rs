@@ -50,6 +50,17 @@ impl InstanceKind {
         InstanceKind::Water,
     ];
 
+    /// Distance culling per class (m from the camera; 0: none, the
+    /// streaming radius bounds it): rocks and fences are too small to
+    /// matter past a few hundred metres, where they would only shimmer.
+    pub fn draw_distance(self) -> f32 {
+        match self {
+            InstanceKind::Rock0 | InstanceKind::Rock1 | InstanceKind::Rock2 => 700.0,
+            InstanceKind::Fence => 500.0,
+            _ => 0.0,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             InstanceKind::Rock0 => "rock0",
