@@ -67,6 +67,11 @@ pub struct BenchArgs {
     /// With --path: write one row per frame to this CSV file.
     #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
     pub csv: Option<std::path::PathBuf>,
+    /// With --path: count every frame's triangles and sub-pixel triangles
+    /// under all-LOD0, triangle-size and object-size selection (E2), and
+    /// FLIP six frames of each against LOD0.
+    #[arg(long)]
+    pub compare_lod: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -113,8 +118,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     settings.envmap_every_frame = args.envmap_every_frame;
     settings.sky_occlusion_every_frame = args.skyocc_every_frame;
     settings.ao = args.ao.settings()?;
-    if args.path.is_none() && (args.dt.is_some() || args.csv.is_some()) {
-        bail!("--dt and --csv need --path NAME (a world's flight path)");
+    if args.path.is_none() && (args.dt.is_some() || args.csv.is_some() || args.compare_lod) {
+        bail!("--dt, --csv and --compare-lod need --path NAME (a world's flight path)");
+    }
+    if args.compare_lod && args.json {
+        bail!("--compare-lod prints a table: leave out --json");
     }
     if args.compare_ao {
         return crate::bench_ao::run(&args.gpu, &scene, &camera, &settings, args.frames);
@@ -133,6 +141,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             fov_y_deg: camera.fov_y_deg,
             csv: args.csv.as_deref(),
             json: args.json,
+            compare_lod: args.compare_lod,
         };
         return crate::bench_path::run(&mut renderer, &settings, &run);
     }

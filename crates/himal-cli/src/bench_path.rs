@@ -95,6 +95,61 @@ pub struct PathRun<'a> {
     pub fov_y_deg: f32,
     pub csv: Option<&'a Path>,
     pub json: bool,
+    /// E2: also count every frame under all-LOD0, triangle-size and
+    /// object-size selection, and FLIP sampled frames against LOD0.
+    pub compare_lod: bool,
+}
+
+/// The E2 comparison's selections: all LOD0, by triangle size (the run's
+/// `--lod-threshold`, else 4 px), by object size (`--lod-object`, else 24 px).
+fn lod_variants(settings: &FrameSettings) -> [(&'static str, FrameSettings); 3] {
+    let mut lod0 = settings.clone();
+    lod0.lod_threshold_px = 0.0;
+    lod0.lod_object_px = 0.0;
+    let mut triangle = lod0.clone();
+    triangle.lod_threshold_px = if settings.lod_threshold_px > 0.0 {
+        settings.lod_threshold_px
+    } else {
+        4.0
+    };
+    let mut object = lod0.clone();
+    object.lod_object_px = if settings.lod_object_px > 0.0 {
+        settings.lod_object_px
+    } else {
+        24.0
+    };
+    [
+        ("all LOD0", lod0),
+        ("triangle size", triangle),
+        ("object size", object),
+    ]
+}
+
+/// Per selection: triangles and sub-pixel triangles per frame, FLIP
+/// against LOD0 on the sampled frames.
+#[derive(Default)]
+struct LodTally {
+    triangles: Vec<f64>,
+    subpixel: f64,
+    flip: Vec<f64>,
+}
+
+/// The image of `settings` from `camera` as linear RGB (a first frame).
+fn linear_image(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    settings: &FrameSettings,
+) -> Result<Vec<[f32; 3]>> {
+    let mut s = settings.clone();
+    s.raw = true;
+    renderer.reset_history();
+    let f = renderer.render(camera, &s)?;
+    Ok(f.image
+        .to_rgba_f32()
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .into_iter()
+        .map(|p| [p[0], p[1], p[2]])
+        .collect())
 }
 
 /// Flies `run` in `renderer`'s world with `settings` and prints the report.
@@ -145,6 +200,10 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
     );
     bar.set_message(format!("flying {}", run.name));
     let mut frames = Vec::with_capacity(run.frames as usize);
+    let variants = lod_variants(settings);
+    let mut tallies: Vec<LodTally> = variants.iter().map(|_| LodTally::default()).collect();
+    // FLIP on six frames spread over the run (three renders each).
+    let flip_every = (run.frames / 6).max(1);
     let wall = Instant::now();
     for i in 0..run.frames {
         let (t, camera) = camera_at(i);
@@ -181,6 +240,30 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
             evicted: s.evicted,
             memory: himal::soak::resident_bytes().unwrap_or(0),
         };
+        if run.compare_lod {
+            for ((_, s), tally) in variants.iter().zip(&mut tallies) {
+                let c = renderer.count_drawn(&camera, s)?;
+                tally.triangles.push(c.total_triangles() as f64);
+                tally.subpixel += c.subpixel.iter().sum::<f64>();
+            }
+            if i % flip_every == flip_every / 2 {
+                let (w, h) = (settings.width as usize, settings.height as usize);
+                let reference = linear_image(renderer, &camera, &variants[0].1)?;
+                for ((_, s), tally) in variants.iter().zip(&mut tallies).skip(1) {
+                    let test = linear_image(renderer, &camera, s)?;
+                    let flip = himal_reference::flip::flip_mean(
+                        &reference,
+                        &test,
+                        w,
+                        h,
+                        himal_reference::flip::DEFAULT_PIXELS_PER_DEGREE,
+                    )
+                    .map_err(|e| anyhow::anyhow!("FLIP: {e}"))?;
+                    tally.flip.push(f64::from(flip));
+                }
+                renderer.reset_history();
+            }
+        }
         if let Some((p, file)) = csv.as_mut() {
             writeln!(file, "{}", csv_row(i as usize, &f))
                 .with_context(|| format!("--csv {}: cannot write", p.display()))?;
@@ -200,6 +283,32 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
         println!("{}", report.json(&adapter, run.name, dt, flown));
     } else {
         report.print(&adapter, run.name, dt, flown, settings, wall.elapsed());
+    }
+    if run.compare_lod {
+        println!(
+            "E2 over the flight (camera lists; sub-pixel: triangles facing the camera under 1 px; FLIP vs all LOD0 on {} frames):",
+            tallies.get(1).map_or(0, |t| t.flip.len())
+        );
+        println!(
+            "{:<16} {:>16} {:>16} {:>12} {:>12}",
+            "selection", "triangles (k)", "total (M)", "sub-pixel", "FLIP mean"
+        );
+        for ((name, _), t) in variants.iter().zip(&mut tallies) {
+            let total: f64 = t.triangles.iter().sum();
+            let flip = if t.flip.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:.4}", t.flip.iter().sum::<f64>() / t.flip.len() as f64)
+            };
+            println!(
+                "{:<16} {:>16.1} {:>16.2} {:>11.1}% {:>12}",
+                name,
+                median(&mut t.triangles) / 1e3,
+                total / 1e6,
+                100.0 * t.subpixel / total.max(1.0),
+                flip
+            );
+        }
     }
     Ok(())
 }

@@ -200,6 +200,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub lod_threshold: String,
+    /// E2 comparison: choose levels by object size instead (the first
+    /// switch where an object's bounding radius covers fewer than PX
+    /// pixels); off: by triangle size (--lod-threshold).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "PX|off",
+        allow_hyphen_values = true
+    )]
+    pub lod_object: String,
     /// L1 sky: bruneton (precomputed scattering tables) or preetham (analytic).
     #[arg(
         long,
@@ -308,13 +318,17 @@ impl PostArgs {
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
-        settings.lod_threshold_px = match self.lod_threshold.as_str() {
-            "off" => 0.0,
-            v => match v.parse::<f32>() {
-                Ok(px) if px.is_finite() && (0.01..=1.0e6).contains(&px) => px,
-                _ => bail!("--lod-threshold {v}: expected pixels in 0.01..1000000, or off"),
-            },
+        let pixels = |flag: &str, v: &str| -> Result<f32> {
+            match v {
+                "off" => Ok(0.0),
+                v => match v.parse::<f32>() {
+                    Ok(px) if px.is_finite() && (0.01..=1.0e6).contains(&px) => Ok(px),
+                    _ => bail!("{flag} {v}: expected pixels in 0.01..1000000, or off"),
+                },
+            }
         };
+        settings.lod_threshold_px = pixels("--lod-threshold", &self.lod_threshold)?;
+        settings.lod_object_px = pixels("--lod-object", &self.lod_object)?;
         settings.culling = match self.culling.as_str() {
             "gpu" => himal::Culling::Gpu,
             "cpu" => himal::Culling::Cpu,

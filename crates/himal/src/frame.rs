@@ -145,6 +145,11 @@ pub fn lod_view(camera: &crate::scene::Camera, settings: &FrameSettings) -> LodV
             focal_px: lod::focal_px(camera.fov_y_deg, settings.height),
             max_error_px: settings.lod_error_px,
             band: settings.lod_band,
+            object_scale: if settings.lod_object_px > 0.0 {
+                lod::focal_px(camera.fov_y_deg, settings.height) / settings.lod_object_px
+            } else {
+                0.0
+            },
         },
     }
 }

@@ -159,6 +159,10 @@ pub struct FrameSettings {
     /// E2 guard (himal's, beside the talk's triangle size): no level whose
     /// simplification error would show more than this many pixels (0: none).
     pub lod_error_px: f32,
+    /// E2 comparison metric: when > 0, levels by object size instead of
+    /// triangle size, the first switch where the object's bounding radius
+    /// projects to this many pixels (later ones at multiples of it).
+    pub lod_object_px: f32,
     /// Forget the sky occlusion sectors each frame so the wanted ones are
     /// re-rendered (bench rows `skyocc.*`).
     pub sky_occlusion_every_frame: bool,
@@ -224,6 +228,7 @@ impl FrameSettings {
             lod_threshold_px: 0.0,
             lod_band: 0.2,
             lod_error_px: 1.0,
+            lod_object_px: 0.0,
             sky_occlusion_every_frame: false,
             environment_probes: true,
             envmap_every_frame: false,

@@ -48,6 +48,7 @@ fn gpu_lists_match_the_twin_and_the_cpu_path() {
             focal_px: himal::scene::lod::focal_px(c.fov_y_deg, 720),
             max_error_px: 1.0,
             band: 0.2,
+            object_scale: 0.0,
         },
     };
     let (levels, fading) = compare(&spheres, lod);
@@ -66,6 +67,20 @@ fn gpu_lists_match_the_twin_and_the_cpu_path() {
         },
     );
     assert_eq!(fading, 0);
+    // The E2 comparison metric (object size: a sphere's first switch where
+    // its radius projects to 24 px) chooses alike on both sides.
+    let by_object = Selection {
+        object_scale: himal::scene::lod::focal_px(c.fov_y_deg, 720) / 24.0,
+        ..pop
+    };
+    let (levels, _) = compare(
+        &spheres,
+        LodView {
+            selection: by_object,
+            ..lod
+        },
+    );
+    assert!(levels >= 2, "object-size levels reach {levels}");
 }
 
 /// Compares the GPU's lists with the twin's; returns how many levels drew
@@ -194,6 +209,7 @@ fn the_lists_are_deterministic() {
             focal_px: 400.0,
             max_error_px: 1.0,
             band: 0.2,
+            object_scale: 0.0,
         },
     };
     let a = cull.read_back(&ctx, &views, lod).expect("first");

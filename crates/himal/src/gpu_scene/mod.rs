@@ -290,6 +290,8 @@ pub struct SceneGpu {
     pub lods: Vec<Vec<LodRange>>,
     /// Some mesh has more than one level (checked once, at upload).
     pub has_lods: bool,
+    /// E2 statistics: per mesh and level, its triangles' areas.
+    pub area_histograms: Vec<Vec<crate::scene::lod::AreaHistogram>>,
     /// E2: this frame's LOD selection for draws recorded on the CPU (set by
     /// `frame::plan`; scale 0 = LOD0 everywhere).
     pub lod: std::sync::Mutex<LodView>,
@@ -334,6 +336,7 @@ impl SceneGpu {
         let mut ranges = Vec::with_capacity(scene.meshes.len());
         let mut lods = Vec::with_capacity(scene.meshes.len());
         let mut mean_area = Vec::with_capacity(scene.meshes.len());
+        let mut area_histograms = Vec::with_capacity(scene.meshes.len());
         for mesh in &scene.meshes {
             ranges.push((
                 indices.len() as u32,
@@ -345,11 +348,14 @@ impl SceneGpu {
                 index_count: mesh.indices.len() as u32,
                 error: 0.0,
             }];
+            let area = |i: &[u32]| crate::scene::lod::AreaHistogram::new(&mesh.vertices, i);
+            let mut histograms = vec![area(&mesh.indices)];
             vertices.extend_from_slice(&mesh.vertices);
             indices.extend_from_slice(&mesh.indices);
             // E2: terrain-sized meshes are always near somewhere; no chain.
             if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
                 for lod in crate::scene::lod::lod_chain(mesh) {
+                    histograms.push(area(&lod.indices));
                     levels.push(LodRange {
                         first_index: indices.len() as u32,
                         index_count: lod.indices.len() as u32,
@@ -359,6 +365,7 @@ impl SceneGpu {
                 }
             }
             lods.push(levels);
+            area_histograms.push(histograms);
             mean_area.push(crate::scene::lod::geometric_mean_area(
                 &mesh.vertices,
                 &mesh.indices,
@@ -523,6 +530,7 @@ impl SceneGpu {
                 object_mesh,
                 has_lods: lods.iter().any(|l| l.len() > 1),
                 lods,
+                area_histograms,
                 lod: std::sync::Mutex::new(LodView::default()),
                 pool: regions,
                 mesh_ranges: ranges,
@@ -582,7 +590,16 @@ impl SceneGpu {
             band: 0.0,
             ..lod.selection
         };
-        crate::scene::lod::choice(d, b.center[3], b.half_extent[3], &errors[..n], &selection).0
+        let radius = b.half_extent().length();
+        crate::scene::lod::choice_for(
+            d,
+            b.center[3],
+            radius,
+            b.half_extent[3],
+            &errors[..n],
+            &selection,
+        )
+        .0
     }
 
     /// `draws` at this frame's LOD (E2): each draw's index range replaced
@@ -590,7 +607,7 @@ impl SceneGpu {
     /// mesh has a chain.
     pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        if lod.selection.scale <= 0.0 || !self.has_lods {
+        if !lod.selection.enabled() || !self.has_lods {
             return std::borrow::Cow::Borrowed(draws);
         }
         let at = |d: &Draw| {
@@ -615,7 +632,7 @@ impl SceneGpu {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
         let mut out: [Vec<Draw>; crate::scene::lod::MAX_LODS] = Default::default();
         for d in draws {
-            let level = if lod.selection.scale > 0.0 && self.has_lods {
+            let level = if lod.selection.enabled() && self.has_lods {
                 self.lod_level(d.object, &lod) as usize
             } else {
                 0

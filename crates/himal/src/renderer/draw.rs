@@ -443,6 +443,11 @@ impl Renderer {
 pub struct DrawnCounts {
     pub instances: [u64; crate::scene::lod::MAX_LODS],
     pub triangles: [u64; crate::scene::lod::MAX_LODS],
+    /// Of those, triangles expected under one pixel (E2): each instance's
+    /// level's areas at `(s f / d)^2` pixels per unit area (`s` its linear
+    /// scale, `d` the eye's distance to its box centre) foreshortened by a
+    /// uniform `|cos|` ([`crate::scene::lod::AreaHistogram::below`]).
+    pub subpixel: [f64; crate::scene::lod::MAX_LODS],
 }
 
 impl DrawnCounts {
@@ -466,6 +471,11 @@ impl DrawnCounts {
     pub fn total_triangles(&self) -> u64 {
         self.triangles.iter().sum()
     }
+
+    /// The share of drawn triangles under one pixel.
+    pub fn subpixel_share(&self) -> f64 {
+        self.subpixel.iter().sum::<f64>() / self.total_triangles().max(1) as f64
+    }
 }
 
 impl Renderer {
@@ -487,6 +497,25 @@ impl Renderer {
         } else {
             reference::cull(&cull.layout, &[view], &lod)
         };
-        Ok(DrawnCounts::from_args(&result.args))
+        let mut counts = DrawnCounts::from_args(&result.args);
+        let (l, scene) = (&cull.layout, &self.res.scene);
+        let focal = crate::scene::lod::focal_px(camera.fov_y_deg, settings.height);
+        let lists = crate::passes::cull::LISTS;
+        let levels = crate::scene::lod::MAX_LODS;
+        for (k, list) in result.instances.iter().enumerate() {
+            let (batch, level) = (k / lists, k % lists % levels);
+            let mesh = l.batch_mesh.get(batch).copied().unwrap_or(0) as usize;
+            let Some(h) = scene.area_histograms.get(mesh).and_then(|m| m.get(level)) else {
+                continue;
+            };
+            for &e in list {
+                let Some(b) = l.bounds.get((e & 0x00ff_ffff) as usize) else {
+                    continue;
+                };
+                let d = camera.position.distance(b.center()).max(1e-3);
+                counts.subpixel[level] += h.below((b.half_extent[3] * focal / d).powi(2));
+            }
+        }
+        Ok(counts)
     }
 }

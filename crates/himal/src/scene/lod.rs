@@ -49,6 +49,95 @@ pub struct Selection {
     pub max_error_px: f32,
     /// Transition band, a fraction of `d_1` (0: levels pop).
     pub band: f32,
+    /// The comparison metric (E2 measurements): object size instead of
+    /// triangle size, `d_1 = r * object_scale` with `r` the bounds' half
+    /// diagonal, `object_scale = f / R` for a first switch where the
+    /// object's radius projects to `R` pixels (0: triangle size).
+    pub object_scale: f32,
+}
+
+impl Selection {
+    /// Whether levels are chosen at all (either metric).
+    pub fn enabled(&self) -> bool {
+        self.scale > 0.0 || self.object_scale > 0.0
+    }
+}
+
+/// [`choice`] under `p`'s metric for an object of triangle size
+/// `triangle_size` and bounding radius `radius` (`lod_choice` in
+/// `passes/cull/cull.wgsl`).
+pub fn choice_for(
+    distance: f32,
+    triangle_size: f32,
+    radius: f32,
+    object_scale: f32,
+    errors: &[f32],
+    p: &Selection,
+) -> (u32, Option<f32>) {
+    if p.object_scale > 0.0 {
+        let by_object = Selection {
+            scale: p.object_scale,
+            ..*p
+        };
+        choice(distance, radius, object_scale, errors, &by_object)
+    } else {
+        choice(distance, triangle_size, object_scale, errors, p)
+    }
+}
+
+/// Triangle areas of one mesh level in quarter-octave bins from 2^-32 to
+/// 2^8 (mesh units squared), to count sub-pixel triangles of many
+/// instances without projecting each triangle (E2 statistics).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AreaHistogram {
+    counts: Vec<u32>,
+}
+
+const AREA_BINS: usize = 160;
+const AREA_LOG2_MIN: f32 = -32.0;
+
+impl AreaHistogram {
+    pub fn new(vertices: &[Vertex], indices: &[u32]) -> Self {
+        let mut counts = vec![0u32; AREA_BINS];
+        let p = |i: u32| {
+            vertices
+                .get(i as usize)
+                .map(|v| glam::Vec3::from(v.position))
+        };
+        for t in indices.chunks_exact(3) {
+            let (Some(a), Some(b), Some(c)) = (p(t[0]), p(t[1]), p(t[2])) else {
+                continue;
+            };
+            let area = 0.5 * (b - a).cross(c - a).length();
+            let x = ((area.max(1e-30).log2() - AREA_LOG2_MIN) * 4.0).floor();
+            counts[(x.max(0.0) as usize).min(AREA_BINS - 1)] += 1;
+        }
+        Self { counts }
+    }
+
+    pub fn triangles(&self) -> u64 {
+        self.counts.iter().map(|&c| u64::from(c)).sum()
+    }
+
+    /// Expected triangles under one pixel when a triangle of area `a`
+    /// covers `a k |cos t|` pixels (`k`: pixels per unit area facing the
+    /// camera) with `|cos t|` uniform in [0, 1], as over a closed surface
+    /// seen from anywhere: a triangle counts `min(1, 1 / (a k))` (each bin
+    /// at its centre). Every triangle when `k` is 0 (infinitely far).
+    pub fn below(&self, k: f32) -> f64 {
+        if k.is_nan() || k <= 0.0 {
+            return self.triangles() as f64;
+        }
+        self.counts
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| **c > 0)
+            .map(|(i, &c)| {
+                let a = (AREA_LOG2_MIN as f64 + (i as f64 + 0.5) / 4.0).exp2();
+                f64::from(c) * (1.0 / (a * f64::from(k))).min(1.0)
+            })
+            .sum()
+    }
 }
 
 /// The level an object draws at and its fade (`lod_choice` in

@@ -32,7 +32,8 @@ struct CullParams {
     // f / sqrt(T) (0: LOD0 everywhere)
     eye: vec4f,
     // x: transition band, a fraction of d1 (0: levels pop); y: focal length
-    // (px); z: largest geometric error a level may show (px; 0: no guard)
+    // (px); z: largest geometric error a level may show (px; 0: no guard);
+    // w: object-size metric f / R (E2 comparison; 0: triangle size)
     lod: vec4f,
 }
 
@@ -140,7 +141,11 @@ fn too_far(b: Bounds, batch: Batch) -> bool {
 }
 
 fn lod_choice(b: Bounds, batch: Batch) -> vec2f {
-    let d1 = b.center.w * params.eye.w;
+    // d_1: triangle size x scale, or (E2 comparison) radius x object scale
+    var d1 = b.center.w * params.eye.w;
+    if (params.lod.w > 0.0) {
+        d1 = length(b.half_extent.xyz) * params.lod.w;
+    }
     let levels = min(batch.lods, MAX_LODS);
     if (levels <= 1u || d1 <= 0.0) {
         return vec2f(0.0, -1.0);

@@ -152,6 +152,8 @@ pub struct CullLayout {
     pub objects: u32,
     /// The batch of each streamed region (`SceneGpu::pool`), opaque.
     pub pool_batches: Vec<u32>,
+    /// The scene mesh each batch draws.
+    pub batch_mesh: Vec<u32>,
 }
 
 impl CullLayout {
@@ -226,6 +228,7 @@ impl CullLayout {
                     lods = l as u32 + 1;
                 }
             }
+            self.batch_mesh.push(mesh.copied().unwrap_or(0));
             self.batches.push(BatchGpu {
                 first_chunk,
                 chunks: self.chunks.len() as u32 - first_chunk,
@@ -516,7 +519,7 @@ impl CullPass {
                     lod.selection.band,
                     lod.selection.focal_px,
                     lod.selection.max_error_px,
-                    0.0,
+                    lod.selection.object_scale,
                 ],
             };
             ctx.queue

@@ -4,7 +4,7 @@
 use super::LISTS;
 use super::{CullLayout, CullView};
 use crate::gpu_scene::{LodView, ObjectBounds as BoundsGpu};
-use crate::scene::lod::{MAX_LODS, choice, distance_to_box, fade_step};
+use crate::scene::lod::{MAX_LODS, choice_for, distance_to_box, fade_step};
 
 /// Per (view, batch, kind, level), view-major, `kind` as
 /// [`super::Kind`]: the indirect arguments (index count, instance count,
@@ -40,7 +40,15 @@ pub fn outside(b: &BoundsGpu, view: &CullView) -> bool {
 pub fn lod_of(b: &BoundsGpu, batch: &super::BatchGpu, lod: &LodView) -> (u32, Option<f32>) {
     let d = distance_to_box(lod.eye, b.center(), b.half_extent());
     let errors = &batch.error[..(batch.lods as usize).min(MAX_LODS)];
-    choice(d, b.center[3], b.half_extent[3], errors, &lod.selection)
+    let radius = b.half_extent().length();
+    choice_for(
+        d,
+        b.center[3],
+        radius,
+        b.half_extent[3],
+        errors,
+        &lod.selection,
+    )
 }
 
 /// Per-class distance culling: beyond `batch`'s distance from the LOD eye
