@@ -208,3 +208,66 @@ fn settling_is_the_same_on_every_run() {
     assert!(!layout(&a).is_empty());
     assert_eq!(layout(&a), layout(&b));
 }
+
+/// A listener's record of the resident set (the L5/L2/S2 hook).
+#[derive(Default)]
+struct Mirror {
+    resident: std::collections::BTreeSet<SectorCoord>,
+    loads: usize,
+}
+
+struct Listener(Arc<std::sync::Mutex<Mirror>>);
+
+impl himal::scene::world::stream::SectorListener for Listener {
+    fn loaded(&mut self, sector: &Arc<himal::scene::world::SectorData>) {
+        let mut m = self.0.lock().unwrap();
+        assert!(
+            m.resident.insert(sector.coord),
+            "{:?} loaded twice",
+            sector.coord
+        );
+        m.loads += 1;
+    }
+    fn evicted(&mut self, sector: SectorCoord) {
+        let mut m = self.0.lock().unwrap();
+        assert!(
+            m.resident.remove(&sector),
+            "{sector:?} evicted, never loaded"
+        );
+    }
+}
+
+/// Sector listeners follow the streaming: one added late is first told of
+/// what is resident, and after every update both mirror the resident set.
+#[test]
+fn sector_listeners_mirror_the_resident_set() {
+    let w = world_with(300.0, 128);
+    let mut s = Streamer::new(w.clone());
+    let early = Arc::new(std::sync::Mutex::new(Mirror::default()));
+    s.add_listener(Box::new(Listener(early.clone())));
+    let path = &w.paths[0];
+    let eye = |t: f32| {
+        let p = path.camera_at(t, 60.0).position;
+        Vec2::new(p.x, p.z)
+    };
+    s.settle(eye(0.0), Duration::from_secs(60));
+    let late = Arc::new(std::sync::Mutex::new(Mirror::default()));
+    s.add_listener(Box::new(Listener(late.clone())));
+    let resident = |s: &Streamer| -> std::collections::BTreeSet<SectorCoord> {
+        s.resident().keys().copied().collect()
+    };
+    assert_eq!(late.lock().unwrap().resident, resident(&s));
+    // 40 frames at 20 m each: sectors come and go.
+    for i in 1..=40 {
+        s.update(eye(i as f32 / 3.0));
+        std::thread::sleep(Duration::from_millis(5));
+        for m in [&early, &late] {
+            assert_eq!(m.lock().unwrap().resident, resident(&s), "frame {i}");
+        }
+    }
+    let loads = early.lock().unwrap().loads;
+    assert!(
+        loads > resident(&s).len(),
+        "no sector came or went ({loads} loads)"
+    );
+}

@@ -218,6 +218,21 @@ impl Renderer {
         Ok(Some(w.stats))
     }
 
+    /// Subscribes `listener` to the world's streaming (the hook sector-based
+    /// techniques follow it by, e.g. L5 probes); `false`: not a world.
+    pub fn add_sector_listener(
+        &mut self,
+        listener: Box<dyn crate::scene::world::stream::SectorListener>,
+    ) -> bool {
+        match self.world.as_mut() {
+            Some(w) => {
+                w.streamer.add_listener(listener);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The last frame's streaming figures (`None`: not a world).
     pub fn world_stats(&self) -> Option<StreamStats> {
         self.world.as_ref().map(|w| w.stats)

@@ -98,6 +98,16 @@ pub struct StreamUpdate {
     pub stats: StreamStats,
 }
 
+/// What follows the streaming, sector by sector (L5 probes, L2 sky
+/// occlusion, S2 static shadows): told of every sector placed in the
+/// pools and every one released, in the order the renderer applies them
+/// (releases of an update first). No GPU here: a listener queues its own
+/// work for its pass's planning.
+pub trait SectorListener: Send {
+    fn loaded(&mut self, sector: &Arc<SectorData>);
+    fn evicted(&mut self, sector: SectorCoord);
+}
+
 /// Streams `world`'s sectors around a moving camera.
 pub struct Streamer {
     world: Arc<World>,
@@ -110,6 +120,7 @@ pub struct Streamer {
     max_in_flight: usize,
     tiles: SlotPool,
     kinds: Vec<DensePool<SectorCoord>>,
+    listeners: Vec<Box<dyn SectorListener>>,
 }
 
 impl Drop for Streamer {
@@ -164,6 +175,29 @@ impl Streamer {
             max_in_flight,
             tiles: SlotPool::new(pools.tiles),
             kinds: pools.instances.iter().map(|&n| DensePool::new(n)).collect(),
+            listeners: Vec::new(),
+        }
+    }
+
+    /// Adds `listener`, first told of every sector resident now (in
+    /// sector order), then of each update's changes.
+    pub fn add_listener(&mut self, mut listener: Box<dyn SectorListener>) {
+        let mut now: Vec<&Residency> = self.resident.values().collect();
+        now.sort_by_key(|r| r.data.coord);
+        for r in now {
+            listener.loaded(&r.data);
+        }
+        self.listeners.push(listener);
+    }
+
+    fn notify(&mut self, u: &StreamUpdate) {
+        for l in &mut self.listeners {
+            for e in &u.evictions {
+                l.evicted(e.coord);
+            }
+            for up in &u.uploads {
+                l.loaded(&up.data);
+            }
         }
     }
 
@@ -237,6 +271,7 @@ impl Streamer {
         let (wanted, over) = self.wanted(eye);
         self.request(&wanted);
         self.finish_stats(&wanted, over, &mut u);
+        self.notify(&u);
         u.stats.cpu_s = t0.elapsed().as_secs_f64();
         u
     }
@@ -274,6 +309,7 @@ impl Streamer {
             self.apply_ready(eye, u64::MAX, &mut u);
         }
         self.finish_stats(&wanted, over, &mut u);
+        self.notify(&u);
         u.stats.cpu_s = t0.elapsed().as_secs_f64();
         u
     }
