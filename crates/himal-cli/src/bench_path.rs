@@ -247,6 +247,8 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
                 tally.subpixel += c.subpixel.iter().sum::<f64>();
             }
             if i % flip_every == flip_every / 2 {
+                // The three images see one resident set: streaming settled first.
+                renderer.settle_world(&camera, Duration::from_secs(600))?;
                 let (w, h) = (settings.width as usize, settings.height as usize);
                 let reference = linear_image(renderer, &camera, &variants[0].1)?;
                 for ((_, s), tally) in variants.iter().zip(&mut tallies).skip(1) {

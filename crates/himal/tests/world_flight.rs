@@ -56,7 +56,8 @@ fn flight_streaming_keeps_pools_flat_and_the_surroundings_resident() {
         if f % 100 == 0 {
             check_instance_slots(&s, &u);
         }
-        assert!(u.stats.in_flight as usize <= 4 * himal::scene::world::worker_count(0));
+        let per_worker = himal::scene::world::stream::MAX_IN_FLIGHT_PER_WORKER;
+        assert!(u.stats.in_flight as usize <= per_worker * himal::scene::world::worker_count(0));
         // Warm-up: until the resident ring behind the camera (the unload
         // margin, 128 m) has formed.
         if f >= 64 {

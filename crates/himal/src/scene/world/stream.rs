@@ -30,6 +30,11 @@ fn lower_priority() {
     }
 }
 
+/// Requests outstanding per worker at most: deep enough that slow frames
+/// (software adapters, benches) do not starve the workers, short enough
+/// that requests stay nearest-first as the camera moves.
+pub const MAX_IN_FLIGHT_PER_WORKER: usize = 16;
+
 /// Instance kinds (one dense pool region each).
 pub const KINDS: usize = InstanceKind::ALL.len();
 
@@ -161,9 +166,7 @@ impl Streamer {
             })
             .collect::<Option<Vec<_>>>()
             .unwrap_or_default();
-        // Deep enough that slow frames (software adapters, benches) do not
-        // starve the workers; short enough that requests stay nearest-first.
-        let max_in_flight = 16 * workers.len().max(1);
+        let max_in_flight = MAX_IN_FLIGHT_PER_WORKER * workers.len().max(1);
         Streamer {
             world,
             requests: Some(request_tx),
