@@ -142,6 +142,12 @@ fn linear_image(
 ) -> Result<Vec<[f32; 3]>> {
     let mut s = settings.clone();
     s.raw = true;
+    // Every wanted sky-occlusion sector rendered in this frame: no image
+    // sees a later stage of its time-sliced fill than another.
+    s.sky_occlusion_every_frame = true;
+    // SMAA 1x: no projection jitter, whose phase follows the frame count
+    // (consecutive images would differ by it, not by their levels).
+    s.aa = himal::passes::aa::AaMode::Smaa;
     renderer.reset_history();
     let f = renderer.render(camera, &s)?;
     Ok(f.image
@@ -288,7 +294,7 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
     }
     if run.compare_lod {
         println!(
-            "E2 over the flight (camera lists; sub-pixel: triangles facing the camera under 1 px; FLIP vs all LOD0 on {} frames):",
+            "E2 over the flight (camera lists; sub-pixel: expected share under 1 px; FLIP vs all LOD0 on {} settled frames):",
             tallies.get(1).map_or(0, |t| t.flip.len())
         );
         println!(
