@@ -432,6 +432,13 @@ impl ShadowArgs {
     }
 }
 
+impl RenderArgs {
+    /// What to load: the `--gltf` model, else `--scene`.
+    pub fn spec(&self) -> &str {
+        self.gltf.as_deref().unwrap_or(&self.scene)
+    }
+}
+
 /// The built-in streamed open world (`--scene world`).
 pub const WORLD: &str = "world";
 
@@ -567,7 +574,7 @@ pub fn setup(
         )
         .map_err(anyhow::Error::msg)?;
     check_output_space(&args.out, width, height, args.frames, kind)?;
-    let mut scene = load_scene(args.gltf.as_deref().unwrap_or(&args.scene))?;
+    let mut scene = load_scene(args.spec())?;
     check_hero(&scene, args.shadows.hero.as_deref())?;
     if let Some(env) = &args.env {
         let mut desc = himal::scene::EnvironmentDesc::new(env);
@@ -686,8 +693,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .as_deref()
         .map(parse_time_lapse)
         .transpose()?;
-    let spec = args.gltf.as_deref().unwrap_or(&args.scene);
-    let mut renderer = open_renderer(spec, args.gpu.context()?, &scene)?;
+    let mut renderer = open_renderer(args.spec(), args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
     if args.graph {

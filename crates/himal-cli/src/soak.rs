@@ -46,8 +46,7 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         );
     }
     let (scene, camera, mut settings) = setup(r)?;
-    let spec = r.gltf.as_deref().unwrap_or(&r.scene);
-    let mut renderer = crate::render::open_renderer(spec, r.gpu.context()?, &scene)?;
+    let mut renderer = crate::render::open_renderer(r.spec(), r.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
     r.post.configure(&mut renderer, &r.gpu)?;
     let every = args.every.unwrap_or((r.frames / 20).max(1)).max(1);

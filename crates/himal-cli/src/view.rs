@@ -291,9 +291,8 @@ impl Viewer {
         );
         // The presentation holds the old device's surface: drop it first.
         let window = self.window.take().map(|(w, _)| w);
-        let spec = self.args.gltf.as_deref().unwrap_or(&self.args.scene);
         let mut renderer =
-            crate::render::open_renderer(spec, self.args.gpu.context()?, &self.scene)?;
+            crate::render::open_renderer(self.args.spec(), self.args.gpu.context()?, &self.scene)?;
         self.args.post.configure(&mut renderer, &self.args.gpu)?;
         self.renderer = renderer;
         if let Some(window) = window {
@@ -622,8 +621,7 @@ impl ApplicationHandler for Viewer {
 pub fn run(view: &ViewArgs) -> Result<()> {
     let args = &view.render;
     let (scene, camera, mut settings) = crate::render::setup(args)?;
-    let spec = args.gltf.as_deref().unwrap_or(&args.scene);
-    let mut renderer = crate::render::open_renderer(spec, args.gpu.context()?, &scene)?;
+    let mut renderer = crate::render::open_renderer(args.spec(), args.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
     let paths = renderer

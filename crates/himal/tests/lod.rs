@@ -8,7 +8,7 @@ mod common;
 use glam::{Mat4, Vec3};
 use himal::gpu_scene::{LodView, SceneGpu};
 use himal::passes::cull::{CullPass, CullView};
-use himal::scene::lod::{MAX_LODS, distance_scale};
+use himal::scene::lod::MAX_LODS;
 use himal::{Culling, Renderer};
 
 /// The rendered comparison's size; triangles are counted at 1280x720.
@@ -65,6 +65,14 @@ fn triangles(
     (all, small)
 }
 
+/// The frame's LOD selection at COUNT_SIZE with `threshold` px (the
+/// default guard and band), as `frame::plan` makes it.
+fn lod_at(scene: &himal::scene::Scene, camera: &himal::scene::Camera, threshold: f32) -> LodView {
+    let mut s = common::raw_settings(scene, COUNT_SIZE, "final");
+    s.lod_threshold_px = threshold;
+    himal::frame::lod_view(camera, &s)
+}
+
 #[test]
 fn lod_cuts_small_triangles_and_keeps_the_image() {
     let (scene, camera) = common::scene_and_camera("lod_spheres", "along");
@@ -74,16 +82,7 @@ fn lod_cuts_small_triangles_and_keeps_the_image() {
     let vp = camera.view_projection(COUNT_SIZE.0 as f32 / COUNT_SIZE.1 as f32);
     // The frame's defaults: error guard 1 px, band 0.2 (objects in a band
     // count twice: both levels draw).
-    let on = LodView {
-        eye: camera.position,
-        selection: himal::scene::lod::Selection {
-            scale: distance_scale(camera.fov_y_deg, COUNT_SIZE.1, THRESHOLD_PX),
-            focal_px: himal::scene::lod::focal_px(camera.fov_y_deg, COUNT_SIZE.1),
-            max_error_px: 1.0,
-            band: 0.2,
-            object_scale: 0.0,
-        },
-    };
+    let on = lod_at(&scene, &camera, THRESHOLD_PX);
     let (full, full_small) = triangles(&ctx, &scene, &mut cull, vp, LodView::default());
     let (lod, lod_small) = triangles(&ctx, &scene, &mut cull, vp, on);
     let share = |s: u64, a: u64| s as f64 / a.max(1) as f64;
@@ -255,8 +254,8 @@ fn lod_view_shows_each_level_in_its_hue() {
 
 /// `Renderer::count_drawn` (what `bench --path` reports): the camera's
 /// triangles equal the exact count of the GPU's lists, and its sub-pixel
-/// estimate (each instance's level histogram at its distance, facing the
-/// camera) stays near the exact per-triangle projection.
+/// estimate (each instance's level histogram at its distance, uniformly
+/// foreshortened) stays near the exact per-triangle projection.
 #[test]
 fn drawn_counts_match_the_exact_projection() {
     let (scene, camera) = common::scene_and_camera("lod_spheres", "along");
@@ -265,17 +264,7 @@ fn drawn_counts_match_the_exact_projection() {
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull");
     let vp = camera.view_projection(COUNT_SIZE.0 as f32 / COUNT_SIZE.1 as f32);
     let mut s = common::raw_settings(&scene, COUNT_SIZE, "final");
-    s.lod_threshold_px = THRESHOLD_PX;
-    let lod = LodView {
-        eye: camera.position,
-        selection: himal::scene::lod::Selection {
-            scale: distance_scale(camera.fov_y_deg, COUNT_SIZE.1, THRESHOLD_PX),
-            focal_px: himal::scene::lod::focal_px(camera.fov_y_deg, COUNT_SIZE.1),
-            max_error_px: s.lod_error_px,
-            band: s.lod_band,
-            object_scale: 0.0,
-        },
-    };
+    let lod = lod_at(&scene, &camera, THRESHOLD_PX);
     let mut r = Renderer::new(common::context(), &scene).expect("renderer");
     let share = |s: f64, a: u64| s / a.max(1) as f64;
     for (threshold, lod) in [(THRESHOLD_PX, lod), (0.0, LodView::default())] {
