@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cull (V6: camera + cascades) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
-//! skyocc.heightfieldN/groundN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
+//! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static, shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
@@ -203,6 +203,12 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         settings.time_s,
         gpu_calls.map(|(_, shadow)| shadow),
     );
+    // L2: the sectors the camera wants; jobs for the ones not resident.
+    let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+    if settings.sky_occlusion_every_frame {
+        passes.skyocc.invalidate();
+    }
+    let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
     let mut views = Vec::new();
     if gpu_cull {
         views.push(CullView::clip(view_proj));
@@ -213,6 +219,18 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
                 .map(|f| CullView::caster(f.light_view_proj)),
         );
     }
+    // L2 in a streamed world: the pool instances under this frame's sectors.
+    passes.skyocc.culled_view = None;
+    let streamed = !passes.cull.layout.pool_batches.is_empty();
+    let room = views.len() < crate::passes::cull::MAX_VIEWS;
+    if let Some(v) = passes
+        .skyocc
+        .cull_view()
+        .filter(|_| gpu_cull && streamed && room)
+    {
+        passes.skyocc.culled_view = Some(views.len() as u32);
+        views.push(v);
+    }
     passes.cull.plan(ctx, &views, lod);
     // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
     let lod_view = settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Lod);
@@ -222,12 +240,6 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         let fits: Vec<Mat4> = shadows.fits.iter().map(|f| f.light_view_proj).collect();
         t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits)
     });
-    // L2: the sectors the camera wants; jobs for the ones not resident.
-    let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
-    if settings.sky_occlusion_every_frame {
-        passes.skyocc.invalidate();
-    }
-    let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);
     Planned {
@@ -366,8 +378,13 @@ pub fn build<'a>(
         }
         None => None,
     };
-    // L2: new sectors' height fields and SH2 visibility (side effect: the pool).
-    let skyocc = passes.skyocc.add(&mut g, scene);
+    // L2: new sectors' height fields and SH2 visibility (side effect: the
+    // pool); in a world over the terrain, with the culled pool instances.
+    let sources = crate::passes::skyocc::SkyOccSources {
+        culled,
+        terrain: passes.terrain.as_ref().map(|t| t.heights()),
+    };
+    let skyocc = passes.skyocc.add(&mut g, scene, sources);
     let env = match probe {
         // L3: the probe's G-buffer cube relit with the lighting and sky
         // passes (sun unshadowed, sky unoccluded), then mipped and filtered.

@@ -202,3 +202,143 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
         "the frame is nearly empty ({differ} pixels)"
     );
 }
+
+/// L2 follows the streaming: a frame drawn before the street's sectors
+/// arrive renders sky-occlusion height fields of the coarse terrain alone;
+/// once the sectors stream in, those height fields are rendered again
+/// (nothing else changed) and hold the terrain's tiles and the pool
+/// instances: every texel between the terrain and the tallest box over it,
+/// the bare ground equal to the CPU height data, houses, roofs and rocks
+/// standing out of it.
+#[test]
+fn sky_occlusion_height_fields_hold_terrain_and_instances_and_follow_streaming() {
+    use himal::passes::skyocc::{RENDER_TEXELS, SkyOccPass, TEXEL_SIZE};
+    let world = small_world();
+    let camera = world
+        .cameras
+        .iter()
+        .find(|c| c.name == "street")
+        .expect("camera")
+        .camera
+        .clone();
+    let mut settings = FrameSettings::new(96, 54, world.scene().sun);
+    settings.sky_occlusion = true;
+    let aspect = 96.0 / 54.0;
+    let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
+    // Resident far away first: nothing near the street.
+    let mut away = camera.clone();
+    away.position.x += 2000.0;
+    r.settle_world(&away, Duration::from_secs(120))
+        .expect("streaming");
+    let first = r.render(&camera, &settings).expect("frame");
+    let missing = r.world_stats().expect("a world").missing;
+    assert!(missing > 0, "the street's sectors arrived within one frame");
+    assert!(first.sky_occlusion.rendered > 0);
+    r.settle_world(&camera, Duration::from_secs(120))
+        .expect("streaming");
+    let again = r.render(&camera, &settings).expect("frame");
+    let wanted = r.sky_occlusion().wanted(&camera, aspect);
+    eprintln!(
+        "sky occlusion: {} sectors rendered before the street streamed in, {} again after ({} wanted)",
+        first.sky_occlusion.rendered,
+        again.sky_occlusion.rendered,
+        wanted.len()
+    );
+    assert!(again.sky_occlusion.rendered > 0, "nothing rendered again");
+    // Job 0 of the last frame is the nearest wanted sector (stale ones go
+    // nearest first): its raw image is the one read back.
+    let sector = wanted[0];
+    let back = r
+        .sky_occlusion()
+        .read_sector(r.context(), sector)
+        .expect("read back")
+        .expect("resident");
+    let origin = SkyOccPass::render_origin(sector);
+    let terrain = r.terrain().expect("terrain");
+    let cpu = terrain.cpu();
+    let scene = world.scene();
+    // Every instance of the sectors under the image, as world boxes.
+    let extent = RENDER_TEXELS as f32 * TEXEL_SIZE;
+    let mut boxes = Vec::new();
+    let mut coords = Vec::new();
+    // Sectors under the image and around it (instances reach over borders).
+    for dz in -1..4 {
+        for dx in -1..4 {
+            let p = origin + Vec2::new(dx as f32, dz as f32) * (extent / 2.0);
+            if let Some(c) = world.sector_at(p).filter(|c| !coords.contains(c)) {
+                coords.push(c);
+            }
+        }
+    }
+    for c in &coords {
+        for i in world.sector(*c).instances {
+            let b = scene.meshes[i.kind as usize]
+                .bounds
+                .transform(&i.transform());
+            boxes.push((i.kind, b));
+        }
+    }
+    let n = RENDER_TEXELS;
+    let (mut bare, mut worst_bare, mut over, mut under) = (0, 0.0f32, 0, 0);
+    for t in 0..n * n {
+        let xz = origin + (Vec2::new((t % n) as f32, (t / n) as f32) + 0.5) * TEXEL_SIZE;
+        let ground = cpu.heights.height(xz, false);
+        let pad = TEXEL_SIZE;
+        let top = boxes
+            .iter()
+            .filter(|(_, b)| {
+                xz.x >= b.min.x - pad
+                    && xz.x <= b.max.x + pad
+                    && xz.y >= b.min.z - pad
+                    && xz.y <= b.max.z + pad
+            })
+            .map(|(_, b)| b.max.y)
+            .fold(f32::NEG_INFINITY, f32::max);
+        let raw = back.raw[t];
+        // Float32 terrain heights of ~1 km: the GPU's and the twin's
+        // bilinear sums differ by a few ulps (measured 6e-5 m).
+        if raw > ground.max(top) + 1e-3 {
+            eprintln!("over at {xz}: raw {raw}, ground {ground}, top {top}");
+            over += 1;
+        }
+        if raw < ground - 1e-3 {
+            under += 1;
+        }
+        if top == f32::NEG_INFINITY {
+            bare += 1;
+            worst_bare = worst_bare.max((raw - ground).abs());
+        }
+    }
+    let mut standing = 0;
+    for (kind, b) in &boxes {
+        use himal::scene::world::InstanceKind::*;
+        let c = (b.min + b.max) * 0.5;
+        let local = (Vec2::new(c.x, c.z) - origin) / TEXEL_SIZE;
+        let inside = local.cmpge(Vec2::ZERO).all() && local.cmplt(Vec2::splat(n as f32)).all();
+        let ground = cpu.heights.height(Vec2::new(c.x, c.z), false);
+        if !inside
+            || !matches!(kind, Rock0 | Rock1 | Rock2 | HouseWalls | Roof)
+            || b.max.y < ground + 1.0
+        {
+            continue;
+        }
+        let raw = back.raw[local.y as usize * n + local.x as usize];
+        assert!(
+            raw >= ground + 0.5 * (b.max.y - ground),
+            "{kind:?} at {c}: height field {raw:.2} m over ground {ground:.2} m, box top {:.2} m",
+            b.max.y
+        );
+        standing += 1;
+    }
+    eprintln!(
+        "sector {sector}: {} instances around, {standing} standing inside checked; {bare} bare texels, worst {worst_bare:.1e} m; {over} over the boxes, {under} under the ground",
+        boxes.len()
+    );
+    assert!(
+        standing >= 3,
+        "only {standing} instances in the street's sector"
+    );
+    assert!(bare > n * n / 4, "only {bare} bare texels");
+    assert!(worst_bare < 1e-3, "bare ground differs by {worst_bare} m");
+    assert_eq!((over, under), (0, 0));
+}

@@ -222,6 +222,11 @@ impl Renderer {
         &self.res.passes.skyocc
     }
 
+    /// The world's terrain (`None`: a plain scene), for tests and tools.
+    pub fn terrain(&self) -> Option<&crate::passes::terrain::TerrainPass> {
+        self.res.passes.terrain.as_ref()
+    }
+
     /// The environment cube and DFG table (L4), for tests and tools.
     pub fn envmap(&self) -> &EnvMapPass {
         &self.res.passes.envmap

@@ -17,6 +17,11 @@ use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
 use crate::scene::world::{Instance, InstanceKind, World};
 use crate::scene::{Aabb, lod};
 
+/// L2's depth range below the lowest coarse height and above the highest
+/// (m): tiles between coarse points, and the tallest house on a peak.
+const SKYOCC_BELOW: f32 = 50.0;
+const SKYOCC_ABOVE: f32 = 100.0;
+
 /// One frame of the streamed world, as [`Renderer::draw`] reports it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldFrame {
@@ -177,9 +182,19 @@ impl Renderer {
     pub fn with_world(ctx: GpuContext, world: Arc<World>) -> Result<Self, Error> {
         let scene = world.scene();
         let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &world_pools(&world))?;
-        let terrain = TerrainPass::new(&ctx, &terrain_desc(&world))?;
+        let desc = terrain_desc(&world);
+        let terrain = TerrainPass::new(&ctx, &desc)?;
         let mut r = Self::from_upload(ctx, &scene, scene_gpu)?;
         r.res.passes.terrain = Some(terrain);
+        // L2 samples the terrain; its depth range holds the ground (the
+        // coarse grid, with room for tiles between its points) and what
+        // stands on it.
+        let (lo, hi) = (desc.coarse.iter())
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &h| {
+                (lo.min(h), hi.max(h))
+            });
+        let skyocc = &mut r.res.passes.skyocc;
+        skyocc.attach_terrain(&r.ctx, (lo - SKYOCC_BELOW, hi + SKYOCC_ABOVE))?;
         r.world = Some(WorldState::new(world, &scene));
         Ok(r)
     }
@@ -214,6 +229,15 @@ impl Renderer {
         let p = &mut self.res.passes;
         let terrain = p.terrain.as_ref();
         w.apply(&u, &self.res.scene, &mut p.cull, terrain, &self.ctx.queue)?;
+        // L2 follows the streaming: sky-occlusion sectors rendered before a
+        // neighbouring world sector arrived are rendered again.
+        let world = w.streamer.world();
+        for up in &u.uploads {
+            let c = up.data.coord;
+            let min = crate::scene::world::sector::sector_origin(world.origin, c);
+            p.skyocc
+                .refresh(min, min + crate::scene::world::SECTOR_SIZE);
+        }
         w.stream_ms = t.elapsed().as_secs_f64() * 1e3;
         Ok(Some(w.stats))
     }

@@ -95,6 +95,21 @@ impl CullView {
         }
     }
 
+    /// The vertical prism over the xz rectangle `min..max` (L2's height
+    /// fields: everything above or below the sectors being rendered).
+    pub fn prism(min: glam::Vec2, max: glam::Vec2) -> Self {
+        Self {
+            planes: [
+                [1.0, 0.0, 0.0, -min.x],
+                [-1.0, 0.0, 0.0, max.x],
+                [0.0, 0.0, 1.0, -min.y],
+                [0.0, 0.0, -1.0, max.y],
+                KEEP_ALL,
+                KEEP_ALL,
+            ],
+        }
+    }
+
     /// A sun map's volume without its near plane: casters between the sun
     /// and the map still cast (as `ShadowFit::may_cast`).
     pub fn caster(light_view_proj: Mat4) -> Self {
@@ -287,6 +302,8 @@ pub struct Culled {
     pub args: BufferHandle,
     opaque: (u32, u32),
     vegetation: (u32, u32),
+    /// The streamed regions' batches (first, count; inside the opaque list).
+    pool: (u32, u32),
     batches: u32,
     /// Some batch has more than one level: fading lists may be non-empty.
     pub has_lods: bool,
@@ -344,6 +361,29 @@ impl Culled {
                 rp.draw_indexed_indirect(args, at * ARGS_BYTES);
                 calls += 1;
             }
+        }
+        calls
+    }
+
+    /// View `view`'s draws of the streamed regions' batches alone (L2's
+    /// height fields: static world instances, no scene objects): one
+    /// multi-draw per kind in `kinds`. Returns the calls recorded.
+    pub fn draw_pool(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        args: &wgpu::Buffer,
+        view: u32,
+        kinds: std::ops::Range<u32>,
+    ) -> u32 {
+        let (first, count) = self.pool;
+        if count == 0 {
+            return 0;
+        }
+        let mut calls = 0;
+        for kind in kinds {
+            let start = self.args_at(view, List::Opaque, kind, first - self.opaque.0, 0);
+            rp.multi_draw_indexed_indirect(args, start * ARGS_BYTES, count * MAX_LODS as u32);
+            calls += 1;
         }
         calls
     }
@@ -578,6 +618,10 @@ impl CullPass {
             args: written.buffer(args),
             opaque: l.range(List::Opaque),
             vegetation: l.range(List::Vegetation),
+            pool: (
+                l.pool_batches.first().copied().unwrap_or(0),
+                l.pool_batches.len() as u32,
+            ),
             batches,
             has_lods: l.has_lods(),
         })

@@ -10,6 +10,12 @@
 //! ([`pool`]). Lighting looks the sector up in a 32x32 table
 //! (`shaders/sky_occlusion.wgsl`). CPU twin: [`reference`]. Docs:
 //! `docs/techniques/L2.md`.
+//!
+//! In the streamed world the height fields follow the streaming: the
+//! terrain is sampled into them (`skyocc.terrain`, `terrain.wgsl`), the
+//! pool instances come from a culling view over the frame's sectors
+//! ([`SkyOccPass::cull_view`]), and a sector whose neighbourhood streams in
+//! after it was rendered is rendered again ([`SkyOccPass::refresh`]).
 
 pub mod pool;
 pub mod reference;
@@ -21,13 +27,16 @@ use glam::{Mat4, Vec2, Vec4};
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu};
-use crate::graph::{FrameGraph, TextureHandle};
+use crate::graph::{BufferAccess, FrameGraph, TextureHandle};
 use crate::passes::common::{view_node, view_pipeline};
+use crate::passes::cull::{CullView, Culled, SHADOW};
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::terrain::TerrainHeights;
 use crate::scene::{Aabb, Camera, Scene};
 use pool::{Sector, SectorPool, visible_sectors};
 pub use reference::{MARGIN_TEXELS, RENDER_TEXELS, SECTOR_TEXELS, TEXEL_SIZE};
 use resources::{Intermediates, PoolTextures, SectorViewGpu};
+use wgpu::StoreOp::{Discard, Store};
 
 /// Sectors whose nearest point is within this distance (m) of the camera are wanted.
 pub const RANGE: f32 = 160.0;
@@ -58,8 +67,20 @@ pub struct SkyOccStats {
 /// (rendered again alone for the terrain height the lighting fades from).
 #[derive(Clone, Debug)]
 struct Job {
+    /// World x, z of the rendered image's texel (0, 0).
+    origin: Vec2,
     draws: Vec<Draw>,
     ground_draws: Vec<Draw>,
+}
+
+/// What the streamed world adds to the height fields (`None`s: a plain
+/// scene's objects alone).
+#[derive(Clone, Copy, Default)]
+pub struct SkyOccSources<'a> {
+    /// The culled lists; the pool instances of view [`SkyOccPass::culled_view`] are drawn.
+    pub culled: Option<Culled>,
+    /// The terrain's height data, sampled under the objects.
+    pub terrain: Option<TerrainHeights<'a>>,
 }
 
 /// The pool textures lighting reads, as graph handles (ordering after this
@@ -111,6 +132,10 @@ pub struct SkyOccPass {
     /// Per object: moves (left out of the height fields).
     moving: Vec<bool>,
     heights: (f32, f32),
+    /// `skyocc.terrain` (a streamed world's terrain, [`Self::attach_terrain`]).
+    terrain: Option<(Program, wgpu::RenderPipeline)>,
+    /// The culling view of this frame's sectors (`frame::plan` sets it).
+    pub culled_view: Option<u32>,
     jobs: Vec<Job>,
     pub stats: SkyOccStats,
 }
@@ -165,9 +190,57 @@ impl SkyOccPass {
                 .collect(),
             moving: casters.moving,
             heights,
+            terrain: None,
+            culled_view: None,
             jobs: Vec::new(),
             stats: SkyOccStats::default(),
         })
+    }
+
+    /// Samples a streamed world's terrain into every height field from now
+    /// on; `heights` (bottom, top, m) bounds the terrain and what stands on
+    /// it (the orthographic depth range grows to hold it). Forgets resident
+    /// sectors.
+    pub fn attach_terrain(
+        &mut self,
+        ctx: &GpuContext,
+        heights: (f32, f32),
+    ) -> Result<(), GpuError> {
+        let program = Program::new(ctx, "passes/skyocc/terrain.wgsl")?;
+        let pipeline = resources::terrain_pipeline(ctx, &program)?;
+        self.terrain = Some((program, pipeline));
+        self.heights = (self.heights.0.min(heights.0), self.heights.1.max(heights.1));
+        self.pool.clear();
+        Ok(())
+    }
+
+    /// The world x, z rectangle of every sector whose rendered image
+    /// (sector and apron) overlaps `min..max` is rendered again when next
+    /// wanted (a world sector streamed in there: its tile and instances
+    /// were not in the image). Returns the sectors marked.
+    pub fn refresh(&mut self, min: Vec2, max: Vec2) -> u32 {
+        let apron = MARGIN_TEXELS as f32 * TEXEL_SIZE;
+        let lo = pool::sector_of(min.x - apron, min.y - apron);
+        let hi = pool::sector_of(max.x + apron, max.y + apron);
+        let before = self.pool.stale();
+        for j in lo.y..=hi.y {
+            for i in lo.x..=hi.x {
+                self.pool.mark_stale(Sector::new(i, j));
+            }
+        }
+        (self.pool.stale() - before) as u32
+    }
+
+    /// The culling view holding this frame's sectors' images (the union of
+    /// their rectangles, every height); `None` when no sector is rendered.
+    pub fn cull_view(&self) -> Option<CullView> {
+        let w = RENDER_TEXELS as f32 * TEXEL_SIZE;
+        let mut jobs = self.jobs.iter();
+        let first = jobs.next()?.origin;
+        let (min, max) = jobs.fold((first, first + w), |(lo, hi), j| {
+            (lo.min(j.origin), hi.max(j.origin + w))
+        });
+        Some(CullView::prism(min, max))
     }
 
     /// The pipeline of a debug view in `format`.
@@ -281,6 +354,7 @@ impl SkyOccPass {
                 0,
                 bytemuck::bytes_of(&SectorViewGpu {
                     view_proj: view_proj.to_cols_array_2d(),
+                    origin: [origin.x, origin.y, TEXEL_SIZE, 0.0],
                 }),
             );
             gpu_jobs.push(resources::JobGpu {
@@ -288,6 +362,7 @@ impl SkyOccPass {
                 layer: [layer, 0, 0, 0],
             });
             jobs.push(Job {
+                origin,
                 draws,
                 ground_draws,
             });
@@ -313,25 +388,33 @@ impl SkyOccPass {
 
     /// Adds this frame's sector updates (none when nothing is planned) and
     /// returns the pool textures lighting reads.
-    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>, scene: &'a SceneGpu) -> SkyOccFrame {
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        scene: &'a SceneGpu,
+        sources: SkyOccSources<'a>,
+    ) -> SkyOccFrame {
         let vis = graph.import_texture("skyocc.vis", &self.textures.vis);
         let heights = graph.import_texture("skyocc.heights", &self.textures.heights);
         let Some(work) = self.work.as_ref().filter(|_| !self.jobs.is_empty()) else {
             return SkyOccFrame { vis, heights };
         };
-        let (raw, ground) = self.add_heightfields(graph, scene, work);
+        let (raw, ground) = self.add_heightfields(graph, scene, work, sources);
         let n = self.jobs.len() as u32;
         self.add_kernels(graph, work, (raw, ground), (vis, heights), n)
     }
 
-    /// `skyocc.heightfield{i}` and `skyocc.ground{i}` per job: every opaque
-    /// draw into layer i of the raw height image, the ground's alone into
-    /// the terrain height image; returns both images' new versions.
+    /// Per job i, one depth layer kept across the three: `skyocc.terrain{i}`
+    /// (a world's terrain into both images), `skyocc.ground{i}` (the ground
+    /// objects into the terrain height image) and `skyocc.heightfield{i}`
+    /// (every static object, and a world's pool instances, into the raw
+    /// image); returns both images' new versions.
     fn add_heightfields<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         scene: &'a SceneGpu,
         work: &'a Intermediates,
+        sources: SkyOccSources<'a>,
     ) -> (TextureHandle, TextureHandle) {
         let mut raw = graph.import_texture("skyocc.raw", &work.raw);
         let mut ground = graph.import_texture("skyocc.ground", &work.ground);
@@ -343,41 +426,82 @@ impl SkyOccPass {
             b: 0.0,
             a: 1.0,
         });
-        let depth_ops = wgpu::Operations {
-            load: wgpu::LoadOp::Clear(1.0),
-            store: wgpu::StoreOp::Discard,
-        };
+        let ops = |load, store| wgpu::Operations { load, store };
+        let pool = sources.culled.zip(self.culled_view);
+        let terrain = sources.terrain.zip(self.terrain.as_ref());
         for (i, job) in self.jobs.iter().enumerate() {
-            for (ground_only, draws) in [(false, &job.draws), (true, &job.ground_draws)] {
-                let (id, target) = if ground_only {
-                    (format!("skyocc.ground{i}"), ground)
-                } else {
-                    (format!("skyocc.heightfield{i}"), raw)
-                };
-                let layer = resources::layer_view_desc(i as u32);
-                let written = graph
-                    .raster(&id, &self.height_program)
-                    .pipeline(Ok(self.height_pipeline.clone()))
-                    .uniform("sector", &work.views[i])
-                    .uniform("objects", &scene.objects)
-                    .uniform("instances", &scene.instances)
-                    .color_view(target, Some(layer.clone()), clear)
-                    .depth(depth, Some(layer), depth_ops)
-                    .record(move |_, rp| {
-                        if !draws.is_empty() {
-                            scene.bind_geometry(rp);
-                            scene.draw_list(rp, draws);
-                        }
-                        Ok(())
-                    });
-                depth = written.depth.unwrap_or(depth);
-                let new = written.colors.first().copied().unwrap_or(target);
-                if ground_only {
-                    ground = new;
-                } else {
-                    raw = new;
+            let layer = || Some(resources::layer_view_desc(i as u32));
+            let (colour_load, depth_load) = match terrain {
+                Some((t, (program, pipeline))) => {
+                    let written = graph
+                        .raster(&format!("skyocc.terrain{i}"), program)
+                        .pipeline(Ok(pipeline.clone()))
+                        .uniform("sector", &work.views[i])
+                        .uniform("terrain", t.params)
+                        .external("coarse_load", t.coarse)
+                        .external("fine_load", t.fine)
+                        .external("pages", t.pages)
+                        .color_view(raw, layer(), clear)
+                        .color_view(ground, layer(), clear)
+                        .depth(depth, layer(), ops(wgpu::LoadOp::Clear(1.0), Store))
+                        .record(|_, rp| {
+                            rp.draw(0..3, 0..1);
+                            Ok(())
+                        });
+                    raw = written.colors.first().copied().unwrap_or(raw);
+                    ground = written.colors.get(1).copied().unwrap_or(ground);
+                    depth = written.depth.unwrap_or(depth);
+                    (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
                 }
-            }
+                None => (clear, wgpu::LoadOp::Clear(1.0)),
+            };
+            let draws = &job.ground_draws;
+            let written = graph
+                .raster(&format!("skyocc.ground{i}"), &self.height_program)
+                .pipeline(Ok(self.height_pipeline.clone()))
+                .uniform("sector", &work.views[i])
+                .uniform("objects", &scene.objects)
+                .uniform("instances", &scene.instances)
+                .color_view(ground, layer(), colour_load)
+                .depth(depth, layer(), ops(depth_load, Store))
+                .record(move |_, rp| {
+                    if !draws.is_empty() {
+                        scene.bind_geometry(rp);
+                        scene.draw_list(rp, draws);
+                    }
+                    Ok(())
+                });
+            ground = written.colors.first().copied().unwrap_or(ground);
+            depth = written.depth.unwrap_or(depth);
+            // Every object over the ground's depth (LessEqual: the ground
+            // objects again, at the same depth, into the raw image too).
+            let draws = &job.draws;
+            let node = graph
+                .raster(&format!("skyocc.heightfield{i}"), &self.height_program)
+                .pipeline(Ok(self.height_pipeline.clone()))
+                .uniform("sector", &work.views[i])
+                .uniform("objects", &scene.objects);
+            let node = match pool {
+                Some((c, _)) => node
+                    .read_buffer("instances", c.instances, BufferAccess::StorageRead)
+                    .indirect(c.args),
+                None => node.uniform("instances", &scene.instances),
+            };
+            let written = node
+                .color_view(raw, layer(), colour_load)
+                .depth(depth, layer(), ops(wgpu::LoadOp::Load, Discard))
+                .record(move |ctx, rp| {
+                    scene.bind_geometry(rp);
+                    if !draws.is_empty() {
+                        scene.draw_list(rp, draws);
+                    }
+                    if let Some((c, view)) = pool {
+                        c.draw_pool(rp, ctx.buffer(c.args), view, SHADOW);
+                    }
+                    Ok(())
+                });
+            raw = written.colors.first().copied().unwrap_or(raw);
+            depth = written.depth.unwrap_or(depth);
         }
         (raw, ground)
     }

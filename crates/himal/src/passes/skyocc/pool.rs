@@ -2,7 +2,7 @@
 //! wanted this frame, and which pool layer holds each resident one, with
 //! least-recently-used eviction. Pure CPU; the pass renders what `plan` returns.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use glam::{IVec2, Mat4, Vec2, Vec3, Vec4};
 
@@ -75,6 +75,10 @@ pub struct SectorPool {
     capacity: usize,
     /// Resident sector -> (layer, frame it was last wanted).
     resident: HashMap<Sector, (u32, u64)>,
+    /// Resident sectors whose geometry changed since they were rendered
+    /// (the world streamed in around them): rendered again into their own
+    /// layer when next wanted, shown as they were until then.
+    stale: HashSet<Sector>,
     frame: u64,
 }
 
@@ -83,6 +87,7 @@ impl SectorPool {
         Self {
             capacity: capacity.max(1),
             resident: HashMap::new(),
+            stale: HashSet::new(),
             frame: 0,
         }
     }
@@ -104,11 +109,25 @@ impl SectorPool {
     /// Forgets every sector (scene change).
     pub fn clear(&mut self) {
         self.resident.clear();
+        self.stale.clear();
+    }
+
+    /// Marks `sector` for rendering again (no effect unless resident).
+    pub fn mark_stale(&mut self, sector: Sector) {
+        if self.resident.contains_key(&sector) {
+            self.stale.insert(sector);
+        }
+    }
+
+    /// Resident sectors waiting to be rendered again.
+    pub fn stale(&self) -> usize {
+        self.stale.len()
     }
 
     /// One frame: marks the `wanted` sectors used, then gives up to `cap`
     /// missing ones a layer (a free one, else the least recently used
-    /// sector's; never one wanted this frame). Returns (sector, layer) to
+    /// sector's; never one wanted this frame) and takes stale ones again
+    /// in their own layer, in `wanted` order. Returns (sector, layer) to
     /// render. Sectors left without a layer (pool over-committed or cap
     /// reached) count as fully visible in lighting.
     pub fn plan(&mut self, wanted: &[Sector], cap: usize) -> Vec<(Sector, u32)> {
@@ -124,7 +143,10 @@ impl SectorPool {
             if out.len() >= cap {
                 break;
             }
-            if self.resident.contains_key(s) {
+            if let Some(&(layer, _)) = self.resident.get(s) {
+                if self.stale.remove(s) {
+                    out.push((*s, layer));
+                }
                 continue;
             }
             let layer = if self.resident.len() < self.capacity {
@@ -140,6 +162,7 @@ impl SectorPool {
                     .map(|(v, &(l, _))| (*v, l));
                 victim.map(|(v, l)| {
                     self.resident.remove(&v);
+                    self.stale.remove(&v);
                     l
                 })
             };
@@ -212,6 +235,28 @@ mod tests {
             assert_eq!(layers.len(), wanted.len());
             assert!(pool.resident().count() <= 4);
         }
+    }
+
+    #[test]
+    fn stale_sectors_render_again_in_their_own_layer_when_wanted() {
+        let mut pool = SectorPool::new(4);
+        let s = |i, j| IVec2::new(i, j);
+        pool.plan(&[s(0, 0), s(1, 0)], 8);
+        let layer = pool.layer(s(1, 0));
+        pool.mark_stale(s(1, 0));
+        pool.mark_stale(s(5, 5)); // not resident: ignored
+        assert_eq!(pool.stale(), 1);
+        // Not wanted: stays stale and keeps its layer.
+        assert!(pool.plan(&[s(0, 0)], 8).is_empty());
+        assert_eq!(pool.stale(), 1);
+        // The cap counts re-renders too; nearest (first) wanted go first.
+        pool.mark_stale(s(0, 0));
+        let got = pool.plan(&[s(1, 0), s(0, 0)], 1);
+        assert_eq!(got, vec![(s(1, 0), layer.unwrap_or(99))]);
+        assert_eq!(pool.stale(), 1);
+        assert_eq!(pool.plan(&[s(1, 0), s(0, 0)], 8).len(), 1);
+        assert_eq!(pool.stale(), 0);
+        assert!(pool.plan(&[s(1, 0), s(0, 0)], 8).is_empty());
     }
 
     #[test]

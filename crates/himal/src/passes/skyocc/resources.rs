@@ -18,6 +18,8 @@ const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Sint;
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SectorViewGpu {
     pub view_proj: [[f32; 4]; 4],
+    /// xy world x, z of texel (0, 0)'s corner; z the texel size.
+    pub origin: [f32; 4],
 }
 
 /// Twin of `SectorJob` in `visibility.wgsl`.
@@ -283,6 +285,37 @@ pub fn height_pipeline(
                 cull_mode: None,
                 ..Default::default()
             },
+            constants: &[],
+        },
+    )
+}
+
+/// The world's terrain into a sector's raw and ground images
+/// (`terrain.wgsl`): full-screen, depth written from the height, always.
+pub fn terrain_pipeline(
+    ctx: &GpuContext,
+    program: &Program,
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    let targets = [
+        crate::passes::common::target(RAW_FORMAT),
+        crate::passes::common::target(RAW_FORMAT),
+    ];
+    program.render_pipeline(
+        ctx,
+        &RenderSpec {
+            label: "skyocc.terrain",
+            vertex_entry: "vs_main",
+            fragment_entry: Some("fs_main"),
+            vertex_buffers: &[],
+            targets: &targets,
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            primitive: wgpu::PrimitiveState::default(),
             constants: &[],
         },
     )

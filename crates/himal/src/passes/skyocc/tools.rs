@@ -39,7 +39,7 @@ impl SkyOccPass {
         let layers: Vec<u32> = sectors.iter().filter_map(|s| self.pool.layer(*s)).collect();
         self.plan_jobs(ctx, scene, &planned, sectors);
         let mut graph = FrameGraph::new();
-        self.add(&mut graph, scene);
+        self.add(&mut graph, scene, super::SkyOccSources::default());
         run_graph(ctx, graph)?;
         ctx.check("skyocc.render_sectors")?;
         let mut out = Vec::new();

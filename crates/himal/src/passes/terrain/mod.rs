@@ -339,6 +339,16 @@ fn patch_layout() -> wgpu::VertexBufferLayout<'static> {
     }
 }
 
+/// What `terrain_height` in `shaders/terrain.wgsl` binds: the parameters,
+/// the coarse grid, the tile array and the page table.
+#[derive(Clone, Copy)]
+pub struct TerrainHeights<'a> {
+    pub params: &'a wgpu::Buffer,
+    pub coarse: &'a wgpu::TextureView,
+    pub fine: &'a wgpu::TextureView,
+    pub pages: &'a wgpu::TextureView,
+}
+
 /// The CPU side of the height data (behind a lock: tiles stream in through `&self`).
 pub struct TerrainCpu {
     pub heights: Heights,
@@ -680,6 +690,17 @@ impl TerrainPass {
     /// The CPU copy of the height data and bounds (twin, tests, tools).
     pub fn cpu(&self) -> MutexGuard<'_, TerrainCpu> {
         self.lock()
+    }
+
+    /// The height data's bindings (`shaders/terrain.wgsl`), for passes
+    /// that sample the ground outside the terrain's own draws (L2).
+    pub fn heights(&self) -> TerrainHeights<'_> {
+        TerrainHeights {
+            params: &self.params,
+            coarse: &self.coarse_view,
+            fine: &self.fine_view,
+            pages: &self.pages_view,
+        }
     }
 
     fn write_texels(

@@ -122,7 +122,7 @@ fn camera(name: &str, position: Vec3, target: Vec3, fov: f32) -> NamedCamera {
 /// the water), `village` (the village nearest the middle), `peak` (the
 /// flank of the highest ground near the middle, looking out), `grazing`
 /// (1.8 m above a meadow toward the horizon), `top` (straight down from
-/// 1.2 km).
+/// 1.2 km), `street` (eye height in that village, along its street).
 pub fn cameras(w: &World) -> Vec<NamedCamera> {
     let t = &w.terrain;
     let ground = |x: f32, z: f32| t.height(x, z);
@@ -198,5 +198,14 @@ pub fn cameras(w: &World) -> Vec<NamedCamera> {
         Vec3::new(rx, 0.0, 0.0),
         60.0,
     ));
+    if let Some(v) = t
+        .villages()
+        .min_by(|a, b| a.center.length().total_cmp(&b.center.length()))
+    {
+        let along = Vec2::new(v.street.cos(), v.street.sin());
+        let (from, to) = (v.center - along * 45.0, v.center + along * 60.0);
+        let eye = |p: Vec2, up: f32| Vec3::new(p.x, ground(p.x, p.y).max(v.height) + up, p.y);
+        out.push(camera("street", eye(from, 1.7), eye(to, 3.0), 65.0));
+    }
     out
 }
