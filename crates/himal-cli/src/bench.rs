@@ -81,8 +81,13 @@ pub struct BenchArgs {
 
 /// Budget group of a pass id (E5: shadows, G-buffer, lighting, blended, post, anti-aliasing, misc).
 pub fn group(pass: &str) -> &'static str {
+    // The world's terrain draws into the G-buffer and into the sun maps.
+    if pass.starts_with("terrain.shadow") || pass.starts_with("terrain.static") {
+        return "shadows";
+    }
     match pass.split('.').next().unwrap_or("") {
         "shadows" => "shadows",
+        "terrain" => "G-buffer",
         "gbuffer" => "G-buffer",
         "lighting" | "sky" | "skyocc" | "ao" | "envmap" => "lighting",
         "blended" => "blended",

@@ -212,12 +212,11 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     let mut views = Vec::new();
     if gpu_cull {
         views.push(CullView::clip(view_proj));
-        views.extend(
-            shadows
-                .fits
-                .iter()
-                .map(|f| CullView::caster(f.light_view_proj)),
-        );
+        // The cascades, then the world's static-map tiles (S2; ShadowPass
+        // names them 1 + cascades + k).
+        let sun_views = shadows.fits.iter().map(|f| &f.light_view_proj);
+        let sun_views = sun_views.chain(&shadows.static_tiles);
+        views.extend(sun_views.map(|m| CullView::caster(*m)));
     }
     // L2 in a streamed world: the pool instances under this frame's sectors.
     passes.skyocc.culled_view = None;
@@ -237,8 +236,13 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     passes.gbuffer.lod_view = lod_view;
     let terrain = passes.terrain.as_mut().map(|t| {
         t.lod_view = lod_view;
-        let fits: Vec<Mat4> = shadows.fits.iter().map(|f| f.light_view_proj).collect();
-        t.prepare(&ctx.queue, &TerrainView::from_camera(camera, size), &fits)
+        let fits = shadows.fits.iter().map(|f| f.light_view_proj);
+        let sun_views: Vec<Mat4> = fits.chain(shadows.static_tiles.iter().copied()).collect();
+        t.prepare(
+            &ctx.queue,
+            &TerrainView::from_camera(camera, size),
+            &sun_views,
+        )
     });
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);

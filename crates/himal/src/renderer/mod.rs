@@ -222,6 +222,11 @@ impl Renderer {
         &self.res.passes.skyocc
     }
 
+    /// The sun shadows (S1-S4), for tests and tools.
+    pub fn shadows(&self) -> &crate::passes::shadows::ShadowPass {
+        &self.res.passes.shadows
+    }
+
     /// The world's terrain (`None`: a plain scene), for tests and tools.
     pub fn terrain(&self) -> Option<&crate::passes::terrain::TerrainPass> {
         self.res.passes.terrain.as_ref()

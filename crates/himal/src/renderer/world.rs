@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 use super::*;
 use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
@@ -195,6 +195,8 @@ impl Renderer {
             });
         let skyocc = &mut r.res.passes.skyocc;
         skyocc.attach_terrain(&r.ctx, (lo - SKYOCC_BELOW, hi + SKYOCC_ABOVE))?;
+        // S2 holds the same casters in a camera-centred map.
+        (r.res.passes.shadows).attach_world((lo - SKYOCC_BELOW, hi + SKYOCC_ABOVE));
         r.world = Some(WorldState::new(world, &scene));
         Ok(r)
     }
@@ -207,7 +209,10 @@ impl Renderer {
         timeout: Duration,
     ) -> Result<Option<StreamStats>, Error> {
         let eye = Vec2::new(camera.position.x, camera.position.z);
-        self.stream_with(|s| s.settle(eye, timeout))
+        let stats = self.stream_with(|s| s.settle(eye, timeout))?;
+        // The static map completes in the next frame too.
+        self.res.passes.shadows.settle();
+        Ok(stats)
     }
 
     /// One frame of streaming for `camera` (inside `plan_frame`).
@@ -232,11 +237,18 @@ impl Renderer {
         // L2 follows the streaming: sky-occlusion sectors rendered before a
         // neighbouring world sector arrived are rendered again.
         let world = w.streamer.world();
+        // So does S2: the static-map tiles under a sector's ground and what
+        // stands on it.
         for up in &u.uploads {
-            let c = up.data.coord;
-            let min = crate::scene::world::sector::sector_origin(world.origin, c);
-            p.skyocc
-                .refresh(min, min + crate::scene::world::SECTOR_SIZE);
+            let d = &up.data;
+            let min = crate::scene::world::sector::sector_origin(world.origin, d.coord);
+            let max = min + crate::scene::world::SECTOR_SIZE;
+            p.skyocc.refresh(min, max);
+            let top = d.max_height + crate::passes::shadows::static_map::OBJECT_HEADROOM;
+            p.shadows.refresh(&Aabb::new(
+                Vec3::new(min.x, d.min_height, min.y),
+                Vec3::new(max.x, top, max.y),
+            ));
         }
         w.stream_ms = t.elapsed().as_secs_f64() * 1e3;
         Ok(Some(w.stats))

@@ -46,6 +46,8 @@ pub struct DepthPipelines {
     pub opaque: wgpu::RenderPipeline,
     /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
     pub vegetation: wgpu::RenderPipeline,
+    /// Writes the far plane over the viewport (one tile of a map).
+    pub clear: wgpu::RenderPipeline,
 }
 
 impl DepthPipelines {
@@ -88,6 +90,25 @@ impl DepthPipelines {
                 constants: &[],
             },
         )?;
+        let clear = program.render_pipeline(
+            ctx,
+            &RenderSpec {
+                label: "shadows.depth.clear",
+                vertex_entry: "vs_clear",
+                fragment_entry: None,
+                vertex_buffers: &[],
+                targets: &[],
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                primitive: Default::default(),
+                constants: &[],
+            },
+        )?;
         let opaque = program.render_pipeline(
             ctx,
             &RenderSpec {
@@ -101,7 +122,11 @@ impl DepthPipelines {
                 constants: &[],
             },
         )?;
-        Ok(Self { opaque, vegetation })
+        Ok(Self {
+            opaque,
+            vegetation,
+            clear,
+        })
     }
 
     /// Draws `lists` (the pass's view group is set).
@@ -126,6 +151,25 @@ impl DepthPipelines {
             rp.set_pipeline(&self.vegetation);
             c.draw(rp, args, view, List::Vegetation, SHADOW);
         }
+        if let (Some(view), Some((c, args))) = (lists.gpu_pool, culled) {
+            rp.set_pipeline(&self.opaque);
+            c.draw_pool(rp, args, view, SHADOW);
+        }
+    }
+
+    /// Clears texel rectangle `rect` (x, y, w, h) to the far plane and
+    /// leaves it as the viewport and scissor of what follows.
+    pub fn clear_rect(&self, rp: &mut wgpu::RenderPass<'_>, rect: [u32; 4]) {
+        self.set_rect(rp, rect);
+        rp.set_pipeline(&self.clear);
+        rp.draw(0..3, 0..1);
+    }
+
+    /// Viewport and scissor on texel rectangle `rect` (x, y, w, h).
+    pub fn set_rect(&self, rp: &mut wgpu::RenderPass<'_>, rect: [u32; 4]) {
+        let [x, y, w, h] = rect;
+        rp.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+        rp.set_scissor_rect(x, y, w, h);
     }
 
     /// Draws `lists` with the geometry already bound.

@@ -7,6 +7,7 @@
 
 #import scene
 #import object_vertex
+#import view
 
 struct ShadowView {
     light_view_proj: mat4x4f,
@@ -50,4 +51,13 @@ fn fs_vegetation(in: VegetationOut) {
     if (foliage_alpha(in.pattern, in.uv) < 0.5) {
         discard;
     }
+}
+
+// One tile of a map back to the far plane (its viewport): the world's static
+// map renders a tile again in place (shadows.static.tileN).
+@vertex
+fn vs_clear(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
+    var c = fullscreen_clip(i);
+    c.z = 1.0;
+    return c;
 }

@@ -45,8 +45,27 @@ pub trait CascadeCaster {
         layer: u32,
         view: &'a wgpu::Buffer,
     ) -> TextureHandle;
+
+    /// A node after static tile `rect`'s (texels x, y, w, h: its viewport
+    /// and scissor) into the world's static map `map` ([`STATIC_FORMAT`]),
+    /// drawing this frame's shadow view `index` (the cascades first, then
+    /// the tiles, as `ShadowStats::fits` then `static_tiles`) with `view`.
+    fn add_static_tile<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        map: TextureHandle,
+        index: usize,
+        view: &'a wgpu::Buffer,
+        rect: [u32; 4],
+    ) -> TextureHandle;
 }
-use static_map::{STATIC_FORMAT, StaticMapState, StaticUpdate};
+pub use static_map::STATIC_FORMAT;
+use static_map::{StaticMapState, StaticUpdate, TileUpdate, TiledMapState, WorldMap};
+
+/// Tiles of the world's static map rendered a frame: each is a culling and
+/// a terrain view (cull views: camera, 4 cascades, these 2, sky occlusion =
+/// `cull::MAX_VIEWS`).
+pub const MAX_STATIC_TILES: usize = 2;
 
 /// Depth format of the cascades and the hero map.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -80,9 +99,20 @@ struct MaskParamsGpu {
 struct FramePlan {
     cascades: Vec<(ShadowFit, DrawLists)>,
     static_update: Option<(StaticUpdate, DrawLists)>,
+    /// The world's static map: this frame's tiles.
+    static_tiles: Vec<StaticTile>,
     hero: Option<(ShadowFit, DrawLists)>,
     /// S3 projectors into the atlas.
     projectors: Vec<Projector>,
+}
+
+/// One tile of the world's static map this frame: the tile, its static
+/// scene objects (CPU-culled) and its pool instances (the GPU-culled view
+/// after the cascades', `1 + cascades + k`).
+struct StaticTile {
+    update: TileUpdate,
+    objects: DrawLists,
+    pool: DrawLists,
 }
 
 /// Smallest and largest atlas tiles (S3).
@@ -106,6 +136,9 @@ pub struct ShadowStats {
     pub splits: [f32; CASCADES],
     /// Atlas tiles rendered (S3 projectors).
     pub atlas_tiles: u32,
+    /// The world's static-map tiles rendered this frame: their light
+    /// view-projections (each a terrain and a culling view).
+    pub static_tiles: Vec<Mat4>,
 }
 
 pub struct ShadowPass {
@@ -127,6 +160,13 @@ pub struct ShadowPass {
     static_all: Option<Vec<(crate::gpu_scene::Draw, bool)>>,
     /// The two static maps (shown and filling) and their edge.
     static_maps: Option<(u32, [wgpu::Texture; 2])>,
+    /// S2 in a streamed world ([`Self::attach_world`]): the camera-centred
+    /// map, its tiled fills and one view uniform per tile of a frame.
+    world: Option<WorldMap>,
+    tiled: TiledMapState,
+    tile_views: Vec<wgpu::Buffer>,
+    /// Render every waiting tile next frame (offline frames).
+    settle: bool,
     plan: Option<FramePlan>,
     cascade_resolution: u32,
     hero_resolution: u32,
@@ -162,7 +202,9 @@ fn depth_texture(
         (size, size),
         1,
         format,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC,
     )
 }
 
@@ -238,6 +280,12 @@ impl ShadowPass {
             static_state: StaticMapState::default(),
             static_all: None,
             static_maps: None,
+            world: None,
+            tiled: TiledMapState::default(),
+            tile_views: (0..MAX_STATIC_TILES)
+                .map(|i| depth::view_buffer(ctx, &format!("shadows.static.tile{i}")))
+                .collect(),
+            settle: false,
             plan: None,
             cascade_resolution: 0,
             hero_resolution: 0,
@@ -258,6 +306,54 @@ impl ShadowPass {
         format: wgpu::TextureFormat,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         view_pipeline(ctx, &self.view_program, "shadows.view", view.id(), format)
+    }
+
+    /// S2 follows a streamed world: the static map becomes a square of
+    /// [`static_map::WORLD_EXTENT`] around the camera holding casters
+    /// between `heights` (m), re-centred and refilled tile by tile
+    /// ([`TiledMapState`]); the terrain draws into it through
+    /// [`CascadeCaster::add_static_tile`].
+    pub fn attach_world(&mut self, heights: (f32, f32)) {
+        self.world = Some(WorldMap::new(heights));
+        self.tiled.reset();
+    }
+
+    /// Streaming placed casters inside `bounds` (a sector's ground and what
+    /// stands on it): the static-map tiles under them are rendered again.
+    /// Returns the tiles marked.
+    pub fn refresh(&mut self, bounds: &crate::scene::Aabb) -> u32 {
+        match &self.world {
+            Some(map) => self.tiled.mark_dirty(map, bounds),
+            None => 0,
+        }
+    }
+
+    /// The next frame renders every static-map tile that waits (offline
+    /// frames after `Renderer::settle_world`: the same image on every run).
+    pub fn settle(&mut self) {
+        self.settle = true;
+    }
+
+    /// The shown static map read back: its fit, edge and 16-bit depths
+    /// (row 0 = light-view +y); `None` while none is complete.
+    pub fn read_static_map(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Option<(ShadowFit, u32, Vec<u16>)>, GpuError> {
+        let shown = match self.world {
+            Some(_) => self.tiled.shown.map(|(i, fit, _)| (i, fit)),
+            None => self.static_state.shown,
+        };
+        let (Some((i, fit)), Some((n, maps))) = (shown, &self.static_maps) else {
+            return Ok(None);
+        };
+        let data = crate::gpu::read_texture(ctx, &maps[i.min(1)], 0, 0)?;
+        Ok(Some((fit, *n, bytemuck::pod_collect_to_vec(&data.bytes))))
+    }
+
+    /// The world's static-map state (tests, `bench`).
+    pub fn world_map(&self) -> Option<(&WorldMap, &TiledMapState)> {
+        self.world.as_ref().map(|m| (m, &self.tiled))
     }
 
     /// Plans this frame (fits, culled draw lists, the static slice, the hero)
@@ -342,42 +438,82 @@ impl ShadowPass {
         let sun_up = sun_direction.y > 0.0;
         let static_on = s.mode == ShadowMode::CsmStatic && sun_up;
         if static_on {
-            if self
-                .static_maps
-                .as_ref()
-                .is_none_or(|(n, _)| *n != s.static_resolution)
-            {
-                let n = s.static_resolution;
+            // The world's map is whole tiles; a scene's the size asked for.
+            let n = match self.world {
+                Some(map) => map.resolution(s.static_resolution),
+                None => s.static_resolution,
+            };
+            if self.static_maps.as_ref().is_none_or(|(m, _)| *m != n) {
                 let make = |i| depth_texture(ctx, &format!("shadows.static{i}"), n, STATIC_FORMAT);
                 self.static_maps = Some((n, [make(0), make(1)]));
                 self.static_state.reset();
+                self.tiled.reset();
             }
-            if self.static_all.is_none() {
-                self.static_all = Some(static_draws(&self.casters, scene));
-            }
-            let all = self.static_all.as_deref().unwrap_or_default();
-            let update = self.static_state.plan(
-                &bounds,
-                sun_direction,
-                s.static_resolution,
-                all.len(),
-                s.static_draw_cap as usize,
-            );
-            if let Some(u) = update {
-                let slice = take_range(all, &u.range);
-                stats.static_draws = slice.len() as u32;
-                write_view(CASCADES, u.fit.light_view_proj);
-                plan.static_update = Some((u, slice));
-            }
-            if let Some((_, fit)) = self.static_state.shown {
+            // The map shown and the first cascade it replaces: the far one in
+            // a scene; in the world none (the cascades draw the terrain at
+            // this frame's LOD, the map at its fill's), it adds the far field.
+            let shown = if let Some(map) = self.world {
+                let whole = std::mem::take(&mut self.settle);
+                let eye = glam::Vec2::new(camera.position.x, camera.position.z);
+                let tiles = self
+                    .tiled
+                    .plan(&map, eye, sun_direction, n, MAX_STATIC_TILES, whole);
+                // Culling views: the camera, the cascades (all four: the
+                // sun is up), then the tiles.
+                let first_view = 1 + CASCADES as u32;
+                for (k, update) in tiles.into_iter().enumerate() {
+                    let mut objects = DrawLists::default();
+                    let keep_static = |is_static: bool| is_static;
+                    let (opaque, veg) = (&scene.draws_opaque, &scene.draws_vegetation);
+                    (self.casters).cull_into(opaque, veg, &update.fit, keep_static, &mut objects);
+                    let pool = DrawLists {
+                        gpu_pool: gpu_calls.map(|_| first_view + k as u32),
+                        ..DrawLists::default()
+                    };
+                    stats.static_draws += objects.len() as u32;
+                    stats.static_tiles.push(update.fit.light_view_proj);
+                    let m = update.fit.light_view_proj;
+                    ctx.queue.write_buffer(
+                        &self.tile_views[k.min(MAX_STATIC_TILES - 1)],
+                        0,
+                        bytemuck::bytes_of(&ShadowViewGpu::new(m, time_s)),
+                    );
+                    plan.static_tiles.push(StaticTile {
+                        update,
+                        objects,
+                        pool,
+                    });
+                }
+                self.tiled.shown.map(|(_, fit, _)| (fit, CASCADES))
+            } else {
+                if self.static_all.is_none() {
+                    self.static_all = Some(static_draws(&self.casters, scene));
+                }
+                let all = self.static_all.as_deref().unwrap_or_default();
+                if let Some(u) = self.static_state.plan(
+                    &bounds,
+                    sun_direction,
+                    n,
+                    all.len(),
+                    s.static_draw_cap as usize,
+                ) {
+                    let slice = take_range(all, &u.range);
+                    stats.static_draws = slice.len() as u32;
+                    write_view(CASCADES, u.fit.light_view_proj);
+                    plan.static_update = Some((u, slice));
+                }
+                self.static_state.shown.map(|(_, fit)| (fit, CASCADES - 1))
+            };
+            if let Some((fit, first)) = shown {
                 stats.static_shown = true;
                 params.static_map = fit.light_view_proj.to_cols_array_2d();
-                params.static_info = [1.0, fit.texel_world, fit.depth_range, (CASCADES - 1) as f32];
+                params.static_info = [1.0, fit.texel_world, fit.depth_range, first as f32];
             }
         } else if s.mode != ShadowMode::CsmStatic {
             // Leaving csm+static frees 256 MB and restarts the fill next time.
             self.static_maps = None;
             self.static_state.reset();
+            self.tiled.reset();
         }
 
         // S1: the cascades (the far one only while no static map is shown).
@@ -385,7 +521,7 @@ impl ShadowPass {
             cascades::practical_splits(camera.near.max(0.05), s.max_distance, s.split_lambda);
         let rendered = if !sun_up {
             0
-        } else if stats.static_shown {
+        } else if stats.static_shown && self.world.is_none() {
             CASCADES - 1
         } else {
             CASCADES
@@ -444,6 +580,7 @@ impl ShadowPass {
                 opaque: of_hero(&scene.draws_opaque),
                 vegetation: of_hero(&scene.draws_vegetation),
                 gpu_view: None,
+                gpu_pool: None,
             };
             write_view(CASCADES + 1, fit.light_view_proj);
             params.hero = fit.light_view_proj.to_cols_array_2d();
@@ -476,6 +613,9 @@ impl ShadowPass {
                 .as_ref()
                 .map_or(0, |(_, l)| l.draw_calls(scene))
             + plan.hero.as_ref().map_or(0, |(_, l)| l.draw_calls(scene))
+            + (plan.static_tiles.iter())
+                .map(|t| t.objects.draw_calls(scene) + t.pool.draw_calls(scene))
+                .sum::<u32>()
             + plan
                 .projectors
                 .iter()

@@ -11,14 +11,21 @@ use crate::passes::cull::Culled;
 /// `keep`: never culled by the graph (read by a later frame).
 struct DepthNode<'s, 'a> {
     id: &'s str,
-    view: usize,
+    view: &'a wgpu::Buffer,
     target: (TextureHandle, u32, bool),
     pipelines: &'a DepthPipelines,
     lists: &'a DrawLists,
     culled: Option<Culled>,
     keep: bool,
+    /// Draw inside this texel rectangle (a static tile), cleared first
+    /// when `clear_rect`.
+    rect: Option<[u32; 4]>,
+    clear_rect: bool,
 }
 use crate::passes::common::view_node;
+
+/// Graph names of the two static maps.
+const STATIC_NAMES: [&str; 2] = ["shadow.static0", "shadow.static1"];
 
 impl ShadowPass {
     /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
@@ -43,12 +50,14 @@ impl ShadowPass {
             let target = (cascades, i as u32, true);
             let node = DepthNode {
                 id: &id,
-                view: i,
+                view: &self.views[i],
                 target,
                 pipelines: &self.depth32,
                 lists,
                 culled,
                 keep: false,
+                rect: None,
+                clear_rect: false,
             };
             cascades = self.depth_node(graph, scene, node);
             if let Some(c) = extra {
@@ -57,28 +66,65 @@ impl ShadowPass {
         }
         let cascades = (!plan.cascades.is_empty()).then_some(cascades);
         // The static slice writes the back map, outside the graph's pool.
-        let mut static_written = None;
+        // Each map's latest version this frame (imported once).
+        let mut static_written: [Option<TextureHandle>; 2] = [None, None];
         if let (Some((update, lists)), Some((_, maps))) = (&plan.static_update, &self.static_maps) {
-            let name = if update.target == 0 {
-                "shadow.static0"
-            } else {
-                "shadow.static1"
-            };
-            let h = graph.import_texture(name, &maps[update.target]);
+            let t = update.target.min(1);
+            let h = graph.import_texture(STATIC_NAMES[t], &maps[t]);
             let target = (h, 0, update.clear);
             let depth16 = &self.depth16;
             // The back map is read in a later frame: keep the pass even unread.
             let node = DepthNode {
                 id: "shadows.static",
-                view: CASCADES,
+                view: &self.views[CASCADES],
                 target,
                 pipelines: depth16,
                 lists,
                 culled: None,
                 keep: true,
+                rect: None,
+                clear_rect: false,
             };
             let h = self.depth_node(graph, scene, node);
-            static_written = Some((update.target, h));
+            static_written[update.target.min(1)] = Some(h);
+        }
+        // The world's static tiles: scene objects, pool instances, terrain.
+        let first_terrain_view = plan.cascades.len();
+        for (k, tile) in plan.static_tiles.iter().enumerate() {
+            let Some((_, maps)) = &self.static_maps else {
+                break;
+            };
+            let (target, rect) = (tile.update.target.min(1), tile.update.rect);
+            let mut h = match static_written[target] {
+                Some(h) => h,
+                None => graph.import_texture(STATIC_NAMES[target], &maps[target]),
+            };
+            let view = &self.tile_views[k.min(MAX_STATIC_TILES - 1)];
+            // Each tile's nodes are kept: the map is read in later frames.
+            let objects = format!("shadows.static.tile{k}");
+            let pool = format!("shadows.static.pool{k}");
+            let mut steps = vec![(&objects, &tile.objects, None, true)];
+            if culled.is_some() && tile.pool.gpu_pool.is_some() {
+                steps.push((&pool, &tile.pool, culled, false));
+            }
+            for (id, lists, culled, clear) in steps {
+                let node = DepthNode {
+                    id,
+                    view,
+                    target: (h, 0, false),
+                    pipelines: &self.depth16,
+                    lists,
+                    culled,
+                    keep: true,
+                    rect: Some(rect),
+                    clear_rect: clear,
+                };
+                h = self.depth_node(graph, scene, node);
+            }
+            if let Some(c) = extra {
+                h = c.add_static_tile(graph, h, first_terrain_view + k, view, rect);
+            }
+            static_written[target] = Some(h);
         }
         let hero_map = plan.hero.as_ref().map(|(_, lists)| {
             let r = self.hero_resolution;
@@ -87,28 +133,31 @@ impl ShadowPass {
             let depth32 = &self.depth32;
             let node = DepthNode {
                 id: "shadows.hero",
-                view: CASCADES + 1,
+                view: &self.views[CASCADES + 1],
                 target,
                 pipelines: depth32,
                 lists,
                 culled: None,
                 keep: false,
+                rect: None,
+                clear_rect: false,
             };
             self.depth_node(graph, scene, node)
         });
         let atlas_map = (!plan.projectors.is_empty()).then(|| self.add_atlas(graph, scene, plan));
         // The shown static map: this frame's slice when it just completed,
         // else the front map of an earlier frame.
-        let shown = self.static_state.shown.map(|(i, _)| i);
-        let static_map = match (static_written, shown, &self.static_maps) {
-            (Some((i, h)), Some(s), _) if i == s => Some(h),
-            (_, Some(s), Some((_, maps))) => {
-                let name = if s == 0 {
-                    "shadow.static0"
-                } else {
-                    "shadow.static1"
-                };
-                Some(graph.import_texture(name, &maps[s]))
+        let shown = match self.world {
+            Some(_) => self.tiled.shown.map(|(i, _, _)| i),
+            None => self.static_state.shown.map(|(i, _)| i),
+        };
+        let static_map = match (shown, &self.static_maps) {
+            (Some(s), Some((_, maps))) => {
+                let s = s.min(1);
+                Some(
+                    static_written[s]
+                        .unwrap_or_else(|| graph.import_texture(STATIC_NAMES[s], &maps[s])),
+                )
             }
             _ => None,
         };
@@ -159,8 +208,10 @@ impl ShadowPass {
             lists,
             culled,
             keep,
+            rect,
+            clear_rect,
         } = node;
-        let culled = culled.filter(|_| lists.gpu_view.is_some());
+        let culled = culled.filter(|_| lists.gpu_view.is_some() || lists.gpu_pool.is_some());
         let (map, layer, clear) = target;
         let ops = wgpu::Operations {
             load: if clear {
@@ -172,7 +223,7 @@ impl ShadowPass {
         };
         let node = graph
             .raster(id, &self.depth_program)
-            .uniform("shadow", &self.views[view])
+            .uniform("shadow", view)
             .uniform("objects", &scene.objects);
         let mut node = match culled {
             Some(c) => node
@@ -185,6 +236,11 @@ impl ShadowPass {
             node = node.side_effect();
         }
         node.record(move |ctx, rp| {
+            match rect {
+                Some(r) if clear_rect => pipelines.clear_rect(rp, r),
+                Some(r) => pipelines.set_rect(rp, r),
+                None => {}
+            }
             let culled = culled.as_ref().map(|c| (c, ctx.buffer(c.args)));
             pipelines.draw_culled(rp, scene, lists, culled);
             Ok(())

@@ -363,6 +363,8 @@ pub struct TerrainPass {
     program: Program,
     shadow_program: Program,
     shadow_pipeline: wgpu::RenderPipeline,
+    /// The same into the world's static map (S2, 16-bit depth).
+    static_pipeline: wgpu::RenderPipeline,
     params: wgpu::Buffer,
     layers: wgpu::Buffer,
     layer_count: u32,
@@ -453,34 +455,9 @@ impl TerrainPass {
         let pyramid = Pyramid::new(&heights);
         let program = Program::new(ctx, "passes/terrain/terrain.wgsl")?;
         let shadow_program = Program::new(ctx, "passes/terrain/shadow.wgsl")?;
-        let shadow_pipeline = shadow_program.render_pipeline(
-            ctx,
-            &RenderSpec {
-                label: "terrain.shadow",
-                vertex_entry: "vs_main",
-                fragment_entry: None,
-                vertex_buffers: &[Some(patch_layout())],
-                targets: &[],
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: SHADOW_DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                    stencil: Default::default(),
-                    // As the scene's casters (passes/shadows/depth.rs).
-                    bias: wgpu::DepthBiasState {
-                        constant: 0,
-                        slope_scale: 1.5,
-                        clamp: 0.0,
-                    },
-                }),
-                // Both faces cast: the sun may see the ground from below the horizon line.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                constants: &[],
-            },
-        )?;
+        let shadow_pipeline = sun_view_pipeline(ctx, &shadow_program, SHADOW_DEPTH_FORMAT)?;
+        let static_pipeline =
+            sun_view_pipeline(ctx, &shadow_program, crate::passes::shadows::STATIC_FORMAT)?;
 
         let layer_count = desc.layers.len() as u32;
         let mut layers = [LayerGpu::default(); MAX_LAYERS];
@@ -660,6 +637,7 @@ impl TerrainPass {
             program,
             shadow_program,
             shadow_pipeline,
+            static_pipeline,
             params,
             layers,
             layer_count,
@@ -1038,6 +1016,18 @@ impl TerrainPass {
         shadow_view: &wgpu::Buffer,
         cascade: usize,
     ) -> Result<u32, GpuError> {
+        self.draw_sun_view(device, rp, shadow_view, cascade, &self.shadow_pipeline)
+    }
+
+    /// [`Self::draw_shadow`] with `pipeline` (its depth format).
+    fn draw_sun_view(
+        &self,
+        device: &wgpu::Device,
+        rp: &mut wgpu::RenderPass<'_>,
+        shadow_view: &wgpu::Buffer,
+        cascade: usize,
+        pipeline: &wgpu::RenderPipeline,
+    ) -> Result<u32, GpuError> {
         let view = cascade + 1;
         if view >= MAX_VIEWS {
             return Err(other(format!(
@@ -1068,7 +1058,7 @@ impl TerrainPass {
                 ),
             ],
         )?;
-        rp.set_pipeline(&self.shadow_pipeline);
+        rp.set_pipeline(pipeline);
         rp.set_bind_group(0, &group, &[]);
         Ok(self.draw_view(rp, view))
     }
@@ -1119,4 +1109,71 @@ impl crate::passes::shadows::CascadeCaster for TerrainPass {
     ) -> TextureHandle {
         self.add_shadow(graph, cascades, layer, view, layer as usize)
     }
+
+    fn add_static_tile<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        map: TextureHandle,
+        index: usize,
+        view: &'a wgpu::Buffer,
+        rect: [u32; 4],
+    ) -> TextureHandle {
+        let written = graph
+            .raster(&format!("terrain.static{index}"), &self.shadow_program)
+            .external_group(0)
+            .depth(
+                map,
+                None,
+                wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            )
+            .side_effect()
+            .record(move |ctx, rp| {
+                let [x, y, w, h] = rect;
+                rp.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+                rp.set_scissor_rect(x, y, w, h);
+                let pipeline = &self.static_pipeline;
+                (self.draw_sun_view(ctx.device, rp, view, index, pipeline)).map(|_| ())
+            });
+        written.depth.unwrap_or(map)
+    }
+}
+
+/// The sun-view pipeline writing `format` (cascades: 32-bit, the world's
+/// static map: 16-bit).
+fn sun_view_pipeline(
+    ctx: &GpuContext,
+    program: &Program,
+    format: wgpu::TextureFormat,
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    program.render_pipeline(
+        ctx,
+        &RenderSpec {
+            label: "terrain.shadow",
+            vertex_entry: "vs_main",
+            fragment_entry: None,
+            vertex_buffers: &[Some(patch_layout())],
+            targets: &[],
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                stencil: Default::default(),
+                // As the scene's casters (passes/shadows/depth.rs).
+                bias: wgpu::DepthBiasState {
+                    constant: 0,
+                    slope_scale: 1.5,
+                    clamp: 0.0,
+                },
+            }),
+            // Both faces cast: the sun may see the ground from below the horizon line.
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            constants: &[],
+        },
+    )
 }
