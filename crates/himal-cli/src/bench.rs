@@ -170,6 +170,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut cpu: [Vec<f64>; 3] = Default::default();
     // L2 sky occlusion sectors rendered per measured frame.
     let mut sectors: Vec<u32> = Vec::new();
+    // S2 in the world: static-map tiles rendered per frame.
+    let mut tiles: Vec<u32> = Vec::new();
     // Resident memory after each measured frame (issue #16: flat over time).
     let mut resident: Vec<himal::soak::SoakSample> = Vec::new();
     let mut gpu_first: Vec<(String, u64)> = Vec::new();
@@ -190,6 +192,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             v.push(ms);
         }
         sectors.push(frame.sky_occlusion.rendered);
+        tiles.push(frame.shadows.static_tiles.len() as u32);
         let memory = renderer.memory();
         resident.push(himal::soak::SoakSample {
             frame: u64::from(i) + 1,
@@ -322,6 +325,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         sectors.iter().sum::<u32>() as f64 / sectors.len().max(1) as f64,
         sectors.iter().copied().max().unwrap_or(0)
     );
+    if tiles.iter().any(|&t| t > 0) {
+        println!(
+            "static shadow-map updates per frame: mean {:.2}, max {}",
+            tiles.iter().sum::<u32>() as f64 / tiles.len().max(1) as f64,
+            tiles.iter().copied().max().unwrap_or(0)
+        );
+    }
     println!("frame wall time (submit to read-back, median): {wall_median:.1} ms");
     println!("pipeline cache (whole run, E1): {cache}");
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);

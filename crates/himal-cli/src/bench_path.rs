@@ -28,6 +28,9 @@ pub struct PathFrame {
     pub gpu_ms: f64,
     pub gbuffer_draws: u32,
     pub shadow_draws: u32,
+    /// S2 static-map tiles rendered (`--shadows csm+static`).
+    pub static_tiles: u32,
+    pub static_texels: u64,
     /// Triangles of the culled object lists (all levels) and of the terrain.
     pub object_triangles: u64,
     pub terrain_triangles: u64,
@@ -52,11 +55,11 @@ impl PathFrame {
     }
 }
 
-const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,record_ms,submit_ms,cpu_ms,gpu_ms,gbuffer_draws,shadow_draws,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
+const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,record_ms,submit_ms,cpu_ms,gpu_ms,gbuffer_draws,shadow_draws,static_tiles,static_texels,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
 
 fn csv_row(i: usize, f: &PathFrame) -> String {
     format!(
-        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         f.t,
         f.plan_ms,
         f.stream_ms,
@@ -67,6 +70,8 @@ fn csv_row(i: usize, f: &PathFrame) -> String {
         f.gpu_ms,
         f.gbuffer_draws,
         f.shadow_draws,
+        f.static_tiles,
+        f.static_texels,
         f.object_triangles,
         f.terrain_triangles,
         f.instances[0],
@@ -232,6 +237,8 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
             gpu_ms: frame.timings.iter().map(|t| t.gpu_ms).sum(),
             gbuffer_draws: frame.gbuffer_draws,
             shadow_draws: frame.shadows.draws,
+            static_tiles: frame.shadows.static_tiles.len() as u32,
+            static_texels: frame.shadows.static_texels,
             object_triangles: counts.total_triangles(),
             terrain_triangles: world.terrain.as_ref().map_or(0, |t| t.triangles().into()),
             instances: counts.instances,
@@ -372,6 +379,8 @@ pub struct Report {
     pub gpu: Stat,
     pub gbuffer_draws: Stat,
     pub shadow_draws: Stat,
+    pub static_tiles: Stat,
+    pub static_texels: Stat,
     pub object_triangles: Stat,
     pub terrain_triangles: Stat,
     pub instances: Stat,
@@ -407,6 +416,8 @@ impl Report {
             gpu: Stat::of(f, |x| x.gpu_ms),
             gbuffer_draws: Stat::of(f, |x| x.gbuffer_draws.into()),
             shadow_draws: Stat::of(f, |x| x.shadow_draws.into()),
+            static_tiles: Stat::of(f, |x| x.static_tiles.into()),
+            static_texels: Stat::of(f, |x| x.static_texels as f64),
             object_triangles: Stat::of(f, |x| x.object_triangles as f64),
             terrain_triangles: Stat::of(f, |x| x.terrain_triangles as f64),
             instances: Stat::of(f, |x| x.instances.iter().sum::<u64>() as f64),
@@ -469,6 +480,8 @@ impl Report {
         row("GPU total (ms)", &self.gpu, 1.0);
         row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
         row("shadow draw calls", &self.shadow_draws, 1.0);
+        row("static shadow-map updates", &self.static_tiles, 1.0);
+        row("  their texels (k)", &self.static_texels, 1e3);
         row("object triangles (k)", &self.object_triangles, 1e3);
         row("terrain triangles (k)", &self.terrain_triangles, 1e3);
         row("instances drawn (camera)", &self.instances, 1.0);
@@ -522,6 +535,8 @@ impl Report {
             ("gpu_ms", &self.gpu),
             ("gbuffer_draws", &self.gbuffer_draws),
             ("shadow_draws", &self.shadow_draws),
+            ("static_tiles", &self.static_tiles),
+            ("static_texels", &self.static_texels),
             ("object_triangles", &self.object_triangles),
             ("terrain_triangles", &self.terrain_triangles),
             ("instances_drawn", &self.instances),

@@ -2,10 +2,10 @@
 //! technique's CPU half) and [`build`] (the graph).
 //!
 //! ```text
-//! cull (V6: camera + cascades) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
+//! cull (V6: camera, cascades, static tiles, L2 sectors) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
 //! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
-//! shadows.cascade0..3, shadows.static, shadows.hero ─┐
+//! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
 //!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐

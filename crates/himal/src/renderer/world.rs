@@ -244,7 +244,7 @@ impl Renderer {
             let min = crate::scene::world::sector::sector_origin(world.origin, d.coord);
             let max = min + crate::scene::world::SECTOR_SIZE;
             p.skyocc.refresh(min, max);
-            let top = d.max_height + crate::passes::shadows::static_map::OBJECT_HEADROOM;
+            let top = d.max_height + crate::passes::shadows::world_map::OBJECT_HEADROOM;
             p.shadows.refresh(&Aabb::new(
                 Vec3::new(min.x, d.min_height, min.y),
                 Vec3::new(max.x, top, max.y),

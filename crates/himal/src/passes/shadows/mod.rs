@@ -5,6 +5,8 @@
 //! pass into a shadow-mask texture (R = sun) that lighting reads. The filter
 //! is a per-texel rotated 16-tap Poisson disk (`shaders/shadow.wgsl`, twin
 //! [`reference`]). [`atlas`]: the S3 local-light atlas allocator.
+//! [`world_map`]: S2 in a streamed world (a camera-centred map refreshed
+//! where sectors stream in).
 //! Docs: `docs/techniques/S1.md`..`S4.md`.
 
 pub mod atlas;
@@ -17,6 +19,7 @@ mod nodes;
 pub mod reference;
 pub mod settings;
 pub mod static_map;
+pub mod world_map;
 
 use glam::{Mat4, Vec3};
 
@@ -60,7 +63,8 @@ pub trait CascadeCaster {
     ) -> TextureHandle;
 }
 pub use static_map::STATIC_FORMAT;
-use static_map::{StaticMapState, StaticUpdate, TileUpdate, TiledMapState, WorldMap};
+use static_map::{StaticMapState, StaticUpdate};
+use world_map::{TileUpdate, WorldMap, WorldMapState};
 
 /// Tiles of the world's static map rendered a frame: each is a culling and
 /// a terrain view (cull views: camera, 4 cascades, these 2, sky occlusion =
@@ -139,6 +143,8 @@ pub struct ShadowStats {
     /// The world's static-map tiles rendered this frame: their light
     /// view-projections (each a terrain and a culling view).
     pub static_tiles: Vec<Mat4>,
+    /// Texels of the world's static map rendered this frame.
+    pub static_texels: u64,
 }
 
 pub struct ShadowPass {
@@ -163,7 +169,7 @@ pub struct ShadowPass {
     /// S2 in a streamed world ([`Self::attach_world`]): the camera-centred
     /// map, its tiled fills and one view uniform per tile of a frame.
     world: Option<WorldMap>,
-    tiled: TiledMapState,
+    tiled: WorldMapState,
     tile_views: Vec<wgpu::Buffer>,
     /// Render every waiting tile next frame (offline frames).
     settle: bool,
@@ -281,7 +287,7 @@ impl ShadowPass {
             static_all: None,
             static_maps: None,
             world: None,
-            tiled: TiledMapState::default(),
+            tiled: WorldMapState::default(),
             tile_views: (0..MAX_STATIC_TILES)
                 .map(|i| depth::view_buffer(ctx, &format!("shadows.static.tile{i}")))
                 .collect(),
@@ -309,9 +315,9 @@ impl ShadowPass {
     }
 
     /// S2 follows a streamed world: the static map becomes a square of
-    /// [`static_map::WORLD_EXTENT`] around the camera holding casters
+    /// [`world_map::WORLD_EXTENT`] around the camera holding casters
     /// between `heights` (m), re-centred and refilled tile by tile
-    /// ([`TiledMapState`]); the terrain draws into it through
+    /// ([`WorldMapState`]); the terrain draws into it through
     /// [`CascadeCaster::add_static_tile`].
     pub fn attach_world(&mut self, heights: (f32, f32)) {
         self.world = Some(WorldMap::new(heights));
@@ -319,12 +325,12 @@ impl ShadowPass {
     }
 
     /// Streaming placed casters inside `bounds` (a sector's ground and what
-    /// stands on it): the static-map tiles under them are rendered again.
-    /// Returns the tiles marked.
+    /// stands on it): the static-map texels they cast into are rendered
+    /// again. Returns the rectangles queued.
     pub fn refresh(&mut self, bounds: &crate::scene::Aabb) -> u32 {
-        match &self.world {
-            Some(map) => self.tiled.mark_dirty(map, bounds),
-            None => 0,
+        match (&self.world, &self.static_maps) {
+            (Some(map), Some((n, _))) => self.tiled.mark_dirty(map, bounds, *n),
+            _ => 0,
         }
     }
 
@@ -352,7 +358,7 @@ impl ShadowPass {
     }
 
     /// The world's static-map state (tests, `bench`).
-    pub fn world_map(&self) -> Option<(&WorldMap, &TiledMapState)> {
+    pub fn world_map(&self) -> Option<(&WorldMap, &WorldMapState)> {
         self.world.as_ref().map(|m| (m, &self.tiled))
     }
 
@@ -472,6 +478,7 @@ impl ShadowPass {
                     };
                     stats.static_draws += objects.len() as u32;
                     stats.static_tiles.push(update.fit.light_view_proj);
+                    stats.static_texels += u64::from(update.rect[2]) * u64::from(update.rect[3]);
                     let m = update.fit.light_view_proj;
                     ctx.queue.write_buffer(
                         &self.tile_views[k.min(MAX_STATIC_TILES - 1)],
