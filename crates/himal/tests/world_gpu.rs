@@ -24,6 +24,12 @@ fn small_world() -> Arc<World> {
     Arc::new(World::new(desc))
 }
 
+/// The world's camera called `name`.
+fn named_camera(world: &World, name: &str) -> himal::scene::Camera {
+    let named = world.cameras.iter().find(|c| c.name == name);
+    named.expect("camera").camera.clone()
+}
+
 #[test]
 fn streamed_pool_lists_match_the_twin() {
     let ctx = common::context();
@@ -168,13 +174,7 @@ fn streamed_pool_lists_match_the_twin() {
 #[test]
 fn a_world_frame_is_the_same_twice_and_draws_the_village() {
     let world = small_world();
-    let camera = world
-        .cameras
-        .iter()
-        .find(|c| c.name == "village")
-        .expect("camera")
-        .camera
-        .clone();
+    let camera = named_camera(&world, "village");
     let settings = FrameSettings::new(160, 90, world.scene().sun);
     let render = || {
         let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
@@ -214,13 +214,7 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
 fn sky_occlusion_height_fields_hold_terrain_and_instances_and_follow_streaming() {
     use himal::passes::skyocc::{RENDER_TEXELS, SkyOccPass, TEXEL_SIZE};
     let world = small_world();
-    let camera = world
-        .cameras
-        .iter()
-        .find(|c| c.name == "street")
-        .expect("camera")
-        .camera
-        .clone();
+    let camera = named_camera(&world, "street");
     let mut settings = FrameSettings::new(96, 54, world.scene().sun);
     settings.sky_occlusion = true;
     let aspect = 96.0 / 54.0;
@@ -356,13 +350,7 @@ fn static_shadow_map_holds_terrain_and_instances_and_follows_streaming() {
     use himal::scene::Aabb;
     use himal::scene::world::InstanceKind::*;
     let world = small_world();
-    let village = world
-        .cameras
-        .iter()
-        .find(|c| c.name == "village")
-        .expect("camera")
-        .camera
-        .clone();
+    let village = named_camera(&world, "village");
     let mut settings = FrameSettings::new(96, 54, world.scene().sun);
     settings.sun.time_hours = 17.0;
     settings.shadow_resolution = 256;

@@ -60,18 +60,7 @@ impl DepthPipelines {
         layout.attributes = &layout.attributes[..1]; // position only
         let mut veg_layout = vertex_layout();
         veg_layout.attributes = &VEGETATION_ATTRIBUTES;
-        let depth_stencil = wgpu::DepthStencilState {
-            format,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: Default::default(),
-            // Slope-scaled bias against acne on surfaces grazing the sun.
-            bias: wgpu::DepthBiasState {
-                constant: 0,
-                slope_scale: 1.5,
-                clamp: 0.0,
-            },
-        };
+        let depth_stencil = caster_depth(format);
         // Both faces cast: the terrain is single-sided.
         let primitive = wgpu::PrimitiveState {
             cull_mode: None,
@@ -160,16 +149,9 @@ impl DepthPipelines {
     /// Clears texel rectangle `rect` (x, y, w, h) to the far plane and
     /// leaves it as the viewport and scissor of what follows.
     pub fn clear_rect(&self, rp: &mut wgpu::RenderPass<'_>, rect: [u32; 4]) {
-        self.set_rect(rp, rect);
+        set_rect(rp, rect);
         rp.set_pipeline(&self.clear);
         rp.draw(0..3, 0..1);
-    }
-
-    /// Viewport and scissor on texel rectangle `rect` (x, y, w, h).
-    pub fn set_rect(&self, rp: &mut wgpu::RenderPass<'_>, rect: [u32; 4]) {
-        let [x, y, w, h] = rect;
-        rp.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-        rp.set_scissor_rect(x, y, w, h);
     }
 
     /// Draws `lists` with the geometry already bound.
@@ -188,6 +170,30 @@ impl DepthPipelines {
             scene.draw_list(rp, &lists.vegetation);
         }
     }
+}
+
+/// Depth state of every sun-view caster (scene objects, terrain) in
+/// `format`: standard depth, slope-scaled bias against acne on surfaces
+/// grazing the sun.
+pub fn caster_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+        stencil: Default::default(),
+        bias: wgpu::DepthBiasState {
+            constant: 0,
+            slope_scale: 1.5,
+            clamp: 0.0,
+        },
+    }
+}
+
+/// Viewport and scissor on texel rectangle `rect` (x, y, w, h).
+pub fn set_rect(rp: &mut wgpu::RenderPass<'_>, rect: [u32; 4]) {
+    let [x, y, w, h] = rect;
+    rp.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+    rp.set_scissor_rect(x, y, w, h);
 }
 
 /// A uniform buffer for one sun view.

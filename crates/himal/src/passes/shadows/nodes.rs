@@ -238,7 +238,7 @@ impl ShadowPass {
         node.record(move |ctx, rp| {
             match rect {
                 Some(r) if clear_rect => pipelines.clear_rect(rp, r),
-                Some(r) => pipelines.set_rect(rp, r),
+                Some(r) => super::depth::set_rect(rp, r),
                 None => {}
             }
             let culled = culled.as_ref().map(|c| (c, ctx.buffer(c.args)));

@@ -17,6 +17,13 @@ pub const STATIC_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth16Unorm
 /// The sun moves this much (radians, ~0.1°) before the map is re-rendered.
 pub const SUN_EPSILON: f32 = 0.0017;
 
+/// Whether a map last filled for `last` (sun, resolution) must be filled
+/// again: none yet, another resolution, or the sun turned by more than
+/// [`SUN_EPSILON`] (`sun` normalised).
+pub fn needs_fill(last: Option<(Vec3, u32)>, sun: Vec3, resolution: u32) -> bool {
+    last.is_none_or(|(s, n)| n != resolution || s.dot(sun).clamp(-1.0, 1.0).acos() > SUN_EPSILON)
+}
+
 /// Orthographic fit around the bounding sphere of `scene`; view-independent.
 pub fn static_fit(scene: &Aabb, sun_direction: Vec3, resolution: u32) -> ShadowFit {
     let (center, radius) = if scene.is_empty() {
@@ -72,9 +79,7 @@ impl StaticMapState {
         cap: usize,
     ) -> Option<StaticUpdate> {
         let sun = sun_direction.normalize_or(Vec3::Y);
-        let moved = self.last.is_none_or(|(s, n)| {
-            n != resolution || s.dot(sun).clamp(-1.0, 1.0).acos() > SUN_EPSILON
-        });
+        let moved = needs_fill(self.last, sun, resolution);
         // A fill in progress finishes first, else a sun moving faster than
         // the fill would never show a map; the next fill catches up.
         if moved && self.filling.is_none() {

@@ -7,7 +7,7 @@
 use glam::{Vec2, Vec3};
 
 use super::cascades::{ShadowFit, light_rotation, ortho_fit};
-use super::static_map::SUN_EPSILON;
+use super::static_map::needs_fill;
 use crate::scene::Aabb;
 
 /// Edge of the world's static map (m): 8192² texels give 0.5 m texels, the
@@ -196,7 +196,7 @@ struct Fill {
 }
 
 /// Time slicing of the world's static map: a fill of a new fit (first
-/// frame, sun turned by [`SUN_EPSILON`], camera more than an eighth of the
+/// frame, sun turned by [`super::static_map::SUN_EPSILON`], camera more than an eighth of the
 /// extent from the map's centre) renders every tile into the back map,
 /// nearest the camera first, and is shown when the last is drawn; the
 /// rectangles streamed sectors cast into ([`Self::mark_dirty`]) are
@@ -244,9 +244,7 @@ impl WorldMapState {
         let sun = sun_direction.normalize_or(Vec3::Y);
         let far =
             (self.shown).is_none_or(|(_, _, c)| (eye - c).abs().max_element() > map.extent / 8.0);
-        let moved = self.last.is_none_or(|(s, n)| {
-            n != resolution || s.dot(sun).clamp(-1.0, 1.0).acos() > SUN_EPSILON
-        });
+        let moved = needs_fill(self.last, sun, resolution);
         if (moved || far) && self.filling.is_none() {
             self.filling = Some(self.start_fill(map, eye, sun, resolution));
             self.last = Some((sun, resolution));

@@ -1131,9 +1131,7 @@ impl crate::passes::shadows::CascadeCaster for TerrainPass {
             )
             .side_effect()
             .record(move |ctx, rp| {
-                let [x, y, w, h] = rect;
-                rp.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-                rp.set_scissor_rect(x, y, w, h);
+                crate::passes::shadows::depth::set_rect(rp, rect);
                 let pipeline = &self.static_pipeline;
                 (self.draw_sun_view(ctx.device, rp, view, index, pipeline)).map(|_| ())
             });
@@ -1156,18 +1154,8 @@ fn sun_view_pipeline(
             fragment_entry: None,
             vertex_buffers: &[Some(patch_layout())],
             targets: &[],
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: Default::default(),
-                // As the scene's casters (passes/shadows/depth.rs).
-                bias: wgpu::DepthBiasState {
-                    constant: 0,
-                    slope_scale: 1.5,
-                    clamp: 0.0,
-                },
-            }),
+            // As the scene's casters.
+            depth_stencil: Some(crate::passes::shadows::depth::caster_depth(format)),
             // Both faces cast: the sun may see the ground from below the horizon line.
             primitive: wgpu::PrimitiveState {
                 cull_mode: None,
