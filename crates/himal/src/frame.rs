@@ -28,7 +28,7 @@ use crate::gpu_scene::{LodView, SceneGpu};
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
 use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform};
-use crate::passes::cull::{CullPass, CullView};
+use crate::passes::cull::{CullPass, CullPath, CullView};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
 use crate::passes::envmap::{EnvMapPass, EnvViewPass};
@@ -179,6 +179,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         settings.culling == Culling::Gpu && settings.instancing && passes.cull.supported().is_ok();
     let layout = &passes.cull.layout;
     let gpu_calls = gpu_cull.then(|| (layout.draw_calls(true), layout.draw_calls(false)));
+    // The streamed world's pool is culled per view on every path: on the
+    // GPU, or by the CPU twin (its lists drawn directly) where that is off.
+    let streamed = !layout.pool_batches.is_empty();
+    let per_view = gpu_cull || streamed;
     let cull_view = (settings.culling != Culling::Off).then_some(view_proj);
     passes.gbuffer.visible = scene.visible(cull_view, gpu_calls.map(|(g, _)| (0, g)));
     // B1: reconstruction from depth and reprojection with this jitter.
@@ -202,6 +206,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         Some(&settings.shadows),
         settings.time_s,
         gpu_calls.map(|(_, shadow)| shadow),
+        streamed,
     );
     // L2: the sectors the camera wants; jobs for the ones not resident.
     let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
@@ -210,8 +215,11 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     }
     let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
     let mut views = Vec::new();
-    if gpu_cull {
-        views.push(CullView::clip(view_proj));
+    if per_view {
+        views.push(match settings.culling {
+            Culling::Off => CullView::ALL,
+            _ => CullView::clip(view_proj),
+        });
         // The cascades, then the world's static-map tiles (S2; ShadowPass
         // names them 1 + cascades + k).
         let sun_views = shadows.fits.iter().map(|f| &f.light_view_proj);
@@ -220,17 +228,30 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     }
     // L2 in a streamed world: the pool instances under this frame's sectors.
     passes.skyocc.culled_view = None;
-    let streamed = !passes.cull.layout.pool_batches.is_empty();
     let room = views.len() < crate::passes::cull::MAX_VIEWS;
-    if let Some(v) = passes
-        .skyocc
-        .cull_view()
-        .filter(|_| gpu_cull && streamed && room)
-    {
+    if let Some(v) = passes.skyocc.cull_view().filter(|_| streamed && room) {
         passes.skyocc.culled_view = Some(views.len() as u32);
         views.push(v);
     }
-    passes.cull.plan(ctx, &views, lod);
+    let path = match gpu_cull {
+        true => CullPath::Gpu,
+        false => CullPath::Cpu {
+            instanced: settings.instancing,
+        },
+    };
+    passes.cull.plan(ctx, &views, lod, path);
+    // The pool's own draws: the sun maps' pool views, and the camera's
+    // where the CPU twin's lists are drawn directly (on the GPU path they
+    // are in its multi-draws).
+    let mut shadows = shadows;
+    let cull = &passes.cull;
+    shadows.draws += (passes.shadows.pool_views())
+        .map(|v| cull.pool_calls(v, crate::passes::cull::SHADOW))
+        .sum::<u32>();
+    if !gpu_cull {
+        let kinds = [crate::passes::cull::STEADY, crate::passes::cull::FADING];
+        passes.gbuffer.visible.pool_calls = kinds.into_iter().map(|k| cull.pool_calls(0, k)).sum();
+    }
     // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
     let lod_view = settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Lod);
     passes.gbuffer.lod_view = lod_view;
@@ -319,7 +340,11 @@ pub fn build<'a>(
     // V6: the camera's and the cascades' objects, culled on the GPU.
     let culled = passes.cull.add(&mut g);
     let visible = Some(&passes.gbuffer.visible);
-    let camera_list = culled.filter(|_| passes.gbuffer.visible.gpu_view.is_some());
+    // The camera's view: GPU lists, or the CPU twin's pool lists alone.
+    let camera_list = culled.filter(|c| {
+        let cpu = matches!(c.args, crate::passes::cull::CulledArgs::Cpu { .. });
+        passes.gbuffer.visible.gpu_view.is_some() || cpu
+    });
     let gbuffer = (passes.gbuffer).add(
         ctx,
         &mut g,

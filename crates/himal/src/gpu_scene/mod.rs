@@ -78,6 +78,9 @@ pub struct VisibleLists {
     /// `Some((view, calls))`: opaque and vegetation objects come from view
     /// `view` of the GPU-culled lists instead, `calls` multi-draws (V6).
     pub gpu_view: Option<(u32, u32)>,
+    /// Draws of the streamed pool from the CPU twin's lists (where the
+    /// GPU path is off; `passes::cull::CullPath::Cpu`).
+    pub pool_calls: u32,
 }
 
 impl VisibleLists {
@@ -89,6 +92,7 @@ impl VisibleLists {
             + scene.draw_calls(&self.vegetation)
             + self.textured.len() as u32
             + self.gpu_view.map_or(0, |(_, calls)| calls)
+            + self.pool_calls
     }
 }
 
@@ -206,7 +210,8 @@ pub struct LodView {
 /// A streamed region of the objects buffer (the open world, V6): objects
 /// `first_object..first_object + capacity` draw mesh `mesh`; streaming
 /// writes their records ([`SceneGpu::write_objects`]) and bounds, packed
-/// from the front; only the GPU-culled path draws them.
+/// from the front; `passes::cull` culls them per view (on the GPU, or its
+/// CPU twin where that path is off).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoolRegion {
     pub mesh: u32,
@@ -682,6 +687,7 @@ impl SceneGpu {
                 vegetation: self.draws_vegetation.clone(),
                 textured: self.draws_textured.clone(),
                 gpu_view: None,
+                pool_calls: 0,
             };
         };
         let inside = |i: usize| self.bounds.get(i).is_some_and(|b| !b.outside_clip(vp));
@@ -698,6 +704,7 @@ impl SceneGpu {
                 .cloned()
                 .collect(),
             gpu_view,
+            pool_calls: 0,
         }
     }
 

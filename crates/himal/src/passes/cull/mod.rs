@@ -12,7 +12,9 @@
 //! batches into 64 objects, one workgroup each. The layout is built once per
 //! scene; the per-frame buffers have a fixed size ([`MAX_VIEWS`] views).
 //! CPU twin: [`reference`]. Adapters without indirect draws with a first
-//! instance use the CPU path (`gpu_scene::SceneGpu::visible`, casters).
+//! instance use the CPU path (`gpu_scene::SceneGpu::visible`, casters);
+//! the streamed pool, which has no per-object lists, is then culled by the
+//! twin and drawn directly ([`CullPath::Cpu`]).
 
 pub mod reference;
 
@@ -23,7 +25,7 @@ use wgpu::util::DeviceExt;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, LodView, ObjectBounds, SceneGpu};
-use crate::graph::{BufferDesc, BufferHandle, FrameGraph};
+use crate::graph::{BufferAccess, BufferDesc, BufferHandle, FrameGraph, Node, PassContext};
 use crate::scene::lod::MAX_LODS;
 
 /// Views culled per frame at most: the camera and four cascades, and room
@@ -77,6 +79,11 @@ pub struct CullView {
 const KEEP_ALL: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
 
 impl CullView {
+    /// A view that keeps everything (`--culling off`).
+    pub const ALL: Self = Self {
+        planes: [KEEP_ALL; 6],
+    };
+
     /// The clip volume of `view_proj` (x, y in [-w, w], z in [0, w]): the
     /// camera (reverse-Z: z = 0 is the far plane). Same test as
     /// [`crate::scene::Aabb::outside_clip`].
@@ -293,13 +300,13 @@ impl CullLayout {
 
 /// This frame's culled lists in the graph ([`CullPass::add`]).
 #[derive(Clone, Copy, Debug)]
-pub struct Culled {
+pub struct Culled<'a> {
     /// Instance -> object: the identity at `0..objects` (draws recorded on
     /// the CPU in a culled pass), then per view `v` the lists at
     /// `(v + 1) * objects + batch.first_object ..`.
     pub instances: BufferHandle,
     /// Per view: one `DrawIndexedIndirectArgs` per batch, kind and level.
-    pub args: BufferHandle,
+    pub args: CulledArgs<'a>,
     opaque: (u32, u32),
     vegetation: (u32, u32),
     /// The streamed regions' batches (first, count; inside the opaque list).
@@ -307,6 +314,21 @@ pub struct Culled {
     batches: u32,
     /// Some batch has more than one level: fading lists may be non-empty.
     pub has_lods: bool,
+}
+
+/// Where the draw arguments of [`Culled`] are.
+#[derive(Clone, Copy, Debug)]
+pub enum CulledArgs<'a> {
+    /// Written by the `cull` node: drawn with (multi-)indirect draws.
+    Gpu(BufferHandle),
+    /// Written by the CPU twin for the streamed pool alone (adapters
+    /// without indirect draws, `--culling cpu`): drawn directly, the
+    /// non-empty lists one instanced draw each (`instanced`) or one draw
+    /// per instance (the per-object path).
+    Cpu {
+        args: &'a [[u32; 5]],
+        instanced: bool,
+    },
 }
 
 /// The kinds the G-buffer's opaque pipeline draws (no discard: early-Z).
@@ -319,15 +341,32 @@ pub const SHADOW: std::ops::Range<u32> = 0..2;
 /// Every kind (vegetation, which tests its fade code anyway).
 pub const ALL: std::ops::Range<u32> = 0..3;
 
-impl Culled {
+/// Binds `instances` of `node`: the culled lists, their indirect arguments
+/// declared too, or without `culled` the scene's identity `identity`.
+pub fn bind_instances<'g, 'a>(
+    node: Node<'g, 'a>,
+    culled: Option<&Culled<'a>>,
+    identity: &'a wgpu::Buffer,
+) -> Node<'g, 'a> {
+    let Some(c) = culled else {
+        return node.uniform("instances", identity);
+    };
+    let node = node.read_buffer("instances", c.instances, BufferAccess::StorageRead);
+    match c.args {
+        CulledArgs::Gpu(args) => node.indirect(args),
+        CulledArgs::Cpu { .. } => node,
+    }
+}
+
+impl Culled<'_> {
     /// Records view `view`'s draws of `list`'s `kinds` ([`STEADY`],
-    /// [`FADING`], [`SHADOW`], [`ALL`]) from `args` (the graph buffer of
-    /// [`Self::args`]; pipeline and geometry bound): one multi-draw, or none
-    /// when the list is empty. Returns the calls recorded.
+    /// [`FADING`], [`SHADOW`], [`ALL`]; pipeline and geometry bound): one
+    /// multi-draw, or none when the list is empty. Returns the calls
+    /// recorded.
     pub fn draw(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
-        args: &wgpu::Buffer,
+        ctx: &PassContext<'_>,
         view: u32,
         list: List,
         kinds: std::ops::Range<u32>,
@@ -338,8 +377,7 @@ impl Culled {
         }
         let start = self.args_at(view, list, kinds.start, 0, 0);
         let draws = (kinds.end - kinds.start) * count * MAX_LODS as u32;
-        rp.multi_draw_indexed_indirect(args, start * ARGS_BYTES, draws);
-        1
+        self.record(rp, ctx, start, draws)
     }
 
     /// [`Self::draw`] of `level`'s lists alone, one indirect draw per
@@ -347,7 +385,7 @@ impl Culled {
     pub fn draw_level(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
-        args: &wgpu::Buffer,
+        ctx: &PassContext<'_>,
         view: u32,
         list: List,
         kinds: std::ops::Range<u32>,
@@ -358,20 +396,26 @@ impl Culled {
         for kind in kinds {
             for b in 0..count {
                 let at = self.args_at(view, list, kind, b, level);
-                rp.draw_indexed_indirect(args, at * ARGS_BYTES);
-                calls += 1;
+                calls += match self.args {
+                    CulledArgs::Gpu(args) => {
+                        rp.draw_indexed_indirect(ctx.buffer(args), at * ARGS_BYTES);
+                        1
+                    }
+                    CulledArgs::Cpu { .. } => self.record(rp, ctx, at, 1),
+                };
             }
         }
         calls
     }
 
     /// View `view`'s draws of the streamed regions' batches alone (L2's
-    /// height fields: static world instances, no scene objects): one
-    /// multi-draw per kind in `kinds`. Returns the calls recorded.
+    /// height fields, shadow maps on the CPU path: static world instances,
+    /// no scene objects): one multi-draw per kind in `kinds`. Returns the
+    /// calls recorded.
     pub fn draw_pool(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
-        args: &wgpu::Buffer,
+        ctx: &PassContext<'_>,
         view: u32,
         kinds: std::ops::Range<u32>,
     ) -> u32 {
@@ -382,10 +426,47 @@ impl Culled {
         let mut calls = 0;
         for kind in kinds {
             let start = self.args_at(view, List::Opaque, kind, first - self.opaque.0, 0);
-            rp.multi_draw_indexed_indirect(args, start * ARGS_BYTES, count * MAX_LODS as u32);
-            calls += 1;
+            calls += self.record(rp, ctx, start, count * MAX_LODS as u32);
         }
         calls
+    }
+
+    /// Draws the `count` argument records from `start`: one multi-draw
+    /// (GPU), or each non-empty one directly (CPU twin).
+    fn record(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        ctx: &PassContext<'_>,
+        start: u64,
+        count: u32,
+    ) -> u32 {
+        match self.args {
+            CulledArgs::Gpu(args) => {
+                rp.multi_draw_indexed_indirect(ctx.buffer(args), start * ARGS_BYTES, count);
+                1
+            }
+            CulledArgs::Cpu { args, instanced } => {
+                let at = start as usize;
+                let records = args.get(at..at + count as usize).unwrap_or_default();
+                let mut calls = 0;
+                for &[indices, n, first, base, first_instance] in records {
+                    let range = first..first + indices;
+                    let instances = first_instance..first_instance + n;
+                    if n == 0 {
+                        continue;
+                    } else if instanced {
+                        rp.draw_indexed(range, base as i32, instances);
+                        calls += 1;
+                    } else {
+                        for i in instances {
+                            rp.draw_indexed(range.clone(), base as i32, i..i + 1);
+                        }
+                        calls += n;
+                    }
+                }
+                calls
+            }
+        }
     }
 
     /// Index of the arguments of (view, list, kind, batch of the list,
@@ -407,6 +488,18 @@ impl Culled {
     }
 }
 
+/// How [`CullPass::plan`] culls this frame's views.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CullPath {
+    /// The `cull` node, where the adapter can draw its lists (else `Cpu`).
+    Gpu,
+    /// The streamed pool by the CPU twin ([`reference::cull_batch`]), its
+    /// lists uploaded and drawn directly; scene objects are left to the
+    /// passes' own CPU lists. `instanced`: one draw per list, else per
+    /// instance.
+    Cpu { instanced: bool },
+}
+
 pub struct CullPass {
     program: Program,
     test: wgpu::ComputePipeline,
@@ -422,8 +515,22 @@ pub struct CullPass {
     pub layout: CullLayout,
     /// Why the GPU path cannot run here (`None`: it can).
     unsupported: Option<String>,
-    /// Views planned this frame.
+    /// Views planned on the GPU this frame.
     planned: u32,
+    /// Views whose pool lists the CPU twin wrote this frame ([`CullPath::Cpu`]),
+    /// their arguments (laid out as the GPU's; scene batches empty), whether
+    /// they draw instanced, and the lists' scratch (reused, never shrunk
+    /// below the largest frame's).
+    cpu: CpuLists,
+}
+
+#[derive(Default)]
+struct CpuLists {
+    views: u32,
+    args: Vec<[u32; 5]>,
+    instanced: bool,
+    lists: [Vec<u32>; LISTS],
+    entries: Vec<u32>,
 }
 
 impl CullPass {
@@ -487,6 +594,7 @@ impl CullPass {
             layout,
             unsupported,
             planned: 0,
+            cpu: CpuLists::default(),
         })
     }
 
@@ -536,15 +644,25 @@ impl CullPass {
 
     /// Uploads this frame's views (the first [`MAX_VIEWS`]) and the LOD
     /// selection (every view draws at the levels seen from `lod.eye`, so
-    /// shadows match the G-buffer); no views: the node is left out.
-    /// Returns the views planned.
-    pub fn plan(&mut self, ctx: &GpuContext, views: &[CullView], lod: LodView) -> u32 {
+    /// shadows match the G-buffer); no views: the node is left out. Where
+    /// `path` is [`CullPath::Cpu`] or the GPU path cannot run, the CPU twin
+    /// culls the streamed pool for the views instead. Returns the views
+    /// planned on the GPU.
+    pub fn plan(
+        &mut self,
+        ctx: &GpuContext,
+        views: &[CullView],
+        lod: LodView,
+        path: CullPath,
+    ) -> u32 {
         let views = &views[..views.len().min(MAX_VIEWS)];
-        self.planned = if self.supported().is_ok() {
-            views.len() as u32
-        } else {
-            0
-        };
+        let gpu = path == CullPath::Gpu && self.supported().is_ok();
+        self.planned = if gpu { views.len() as u32 } else { 0 };
+        self.cpu.views = 0;
+        if !gpu {
+            let instanced = !matches!(path, CullPath::Cpu { instanced: false });
+            self.plan_cpu(&ctx.queue, views, &lod, instanced);
+        }
         if self.planned > 0 {
             let l = &self.layout;
             let params = ParamsGpu {
@@ -570,17 +688,116 @@ impl CullPass {
         self.planned
     }
 
-    /// Views planned this frame.
+    /// The CPU path of the streamed pool: [`reference::cull_batch`] per view
+    /// and pool batch, each batch's lists written where the GPU would write
+    /// them (one upload per view and batch), the arguments kept for direct
+    /// draws. Scene objects are not culled here (their passes' CPU lists
+    /// draw them). Nothing to do without a pool, or with more objects than
+    /// an entry can name (the fade code shares the word).
+    fn plan_cpu(
+        &mut self,
+        queue: &wgpu::Queue,
+        views: &[CullView],
+        lod: &LodView,
+        instanced: bool,
+    ) {
+        let l = &self.layout;
+        if l.pool_batches.is_empty() || l.objects >= MAX_OBJECTS || views.is_empty() {
+            return;
+        }
+        let cpu = &mut self.cpu;
+        cpu.views = views.len() as u32;
+        cpu.instanced = instanced;
+        cpu.args.clear();
+        cpu.args
+            .resize(views.len() * l.batches.len() * LISTS, [0; 5]);
+        for (v, view) in views.iter().enumerate() {
+            for &b in &l.pool_batches {
+                let batch = &l.batches[b as usize];
+                let args = reference::cull_batch(l, v, view, batch, lod, &mut cpu.lists);
+                cpu.entries.clear();
+                for list in &cpu.lists {
+                    cpu.entries.extend_from_slice(list);
+                }
+                for (j, a) in args.into_iter().enumerate() {
+                    cpu.args[l.args_index(v, b as usize, j / MAX_LODS, j % MAX_LODS)] = a;
+                }
+                if !cpu.entries.is_empty() {
+                    let offset = u64::from(reference::region(l, v, batch)) * 4;
+                    queue.write_buffer(&self.instances, offset, bytemuck::cast_slice(&cpu.entries));
+                }
+            }
+        }
+    }
+
+    /// Views planned on the GPU this frame.
     pub fn planned(&self) -> u32 {
         self.planned
     }
 
+    /// Views whose pool lists the CPU twin culled this frame.
+    pub fn cpu_planned(&self) -> u32 {
+        self.cpu.views
+    }
+
+    /// Draw calls view `view`'s pool lists of `kinds` record this frame:
+    /// one multi-draw per kind on the GPU path, the non-empty lists (or
+    /// their instances, not instanced) on the CPU path.
+    pub fn pool_calls(&self, view: u32, kinds: std::ops::Range<u32>) -> u32 {
+        let l = &self.layout;
+        if l.pool_batches.is_empty() {
+            return 0;
+        }
+        if self.planned > view {
+            return kinds.len() as u32;
+        }
+        if self.cpu.views <= view {
+            return 0;
+        }
+        let mut calls = 0;
+        for kind in kinds {
+            for &b in &l.pool_batches {
+                for level in 0..MAX_LODS {
+                    let at = l.args_index(view as usize, b as usize, kind as usize, level);
+                    let n = self.cpu.args.get(at).map_or(0, |a| a[1]);
+                    calls += if self.cpu.instanced {
+                        u32::from(n > 0)
+                    } else {
+                        n
+                    };
+                }
+            }
+        }
+        calls
+    }
+
     /// The `cull` node for the planned views; `None` when none are planned
     /// or the scene has no opaque or vegetation objects.
-    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>) -> Option<Culled> {
+    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>) -> Option<Culled<'a>> {
         let l = &self.layout;
-        if self.planned == 0 || l.batches.is_empty() {
+        if l.batches.is_empty() {
             return None;
+        }
+        let culled = |instances, args| Culled {
+            instances,
+            args,
+            opaque: l.range(List::Opaque),
+            vegetation: l.range(List::Vegetation),
+            pool: (
+                l.pool_batches.first().copied().unwrap_or(0),
+                l.pool_batches.len() as u32,
+            ),
+            batches: l.batches.len() as u32,
+            has_lods: l.has_lods(),
+        };
+        if self.planned == 0 {
+            // The CPU twin's pool lists, already uploaded: no node.
+            let instances = graph.import_buffer("cull.instances", &self.instances);
+            let args = CulledArgs::Cpu {
+                args: &self.cpu.args,
+                instanced: self.cpu.instanced,
+            };
+            return (self.cpu.views > 0).then(|| culled(instances, args));
         }
         // Fixed sizes (MAX_VIEWS): the graph's pool reuses one allocation.
         let views = MAX_VIEWS as u64;
@@ -613,18 +830,10 @@ impl CullPass {
                 cp.set_pipeline(write);
                 cp.dispatch_workgroups(chunks, n, 1);
             });
-        Some(Culled {
-            instances: written.buffer(instances),
-            args: written.buffer(args),
-            opaque: l.range(List::Opaque),
-            vegetation: l.range(List::Vegetation),
-            pool: (
-                l.pool_batches.first().copied().unwrap_or(0),
-                l.pool_batches.len() as u32,
-            ),
-            batches,
-            has_lods: l.has_lods(),
-        })
+        Some(culled(
+            written.buffer(instances),
+            CulledArgs::Gpu(written.buffer(args)),
+        ))
     }
 
     /// Runs the node for `views` alone and reads back each view's draw
@@ -636,7 +845,7 @@ impl CullPass {
         views: &[CullView],
         lod: LodView,
     ) -> Result<reference::CullResult, crate::Error> {
-        let n = self.plan(ctx, views, lod) as usize;
+        let n = self.plan(ctx, views, lod, CullPath::Gpu) as usize;
         let l = &self.layout;
         let draws = l.batches.len() * LISTS;
         let mut result = reference::CullResult {
@@ -659,13 +868,15 @@ impl CullPass {
         );
         {
             let mut graph = FrameGraph::new();
-            let Some(culled) = self.add(&mut graph) else {
+            let Some((culled, CulledArgs::Gpu(culled_args))) =
+                self.add(&mut graph).map(|c| (c, c.args))
+            else {
                 return Ok(result);
             };
             let dst_args = graph.import_buffer("cull.args.copy", &args_copy);
             let dst_inst = graph.import_buffer("cull.instances.copy", &inst_copy);
             let mut pass = graph.add_pass("cull.read_back");
-            let src_args = pass.read_buffer(culled.args, crate::graph::BufferAccess::CopySrc);
+            let src_args = pass.read_buffer(culled_args, crate::graph::BufferAccess::CopySrc);
             let src_inst = pass.read_buffer(culled.instances, crate::graph::BufferAccess::CopySrc);
             let dst_args = pass.write_buffer(dst_args, crate::graph::BufferAccess::CopyDst);
             let dst_inst = pass.write_buffer(dst_inst, crate::graph::BufferAccess::CopyDst);
@@ -694,8 +905,7 @@ impl CullPass {
                     let at = l.args_index(v, b, kind, lod);
                     let a: [u32; 5] = std::array::from_fn(|j| args[at * 5 + j]);
                     let start = a[4] as usize;
-                    let region = l.objects + 2 * (v as u32 * l.objects + batch.first_object);
-                    let list = (a[4] >= region)
+                    let list = (a[4] >= reference::region(l, v, batch))
                         .then(|| inst.get(start..start + a[1] as usize))
                         .flatten()
                         .ok_or_else(|| {

@@ -61,44 +61,69 @@ pub fn too_far(b: &BoundsGpu, batch: &super::BatchGpu, lod: &LodView) -> bool {
 /// The culled lists of `views` over `layout`, levels chosen from `lod`.
 pub fn cull(layout: &CullLayout, views: &[CullView], lod: &LodView) -> CullResult {
     let mut result = CullResult::default();
+    let mut lists: [Vec<u32>; LISTS] = Default::default();
     for (v, view) in views.iter().enumerate() {
         for batch in &layout.batches {
-            let chunks = &layout.chunks[batch.first_chunk as usize..][..batch.chunks as usize];
-            let mut lists: [Vec<u32>; LISTS] = Default::default();
-            for o in chunks
-                .iter()
-                .flat_map(|c| c.first_object..c.first_object + c.count)
-            {
-                let Some(b) = layout.bounds.get(o as usize) else {
-                    continue;
-                };
-                if outside(b, view) || too_far(b, batch, lod) {
-                    continue;
-                }
-                match lod_of(b, batch, lod) {
-                    (l, None) => lists[l as usize].push(o),
-                    (l, Some(t)) => {
-                        let q = fade_step(t);
-                        lists[MAX_LODS + l as usize].push(o | ((1 + q) << 24));
-                        lists[2 * MAX_LODS + l as usize + 1].push(o | ((128 + q) << 24));
-                    }
-                }
-            }
-            let region = layout.objects + 2 * (v as u32 * layout.objects + batch.first_object);
-            let mut base = 0;
-            for (j, list) in lists.into_iter().enumerate() {
-                let l = j % MAX_LODS;
-                result.args.push([
-                    batch.lod[l][1],
-                    list.len() as u32,
-                    batch.lod[l][0],
-                    batch.base_vertex as u32,
-                    region + base,
-                ]);
-                base += list.len() as u32;
-                result.instances.push(list);
-            }
+            let args = cull_batch(layout, v, view, batch, lod, &mut lists);
+            result.args.extend(args);
+            result.instances.extend(lists.iter().cloned());
         }
     }
     result
+}
+
+/// One batch's lists in view `v` (`view`): the entries of each list (kind,
+/// level) into `lists` (cleared first) and their draw arguments, the
+/// instances at the batch's region of that view, lists one after another
+/// (the CPU path writes `lists` there and draws the arguments directly).
+pub fn cull_batch(
+    layout: &CullLayout,
+    v: usize,
+    view: &CullView,
+    batch: &super::BatchGpu,
+    lod: &LodView,
+    lists: &mut [Vec<u32>; LISTS],
+) -> [[u32; 5]; LISTS] {
+    lists.iter_mut().for_each(Vec::clear);
+    let chunks = &layout.chunks[batch.first_chunk as usize..][..batch.chunks as usize];
+    for o in chunks
+        .iter()
+        .flat_map(|c| c.first_object..c.first_object + c.count)
+    {
+        let Some(b) = layout.bounds.get(o as usize) else {
+            continue;
+        };
+        if outside(b, view) || too_far(b, batch, lod) {
+            continue;
+        }
+        match lod_of(b, batch, lod) {
+            (l, None) => lists[l as usize].push(o),
+            (l, Some(t)) => {
+                let q = fade_step(t);
+                lists[MAX_LODS + l as usize].push(o | ((1 + q) << 24));
+                lists[2 * MAX_LODS + l as usize + 1].push(o | ((128 + q) << 24));
+            }
+        }
+    }
+    let region = region(layout, v, batch);
+    let mut base = 0;
+    std::array::from_fn(|j| {
+        let l = j % MAX_LODS;
+        let n = lists[j].len() as u32;
+        let args = [
+            batch.lod[l][1],
+            n,
+            batch.lod[l][0],
+            batch.base_vertex as u32,
+            region + base,
+        ];
+        base += n;
+        args
+    })
+}
+
+/// First entry of `batch`'s instances in view `v`'s lists (`cull.wgsl`:
+/// the identity's `objects` entries, then two per object and view).
+pub fn region(layout: &CullLayout, v: usize, batch: &super::BatchGpu) -> u32 {
+    layout.objects + 2 * (v as u32 * layout.objects + batch.first_object)
 }

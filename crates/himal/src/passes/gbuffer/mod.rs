@@ -10,9 +10,9 @@
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
-use crate::graph::{BufferAccess, FrameGraph, TextureDesc, TextureHandle};
+use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
-use crate::passes::cull::{ALL, Culled, FADING, List, STEADY};
+use crate::passes::cull::{ALL, Culled, FADING, List, STEADY, bind_instances};
 use crate::scene::lod::MAX_LODS;
 
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -259,7 +259,7 @@ impl GBufferPass {
         size: (u32, u32),
         scene: &'a SceneGpu,
         lists: Option<&'a VisibleLists>,
-        culled: Option<(Culled, u32)>,
+        culled: Option<(Culled<'a>, u32)>,
         mip_bias: bool,
     ) -> GBuffer {
         let (opaque, vegetation, textured) = match lists {
@@ -291,12 +291,7 @@ impl GBufferPass {
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects);
-        let node = match culled {
-            Some((c, _)) => node
-                .read_buffer("instances", c.instances, BufferAccess::StorageRead)
-                .indirect(c.args),
-            None => node.uniform("instances", &scene.instances),
-        };
+        let node = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances);
         let written = node
             .color(albedo, clear)
             .color(frame, clear)
@@ -339,10 +334,9 @@ impl GBufferPass {
                         _ => scene.draw_list(rp, opaque),
                     }
                     if let Some((c, view)) = culled {
-                        let args = ctx.buffer(c.args);
                         let draw = |rp: &mut wgpu::RenderPass<'_>, kinds| match level {
-                            Some(l) => c.draw_level(rp, args, view, List::Opaque, kinds, l.into()),
-                            None => c.draw(rp, args, view, List::Opaque, kinds),
+                            Some(l) => c.draw_level(rp, ctx, view, List::Opaque, kinds, l.into()),
+                            None => c.draw(rp, ctx, view, List::Opaque, kinds),
                         };
                         draw(rp, STEADY);
                         if c.has_lods {
@@ -378,7 +372,7 @@ impl GBufferPass {
                     && !scene.draws_vegetation.is_empty()
                 {
                     rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    c.draw(rp, ctx.buffer(c.args), view, List::Vegetation, ALL);
+                    c.draw(rp, ctx, view, List::Vegetation, ALL);
                 }
                 Ok(())
             });

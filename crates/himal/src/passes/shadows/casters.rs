@@ -16,8 +16,10 @@ pub struct DrawLists {
     /// `calls` multi-draws.
     pub gpu_view: Option<(u32, u32)>,
     /// `Some(view)`: also draw the streamed pool's batches of culled view
-    /// `view` (the world's static-map tiles).
-    pub gpu_pool: Option<u32>,
+    /// `view` (the world's static-map tiles; the cascades where the GPU
+    /// path is off). Not in [`Self::draw_calls`]: the culling counts them
+    /// ([`crate::passes::cull::CullPass::pool_calls`]).
+    pub pool_view: Option<u32>,
 }
 
 impl DrawLists {
@@ -34,14 +36,13 @@ impl DrawLists {
         scene.draw_calls(&self.opaque)
             + scene.draw_calls(&self.vegetation)
             + self.gpu_view.map_or(0, |(_, calls)| calls)
-            + u32::from(self.gpu_pool.is_some()) * crate::passes::cull::SHADOW.len() as u32
     }
 
     pub fn clear(&mut self) {
         self.opaque.clear();
         self.vegetation.clear();
         self.gpu_view = None;
-        self.gpu_pool = None;
+        self.pool_view = None;
     }
 }
 

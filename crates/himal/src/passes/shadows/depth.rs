@@ -124,25 +124,25 @@ impl DepthPipelines {
         self.draw_pipelines(rp, scene, lists);
     }
 
-    /// Draws `lists` and, with `culled` (its args buffer), the GPU-culled
+    /// Draws `lists` and, with `culled` (and the pass recording it), the GPU-culled
     /// view the lists name (V6).
     pub fn draw_culled(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
         scene: &SceneGpu,
         lists: &DrawLists,
-        culled: Option<(&Culled, &wgpu::Buffer)>,
+        culled: Option<(&Culled<'_>, &crate::graph::PassContext<'_>)>,
     ) {
         self.draw(rp, scene, lists);
-        if let (Some((view, _)), Some((c, args))) = (lists.gpu_view, culled) {
+        if let (Some((view, _)), Some((c, ctx))) = (lists.gpu_view, culled) {
             rp.set_pipeline(&self.opaque);
-            c.draw(rp, args, view, List::Opaque, SHADOW);
+            c.draw(rp, ctx, view, List::Opaque, SHADOW);
             rp.set_pipeline(&self.vegetation);
-            c.draw(rp, args, view, List::Vegetation, SHADOW);
+            c.draw(rp, ctx, view, List::Vegetation, SHADOW);
         }
-        if let (Some(view), Some((c, args))) = (lists.gpu_pool, culled) {
+        if let (Some(view), Some((c, ctx))) = (lists.pool_view, culled) {
             rp.set_pipeline(&self.opaque);
-            c.draw_pool(rp, args, view, SHADOW);
+            c.draw_pool(rp, ctx, view, SHADOW);
         }
     }
 

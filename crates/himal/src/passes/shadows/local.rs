@@ -208,6 +208,6 @@ fn cull_frustum(lists: &DrawLists, casters: &Casters, view_proj: Mat4) -> DrawLi
         opaque: crate::gpu_scene::cull(&lists.opaque, bounds, inside).collect(),
         vegetation: crate::gpu_scene::cull(&lists.vegetation, bounds, inside).collect(),
         gpu_view: None,
-        gpu_pool: None,
+        pool_view: None,
     }
 }

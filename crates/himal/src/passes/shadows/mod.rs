@@ -357,6 +357,15 @@ impl ShadowPass {
         Ok(Some((fit, *n, bytemuck::pod_collect_to_vec(&data.bytes))))
     }
 
+    /// The culled views whose pool lists this frame's sun maps draw
+    /// (their calls are the culling's to count).
+    pub fn pool_views(&self) -> impl Iterator<Item = u32> + '_ {
+        let plan = self.plan.iter();
+        let cascades = plan.clone().flat_map(|p| p.cascades.iter().map(|(_, l)| l));
+        let tiles = plan.flat_map(|p| p.static_tiles.iter().map(|t| &t.pool));
+        cascades.chain(tiles).filter_map(|l| l.pool_view)
+    }
+
     /// The world's static-map state (tests, `bench`).
     pub fn world_map(&self) -> Option<(&WorldMap, &WorldMapState)> {
         self.world.as_ref().map(|m| (m, &self.tiled))
@@ -365,7 +374,9 @@ impl ShadowPass {
     /// Plans this frame (fits, culled draw lists, the static slice, the hero)
     /// and uploads the uniforms; `None` settings = shadows off. `gpu_calls`:
     /// the cascades are culled on the GPU (V6), cascade i as view `1 + i`
-    /// of the culled lists, with that many multi-draws per cascade.
+    /// of the culled lists, with that many multi-draws per cascade. `pool`:
+    /// the streamed pool is culled per view (cascades as above, the
+    /// world's static tiles after them), on the GPU or by its CPU twin.
     #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
@@ -378,6 +389,7 @@ impl ShadowPass {
         settings: Option<&ShadowSettings>,
         time_s: f32,
         gpu_calls: Option<u32>,
+        pool: bool,
     ) -> ShadowStats {
         let on = settings.filter(|s| s.mode != ShadowMode::Off && cascade_resolution > 0);
         // S3: the light list (lit with or without shadows), tiles when on.
@@ -472,8 +484,8 @@ impl ShadowPass {
                     let keep_static = |is_static: bool| is_static;
                     let (opaque, veg) = (&scene.draws_opaque, &scene.draws_vegetation);
                     (self.casters).cull_into(opaque, veg, &update.fit, keep_static, &mut objects);
-                    let pool = DrawLists {
-                        gpu_pool: gpu_calls.map(|_| first_view + k as u32),
+                    let pool_lists = DrawLists {
+                        pool_view: pool.then_some(first_view + k as u32),
                         ..DrawLists::default()
                     };
                     stats.static_draws += objects.len() as u32;
@@ -488,7 +500,7 @@ impl ShadowPass {
                     plan.static_tiles.push(StaticTile {
                         update,
                         objects,
-                        pool,
+                        pool: pool_lists,
                     });
                 }
                 self.tiled.shown.map(|(_, fit, _)| (fit, CASCADES))
@@ -553,13 +565,16 @@ impl ShadowPass {
                 let mut lists = DrawLists::default();
                 match gpu_calls {
                     Some(calls) => lists.gpu_view = Some((1 + i as u32, calls)),
-                    None => self.casters.cull_into(
-                        &scene.draws_opaque,
-                        &scene.draws_vegetation,
-                        &fit,
-                        |_| true,
-                        &mut lists,
-                    ),
+                    None => {
+                        self.casters.cull_into(
+                            &scene.draws_opaque,
+                            &scene.draws_vegetation,
+                            &fit,
+                            |_| true,
+                            &mut lists,
+                        );
+                        lists.pool_view = pool.then_some(1 + i as u32);
+                    }
                 }
                 write_view(i, fit.light_view_proj);
                 stats.fits.push(fit);
@@ -587,7 +602,7 @@ impl ShadowPass {
                 opaque: of_hero(&scene.draws_opaque),
                 vegetation: of_hero(&scene.draws_vegetation),
                 gpu_view: None,
-                gpu_pool: None,
+                pool_view: None,
             };
             write_view(CASCADES + 1, fit.light_view_proj);
             params.hero = fit.light_view_proj.to_cols_array_2d();

@@ -2,8 +2,8 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::graph::{BufferAccess, Fallback};
-use crate::passes::cull::Culled;
+use crate::graph::Fallback;
+use crate::passes::cull::{Culled, bind_instances};
 
 /// One sun view's depth node: `lists` (and, with `culled`, the GPU list
 /// they name) into layer `target.1` of `target.0` (cleared to the far
@@ -15,7 +15,7 @@ struct DepthNode<'s, 'a> {
     target: (TextureHandle, u32, bool),
     pipelines: &'a DepthPipelines,
     lists: &'a DrawLists,
-    culled: Option<Culled>,
+    culled: Option<Culled<'a>>,
     keep: bool,
     /// Draw inside this texel rectangle (a static tile), cleared first
     /// when `clear_rect`.
@@ -37,7 +37,7 @@ impl ShadowPass {
         size: (u32, u32),
         gbuffer: GBuffer,
         scene: &'a SceneGpu,
-        culled: Option<Culled>,
+        culled: Option<Culled<'a>>,
         extra: Option<&'a dyn CascadeCaster>,
     ) -> Option<TextureHandle> {
         let plan = self.plan.as_ref()?;
@@ -104,7 +104,7 @@ impl ShadowPass {
             let objects = format!("shadows.static.tile{k}");
             let pool = format!("shadows.static.pool{k}");
             let mut steps = vec![(&objects, &tile.objects, None, true)];
-            if culled.is_some() && tile.pool.gpu_pool.is_some() {
+            if culled.is_some() && tile.pool.pool_view.is_some() {
                 steps.push((&pool, &tile.pool, culled, false));
             }
             for (id, lists, culled, clear) in steps {
@@ -211,7 +211,7 @@ impl ShadowPass {
             rect,
             clear_rect,
         } = node;
-        let culled = culled.filter(|_| lists.gpu_view.is_some() || lists.gpu_pool.is_some());
+        let culled = culled.filter(|_| lists.gpu_view.is_some() || lists.pool_view.is_some());
         let (map, layer, clear) = target;
         let ops = wgpu::Operations {
             load: if clear {
@@ -225,13 +225,11 @@ impl ShadowPass {
             .raster(id, &self.depth_program)
             .uniform("shadow", view)
             .uniform("objects", &scene.objects);
-        let mut node = match culled {
-            Some(c) => node
-                .read_buffer("instances", c.instances, BufferAccess::StorageRead)
-                .indirect(c.args),
-            None => node.uniform("instances", &scene.instances),
-        }
-        .depth(map, Some(layer_view_desc(layer)), ops);
+        let mut node = bind_instances(node, culled.as_ref(), &scene.instances).depth(
+            map,
+            Some(layer_view_desc(layer)),
+            ops,
+        );
         if keep {
             node = node.side_effect();
         }
@@ -241,7 +239,7 @@ impl ShadowPass {
                 Some(r) => super::depth::set_rect(rp, r),
                 None => {}
             }
-            let culled = culled.as_ref().map(|c| (c, ctx.buffer(c.args)));
+            let culled = culled.as_ref().map(|c| (c, ctx));
             pipelines.draw_culled(rp, scene, lists, culled);
             Ok(())
         })

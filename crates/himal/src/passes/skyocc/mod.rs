@@ -27,9 +27,9 @@ use glam::{Mat4, Vec2, Vec4};
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu};
-use crate::graph::{BufferAccess, FrameGraph, TextureHandle};
+use crate::graph::{FrameGraph, TextureHandle};
 use crate::passes::common::{view_node, view_pipeline};
-use crate::passes::cull::{CullView, Culled, SHADOW};
+use crate::passes::cull::{CullView, Culled, SHADOW, bind_instances};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::terrain::TerrainHeights;
 use crate::scene::{Aabb, Camera, Scene};
@@ -78,7 +78,7 @@ struct Job {
 #[derive(Clone, Copy, Default)]
 pub struct SkyOccSources<'a> {
     /// The culled lists; the pool instances of view [`SkyOccPass::culled_view`] are drawn.
-    pub culled: Option<Culled>,
+    pub culled: Option<Culled<'a>>,
     /// The terrain's height data, sampled under the objects.
     pub terrain: Option<TerrainHeights<'a>>,
 }
@@ -481,12 +481,7 @@ impl SkyOccPass {
                 .pipeline(Ok(self.height_pipeline.clone()))
                 .uniform("sector", &work.views[i])
                 .uniform("objects", &scene.objects);
-            let node = match pool {
-                Some((c, _)) => node
-                    .read_buffer("instances", c.instances, BufferAccess::StorageRead)
-                    .indirect(c.args),
-                None => node.uniform("instances", &scene.instances),
-            };
+            let node = bind_instances(node, pool.as_ref().map(|(c, _)| c), &scene.instances);
             let written = node
                 .color_view(raw, layer(), colour_load)
                 .depth(depth, layer(), ops(wgpu::LoadOp::Load, Discard))
@@ -496,7 +491,7 @@ impl SkyOccPass {
                         scene.draw_list(rp, draws);
                     }
                     if let Some((c, view)) = pool {
-                        c.draw_pool(rp, ctx.buffer(c.args), view, SHADOW);
+                        c.draw_pool(rp, ctx, view, SHADOW);
                     }
                     Ok(())
                 });
