@@ -27,12 +27,30 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
         ("csm", ShadowMode::Csm, 400.0),
         ("static", ShadowMode::CsmStatic, 12.0),
     ];
-    for (time, (variant, mode, max_distance)) in ["09:00", "12:00", "16:30"]
+    // The box as a scene primitive and as a glTF model (glTF objects cast
+    // like any other: issue #22 found they cast nothing).
+    let cube = common::cube_gltf(
+        "shadow-box",
+        "",
+        r#"{"pbrMetallicRoughness":{"baseColorFactor":[0.7,0.7,0.7,1]}}"#,
+    );
+    let gltf_box = format!(
+        "[[gltf]]\nfile = {:?}\ntranslation = [0.0, 3.0, 0.0]\nscale = [2.0, 6.0, 2.0]\n",
+        cube.display().to_string()
+    );
+    let primitive_box = "[[object]]\nname = \"box\"\nprimitive = \"box\"\nmaterial = \"white\"\nsize = [2.0, 6.0, 2.0]\nposition = [0.0, 3.0, 0.0]\n";
+    let sources = [("primitive", None), ("gltf", Some(gltf_box.as_str()))];
+    for ((time, (variant, mode, max_distance)), (source, replace)) in ["09:00", "12:00", "16:30"]
         .into_iter()
         .flat_map(|t| variants.map(|v| (t, v)))
+        .flat_map(|tv| sources.map(|s| (tv, s)))
     {
         let time_of_day = format!("time = \"{time}\"");
-        let scene = scene_with("shadow_box", &[("time = \"12:00\"", &time_of_day)]);
+        let mut overrides = vec![("time = \"12:00\"", time_of_day.as_str())];
+        if let Some(r) = replace {
+            overrides.push((primitive_box, r));
+        }
+        let scene = scene_with("shadow_box", &overrides);
         let camera = scene.camera("top").expect("camera").clone();
         let mut r = renderer(&scene);
         let mut s = raw_settings(&scene, (w, h), "lighting");
@@ -92,7 +110,7 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
             lit_ok as f64 / lit.max(1) as f64,
         );
         eprintln!(
-            "{time} {variant}: shadowed {shadowed_ok}/{shadowed} ({:.2}%), lit {lit_ok}/{lit} ({:.2}%)",
+            "{time} {variant} {source}: shadowed {shadowed_ok}/{shadowed} ({:.2}%), lit {lit_ok}/{lit} ({:.2}%)",
             100.0 * rs,
             100.0 * rl
         );

@@ -124,6 +124,16 @@ pub fn draws_of(draws: &[Draw], object: u32) -> &[Draw] {
     &draws[start..end.max(start)]
 }
 
+/// The draws of `object` in `textured` (object order), materials dropped.
+pub fn draws_of_textured(textured: &[(Draw, usize)], object: u32) -> Vec<Draw> {
+    let start = textured.partition_point(|(d, _)| d.object < object);
+    let end = textured.partition_point(|(d, _)| d.object <= object);
+    textured[start..end.max(start)]
+        .iter()
+        .map(|(d, _)| d.clone())
+        .collect()
+}
+
 /// Draw calls `draws` records: with instancing, one per run of
 /// consecutive objects of one mesh; without, one per draw.
 pub fn draw_calls(draws: &[Draw], instancing: bool) -> u32 {

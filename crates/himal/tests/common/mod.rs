@@ -301,3 +301,56 @@ pub fn number_runs(text: &str) -> Vec<(usize, usize)> {
     }
     runs
 }
+
+/// A .gltf of one unit cube (-0.5..0.5, 24 vertices with face normals, CCW
+/// outward) under one node with the extra JSON members `node` (e.g.
+/// `"scale":[2,6,2]`) and the material `material` (JSON); written to a
+/// temporary file named after `name`.
+pub fn cube_gltf(name: &str, node: &str, material: &str) -> PathBuf {
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for sign in [1.0f32, -1.0] {
+            let mut n = [0.0f32; 3];
+            n[axis] = sign;
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let base = positions.len() as u16;
+            // (u, v) corners in CCW order seen from outside: the normal is u x v
+            // for the + face; the - face walks them the other way.
+            let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+            for (a, b) in corners {
+                let mut p = [0.0f32; 3];
+                p[axis] = 0.5 * sign;
+                p[u] = a;
+                p[v] = b * sign;
+                positions.push(p);
+                normals.push(n);
+            }
+            indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+        }
+    }
+    let mut bin: Vec<u8> = Vec::new();
+    bin.extend(positions.iter().flatten().flat_map(|c| c.to_le_bytes()));
+    bin.extend(normals.iter().flatten().flat_map(|c| c.to_le_bytes()));
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let (pn, ib) = (24 * 12, indices.len() * 2);
+    let b64 = base64(&bin);
+    let node = if node.is_empty() {
+        String::new()
+    } else {
+        format!(",{node}")
+    };
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0{node}}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2,"material":0}}]}}],"materials":[{material}],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{b64}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{pn}}},{{"buffer":0,"byteOffset":{pn},"byteLength":{pn}}},{{"buffer":0,"byteOffset":{},"byteLength":{ib}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":24,"type":"VEC3","min":[-0.5,-0.5,-0.5],"max":[0.5,0.5,0.5]}},
+{{"bufferView":1,"componentType":5126,"count":24,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":{},"type":"SCALAR"}}]}}"#,
+        bin.len(),
+        2 * pn,
+        indices.len()
+    );
+    let path = std::env::temp_dir().join(format!("himal-{}-{name}.gltf", std::process::id()));
+    std::fs::write(&path, json).expect("write temporary glTF");
+    path
+}

@@ -95,35 +95,57 @@ impl Casters {
         !self.moving.get(object).copied().unwrap_or(true)
     }
 
-    /// Appends to `out` the draws of `opaque` / `vegetation` that may cast
-    /// into `fit` and pass `keep` (`true` = static object).
+    /// Appends to `out` the draws of `scene` (opaque, glTF, vegetation)
+    /// that may cast into `fit` and pass `keep` (`true` = static object).
     pub fn cull_into(
         &self,
-        opaque: &[Draw],
-        vegetation: &[Draw],
+        scene: &SceneGpu,
         fit: &ShadowFit,
         keep: impl Fn(bool) -> bool,
         out: &mut DrawLists,
     ) {
         let take = |i: usize, b: &Aabb| keep(self.is_static(i)) && fit.may_cast(b);
-        out.opaque.extend(cull(opaque, &self.bounds, take));
-        out.vegetation.extend(cull(vegetation, &self.bounds, take));
+        out.opaque
+            .extend(cull(&scene.draws_opaque, &self.bounds, take));
+        out.vegetation
+            .extend(cull(&scene.draws_vegetation, &self.bounds, take));
+        self.cull_textured_into(scene, fit, keep, out);
     }
 
-    /// Appends the draws whose bounds overlap `region` (a light's reach),
+    /// [`Self::cull_into`] of the glTF draws alone (opaque and mask
+    /// materials, drawn with the opaque depth pipeline: a mask's alpha is
+    /// not tested), for maps whose other objects are culled on the GPU.
+    pub fn cull_textured_into(
+        &self,
+        scene: &SceneGpu,
+        fit: &ShadowFit,
+        keep: impl Fn(bool) -> bool,
+        out: &mut DrawLists,
+    ) {
+        let take = |i: usize, b: &Aabb| keep(self.is_static(i)) && fit.may_cast(b);
+        let textured = scene.draws_textured.iter().map(|(d, _)| d);
+        out.opaque.extend(cull(textured, &self.bounds, take));
+    }
+
+    /// Appends the draws of `scene` whose bounds overlap `region` (a light's reach),
     /// leaving out casters more than `max_extent` across: the terrain would be
     /// drawn into every projector for shadows it hardly casts on itself.
     pub fn cull_local_into(
         &self,
-        opaque: &[Draw],
-        vegetation: &[Draw],
+        scene: &SceneGpu,
         region: &Aabb,
         max_extent: f32,
         out: &mut DrawLists,
     ) {
         let take =
             |_: usize, b: &Aabb| b.overlaps(region) && b.extent().max_element() <= max_extent;
-        out.opaque.extend(cull(opaque, &self.bounds, take));
-        out.vegetation.extend(cull(vegetation, &self.bounds, take));
+        let textured = scene.draws_textured.iter().map(|(d, _)| d);
+        out.opaque.extend(cull(
+            scene.draws_opaque.iter().chain(textured),
+            &self.bounds,
+            take,
+        ));
+        out.vegetation
+            .extend(cull(&scene.draws_vegetation, &self.bounds, take));
     }
 }

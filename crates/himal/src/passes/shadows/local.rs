@@ -166,13 +166,7 @@ pub fn plan(
             l.position + Vec3::splat(l.range),
         );
         let mut draws = DrawLists::default();
-        casters.cull_local_into(
-            &scene.draws_opaque,
-            &scene.draws_vegetation,
-            &bounds,
-            MAX_CASTER_RANGES * l.range,
-            &mut draws,
-        );
+        casters.cull_local_into(scene, &bounds, MAX_CASTER_RANGES * l.range, &mut draws);
         let mut faces = mine;
         faces.sort_by_key(|t| t.face);
         for t in faces {

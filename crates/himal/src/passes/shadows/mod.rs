@@ -482,8 +482,7 @@ impl ShadowPass {
                 for (k, update) in tiles.into_iter().enumerate() {
                     let mut objects = DrawLists::default();
                     let keep_static = |is_static: bool| is_static;
-                    let (opaque, veg) = (&scene.draws_opaque, &scene.draws_vegetation);
-                    (self.casters).cull_into(opaque, veg, &update.fit, keep_static, &mut objects);
+                    (self.casters).cull_into(scene, &update.fit, keep_static, &mut objects);
                     let pool_lists = DrawLists {
                         pool_view: pool.then_some(first_view + k as u32),
                         ..DrawLists::default()
@@ -564,15 +563,12 @@ impl ShadowPass {
             if i < rendered {
                 let mut lists = DrawLists::default();
                 match gpu_calls {
-                    Some(calls) => lists.gpu_view = Some((1 + i as u32, calls)),
+                    Some(calls) => {
+                        lists.gpu_view = Some((1 + i as u32, calls));
+                        (self.casters).cull_textured_into(scene, &fit, |_| true, &mut lists);
+                    }
                     None => {
-                        self.casters.cull_into(
-                            &scene.draws_opaque,
-                            &scene.draws_vegetation,
-                            &fit,
-                            |_| true,
-                            &mut lists,
-                        );
+                        self.casters.cull_into(scene, &fit, |_| true, &mut lists);
                         lists.pool_view = pool.then_some(1 + i as u32);
                     }
                 }
@@ -598,8 +594,9 @@ impl ShadowPass {
                 s.hero_resolution,
             );
             let of_hero = |draws| crate::gpu_scene::draws_of(draws, h as u32).to_vec();
+            let textured = crate::gpu_scene::draws_of_textured(&scene.draws_textured, h as u32);
             let lists = DrawLists {
-                opaque: of_hero(&scene.draws_opaque),
+                opaque: [of_hero(&scene.draws_opaque), textured].concat(),
                 vegetation: of_hero(&scene.draws_vegetation),
                 gpu_view: None,
                 pool_view: None,
@@ -659,9 +656,8 @@ fn static_draws(casters: &Casters, scene: &SceneGpu) -> Vec<(crate::gpu_scene::D
             .copied()
             .unwrap_or(true)
     };
-    let opaque = scene
-        .draws_opaque
-        .iter()
+    let textured = scene.draws_textured.iter().map(|(d, _)| d);
+    let opaque = (scene.draws_opaque.iter().chain(textured))
         .filter(|d| keep(d))
         .map(|d| (d.clone(), false));
     let veg = scene
