@@ -202,6 +202,8 @@ pub(crate) fn build_scene(
         super::gltf::placement::place_all(&ck, base_dir, &file.gltf, &mut meshes, &objects, left)?;
     objects.extend(placed.objects);
     lights.extend(placed.lights);
+    let mut pbr = placed.pbr;
+    super::mirror_meshes(&mut meshes, &mut objects, &mut pbr);
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
         b.union(&o.swept_bounds(&meshes[o.mesh].bounds))
     });
@@ -214,7 +216,7 @@ pub(crate) fn build_scene(
         sun,
         lights,
         bounds,
-        pbr: placed.pbr,
+        pbr,
         probes,
         environment,
     })

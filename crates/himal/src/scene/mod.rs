@@ -319,6 +319,44 @@ impl Mesh {
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
+
+    /// The mesh as a mirroring transform (negative determinant) needs it:
+    /// each triangle's winding reversed, so its front stays the side its
+    /// normal leaves. (Tangent handedness is the shader's: it folds the
+    /// model matrix's determinant into `w`, `gltf_world_tangent`.)
+    pub fn mirrored(&self) -> Mesh {
+        let mut m = self.clone();
+        m.name = format!("{} (mirrored)", self.name);
+        for t in m.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        m
+    }
+}
+
+/// Objects whose transform mirrors (negative determinant) draw a mirrored
+/// copy of their mesh ([`Mesh::mirrored`], one per mesh, with the
+/// original's textured material): back-face culling and a double-sided
+/// surface's front-facing test are right without a pipeline per winding.
+pub(crate) fn mirror_meshes(
+    meshes: &mut Vec<Mesh>,
+    objects: &mut [Object],
+    pbr: &mut gltf::PbrSet,
+) {
+    let mut copies: std::collections::HashMap<usize, usize> = Default::default();
+    for o in objects.iter_mut() {
+        if o.transform.determinant() >= 0.0 || o.mesh >= meshes.len() {
+            continue;
+        }
+        let mesh = *copies.entry(o.mesh).or_insert_with(|| {
+            meshes.push(meshes[o.mesh].mirrored());
+            if let Some(material) = pbr.material_of(o.mesh) {
+                pbr.mesh_material.push((meshes.len() - 1, material));
+            }
+            meshes.len() - 1
+        });
+        o.mesh = mesh;
+    }
 }
 
 /// An instance of a mesh in the world.
@@ -599,7 +637,8 @@ impl Scene {
 
     /// [`Scene::from_gltf`] with an explicit memory budget.
     pub fn from_gltf_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
-        let asset = gltf::load_within(path, budget)?;
+        let mut asset = gltf::load_within(path, budget)?;
+        mirror_meshes(&mut asset.meshes, &mut asset.objects, &mut asset.pbr);
         let mut cameras = vec![NamedCamera {
             name: "default".into(),
             camera: gltf::framing_camera(&asset.bounds, 40.0),
