@@ -253,3 +253,40 @@ fn mirrored_nodes_keep_their_front_faces_and_normals() {
         }
     }
 }
+
+/// `extensionsRequired`: an extension himal implements loads (issue #22:
+/// the gltf crate's own list refused `KHR_materials_anisotropy`); one it
+/// does not is an error naming the file and the extension.
+#[test]
+fn required_extensions_load_when_implemented_and_are_named_when_not() {
+    let with = |name: &str, extensions: &str| {
+        let path = common::cube_gltf(name, "", r#"{"pbrMetallicRoughness":{}}"#);
+        let json = std::fs::read_to_string(&path).expect("read");
+        let json = json.replacen(
+            '{',
+            &format!(r#"{{"extensionsUsed":{extensions},"extensionsRequired":{extensions},"#),
+            1,
+        );
+        std::fs::write(&path, json).expect("write");
+        (
+            path.clone(),
+            Scene::from_gltf(&path).map_err(|e| e.to_string()),
+        )
+    };
+    for ours in [
+        r#"["KHR_materials_anisotropy"]"#,
+        r#"["KHR_lights_punctual","KHR_materials_emissive_strength"]"#,
+    ] {
+        let (path, loaded) = with("required-ours", ours);
+        let scene = loaded.unwrap_or_else(|e| panic!("{}: {ours}: {e}", path.display()));
+        assert_eq!(scene.objects.len(), 1);
+    }
+    let (path, loaded) = with("required-draco", r#"["KHR_draco_mesh_compression"]"#);
+    let e = loaded.expect_err("an unimplemented required extension");
+    eprintln!("{e}");
+    let file = path.file_name().and_then(|f| f.to_str()).expect("name");
+    assert!(
+        e.contains(file) && e.contains("KHR_draco_mesh_compression"),
+        "{e}"
+    );
+}

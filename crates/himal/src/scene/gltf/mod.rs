@@ -162,7 +162,8 @@ pub fn load_from_bytes_within(
     // tests/gltf_fuzz.rs).
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
-    let root = document.into_json();
+    let mut root = document.into_json();
+    check_extensions(&cx, &mut root)?;
     check_position_accessors(&cx, &root)?;
     check_image_sources(&cx, &root)?;
     check_nodes(&cx, &root)?;
@@ -320,6 +321,49 @@ pub fn load_from_bytes_within(
     }
     out.meshes = meshes;
     Ok(out)
+}
+
+/// The extensions the loader reads (the gltf crate's typed ones and
+/// those read from the JSON).
+pub const IMPLEMENTED_EXTENSIONS: [&str; 3] = [
+    "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
+    "KHR_materials_emissive_strength",
+];
+
+/// A required extension the loader does not implement is an error naming
+/// them all; a used one is named in one warning. The required list is then
+/// emptied: every entry left is ours, and the gltf crate's validation
+/// knows only its own features' extensions (it refused
+/// `KHR_materials_anisotropy`).
+fn check_extensions(cx: &GltfContext, root: &mut gltf::json::Root) -> Result<(), SceneError> {
+    let missing = |list: &[String]| -> Vec<String> {
+        let mut out: Vec<String> = (list.iter())
+            .filter(|e| !IMPLEMENTED_EXTENSIONS.contains(&e.as_str()))
+            .cloned()
+            .collect();
+        out.sort();
+        out.dedup();
+        out
+    };
+    let required = missing(&root.extensions_required);
+    if !required.is_empty() {
+        return Err(cx.invalid(format!(
+            "requires extensions himal does not implement: {} (it implements {})",
+            required.join(", "),
+            IMPLEMENTED_EXTENSIONS.join(", ")
+        )));
+    }
+    let ignored = missing(&root.extensions_used);
+    if !ignored.is_empty() {
+        log::warn!(
+            "{}: ignores the extensions it does not implement: {} (the model may look wrong)",
+            cx.path.display(),
+            ignored.join(", ")
+        );
+    }
+    root.extensions_required.clear();
+    Ok(())
 }
 
 fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
