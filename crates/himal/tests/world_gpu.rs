@@ -30,6 +30,17 @@ fn named_camera(world: &World, name: &str) -> himal::scene::Camera {
     named.expect("camera").camera.clone()
 }
 
+/// A renderer of `world` with every sector around `camera` resident.
+fn settled(world: &Arc<World>, camera: &himal::scene::Camera) -> Renderer {
+    let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
+    let stats = r
+        .settle_world(camera, Duration::from_secs(120))
+        .expect("streaming")
+        .expect("a world");
+    assert_eq!(stats.missing, 0);
+    r
+}
+
 #[test]
 fn streamed_pool_lists_match_the_twin() {
     let ctx = common::context();
@@ -177,13 +188,9 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
     let camera = named_camera(&world, "village");
     let settings = FrameSettings::new(160, 90, world.scene().sun);
     let render = || {
-        let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
-        let stats = r
-            .settle_world(&camera, Duration::from_secs(120))
-            .expect("streaming")
-            .expect("a world");
-        assert_eq!(stats.missing, 0);
-        r.render(&camera, &settings).expect("frame")
+        settled(&world, &camera)
+            .render(&camera, &settings)
+            .expect("frame")
     };
     let (a, b) = (render(), render());
     assert_eq!(
@@ -211,12 +218,7 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
 fn the_cpu_path_draws_the_streamed_pool_as_the_gpu_path_does() {
     let world = small_world();
     let camera = named_camera(&world, "village");
-    let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
-    let stats = r
-        .settle_world(&camera, Duration::from_secs(120))
-        .expect("streaming")
-        .expect("a world");
-    assert_eq!(stats.missing, 0);
+    let mut r = settled(&world, &camera);
     let mut settings = FrameSettings::new(160, 90, world.scene().sun);
     settings.shadows.mode = himal::passes::shadows::ShadowMode::CsmStatic;
     let mut frame = |culling, instancing| {

@@ -95,34 +95,26 @@ impl Casters {
         !self.moving.get(object).copied().unwrap_or(true)
     }
 
-    /// Appends to `out` the draws of `scene` (opaque, glTF, vegetation)
-    /// that may cast into `fit` and pass `keep` (`true` = static object).
+    /// Appends to `out` the draws of `scene` that may cast into `fit` and
+    /// pass `keep` (`true` = static object): its glTF draws (opaque and
+    /// mask materials, drawn with the opaque depth pipeline: a mask's alpha
+    /// is not tested) and, with `objects`, its opaque and vegetation draws
+    /// (`false`: the GPU culls those for this map).
     pub fn cull_into(
         &self,
         scene: &SceneGpu,
         fit: &ShadowFit,
         keep: impl Fn(bool) -> bool,
+        objects: bool,
         out: &mut DrawLists,
     ) {
         let take = |i: usize, b: &Aabb| keep(self.is_static(i)) && fit.may_cast(b);
-        out.opaque
-            .extend(cull(&scene.draws_opaque, &self.bounds, take));
-        out.vegetation
-            .extend(cull(&scene.draws_vegetation, &self.bounds, take));
-        self.cull_textured_into(scene, fit, keep, out);
-    }
-
-    /// [`Self::cull_into`] of the glTF draws alone (opaque and mask
-    /// materials, drawn with the opaque depth pipeline: a mask's alpha is
-    /// not tested), for maps whose other objects are culled on the GPU.
-    pub fn cull_textured_into(
-        &self,
-        scene: &SceneGpu,
-        fit: &ShadowFit,
-        keep: impl Fn(bool) -> bool,
-        out: &mut DrawLists,
-    ) {
-        let take = |i: usize, b: &Aabb| keep(self.is_static(i)) && fit.may_cast(b);
+        if objects {
+            out.opaque
+                .extend(cull(&scene.draws_opaque, &self.bounds, take));
+            out.vegetation
+                .extend(cull(&scene.draws_vegetation, &self.bounds, take));
+        }
         let textured = scene.draws_textured.iter().map(|(d, _)| d);
         out.opaque.extend(cull(textured, &self.bounds, take));
     }

@@ -482,7 +482,7 @@ impl ShadowPass {
                 for (k, update) in tiles.into_iter().enumerate() {
                     let mut objects = DrawLists::default();
                     let keep_static = |is_static: bool| is_static;
-                    (self.casters).cull_into(scene, &update.fit, keep_static, &mut objects);
+                    (self.casters).cull_into(scene, &update.fit, keep_static, true, &mut objects);
                     let pool_lists = DrawLists {
                         pool_view: pool.then_some(first_view + k as u32),
                         ..DrawLists::default()
@@ -565,10 +565,11 @@ impl ShadowPass {
                 match gpu_calls {
                     Some(calls) => {
                         lists.gpu_view = Some((1 + i as u32, calls));
-                        (self.casters).cull_textured_into(scene, &fit, |_| true, &mut lists);
+                        (self.casters).cull_into(scene, &fit, |_| true, false, &mut lists);
                     }
                     None => {
-                        self.casters.cull_into(scene, &fit, |_| true, &mut lists);
+                        self.casters
+                            .cull_into(scene, &fit, |_| true, true, &mut lists);
                         lists.pool_view = pool.then_some(1 + i as u32);
                     }
                 }
