@@ -433,9 +433,22 @@ impl ShadowArgs {
 }
 
 impl RenderArgs {
-    /// What to load: the `--gltf` model, else `--scene`.
-    pub fn spec(&self) -> &str {
-        self.gltf.as_deref().unwrap_or(&self.scene)
+    /// The `--gltf` model (read as glTF whatever its name ends with), else
+    /// `--scene` ([`load_scene`]).
+    pub fn load_scene(&self) -> Result<Scene> {
+        match &self.gltf {
+            Some(path) => Ok(Scene::from_gltf(Path::new(path))?),
+            None => load_scene(&self.scene),
+        }
+    }
+
+    /// The renderer for what [`Self::load_scene`] loaded: a `--gltf` model
+    /// is never a world ([`open_renderer`] otherwise).
+    pub fn open_renderer(&self, ctx: himal::gpu::GpuContext, scene: &Scene) -> Result<Renderer> {
+        match &self.gltf {
+            Some(_) => Ok(Renderer::new(ctx, scene)?),
+            None => open_renderer(&self.scene, ctx, scene),
+        }
     }
 }
 
@@ -574,7 +587,7 @@ pub fn setup(
         )
         .map_err(anyhow::Error::msg)?;
     check_output_space(&args.out, width, height, args.frames, kind)?;
-    let mut scene = load_scene(args.spec())?;
+    let mut scene = args.load_scene()?;
     check_hero(&scene, args.shadows.hero.as_deref())?;
     if let Some(env) = &args.env {
         let mut desc = himal::scene::EnvironmentDesc::new(env);
@@ -693,7 +706,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .as_deref()
         .map(parse_time_lapse)
         .transpose()?;
-    let mut renderer = open_renderer(args.spec(), args.gpu.context()?, &scene)?;
+    let mut renderer = args.open_renderer(args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
     if args.graph {

@@ -46,7 +46,7 @@ pub fn run(args: &SoakArgs) -> Result<()> {
         );
     }
     let (scene, camera, mut settings) = setup(r)?;
-    let mut renderer = crate::render::open_renderer(r.spec(), r.gpu.context()?, &scene)?;
+    let mut renderer = r.open_renderer(r.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
     r.post.configure(&mut renderer, &r.gpu)?;
     let every = args.every.unwrap_or((r.frames / 20).max(1)).max(1);

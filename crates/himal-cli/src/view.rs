@@ -291,8 +291,9 @@ impl Viewer {
         );
         // The presentation holds the old device's surface: drop it first.
         let window = self.window.take().map(|(w, _)| w);
-        let mut renderer =
-            crate::render::open_renderer(self.args.spec(), self.args.gpu.context()?, &self.scene)?;
+        let mut renderer = self
+            .args
+            .open_renderer(self.args.gpu.context()?, &self.scene)?;
         self.args.post.configure(&mut renderer, &self.args.gpu)?;
         self.renderer = renderer;
         if let Some(window) = window {
@@ -621,7 +622,7 @@ impl ApplicationHandler for Viewer {
 pub fn run(view: &ViewArgs) -> Result<()> {
     let args = &view.render;
     let (scene, camera, mut settings) = crate::render::setup(args)?;
-    let mut renderer = crate::render::open_renderer(args.spec(), args.gpu.context()?, &scene)?;
+    let mut renderer = args.open_renderer(args.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
     args.post.configure(&mut renderer, &args.gpu)?;
     let paths = renderer

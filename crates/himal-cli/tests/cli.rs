@@ -184,3 +184,36 @@ fn a_shadow_map_too_large_for_one_texture_is_refused_before_the_frame() {
     ];
     fails_with(&args, "shadow resolution 16384 needs 4.0 GiB");
 }
+
+/// `--gltf` reads its file as glTF whatever the name ends with (issue #22:
+/// `--gltf README.md` was parsed as a TOML scene, a `.json` model refused).
+#[test]
+fn gltf_flag_reads_any_name_as_gltf() {
+    let dir = common::temp_path("cli-gltf-name");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let model = dir.join("triangle.json");
+    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,B64"}],
+"bufferViews":[{"buffer":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]}"#;
+    std::fs::write(
+        &model,
+        json.replace("B64", "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"),
+    )
+    .expect("write model");
+    let out = dir.join("t.png");
+    let (m, o) = (model.to_string_lossy(), out.to_string_lossy());
+    let (ok, _, err) = himal(&["render", "--gltf", &m, "--size", "32x32", "--out", &o]);
+    assert!(ok, "{err}");
+    assert!(image::open(&out).is_ok(), "a PNG");
+    // A text file is a glTF error naming it, not a TOML one.
+    let text = dir.join("notes.md");
+    std::fs::write(&text, "# notes\n").expect("write");
+    let t = text.to_string_lossy();
+    let args = ["render", "--gltf", &*t, "--size", "8x8", "--out", &*o];
+    let (ok, _, err) = himal(&args);
+    assert!(!ok, "a text file rendered as glTF");
+    assert!(err.contains("notes.md") && err.contains("glTF"), "{err}");
+    assert!(!err.to_lowercase().contains("toml"), "{err}");
+}
