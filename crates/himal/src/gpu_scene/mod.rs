@@ -119,19 +119,15 @@ pub fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
 /// The draws of `object` in `draws` (a list in object order, as every
 /// list of [`SceneGpu`] is): a binary search, not a scan.
 pub fn draws_of(draws: &[Draw], object: u32) -> &[Draw] {
-    let start = draws.partition_point(|d| d.object < object);
-    let end = draws.partition_point(|d| d.object <= object);
-    &draws[start..end.max(start)]
+    entries_of(draws, object, |d| d)
 }
 
-/// The draws of `object` in `textured` (object order), materials dropped.
-pub fn draws_of_textured(textured: &[(Draw, usize)], object: u32) -> Vec<Draw> {
-    let start = textured.partition_point(|(d, _)| d.object < object);
-    let end = textured.partition_point(|(d, _)| d.object <= object);
-    textured[start..end.max(start)]
-        .iter()
-        .map(|(d, _)| d.clone())
-        .collect()
+/// The entries of `object` in `list` (object order), `draw` naming each
+/// entry's draw (e.g. `(Draw, material)` of the textured list).
+pub fn entries_of<T>(list: &[T], object: u32, draw: impl Fn(&T) -> &Draw) -> &[T] {
+    let start = list.partition_point(|e| draw(e).object < object);
+    let end = list.partition_point(|e| draw(e).object <= object);
+    &list[start..end.max(start)]
 }
 
 /// Draw calls `draws` records: with instancing, one per run of

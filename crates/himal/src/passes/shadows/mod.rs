@@ -595,7 +595,8 @@ impl ShadowPass {
                 s.hero_resolution,
             );
             let of_hero = |draws| crate::gpu_scene::draws_of(draws, h as u32).to_vec();
-            let textured = crate::gpu_scene::draws_of_textured(&scene.draws_textured, h as u32);
+            let textured = crate::gpu_scene::entries_of(&scene.draws_textured, h as u32, |e| &e.0);
+            let textured: Vec<_> = textured.iter().map(|(d, _)| d.clone()).collect();
             let lists = DrawLists {
                 opaque: [of_hero(&scene.draws_opaque), textured].concat(),
                 vegetation: of_hero(&scene.draws_vegetation),
