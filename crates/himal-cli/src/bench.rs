@@ -110,6 +110,75 @@ pub(crate) fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// One pass's GPU time over the measured frames.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PassRow {
+    pub id: String,
+    /// Frames the pass ran in.
+    pub ran: usize,
+    /// Median over the frames it ran in.
+    pub median_ran: f64,
+    /// Mean over all measured frames (0 where it did not run).
+    pub mean: f64,
+}
+
+/// Per-pass GPU times of a run. Passes that run on some frames only
+/// (time-sliced, on change) would inflate a total of per-pass medians past
+/// any real frame; the total is the median of the frames' own sums.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PassStats {
+    pub rows: Vec<PassRow>,
+    pub frames: usize,
+    /// Median over frames of the frame's summed pass times.
+    pub total_median: f64,
+    /// Mean over frames of the same sums (= the sum of the rows' means).
+    pub total_mean: f64,
+}
+
+impl PassStats {
+    /// `order`: pass ids in first-seen order; `frames`: each frame's
+    /// (pass, ms), passes that did not run absent.
+    pub fn new(order: &[String], frames: &[Vec<(String, f64)>]) -> PassStats {
+        let n = frames.len();
+        let rows = order
+            .iter()
+            .map(|id| {
+                let mut ms: Vec<f64> = frames
+                    .iter()
+                    .flat_map(|f| f.iter().filter(|(p, _)| p == id).map(|(_, ms)| *ms))
+                    .collect();
+                let sum: f64 = ms.iter().sum();
+                PassRow {
+                    id: id.clone(),
+                    ran: ms.len(),
+                    median_ran: median(&mut ms),
+                    mean: sum / n.max(1) as f64,
+                }
+            })
+            .collect();
+        let mut totals: Vec<f64> = frames
+            .iter()
+            .map(|f| f.iter().map(|(_, ms)| ms).sum())
+            .collect();
+        let total_mean = totals.iter().sum::<f64>() / n.max(1) as f64;
+        PassStats {
+            rows,
+            frames: n,
+            total_median: median(&mut totals),
+            total_mean,
+        }
+    }
+
+    /// Share of the mean frame.
+    pub fn share(&self, mean_ms: f64) -> f64 {
+        if self.total_mean > 0.0 {
+            mean_ms / self.total_mean
+        } else {
+            0.0
+        }
+    }
+}
+
 pub fn run(args: &BenchArgs) -> Result<()> {
     let (width, height) = parse_size(&args.size)?;
     if args.frames == 0 {
@@ -155,10 +224,20 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let warm_up = renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     // L1: the Bruneton tables (once) and the sky SH (per time of day) ran
     // before the warm-up frame: reported apart from the per-frame rows.
-    for t in warm_up.timings.iter().filter(|t| t.id.starts_with("sky.")) {
-        println!("one-off {:<32} {:8.3} ms", t.id, t.gpu_ms);
+    let one_off: Vec<(String, f64)> = warm_up
+        .timings
+        .iter()
+        .filter(|t| t.id.starts_with("sky."))
+        .map(|t| (t.id.clone(), t.gpu_ms))
+        .collect();
+    if !args.json {
+        for (id, ms) in &one_off {
+            println!("one-off {id:<32} {ms:8.3} ms");
+        }
     }
-    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    // Each measured frame's (pass, GPU ms): passes that did not run that
+    // frame are absent, not zero.
+    let mut per_frame: Vec<Vec<(String, f64)>> = Vec::new();
     let mut order: Vec<String> = Vec::new();
     let mut wall = Vec::new();
     // Shadow draw calls per measured frame (S2: the static map saves them).
@@ -202,28 +281,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         if i == 0 {
             gpu_first = memory;
         }
-        for t in frame.timings {
+        for t in &frame.timings {
             if !order.contains(&t.id) {
                 order.push(t.id.clone());
             }
-            per_pass.entry(t.id).or_default().push(t.gpu_ms);
         }
+        per_frame.push(
+            frame
+                .timings
+                .into_iter()
+                .map(|t| (t.id, t.gpu_ms))
+                .collect(),
+        );
     }
-    let rows: Vec<(String, f64)> = order
-        .iter()
-        .map(|id| {
-            (
-                id.clone(),
-                median(
-                    per_pass
-                        .get_mut(id)
-                        .map(|v| v.as_mut_slice())
-                        .unwrap_or(&mut []),
-                ),
-            )
-        })
-        .collect();
-    let total: f64 = rows.iter().map(|r| r.1).sum();
+    let stats = PassStats::new(&order, &per_frame);
+    let total = stats.total_median;
     let wall_median = median(&mut wall);
     let draws_mean = shadow_draws.iter().sum::<u32>() as f64 / shadow_draws.len().max(1) as f64;
     let draws_max = shadow_draws.iter().copied().max().unwrap_or(0);
@@ -235,15 +307,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     crate::save_cache(renderer.context());
     let culling = format!("{culling:?}").to_lowercase();
     if args.json {
-        let passes: Vec<String> = rows
+        let passes: Vec<String> = stats
+            .rows
             .iter()
-            .map(|(id, ms)| {
+            .map(|r| {
                 format!(
-                    "{{\"id\":\"{id}\",\"group\":\"{}\",\"gpu_ms\":{ms:.4},\"share\":{:.4}}}",
-                    group(id),
-                    if total > 0.0 { ms / total } else { 0.0 }
+                    "{{\"id\":\"{}\",\"group\":\"{}\",\"gpu_ms\":{:.4},\"mean_ms\":{:.4},\"ran_frames\":{},\"share\":{:.4}}}",
+                    r.id,
+                    group(&r.id),
+                    r.median_ran,
+                    r.mean,
+                    r.ran,
+                    stats.share(r.mean)
                 )
             })
+            .collect();
+        let one_off: Vec<String> = one_off
+            .iter()
+            .map(|(id, ms)| format!("{{\"id\":\"{id}\",\"gpu_ms\":{ms:.4}}}"))
             .collect();
         let memory: Vec<String> = renderer
             .memory()
@@ -251,8 +332,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .map(|(k, b)| format!("{{\"what\":\"{k}\",\"bytes\":{b}}}"))
             .collect();
         println!(
-            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws_mean\":{g_mean:.2},\"culling\":{culling:?},\"cpu_ms_median\":{{\"plan\":{plan:.3},\"record\":{record:.3},\"submit\":{submit:.3}}},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
+            "{{\"adapter\":{adapter:?},\"size\":[{width},{height}],\"frames\":{},\"gpu_total_ms\":{total:.4},\"gpu_total_mean_ms\":{:.4},\"wall_ms_median\":{wall_median:.3},\"triangles\":{},\"gbuffer_draws_mean\":{g_mean:.2},\"culling\":{culling:?},\"cpu_ms_median\":{{\"plan\":{plan:.3},\"record\":{record:.3},\"submit\":{submit:.3}}},\"shadow_draws\":{{\"mean\":{draws_mean:.2},\"max\":{draws_max}}},\"pipelines\":{{\"memory_hits\":{},\"disk_hits\":{},\"compiles\":{},\"disk_ms\":{:.3},\"compile_ms\":{:.3}}},\"passes\":[{}],\"one_off\":[{}],\"memory\":[{}],\"resident_bytes\":[{}]}}",
             args.frames,
+            stats.total_mean,
             renderer.scene_triangles(),
             cache.memory_hits,
             cache.disk_hits,
@@ -260,6 +342,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             cache.disk_ms,
             cache.compile_ms,
             passes.join(","),
+            one_off.join(","),
             memory.join(","),
             resident
                 .iter()
@@ -274,27 +357,34 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.frames,
         renderer.scene_triangles()
     );
-    if rows.is_empty() {
+    if stats.rows.is_empty() {
         println!("(this adapter has no timestamp queries: no per-pass GPU times)");
     }
+    // A pass that runs on some frames only shows its median over those
+    // frames; shares and groups use the mean over all frames.
     println!(
-        "{:<22} {:<14} {:>10} {:>8}",
-        "pass", "group", "GPU ms", "share"
+        "{:<22} {:<14} {:>10} {:>10} {:>7} {:>8}",
+        "pass", "group", "GPU ms", "mean ms", "ran", "share"
     );
-    for (id, ms) in &rows {
+    for r in &stats.rows {
         println!(
-            "{:<22} {:<14} {:>10.3} {:>7.1}%",
-            id,
-            group(id),
-            ms,
-            if total > 0.0 { 100.0 * ms / total } else { 0.0 }
+            "{:<22} {:<14} {:>10.3} {:>10.3} {:>7} {:>7.1}%",
+            r.id,
+            group(&r.id),
+            r.median_ran,
+            r.mean,
+            format!("{}/{}", r.ran, stats.frames),
+            100.0 * stats.share(r.mean)
         );
     }
     let mut groups: BTreeMap<&str, f64> = BTreeMap::new();
-    for (id, ms) in &rows {
-        *groups.entry(group(id)).or_default() += ms;
+    for r in &stats.rows {
+        *groups.entry(group(&r.id)).or_default() += r.mean;
     }
-    println!("{:<22} {:<14} {:>10.3} {:>7.1}%", "total", "", total, 100.0);
+    println!(
+        "{:<22} {:<14} {:>10.3} {:>10.3} {:>7} {:>7.1}%",
+        "total (frame median)", "", total, stats.total_mean, "", 100.0
+    );
     println!(
         "by budget group (Far Cry 4 PS4 ms: shadows 1.8, G-buffer 7.5, lighting 6.6, blended 1.7, post 2.8, AA 1.9, misc 1.1):"
     );
@@ -309,10 +399,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ] {
         let ms = groups.get(g).copied().unwrap_or(0.0);
         println!(
-            "  {:<14} {:>10.3} ms {:>6.1}%",
+            "  {:<14} {:>10.3} ms {:>6.1}%  (mean per frame)",
             g,
             ms,
-            if total > 0.0 { 100.0 * ms / total } else { 0.0 }
+            100.0 * stats.share(ms)
         );
     }
     println!("G-buffer draw calls per frame: mean {g_mean:.1} (culling: {culling})");
@@ -349,4 +439,34 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pass that runs one frame in eight used to add its median to the
+    /// total: 1 ms every frame + 8 ms one frame in eight read 9 ms, where
+    /// the median frame costs 1 ms and the mean frame 2 ms.
+    #[test]
+    fn a_pass_that_runs_now_and_then_does_not_inflate_the_total() {
+        let order = vec!["gbuffer".to_string(), "skyocc.sector".to_string()];
+        let frames: Vec<Vec<(String, f64)>> = (0..8)
+            .map(|i| {
+                let mut f = vec![("gbuffer".to_string(), 1.0)];
+                if i == 3 {
+                    f.push(("skyocc.sector".to_string(), 8.0));
+                }
+                f
+            })
+            .collect();
+        let s = PassStats::new(&order, &frames);
+        assert_eq!(s.frames, 8);
+        assert_eq!(s.total_median, 1.0);
+        assert_eq!(s.total_mean, 2.0);
+        let sky = &s.rows[1];
+        assert_eq!((sky.ran, sky.median_ran, sky.mean), (1, 8.0, 1.0));
+        let shares: f64 = s.rows.iter().map(|r| s.share(r.mean)).sum();
+        assert!((shares - 1.0).abs() < 1e-12, "shares sum to {shares}");
+    }
 }

@@ -9,7 +9,7 @@ use std::num::NonZeroU32;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use glam::{Quat, Vec3};
 use himal::passes::aa::AaMode;
@@ -80,6 +80,38 @@ struct Held {
     looking: bool,
 }
 
+/// Longest simulation step (camera, clock, flight path): a stall must not
+/// throw the camera across the world. The HUD's rate is not clamped.
+const MAX_STEP_S: f32 = 0.25;
+
+fn sim_step(interval_s: f32) -> f32 {
+    interval_s.min(MAX_STEP_S)
+}
+
+/// The HUD's frame rate: an exponential average of the real frame
+/// intervals (not of their reciprocals, which over-weights fast frames).
+#[derive(Default)]
+struct FrameRate {
+    interval_s: Option<f32>,
+}
+
+impl FrameRate {
+    fn record(&mut self, interval_s: f32) {
+        self.interval_s = Some(match self.interval_s {
+            None => interval_s,
+            Some(avg) => 0.9 * avg + 0.1 * interval_s,
+        });
+    }
+
+    fn fps(&self) -> f32 {
+        self.interval_s.map_or(0.0, |s| 1.0 / s.max(1e-6))
+    }
+
+    fn frame_ms(&self) -> f32 {
+        self.interval_s.map_or(0.0, |s| 1e3 * s)
+    }
+}
+
 struct Viewer {
     args: RenderArgs,
     /// Kept to rebuild the renderer when the device is lost.
@@ -99,7 +131,7 @@ struct Viewer {
     last: Instant,
     frames: u32,
     clock: f32,
-    fps: f32,
+    rate: FrameRate,
     screenshot: bool,
     error: Option<anyhow::Error>,
     /// The world's flight path F flies, and whether it is flying and where (s).
@@ -205,8 +237,9 @@ impl Viewer {
         let total: f64 = timings.iter().map(|t| t.gpu_ms).sum();
         let mut lines = vec![
             format!(
-                "himal {:5.1} fps  {}x{}  {:02}:{:02}  GPU {total:.2} ms",
-                self.fps,
+                "himal {:5.1} fps ({:.1} ms)  {}x{}  {:02}:{:02}  GPU {total:.2} ms",
+                self.rate.fps(),
+                self.rate.frame_ms(),
                 s.width,
                 s.height,
                 s.sun.time_hours as u32,
@@ -315,15 +348,13 @@ impl Viewer {
         let size = window.inner_size();
         let (w, h) = (size.width.max(1), size.height.max(1));
         let now = Instant::now();
-        let dt = (now - self.last).as_secs_f32().min(0.25);
+        let interval = (now - self.last).as_secs_f32();
         self.last = now;
         // The first interval runs from start-up, not from a previous frame.
-        let rate = 1.0 / dt.max(1e-3);
-        self.fps = match self.frames {
-            0 => 0.0,
-            1 => rate,
-            _ => 0.9 * self.fps + 0.1 * rate,
-        };
+        if self.frames > 0 {
+            self.rate.record(interval);
+        }
+        let dt = sim_step(interval);
         self.clock += dt;
         let mut settings = self.settings.clone();
         settings.width = w;
@@ -369,7 +400,7 @@ impl Viewer {
                         return Ok(());
                     }
                     wgpu::CurrentSurfaceTexture::Validation => {
-                        anyhow::bail!("window surface: validation error acquiring a frame")
+                        bail!("window surface: validation error acquiring a frame")
                     }
                 };
                 let view = texture.texture.create_view(&Default::default());
@@ -416,7 +447,7 @@ impl Viewer {
         }
         window.set_title(&format!(
             "himal {:.1} fps | {:02}:{:02}",
-            self.fps,
+            self.rate.fps(),
             settings.sun.time_hours as u32,
             (settings.sun.time_hours.fract() * 60.0) as u32,
         ));
@@ -565,8 +596,7 @@ impl ApplicationHandler for Viewer {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::RedrawRequested => {
-                let dt = (Instant::now() - self.last).as_secs_f32().min(0.25);
-                self.step_camera(dt);
+                self.step_camera(sim_step((Instant::now() - self.last).as_secs_f32()));
                 if let Err(e) = self.redraw(event_loop).or_else(|e| self.recover(e)) {
                     self.error = Some(e);
                     event_loop.exit();
@@ -617,6 +647,37 @@ impl ApplicationHandler for Viewer {
     }
 }
 
+/// The X11 libraries winit opens at run time, with their Debian/Ubuntu
+/// packages: without them winit panics or reports a display failure.
+const X11_LIBRARIES: [(&str, &str); 7] = [
+    ("libX11.so.6", "libx11-6"),
+    ("libX11-xcb.so.1", "libx11-xcb1"),
+    ("libxkbcommon.so.0", "libxkbcommon0"),
+    ("libxkbcommon-x11.so.0", "libxkbcommon-x11-0"),
+    ("libXi.so.6", "libxi6"),
+    ("libXcursor.so.1", "libxcursor1"),
+    ("libXrandr.so.2", "libxrandr2"),
+];
+
+/// Fails naming every missing library (and its package) that `opens`
+/// cannot load.
+fn check_x11_libraries(opens: impl Fn(&str) -> bool) -> Result<()> {
+    let missing: Vec<_> = X11_LIBRARIES
+        .iter()
+        .filter(|(lib, _)| !opens(lib))
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    let libs: Vec<&str> = missing.iter().map(|(l, _)| *l).collect();
+    let packages: Vec<&str> = missing.iter().map(|(_, p)| *p).collect();
+    bail!(
+        "himal view cannot load the X11 libraries {} (Debian/Ubuntu packages: {}; `./run view` installs them)",
+        libs.join(", "),
+        packages.join(" ")
+    )
+}
+
 /// Opens the window; `--frames N` (N > 1) renders N frames, writes the last
 /// to `--out` and exits (automated runs, e.g. under Xvfb).
 pub fn run(view: &ViewArgs) -> Result<()> {
@@ -640,6 +701,17 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         })?),
         None => paths.first().cloned(),
     };
+    check_x11_libraries(|name| {
+        let c = std::ffi::CString::new(name).expect("no NUL in a library name");
+        // SAFETY: dlopen with a valid C string; the handle is closed at once.
+        unsafe {
+            let h = libc::dlopen(c.as_ptr(), libc::RTLD_LAZY | libc::RTLD_LOCAL);
+            if !h.is_null() {
+                libc::dlclose(h);
+            }
+            !h.is_null()
+        }
+    })?;
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow::anyhow!("himal view needs a display (X11; e.g. xvfb-run for automated runs): {e}")
     })?;
@@ -668,7 +740,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         last: Instant::now(),
         frames: 0,
         clock: 0.0,
-        fps: 0.0,
+        rate: FrameRate::default(),
         screenshot: false,
         error: None,
         flying: view.path.is_some(),
@@ -682,5 +754,41 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     match viewer.error.take() {
         Some(e) => Err(e),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_x11_libraries_are_named_with_their_packages() {
+        assert!(check_x11_libraries(|_| true).is_ok());
+        let e = check_x11_libraries(|l| !l.starts_with("libxkbcommon-x11") && l != "libXi.so.6")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("libxkbcommon-x11.so.0, libXi.so.6"), "{e}");
+        assert!(e.contains("libxkbcommon-x11-0 libxi6"), "{e}");
+        assert!(!e.contains("display"), "{e}");
+    }
+
+    /// The HUD capped the frame time at 0.25 s (never below 4 fps): a
+    /// 2-second frame on a software adapter read 4 fps.
+    #[test]
+    fn the_hud_rate_is_the_real_one_and_only_the_step_is_clamped() {
+        let mut rate = FrameRate::default();
+        assert_eq!(rate.fps(), 0.0);
+        rate.record(2.0);
+        assert_eq!(rate.fps(), 0.5);
+        assert_eq!(rate.frame_ms(), 2000.0);
+        assert_eq!(sim_step(2.0), MAX_STEP_S);
+        assert_eq!(sim_step(0.016), 0.016);
+        // Averaged intervals: 10 ms frames then one 1 s stall.
+        let mut rate = FrameRate::default();
+        for _ in 0..50 {
+            rate.record(0.010);
+        }
+        rate.record(1.0);
+        assert!((rate.frame_ms() - 109.0).abs() < 0.5, "{}", rate.frame_ms());
     }
 }

@@ -217,3 +217,67 @@ fn gltf_flag_reads_any_name_as_gltf() {
     assert!(err.contains("notes.md") && err.contains("glTF"), "{err}");
     assert!(!err.to_lowercase().contains("toml"), "{err}");
 }
+
+/// `bench --json` is one JSON document on standard output (it used to
+/// print the one-off sky-table lines first), and its total is a frame's.
+#[test]
+fn bench_json_is_json_alone() {
+    let args = ["bench", "--json", "--frames", "3", "--size", "32x18"];
+    let (ok, out, err) = himal(&args);
+    assert!(ok, "himal {args:?} failed: {err}");
+    let v: serde_json::Value = serde_json::from_str(&out)
+        .unwrap_or_else(|e| panic!("bench --json stdout is not JSON ({e}):\n{out}"));
+    let passes = v["passes"].as_array().expect("passes");
+    assert!(!passes.is_empty(), "no passes in {out}");
+    assert!(
+        v["one_off"].as_array().is_some_and(|o| !o.is_empty()),
+        "the sky tables' one-off times belong in the JSON: {out}"
+    );
+    assert!(v["gpu_total_ms"].as_f64().is_some(), "gpu_total_ms: {out}");
+    let mean_sum: f64 = passes.iter().map(|p| p["mean_ms"].as_f64().unwrap()).sum();
+    let mean = v["gpu_total_mean_ms"].as_f64().expect("gpu_total_mean_ms");
+    // Rounded to 4 decimals per pass in the JSON.
+    assert!(
+        (mean_sum - mean).abs() < 1e-3 * passes.len() as f64,
+        "{mean_sum} vs {mean}"
+    );
+}
+
+/// `./run` looked for a Vulkan driver with one `ls` over two globs, which
+/// fails when either folder is empty: with lavapipe in /usr/share and an
+/// empty /etc/vulkan/icd.d, every call ran apt.
+#[test]
+fn run_finds_a_vulkan_driver_beside_an_empty_folder() {
+    let dir = common::temp_path("run-icd");
+    let (empty, full) = (dir.join("etc"), dir.join("share"));
+    std::fs::create_dir_all(&empty).expect("temp dir");
+    std::fs::create_dir_all(&full).expect("temp dir");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../run");
+    let doctor = |dirs: String| {
+        let out = std::process::Command::new("bash")
+            .args([script, "doctor"])
+            .env("HIMAL_VULKAN_ICD_DIRS", dirs)
+            .output()
+            .expect("runs ./run doctor");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let both = format!("{} {}", full.display(), empty.display());
+    let reversed = format!("{} {}", empty.display(), full.display());
+    let none = doctor(both.clone());
+    assert!(none.contains("vulkan driver: none"), "{none}");
+    let icd = full.join("lvp_icd.x86_64.json");
+    std::fs::write(&icd, "{}").expect("write manifest");
+    for dirs in [both, reversed] {
+        let found = doctor(dirs);
+        assert!(
+            found.contains(&format!("vulkan driver: {}", icd.display())),
+            "{found}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
