@@ -309,16 +309,16 @@ fn bad_input_is_an_error_naming_file_and_problem() {
         ),
     );
     assert!(e.contains("bytes"), "{e}");
-    // Non-triangle primitives.
+    // A point primitive is left out and named, the rest of the file loads.
     let points = orig.replacen("\"material\"", "\"mode\" : 0, \"material\"", 1);
     std::fs::write(dir.join("OrientationTest.bin"), &bin).unwrap();
     std::fs::write(dir.join("points.gltf"), &points).unwrap();
-    let e = gltf::load(&dir.join("points.gltf"))
-        .unwrap_err()
-        .to_string();
+    let a = gltf::load(&dir.join("points.gltf")).expect("points do not reject the file");
+    assert_eq!((a.meshes.len(), a.objects.len()), (12, 12));
     assert!(
-        e.contains("points.gltf") && e.contains("triangles only"),
-        "{e}"
+        a.warnings.len() == 1 && a.warnings[0].contains("(Points)"),
+        "{:?}",
+        a.warnings
     );
     // Non-finite transforms: 1e39 overflows f32 to infinity (JSON has no NaN).
     let nan = orig.replacen(
@@ -334,4 +334,62 @@ fn bad_input_is_an_error_naming_file_and_problem() {
     std::fs::write(dir.join("range.gltf"), &text).unwrap();
     let e = gltf::load(&dir.join("range.gltf")).unwrap_err().to_string();
     assert!(e.contains("range.gltf") && e.contains("runs past"), "{e}");
+}
+
+/// Points and lines anywhere in a file rejected the whole file, and strips
+/// and fans were refused. MeshPrimitiveModes holds one primitive of each
+/// of the seven modes over the same hexagon: the three triangle modes load
+/// as lists covering the hexagon with one winding, the four others are
+/// named in one warning.
+#[test]
+fn triangle_strips_and_fans_load_and_points_and_lines_are_named() {
+    let a = gltf::load(&common::gltf_sample("MeshPrimitiveModes")).expect("loads");
+    assert_eq!((a.gltf_meshes, a.gltf_primitives), (7, 7));
+    let names: Vec<&str> = a.meshes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "mesh with TRIANGLES.0",
+            "mesh with GL_TRIANGLE_STRIP.0",
+            "mesh with GL_TRIANGLE_FAN.0"
+        ]
+    );
+    assert_eq!(a.objects.len(), 3, "one node per drawn primitive");
+    assert_eq!(a.pbr.mesh_material.len(), 3);
+    let warning = a.warnings.join("\n");
+    for mode in [
+        "POINTS.0 (Points)",
+        "LINES.0 (Lines)",
+        "LINE_LOOP.0 (LineLoop)",
+    ] {
+        assert!(warning.contains(mode), "{mode} not named in: {warning}");
+    }
+    assert!(warning.contains("4 point or line"), "{warning}");
+    // Signed area (z of the summed cross products) per mesh: the strip (4
+    // triangles, vertex 0 unused) and the fan (6) cover the same hexagon as
+    // the list (6), each triangle wound the same way.
+    let hexagon = |m: &himal::scene::Mesh| {
+        let p = |i: u32| Vec3::from(m.vertices[i as usize].position);
+        let z: Vec<f32> = (m.indices.chunks(3))
+            .map(|t| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).z)
+            .collect();
+        (z.len(), z.iter().sum::<f32>(), z.iter().all(|&z| z > 0.0))
+    };
+    let list = hexagon(&a.meshes[0]);
+    assert_eq!((list.0, list.2), (6, true), "{list:?}");
+    for (m, triangles) in [(&a.meshes[1], 4), (&a.meshes[2], 6)] {
+        let (n, area, same_winding) = hexagon(m);
+        assert_eq!(n, triangles, "{}", m.name);
+        assert!(
+            same_winding,
+            "{}: a triangle is wound the other way",
+            m.name
+        );
+        assert!(
+            (area - list.1).abs() < 1e-4,
+            "{}: area {area} vs {}",
+            m.name,
+            list.1
+        );
+    }
 }

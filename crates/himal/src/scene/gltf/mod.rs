@@ -101,6 +101,9 @@ pub struct GltfAsset {
     pub gltf_primitives: usize,
     /// World bounds of all objects.
     pub bounds: Aabb,
+    /// What the file holds that himal does not show (also logged once at
+    /// load): unimplemented extensions, point and line primitives.
+    pub warnings: Vec<String>,
 }
 
 /// Loads a .gltf (with its .bin and images) or a .glb file.
@@ -163,7 +166,7 @@ pub fn load_from_bytes_within(
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     let mut root = document.into_json();
-    check_extensions(&cx, &mut root)?;
+    let mut warnings: Vec<String> = check_extensions(&cx, &mut root)?.into_iter().collect();
     check_position_accessors(&cx, &root)?;
     check_image_sources(&cx, &root)?;
     check_nodes(&cx, &root)?;
@@ -236,20 +239,39 @@ pub fn load_from_bytes_within(
     let default_material = pbr.materials.len();
     let fallback = PbrMaterial::default();
 
-    // Meshes: one himal mesh per primitive.
-    let mut first_mesh = Vec::new();
+    // Meshes: one himal mesh per triangle primitive; points and lines are
+    // named in a warning, not drawn.
+    let mut primitive_mesh: Vec<Vec<Option<usize>>> = Vec::new();
     let mut meshes = Vec::new();
     let mut gltf_primitives = 0;
+    let mut not_drawn = Vec::new();
     for m in doc.meshes() {
-        first_mesh.push(meshes.len());
+        let mut of_mesh = Vec::new();
         for p in m.primitives() {
             gltf_primitives += 1;
+            if !draws_triangles(p.mode()) {
+                not_drawn.push(format!("{} ({:?})", primitive_name(&m, &p), p.mode()));
+                of_mesh.push(None);
+                continue;
+            }
             let material = p.material().index().unwrap_or(default_material);
             let desc = pbr.materials.get(material).unwrap_or(&fallback);
             let mesh = primitive(&cx, &m, &p, &buffers, desc)?;
             pbr.mesh_material.push((meshes.len(), material));
+            of_mesh.push(Some(meshes.len()));
             meshes.push(mesh);
         }
+        primitive_mesh.push(of_mesh);
+    }
+    if !not_drawn.is_empty() {
+        warnings.push(format!(
+            "does not draw {} point or line primitive(s) (himal draws triangles): {}",
+            not_drawn.len(),
+            not_drawn.join(", ")
+        ));
+    }
+    for w in &warnings {
+        log::warn!("{}: {w}", cx.path.display());
     }
 
     if pbr
@@ -271,6 +293,7 @@ pub fn load_from_bytes_within(
         gltf_primitives,
         bounds: Aabb::EMPTY,
         meshes: Vec::new(),
+        warnings,
     };
     let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(s) => s.nodes().collect(),
@@ -291,9 +314,10 @@ pub fn load_from_bytes_within(
             .name()
             .map_or_else(|| format!("node{}", node.index()), str::to_string);
         if let Some(m) = node.mesh() {
-            let count = m.primitives().count();
-            for k in 0..count {
-                let mesh = first_mesh[m.index()] + k;
+            let drawn = &primitive_mesh[m.index()];
+            let count = drawn.len();
+            for (k, mesh) in drawn.iter().enumerate() {
+                let Some(mesh) = *mesh else { continue };
                 out.bounds = out.bounds.union(&meshes[mesh].bounds.transform(&world));
                 out.objects.push(Object {
                     name: if count == 1 {
@@ -336,7 +360,10 @@ pub const IMPLEMENTED_EXTENSIONS: [&str; 3] = [
 /// emptied: every entry left is ours, and the gltf crate's validation
 /// knows only its own features' extensions (it refused
 /// `KHR_materials_anisotropy`).
-fn check_extensions(cx: &GltfContext, root: &mut gltf::json::Root) -> Result<(), SceneError> {
+fn check_extensions(
+    cx: &GltfContext,
+    root: &mut gltf::json::Root,
+) -> Result<Option<String>, SceneError> {
     let missing = |list: &[String]| -> Vec<String> {
         let mut out: Vec<String> = (list.iter())
             .filter(|e| !IMPLEMENTED_EXTENSIONS.contains(&e.as_str()))
@@ -355,15 +382,52 @@ fn check_extensions(cx: &GltfContext, root: &mut gltf::json::Root) -> Result<(),
         )));
     }
     let ignored = missing(&root.extensions_used);
-    if !ignored.is_empty() {
-        log::warn!(
-            "{}: ignores the extensions it does not implement: {} (the model may look wrong)",
-            cx.path.display(),
-            ignored.join(", ")
-        );
-    }
     root.extensions_required.clear();
-    Ok(())
+    Ok((!ignored.is_empty()).then(|| {
+        format!(
+            "ignores the extensions it does not implement: {} (the model may look wrong)",
+            ignored.join(", ")
+        )
+    }))
+}
+
+/// Triangle lists, strips and fans are drawn (strips and fans as lists).
+fn draws_triangles(mode: gltf::mesh::Mode) -> bool {
+    use gltf::mesh::Mode;
+    matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    )
+}
+
+fn primitive_name(mesh: &gltf::Mesh, p: &gltf::Primitive) -> String {
+    format!(
+        "{}.{}",
+        mesh.name()
+            .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string),
+        p.index()
+    )
+}
+
+/// A strip's or fan's vertex order as a triangle list with the winding of
+/// glTF 2.0 3.7.2.1: strip triangle i is (p[i], p[i + 1 + i % 2],
+/// p[i + 2 - i % 2]), fan triangle i is (p[i + 1], p[i + 2], p[0]).
+/// Degenerate triangles (repeated indices, used to join strips) are dropped.
+fn triangle_list(mode: gltf::mesh::Mode, p: Vec<u32>) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    let tri = |i: usize| match mode {
+        Mode::TriangleStrip => Some([p[i], p[i + 1 + i % 2], p[i + 2 - i % 2]]),
+        Mode::TriangleFan => Some([p[i + 1], p[i + 2], p[0]]),
+        _ => None,
+    };
+    if !matches!(mode, Mode::TriangleStrip | Mode::TriangleFan) {
+        return p;
+    }
+    (0..p.len().saturating_sub(2))
+        .filter_map(tri)
+        .filter(|[a, b, c]| a != b && b != c && a != c)
+        .flatten()
+        .collect()
 }
 
 fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
@@ -454,18 +518,7 @@ fn primitive(
     buffers: &[Vec<u8>],
     material: &PbrMaterial,
 ) -> Result<Mesh, SceneError> {
-    let name = format!(
-        "{}.{}",
-        mesh.name()
-            .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string),
-        p.index()
-    );
-    if p.mode() != gltf::mesh::Mode::Triangles {
-        return Err(cx.invalid(format!(
-            "mesh \"{name}\": primitive mode {:?} is not supported (triangles only)",
-            p.mode()
-        )));
-    }
+    let name = primitive_name(mesh, p);
     let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let positions: Vec<[f32; 3]> = reader
         .read_positions()
@@ -488,6 +541,7 @@ fn primitive(
         Some(i) => i.into_u32().collect(),
         None => (0..n as u32).collect(),
     };
+    let indices = triangle_list(p.mode(), indices);
     if !indices.len().is_multiple_of(3) {
         return Err(cx.invalid(format!(
             "mesh \"{name}\": {} indices is not whole triangles",
