@@ -290,3 +290,46 @@ fn required_extensions_load_when_implemented_and_are_named_when_not() {
         "{e}"
     );
 }
+
+/// `KHR_lights_punctual` directional lights were dropped: a model lit by
+/// one rendered under the default afternoon sun. The first directional
+/// light now stands in for the sun: the sky light the renderer lights with
+/// points towards it and carries its illuminance (lux to klux).
+#[test]
+fn a_directional_light_becomes_the_sun() {
+    let q = Quat::from_rotation_y(0.7) * Quat::from_rotation_x(-1.1);
+    let shines = q * Vec3::NEG_Z;
+    let node = format!(
+        r#""children":[1]}},{{"rotation":[{},{},{},{}],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}"#,
+        q.x, q.y, q.z, q.w
+    );
+    let path = common::cube_gltf("directional", &node, r#"{"pbrMetallicRoughness":{}}"#);
+    let json = std::fs::read_to_string(&path).expect("read");
+    let json = json.replacen(
+        '{',
+        r#"{"extensionsUsed":["KHR_lights_punctual"],"extensions":{"KHR_lights_punctual":{"lights":[{"type":"directional","color":[1.0,0.5,0.25],"intensity":4000.0,"name":"key"}]}},"#,
+        1,
+    );
+    std::fs::write(&path, json).expect("write");
+    let scene = Scene::from_gltf(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let sun = scene.sun.light.expect("the directional light is the sun");
+    assert!(
+        sun.to_light.abs_diff_eq(-shines, 1e-5),
+        "{:?} vs {:?}",
+        sun.to_light,
+        -shines
+    );
+    assert!(
+        sun.illuminance_klux
+            .abs_diff_eq(Vec3::new(4.0, 2.0, 1.0), 1e-5)
+    );
+    // The renderer lights with it (and draws the sky for that direction).
+    let mut r = common::renderer(&scene);
+    let camera = scene.camera("default").expect("camera").clone();
+    let settings = himal::FrameSettings::new(32, 32, scene.sun.clone());
+    r.render(&camera, &settings).expect("frame");
+    let light = r.sky_light().expect("sky light after a frame");
+    assert!(light.sun_direction.abs_diff_eq(sun.to_light, 1e-5));
+    assert_eq!(light.sun_illuminance, sun.illuminance_klux);
+    assert!(light.sky.sun_direction().abs_diff_eq(sun.to_light, 1e-5));
+}

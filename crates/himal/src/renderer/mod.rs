@@ -114,7 +114,7 @@ pub struct Renderer {
     /// Animation time of the previous frame (`None`: first frame or after a cut).
     prev_time: Option<f32>,
     frame_index: u64,
-    sky_light: Option<(SunKey, SkyModel, SkyLight)>,
+    sky_light: Option<(SunDesc, SkyModel, SkyLight)>,
     /// GPU times of the sky tables / SH projection run before the next frame (L1).
     sky_timings: Vec<PassTiming>,
     /// Directory of the Bruneton table cache file (`None`: compute each run).
@@ -130,9 +130,6 @@ pub struct Renderer {
 
 /// The largest single texture the renderer asks a driver for (bytes).
 const MAX_TEXTURE_BYTES: u64 = 2 << 30;
-
-#[derive(Clone, Copy, PartialEq)]
-struct SunKey(f32, f32, u32, f32);
 
 impl Renderer {
     /// Creates every pipeline and uploads the scene.
@@ -372,32 +369,26 @@ impl Renderer {
     }
 
     fn update_sky(&mut self, sun: &SunDesc, model: SkyModel) -> Result<(), Error> {
-        let key = SunKey(
-            sun.time_hours,
-            sun.latitude_deg,
-            sun.day_of_year,
-            sun.turbidity,
-        );
         self.res.passes.sky.model = model;
         if self
             .sky_light
             .as_ref()
-            .is_some_and(|(k, m, _)| *k == key && *m == model)
+            .is_some_and(|(k, m, _)| k == sun && *m == model)
         {
             return Ok(());
         }
-        let mut light = SkyLight::new(
-            sun.time_hours,
-            sun.latitude_deg,
-            sun.day_of_year,
-            sun.turbidity,
-        );
+        let mut light = SkyLight::of_sun(sun);
         // L1: Bruneton tables once per renderer, their sky SH (and the moon) per time of day.
         if model == SkyModel::Bruneton && self.res.environment.is_none() {
             self.prepare_bruneton()?;
             if let Some(b) = self.res.passes.sky.bruneton() {
                 let t = b.update_light(&self.ctx, &mut light, self.timer.as_mut())?;
                 self.sky_timings.extend(t);
+            }
+            // A stand-in light stays itself (no moon when it points up).
+            if let Some(l) = &sun.light {
+                light.sun_direction = l.to_light;
+                light.sun_illuminance = l.illuminance_klux;
             }
         }
         let params = light.sky.gpu_params();
@@ -411,7 +402,7 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&no_disk),
         );
-        self.sky_light = Some((key, model, light));
+        self.sky_light = Some((sun.clone(), model, light));
         self.res.passes.envmap.dirty = true;
         Ok(())
     }

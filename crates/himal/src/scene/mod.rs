@@ -509,6 +509,19 @@ pub struct SunDesc {
     pub latitude_deg: f32,
     pub day_of_year: u32,
     pub turbidity: f32,
+    /// A directional light that stands in for the computed sun (a glTF
+    /// file's `KHR_lights_punctual` directional light): the sky and the
+    /// sun light follow its direction, the sun its illuminance.
+    pub light: Option<SunLight>,
+}
+
+/// A directional light in place of the sun of [`SunDesc`]'s time and place.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunLight {
+    /// Unit vector towards the light (opposite to where it shines).
+    pub to_light: Vec3,
+    /// Illuminance, linear RGB klux (the sun's unit in himal).
+    pub illuminance_klux: Vec3,
 }
 
 impl Default for SunDesc {
@@ -518,6 +531,7 @@ impl Default for SunDesc {
             latitude_deg: 45.0,
             day_of_year: 172,
             turbidity: 3.0,
+            light: None,
         }
     }
 }
@@ -650,7 +664,10 @@ impl Scene {
             objects: asset.objects,
             materials: Vec::new(),
             cameras,
-            sun: SunDesc::default(),
+            sun: SunDesc {
+                light: gltf::sun_light(path, &asset.lights),
+                ..SunDesc::default()
+            },
             bounds: asset.bounds,
             pbr: asset.pbr,
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),

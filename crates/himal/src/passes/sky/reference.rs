@@ -74,12 +74,33 @@ impl SkyLight {
     /// positive), `day_of_year` (1..=365) and atmospheric `turbidity`.
     pub fn new(time_hours: f32, latitude_deg: f32, day_of_year: u32, turbidity: f32) -> SkyLight {
         let sun = sun_position(time_hours, latitude_deg, day_of_year);
-        let sky = PreethamSky::new(sun.direction, turbidity);
-        let sun_illuminance = sun_illuminance_rgb(sun.direction, turbidity);
+        Self::towards(
+            sun.direction,
+            sun_illuminance_rgb(sun.direction, turbidity),
+            turbidity,
+        )
+    }
+
+    /// The sky light of `sun`: its time and place, or its directional
+    /// light where it has one (the sky drawn for that sun direction).
+    pub fn of_sun(sun: &crate::scene::SunDesc) -> SkyLight {
+        match &sun.light {
+            Some(l) => Self::towards(l.to_light, l.illuminance_klux, sun.turbidity),
+            None => Self::new(
+                sun.time_hours,
+                sun.latitude_deg,
+                sun.day_of_year,
+                sun.turbidity,
+            ),
+        }
+    }
+
+    fn towards(sun_direction: Vec3, sun_illuminance: Vec3, turbidity: f32) -> SkyLight {
+        let sky = PreethamSky::new(sun_direction, turbidity);
         SkyLight {
-            sun_direction: sun.direction,
+            sun_direction,
             sun_illuminance,
-            irradiance_sh: sky_and_ground_irradiance_sh(&sky, sun.direction, sun_illuminance),
+            irradiance_sh: sky_and_ground_irradiance_sh(&sky, sun_direction, sun_illuminance),
             sky,
         }
     }

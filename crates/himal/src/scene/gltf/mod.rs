@@ -485,6 +485,26 @@ pub fn local_light(l: &PunctualLight) -> Option<crate::scene::LightDesc> {
     })
 }
 
+/// The file's first directional light as the scene's sun (lux to klux);
+/// further directional lights are named in a warning (one sun is drawn).
+pub fn sun_light(path: &Path, lights: &[PunctualLight]) -> Option<crate::scene::SunLight> {
+    let mut directional = lights.iter().filter(|l| l.kind == LightKind::Directional);
+    let first = directional.next()?;
+    let rest: Vec<&str> = directional.map(|l| l.name.as_str()).collect();
+    if !rest.is_empty() {
+        log::warn!(
+            "{}: directional light \"{}\" is the sun; the other directional lights are not drawn: {}",
+            path.display(),
+            first.name,
+            rest.join(", ")
+        );
+    }
+    Some(crate::scene::SunLight {
+        to_light: -first.direction,
+        illuminance_klux: first.color * first.intensity.max(0.0) * 1e-3,
+    })
+}
+
 fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> PunctualLight {
     use gltf::khr_lights_punctual::Kind;
     let kind = match l.kind() {

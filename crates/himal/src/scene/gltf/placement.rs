@@ -168,6 +168,17 @@ fn merge(
             foliage: None,
             ground: false,
         }));
+    let directional: Vec<&str> = (asset.lights.iter())
+        .filter(|l| l.kind == super::LightKind::Directional)
+        .map(|l| l.name.as_str())
+        .collect();
+    if !directional.is_empty() {
+        log::warn!(
+            "{}: the scene's [sun] lights it; its directional lights are not drawn: {}",
+            asset.path.display(),
+            directional.join(", ")
+        );
+    }
     out.lights.extend(asset.lights.iter().filter_map(|l| {
         let mut l = super::local_light(l)?;
         l.name = format!("{prefix}/{}", l.name);
