@@ -166,6 +166,7 @@
 
 mod build;
 mod build_vegetation;
+pub mod builtin;
 mod camera;
 mod environment;
 mod error;
@@ -651,7 +652,19 @@ impl Scene {
 
     /// [`Scene::from_gltf`] with an explicit memory budget.
     pub fn from_gltf_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
-        let mut asset = gltf::load_within(path, budget)?;
+        let mut asset = match path.to_str().and_then(|p| p.strip_prefix(builtin::PREFIX)) {
+            Some(name) => {
+                let bytes = builtin::model(name).ok_or_else(|| SceneError::Invalid {
+                    file: path.display().to_string(),
+                    message: format!(
+                        "no such built-in model (built in: {})",
+                        builtin::names().join(", ")
+                    ),
+                })?;
+                gltf::load_from_bytes_within(path, bytes, budget)?
+            }
+            None => gltf::load_within(path, budget)?,
+        };
         mirror_meshes(&mut asset.meshes, &mut asset.objects, &mut asset.pbr);
         let mut cameras = vec![NamedCamera {
             name: "default".into(),

@@ -71,8 +71,13 @@ pub(crate) fn place_all(
 ) -> Result<Placed, SceneError> {
     let mut out = Placed::default();
     for (k, g) in entries.iter().enumerate() {
-        let path = base_dir.join(g.file.get_ref());
-        if g.optional == Some(true) && !path.exists() {
+        let file = g.file.get_ref();
+        let builtin = file.strip_prefix(crate::scene::builtin::PREFIX);
+        let path = match builtin {
+            Some(_) => std::path::PathBuf::from(file),
+            None => base_dir.join(file),
+        };
+        if builtin.is_none() && g.optional == Some(true) && !path.exists() {
             log::warn!(
                 "{}: optional glTF \"{}\" not found, skipped",
                 ck.src.origin,
@@ -81,7 +86,22 @@ pub(crate) fn place_all(
             continue;
         }
         let mut transform = entry_transform(ck, g)?;
-        let asset = super::load_within(&path, budget).map_err(|e| {
+        let asset = match builtin {
+            Some(name) => {
+                let bytes = crate::scene::builtin::model(name).ok_or_else(|| {
+                    ck.err(
+                        &g.file.span(),
+                        format!(
+                            "no built-in model \"{name}\" (built in: {})",
+                            crate::scene::builtin::names().join(", ")
+                        ),
+                    )
+                })?;
+                super::load_from_bytes_within(&path, bytes, budget)
+            }
+            None => super::load_within(&path, budget),
+        }
+        .map_err(|e| {
             ck.err(
                 &g.file.span(),
                 format!("glTF \"{}\": {e}", g.file.get_ref()),
