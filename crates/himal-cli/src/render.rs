@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use himal::image_io::ImageKind;
+use himal::passes::post::Tonemapper;
 use himal::passes::sky::bruneton::TableSizes;
 use himal::scene::{Camera, Scene};
 use himal::{FrameSettings, Renderer, ViewBuffer};
@@ -120,6 +121,16 @@ pub struct PostArgs {
     /// Reinhard white point in scaled luminance (maps to white); default: L/(1+L).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub white_point: Option<f32>,
+    /// Tone mapper: reinhard (the talk's, default), neutral (Khronos PBR
+    /// Neutral), aces (Hill's fit) or agx (Blender's base), to compare
+    /// with other viewers.
+    #[arg(
+        long,
+        default_value = "reinhard",
+        value_name = "reinhard|neutral|aces|agx",
+        allow_hyphen_values = true
+    )]
+    pub tonemap: String,
     /// Ambient specular from the GGX-filtered sky cube (L4, M4); off: SH
     /// irradiance along the reflection vector.
     #[arg(
@@ -313,6 +324,16 @@ impl PostArgs {
             bail!("--white-point {w}: must be a positive finite luminance up to 1e6");
         }
         settings.white_point = self.white_point;
+        settings.tonemapper = self
+            .tonemap
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--tonemap {}: {e}", self.tonemap))?;
+        if self.white_point.is_some() && settings.tonemapper != Tonemapper::Reinhard {
+            bail!(
+                "--white-point is Reinhard's: leave it out with --tonemap {}",
+                self.tonemap
+            );
+        }
         settings.environment_specular = on_off("--env-specular", &self.env_specular)?;
         settings.environment_probes = on_off("--env-probes", &self.env_probes)?;
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;

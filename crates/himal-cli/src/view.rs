@@ -27,7 +27,7 @@ use crate::render::RenderArgs;
 
 pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
-7 TAA on AO and motion, 8 sky model, F fly the world's path, H HUD, P screenshot, Esc quit";
+7 TAA on AO and motion, 8 sky model, 9 tone mapper, F fly the world's path, H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -193,6 +193,13 @@ impl Viewer {
                     SkyModel::Preetham => SkyModel::Bruneton,
                 };
             }
+            KeyCode::Digit9 => {
+                s.tonemapper = s.tonemapper.next();
+                // The white point is Reinhard's: kept for it, dropped for the others.
+                s.white_point = (s.tonemapper == himal::passes::post::Tonemapper::Reinhard)
+                    .then_some(self.args.post.white_point)
+                    .flatten();
+            }
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
             KeyCode::KeyF => self.flying = self.path.is_some() && !self.flying,
@@ -258,9 +265,10 @@ impl Viewer {
                 on(s.sky_occlusion)
             ),
             format!(
-                "[7] TAA on AO+motion {}  [8] sky {:?}  [V] {}",
+                "[7] TAA on AO+motion {}  [8] sky {:?}  [9] tone {}  [V] {}",
                 on(s.aa_buffers.any()),
                 s.sky_model,
+                s.tonemapper.name(),
                 view_name(s.view)
             ),
         ];

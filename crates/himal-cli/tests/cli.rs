@@ -281,3 +281,23 @@ fn run_finds_a_vulkan_driver_beside_an_empty_folder() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn tonemap_flag_names_the_curves_and_keeps_the_white_point_reinhards() {
+    fails_with(
+        &["render", "--tonemap", "filmic", "--size", "8x8"],
+        "reinhard, neutral, aces, agx",
+    );
+    fails_with(
+        &[
+            "render",
+            "--tonemap",
+            "agx",
+            "--white-point",
+            "4",
+            "--size",
+            "8x8",
+        ],
+        "--white-point is Reinhard's",
+    );
+}

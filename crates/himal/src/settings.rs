@@ -118,6 +118,8 @@ pub struct FrameSettings {
     pub adaptation: AdaptationSettings,
     /// Reinhard white point (scaled luminance mapped to white); `None` = L/(1+L).
     pub white_point: Option<f32>,
+    /// The tone-map curve (Reinhard, the talk's, by default).
+    pub tonemapper: crate::passes::post::Tonemapper,
     /// H2 Kawase bloom.
     pub bloom: BloomSettings,
     /// Aerial perspective extinction per metre (0 = off).
@@ -211,6 +213,7 @@ impl FrameSettings {
             exposure_ev: 0.0,
             adaptation: AdaptationSettings::default(),
             white_point: None,
+            tonemapper: Default::default(),
             bloom: BloomSettings::default(),
             aerial_extinction: 2.5e-4,
             shadow_resolution: DEFAULT_SHADOW_RESOLUTION,

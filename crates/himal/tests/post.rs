@@ -390,3 +390,145 @@ fn kawase_chain_preserves_energy() {
     assert!(peak_after < 0.5 * peak_before, "the chain did not blur");
     assert!(rel <= 0.01, "energy changed by {rel}");
 }
+
+/// HDR test strip for the tone mappers: columns a log ramp 2^-8 .. 2^8,
+/// rows grey and seven hues (saturated primaries, pastel, skin).
+fn tonemap_strip() -> Image {
+    let hues = [
+        Vec3::ONE,
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(1.0, 0.3, 0.1),
+        Vec3::new(0.8, 0.5, 0.4),
+        Vec3::new(0.3, 0.6, 1.0),
+    ];
+    let width = 97;
+    let mut pixels = Vec::new();
+    for hue in hues {
+        for x in 0..width {
+            let v = (-8.0 + 16.0 * x as f32 / (width - 1) as f32).exp2();
+            pixels.push(hue * v);
+        }
+    }
+    Image {
+        width,
+        height: hues.len() as u32,
+        pixels,
+    }
+}
+
+/// Each tone mapper on the GPU against its CPU twin (the published
+/// formulas, reference.rs), as 8-bit sRGB: the bar is 1/255.
+#[test]
+fn tone_mappers_match_their_cpu_twins_within_one_step() {
+    use himal::passes::post::{PostInputs, TonemapKey, TonemapPass, Tonemapper};
+    let ctx = shared_context().expect("adapter");
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let pass = TonemapPass::new(ctx, format).expect("pass");
+    let bloom = BloomPass::new(ctx).expect("bloom (its sampler)");
+    let strip = quantize(&tonemap_strip());
+    let hdr = upload(ctx, &strip);
+    let post = uniform_buffer(
+        ctx,
+        "test.post",
+        &PostUniform::new(
+            0.18,
+            0.0,
+            None,
+            &BloomSettings::default(),
+            &AdaptationSettings::default(),
+            0.0,
+            true,
+        ),
+    );
+    // Exposure 0.18 at key 0.18: scale 1, the strip's values go in as they are.
+    let exposure = uniform_like_storage(ctx, [0.0, 0.18, 0.0, 0.0]);
+    let mut report = Vec::new();
+    for mapper in Tonemapper::ALL {
+        let output = himal::gpu::texture_2d(
+            &ctx.device,
+            "test.ldr",
+            (strip.width, strip.height),
+            1,
+            format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let mut g = FrameGraph::new();
+        let inputs = PostInputs {
+            post: &post,
+            exposure: g.import_buffer("exposure", &exposure),
+            bloom: None,
+            sampler: &bloom.sampler,
+        };
+        let h = g.import_texture("hdr", &hdr);
+        let o = g.import_texture("output", &output);
+        let key = TonemapKey {
+            mapper,
+            ..Default::default()
+        };
+        let out = pass.add(ctx, &mut g, key, h, inputs, o);
+        g.mark_output(out);
+        submit(ctx, g);
+        let bytes = read_texture(ctx, &output, 0, 0).expect("read back").bytes;
+        let mut worst = 0i32;
+        for (i, c) in strip.pixels.iter().enumerate() {
+            let cpu = reference::tonemap(*c, 1.0, mapper, None);
+            for ch in 0..3 {
+                let expected = (reference::srgb_encode(cpu[ch]) * 255.0).round() as i32;
+                worst = worst.max((expected - bytes[i * 4 + ch] as i32).abs());
+            }
+        }
+        report.push(format!("{} {worst}", mapper.name()));
+        // Measured on lavapipe 2026-12-03: worst 0 or 1 step for every curve
+        // (f32 pow/log2 and the sRGB encoder's rounding).
+        assert!(worst <= 1, "{}: worst {worst} steps of 255", mapper.name());
+    }
+    eprintln!(
+        "tone mappers, GPU vs CPU worst 8-bit step: {}",
+        report.join(", ")
+    );
+}
+
+/// The CPU twins against the curves' published numbers.
+#[test]
+fn tone_mapper_twins_meet_their_published_curves() {
+    use reference::{AgxCurve, aces_hill, agx, pbr_neutral};
+    // PBR Neutral: below K_s a colour whose channels all exceed 2 F90 only
+    // loses the F90 offset (base colours preserved); highlights reach 1.
+    let c = Vec3::new(0.5, 0.3, 0.1);
+    assert!((pbr_neutral(c) - (c - 0.04)).abs().max_element() < 1e-6);
+    assert!(pbr_neutral(Vec3::splat(1e4)).min_element() > 0.999);
+    // AgX: the parameters solved from (0, 0), the pivot and (1, 1) are
+    // EaryChow's published ones (AgX_LUT_Gen: a_bottom, a_top scaled by
+    // 0.0196130869^(1/1.5); min/max EV -12.4739312, 4.0260688).
+    let k = AgxCurve::new();
+    let s = 0.019_613_087f32.powf(1.0 / 1.5);
+    assert!((k.k_bottom - 58.337_322 * s).abs() < 1e-4, "{}", k.k_bottom);
+    assert!((k.k_top - 46.141_05 * s).abs() < 1e-4, "{}", k.k_top);
+    assert!(
+        (k.min_ev + 12.473_931).abs() < 1e-5 && (k.min_ev + k.range_ev - 4.026_069).abs() < 1e-5
+    );
+    assert!((k.sigmoid(0.0)).abs() < 1e-5 && (k.sigmoid(1.0) - 1.0).abs() < 1e-5);
+    // Mid grey is AgX's pivot: 0.18 in, 0.18 out.
+    let grey = agx(Vec3::splat(0.18));
+    assert!(
+        (grey - Vec3::splat(0.18)).abs().max_element() < 1e-4,
+        "{grey}"
+    );
+    // ACES (Hill): the fit's matrices keep grey grey; black stays black,
+    // bright values saturate at 1; monotone over the ramp.
+    let a = aces_hill(Vec3::splat(0.18));
+    assert!((a.x - a.y).abs() < 1e-4 && (a.y - a.z).abs() < 1e-4, "{a}");
+    assert_eq!(aces_hill(Vec3::ZERO), Vec3::ZERO);
+    assert!(aces_hill(Vec3::splat(1e3)).min_element() > 0.999);
+    for f in [pbr_neutral, aces_hill, agx] {
+        let mut last = -1.0f32;
+        for i in 0..200 {
+            let v = f(Vec3::splat((-8.0 + 16.0 * i as f32 / 199.0).exp2())).y;
+            assert!(v >= last - 1e-6, "not monotone at step {i}: {v} < {last}");
+            last = v;
+        }
+    }
+}

@@ -8,7 +8,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::pipeline::uniform_buffer;
 use crate::passes::debug::DebugView;
 use crate::passes::post::{
-    self, BloomSettings, FrameDelta, PostFrame, PostUniform, TonemapKey, adapted_buffer,
+    self, BloomSettings, FrameDelta, PostFrame, PostUniform, TonemapKey, Tonemapper, adapted_buffer,
 };
 use crate::renderer::{FrameSettings, ViewBuffer};
 
@@ -30,11 +30,18 @@ pub fn tonemap_key(settings: &FrameSettings) -> TonemapKey {
     TonemapKey {
         bloom: settings.bloom.enabled,
         white_point: settings.white_point.is_some(),
+        mapper: settings.tonemapper,
     }
 }
 
 pub fn validate(settings: &FrameSettings) -> Result<(), Error> {
     let bad = |m: String| Err(Error::InvalidSettings(m));
+    if settings.white_point.is_some() && settings.tonemapper != Tonemapper::Reinhard {
+        return bad(format!(
+            "a white point is Reinhard's (eq. 4): tone mapper {} has its own",
+            settings.tonemapper.name()
+        ));
+    }
     let b = &settings.bloom;
     if b.passes > BloomSettings::MAX_PASSES {
         return bad(format!(

@@ -1,6 +1,7 @@
 //! HDR post (TECHNIQUES H2, H3): log-average luminance reduced on the GPU,
 //! light adaptation kept on the GPU, Kawase bloom, bloom composite and
-//! Reinhard `L/(1+L)` (optionally with a white point) at key 0.18.
+//! Reinhard `L/(1+L)` (optionally with a white point) at key 0.18, or the
+//! Khronos PBR Neutral, ACES or AgX curve ([`Tonemapper`]).
 //! CPU twin: [`reference`].
 
 pub mod bloom;
@@ -10,7 +11,7 @@ mod tonemap;
 
 pub use bloom::{BloomInputs, BloomPass};
 pub use params::{AdaptationSettings, BloomSettings, FrameDelta, PostUniform};
-pub use tonemap::{PostInputs, TonemapKey, TonemapPass};
+pub use tonemap::{PostInputs, TonemapKey, TonemapPass, Tonemapper};
 
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};

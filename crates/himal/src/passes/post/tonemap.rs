@@ -1,30 +1,106 @@
-//! `post.tonemap`: bloom composite and Reinhard, one pipeline per
-//! [`TonemapKey`] (override constants `BLOOM`, `WHITE_POINT`).
+//! `post.tonemap`: bloom composite and a tone mapper (Reinhard, Khronos
+//! PBR Neutral, ACES, AgX), one pipeline per [`TonemapKey`] (override
+//! constants `BLOOM`, `WHITE_POINT`, `TONEMAP`). Curves:
+//! `docs/techniques/H3.md`; CPU twin: `reference.rs`.
+
+use std::str::FromStr;
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferAccess, BufferHandle, Fallback, FrameGraph, TextureHandle};
 use crate::passes::common::target;
 
+/// The curve from exposed scene-referred colour to display-linear [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Tonemapper {
+    /// Reinhard et al. 2002 on luminance, hue kept (the talk's, H3; the default).
+    #[default]
+    Reinhard,
+    /// Khronos PBR Neutral (glTF viewers: base colours kept up to 0.76).
+    Neutral,
+    /// ACES RRT + sRGB ODT, Hill's fit, with three.js's 1/0.6 exposure.
+    Aces,
+    /// AgX (Blender's base look), the analytic sigmoid of its LUT script.
+    Agx,
+}
+
+impl Tonemapper {
+    pub const ALL: [Tonemapper; 4] = [
+        Tonemapper::Reinhard,
+        Tonemapper::Neutral,
+        Tonemapper::Aces,
+        Tonemapper::Agx,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Tonemapper::Reinhard => "reinhard",
+            Tonemapper::Neutral => "neutral",
+            Tonemapper::Aces => "aces",
+            Tonemapper::Agx => "agx",
+        }
+    }
+
+    /// The shader's `TONEMAP` constant.
+    fn id(self) -> f64 {
+        Self::ALL.iter().position(|&m| m == self).unwrap_or(0) as f64
+    }
+
+    /// The next one (the viewer cycles them).
+    pub fn next(self) -> Tonemapper {
+        Self::ALL[(self.id() as usize + 1) % Self::ALL.len()]
+    }
+}
+
+impl FromStr for Tonemapper {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
+                format!("tone mapper \"{s}\": expected {}", names.join(", "))
+            })
+    }
+}
+
 /// The tone-map permutation: which code the shader keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct TonemapKey {
     pub bloom: bool,
+    /// Reinhard's white point (eq. 4); only with [`Tonemapper::Reinhard`].
     pub white_point: bool,
+    pub mapper: Tonemapper,
 }
 
 impl TonemapKey {
     /// Every permutation (for pre-warming).
-    pub fn all() -> [TonemapKey; 4] {
-        [(false, false), (true, false), (false, true), (true, true)]
-            .map(|(bloom, white_point)| TonemapKey { bloom, white_point })
+    pub fn all() -> Vec<TonemapKey> {
+        let mut keys = Vec::new();
+        for mapper in Tonemapper::ALL {
+            for bloom in [false, true] {
+                for white_point in [false, true] {
+                    if white_point && mapper != Tonemapper::Reinhard {
+                        continue;
+                    }
+                    keys.push(TonemapKey {
+                        bloom,
+                        white_point,
+                        mapper,
+                    });
+                }
+            }
+        }
+        keys
     }
 
-    fn constants(self) -> [(&'static str, f64); 2] {
+    fn constants(self) -> [(&'static str, f64); 3] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("BLOOM", b(self.bloom)),
             ("WHITE_POINT", b(self.white_point)),
+            ("TONEMAP", self.mapper.id()),
         ]
     }
 }
