@@ -137,15 +137,17 @@ pub fn lod_view(camera: &crate::scene::Camera, settings: &FrameSettings) -> LodV
     LodView {
         eye: camera.position,
         selection: lod::Selection {
-            scale: lod::distance_scale(
-                camera.fov_y_deg,
-                settings.height,
-                settings.lod_threshold_px,
-            ),
+            // Orthographic: a triangle's size does not fall with distance;
+            // every object is drawn at LOD0.
+            scale: if camera.orthographic.is_some() {
+                0.0
+            } else {
+                lod::distance_scale(camera.fov_y_deg, settings.height, settings.lod_threshold_px)
+            },
             focal_px: lod::focal_px(camera.fov_y_deg, settings.height),
             max_error_px: settings.lod_error_px,
             band: settings.lod_band,
-            object_scale: if settings.lod_object_px > 0.0 {
+            object_scale: if settings.lod_object_px > 0.0 && camera.orthographic.is_none() {
                 lod::focal_px(camera.fov_y_deg, settings.height) / settings.lod_object_px
             } else {
                 0.0

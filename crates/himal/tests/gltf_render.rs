@@ -109,3 +109,55 @@ fn temporal_aa_biases_texture_mips() {
     // without the permutation the two are equal.
     assert!(biased > plain * 1.03, "{biased} vs {plain}");
 }
+
+/// Orthographic cameras rendered as 40° perspective ones. The Cameras
+/// sample's second camera is orthographic (ymag 1, zfar 100) at (0.5, 0.5, 3)
+/// looking at a unit square tilted 45° about X: in parallel projection the
+/// square covers exactly 1 m by cos 45° m, 128 x 90.5 px of a 256 px image
+/// 2 m tall, wherever it lies in depth (AO under orthographic cameras:
+/// tests/ao.rs::orthographic_hbao_is_close_to_ray_traced_ao).
+#[test]
+fn orthographic_cameras_project_in_parallel() {
+    let scene = Scene::from_gltf(&common::gltf_sample("Cameras")).expect("model");
+    let ortho = scene
+        .cameras
+        .iter()
+        .find(|c| c.camera.orthographic.is_some())
+        .expect("an orthographic camera");
+    let o = ortho.camera.orthographic.unwrap();
+    assert_eq!((o.half_height, o.far), (1.0, 100.0));
+    let mut r = common::renderer(&scene);
+    let mut settings = FrameSettings::new(256, 256, scene.sun.clone());
+    settings.view = "albedo".parse().expect("view");
+    let albedo = r.render(&ortho.camera, &settings).expect("frame").image;
+    let px = albedo.to_rgba_f32().expect("rgba");
+    // The square's albedo is the default material's white; the sky is black.
+    let on = |x: u32, y: u32| px[(y * 256 + x) as usize][0] > 0.5;
+    let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0, u32::MAX, 0);
+    for y in 0..256 {
+        for x in 0..256 {
+            if on(x, y) {
+                (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            }
+        }
+    }
+    let (w, h) = (x1 + 1 - x0, y1 + 1 - y0);
+    eprintln!("orthographic square: {w} x {h} px at ({x0}, {y0})");
+    // Parallel projection: top and bottom edges equally wide (a perspective
+    // camera shows the tilted square as a trapezoid), 128 x 90.5 px.
+    let row = |y: u32| (0..256).filter(|&x| on(x, y)).count() as i32;
+    assert!(
+        (row(y0 + 2) - row(y1 - 2)).abs() <= 1,
+        "{} vs {}",
+        row(y0 + 2),
+        row(y1 - 2)
+    );
+    assert!(
+        (w as i32 - 128).abs() <= 1 && (h as i32 - 90).abs() <= 1,
+        "{w} x {h}"
+    );
+    assert!(
+        (x0 as i32 - 64).abs() <= 1,
+        "centred under the camera: x0 {x0}"
+    );
+}

@@ -21,6 +21,9 @@ pub struct ViewUniform {
     pub jitter: [f32; 4],
     /// x animation time now (s), y animation time of the previous frame, zw 0
     pub time: [f32; 4],
+    /// xyz unit view direction, w the far plane of an orthographic camera
+    /// (parallel rays), 0 for a perspective one
+    pub camera_forward: [f32; 4],
 }
 
 impl ViewUniform {
@@ -46,7 +49,15 @@ impl ViewUniform {
             viewport: [w, h, 1.0 / w, 1.0 / h],
             jitter: [0.0, 0.0, frame_index as f32, exposure_bias_ev],
             time: [0.0; 4],
+            // The view matrix's third row is the camera's back axis.
+            camera_forward: (-view.row(2).truncate()).extend(0.0).to_array(),
         }
+    }
+
+    /// Marks the camera orthographic (parallel view rays) with far plane `far`.
+    pub fn with_orthographic(mut self, far: Option<f32>) -> Self {
+        self.camera_forward[3] = far.unwrap_or(0.0);
+        self
     }
 
     /// Sets this frame's projection jitter in clip units (the matrices already carry it).

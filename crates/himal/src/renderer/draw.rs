@@ -276,7 +276,8 @@ impl Renderer {
             settings.exposure_ev,
         )
         .with_times(settings.time_s, prev_time)
-        .with_jitter(jitter_clip.x, jitter_clip.y);
+        .with_jitter(jitter_clip.x, jitter_clip.y)
+        .with_orthographic(camera.orthographic.map(|o| o.far));
         self.res
             .scene
             .update_objects(&self.ctx.queue, settings.time_s, prev_time);

@@ -356,6 +356,7 @@ pub(crate) fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<Nam
                 up,
                 fov_y_deg,
                 near,
+                orthographic: None,
             },
         });
     }

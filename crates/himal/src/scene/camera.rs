@@ -1,8 +1,19 @@
-//! Pinhole camera: right-handed, Y up, reverse-Z with an infinite far plane.
+//! Pinhole camera: right-handed, Y up, reverse-Z with an infinite far plane;
+//! or an orthographic one (glTF's), reverse-Z between near and far.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 
-/// A perspective camera in world space.
+/// Parallel projection: the view's half height and its far plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orthographic {
+    /// Half the view's height in metres (glTF `ymag`); the width follows
+    /// the image's aspect.
+    pub half_height: f32,
+    /// Far plane distance in metres (depth 0 there).
+    pub far: f32,
+}
+
+/// A perspective (or orthographic) camera in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub position: Vec3,
@@ -14,6 +25,9 @@ pub struct Camera {
     pub fov_y_deg: f32,
     /// Near plane distance in metres (depth 1 there).
     pub near: f32,
+    /// `Some`: an orthographic camera (`fov_y_deg` then only sizes what
+    /// needs an angle, e.g. the terrain's detail).
+    pub orthographic: Option<Orthographic>,
 }
 
 /// Near plane used when a scene file does not give one.
@@ -38,6 +52,7 @@ impl Camera {
             up: up_for(forward),
             fov_y_deg,
             near: DEFAULT_NEAR,
+            orthographic: None,
         }
     }
 
@@ -54,12 +69,26 @@ impl Camera {
 
     /// View to clip, reverse-Z with an infinite far plane: depth = near / distance,
     /// so 1 at the near plane and 0 at infinity; clip z in [0, 1], NDC Y up (wgpu).
+    /// Orthographic: depth = (far - distance) / (far - near), 1 at the near
+    /// plane and 0 at the far one, x and y scaled by the half extents.
     pub fn projection(&self, aspect: f32) -> Mat4 {
-        glam::camera::rh::proj::directx::perspective_infinite_reverse(
-            self.fov_y_deg.to_radians(),
-            aspect,
-            self.near,
-        )
+        match self.orthographic {
+            Some(o) => {
+                let (n, f) = (self.near, o.far.max(self.near * 1.001 + 1e-3));
+                let hh = o.half_height.max(1e-6);
+                Mat4::from_cols(
+                    Vec4::new(1.0 / (hh * aspect), 0.0, 0.0, 0.0),
+                    Vec4::new(0.0, 1.0 / hh, 0.0, 0.0),
+                    Vec4::new(0.0, 0.0, 1.0 / (f - n), 0.0),
+                    Vec4::new(0.0, 0.0, f / (f - n), 1.0),
+                )
+            }
+            None => glam::camera::rh::proj::directx::perspective_infinite_reverse(
+                self.fov_y_deg.to_radians(),
+                aspect,
+                self.near,
+            ),
+        }
     }
 
     pub fn view_projection(&self, aspect: f32) -> Mat4 {

@@ -189,7 +189,7 @@ use glam::{Mat4, Vec3};
 
 use crate::budget::MemoryBudget;
 
-pub use camera::{Camera, DEFAULT_NEAR};
+pub use camera::{Camera, DEFAULT_NEAR, Orthographic};
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};

@@ -19,23 +19,40 @@ struct AoParams {
     stf: vec4f,
     // xy: this frame's sample offset (px, y down), zw: the previous frame's (both inside the view matrices)
     jitter: vec4f,
+    // the projection's depth rows: P22, P23 (clip z), P32, P33 (clip w);
+    // perspective (0, near, -1, 0), orthographic (1/(f-n), f/(f-n), 0, 1)
+    depth: vec4f,
 }
 
 // Linear depth stored for pixels without geometry (fits Rg16Float).
 const AO_SKY_DEPTH: f32 = 65000.0;
 
-// Linear view depth (m) of device depth d (reverse-Z, infinite far plane: d = near / z).
+// Linear view depth z (m) of device depth d: d = (P22 z_v + P23) / (P32 z_v + P33)
+// solved for z_v = -z (perspective: d = near / z; orthographic: linear in z).
+// d = 0 is the cleared depth: infinity, or the orthographic far plane.
 fn ao_linear_depth(p: AoParams, d: f32) -> f32 {
     if (d <= 0.0) {
         return AO_SKY_DEPTH;
     }
-    return min(p.proj.z / d, AO_SKY_DEPTH);
+    let z_v = (p.depth.y - d * p.depth.w) / (d * p.depth.z - p.depth.x);
+    return min(-z_v, AO_SKY_DEPTH);
+}
+
+// Clip w at linear depth z: z (perspective) or 1 (orthographic).
+fn ao_clip_w(p: AoParams, z: f32) -> f32 {
+    return p.depth.w - p.depth.z * z;
 }
 
 // View-space position (camera looks down -Z, y up) at full-resolution uv (y down), linear depth z.
 fn ao_view_position(p: AoParams, uv: vec2f, z: f32) -> vec3f {
     let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    return vec3f(ndc * p.proj.xy * z, -z);
+    return vec3f(ndc * p.proj.xy * ao_clip_w(p, z), -z);
+}
+
+// The view ray's direction through view-space point q (not normalised):
+// q itself (perspective) or -Z (orthographic).
+fn ao_ray(p: AoParams, q: vec3f) -> vec3f {
+    return vec3f(q.xy * -p.depth.z, q.z);
 }
 
 // One tap of the cross-bilateral kernel: exp2(-r^2 falloff - dz^2), with dz the

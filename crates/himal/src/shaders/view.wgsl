@@ -15,6 +15,32 @@ struct View {
     jitter: vec4f,
     // x: animation time now (s); y: animation time of the previous frame; zw: 0
     time: vec4f,
+    // xyz: unit view direction; w: the far plane of an orthographic camera
+    // (parallel rays), 0 for a perspective one
+    camera_forward: vec4f,
+}
+
+fn is_orthographic(view: View) -> bool {
+    return view.camera_forward.w > 0.0;
+}
+
+// Distance along the view axis of device depth d (reverse-Z): near / d, or
+// linear between the near and far planes of an orthographic camera.
+fn view_distance(view: View, d: f32) -> f32 {
+    let near = view.camera_position.w;
+    if (is_orthographic(view)) {
+        return near + (1.0 - d) * (view.camera_forward.w - near);
+    }
+    return near / max(d, 1e-9);
+}
+
+// Unit vector from world point p towards the eye (the view vector V):
+// the same for every point under an orthographic camera.
+fn to_eye(view: View, p: vec3f) -> vec3f {
+    if (is_orthographic(view)) {
+        return -view.camera_forward.xyz;
+    }
+    return normalize(view.camera_position.xyz - p);
 }
 
 // Full-screen triangle: vertex 0..2 covers the screen; uv has y down.
@@ -40,5 +66,5 @@ fn world_at_fragment(view: View, frag_xy: vec2f, depth: f32) -> vec3f {
 fn view_ray(view: View, uv: vec2f) -> vec3f {
     let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0, 1.0);
     let p = view.inv_view_proj * ndc;
-    return normalize(p.xyz / p.w - view.camera_position.xyz);
+    return -to_eye(view, p.xyz / p.w);
 }

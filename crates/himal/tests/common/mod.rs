@@ -244,6 +244,26 @@ pub fn pixel_ray(camera: &Camera, size: (u32, u32), x: u32, y: u32) -> Vec3 {
     (p.truncate() / p.w - camera.position).normalize()
 }
 
+/// Origin (on the near plane) and unit direction of the ray through pixel
+/// (x, y): perspective and orthographic cameras alike.
+#[allow(dead_code)]
+pub fn pixel_ray_from(camera: &Camera, size: (u32, u32), x: u32, y: u32) -> (Vec3, Vec3) {
+    let (w, h) = (size.0 as f32, size.1 as f32);
+    let inv = camera.view_projection(w / h).inverse();
+    let at = |depth: f32| {
+        let p = inv
+            * Vec4::new(
+                (x as f32 + 0.5) / w * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / h * 2.0,
+                depth,
+                1.0,
+            );
+        p.truncate() / p.w
+    };
+    let near = at(1.0);
+    (near, (at(0.5) - near).normalize())
+}
+
 /// The renderer's filtered environment cube and DFG table read back, for
 /// the lighting twin's `ENV_SPECULAR` path.
 pub fn environment_specular(

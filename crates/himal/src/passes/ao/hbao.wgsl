@@ -100,11 +100,11 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var n = cross(dx, dy);
     let len = length(n);
     n = select(vec3f(0.0, 0.0, 1.0), n / max(len, 1e-20), len > 1e-20);
-    if (dot(n, p) > 0.0) {
+    if (dot(n, ao_ray(params, p)) > 0.0) {
         n = -n;
     }
     let mask = select(0.0, 1.0, continuous);
-    let radius_px = min(params.hbao.x * params.proj.w / -p.z, params.hbao_steps.w);
+    let radius_px = min(params.hbao.x * params.proj.w / ao_clip_w(params, -p.z), params.hbao_steps.w);
     if (radius_px < 1.0) {
         return vec4f(1.0, mask, 0.0, 0.0);
     }

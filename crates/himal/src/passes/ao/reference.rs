@@ -72,16 +72,27 @@ fn v4(a: [f32; 4]) -> Vec4 {
 /// `ao_linear_depth`.
 pub fn linear_depth(p: &AoUniform, d: f32) -> f32 {
     if d <= 0.0 {
-        SKY_DEPTH
-    } else {
-        (p.proj[2] / d).min(SKY_DEPTH)
+        return SKY_DEPTH;
     }
+    let [p22, p23, p32, p33] = p.depth;
+    let z_v = (p23 - d * p33) / (d * p32 - p22);
+    (-z_v).min(SKY_DEPTH)
+}
+
+/// `ao_clip_w`.
+pub fn clip_w(p: &AoUniform, z: f32) -> f32 {
+    p.depth[3] - p.depth[2] * z
 }
 
 /// `ao_view_position`.
 pub fn view_position(p: &AoUniform, uv: Vec2, z: f32) -> Vec3 {
     let ndc = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    (ndc * Vec2::new(p.proj[0], p.proj[1]) * z).extend(-z)
+    (ndc * Vec2::new(p.proj[0], p.proj[1]) * clip_w(p, z)).extend(-z)
+}
+
+/// `ao_ray`.
+fn ray(p: &AoUniform, q: Vec3) -> Vec3 {
+    (q.truncate() * -p.depth[2]).extend(q.z)
 }
 
 /// View position of AO texel `q` (`texel_position` in hbao.wgsl).
@@ -172,11 +183,11 @@ pub fn hbao(p: &AoUniform, depth: &Image<f32>) -> Image<[f32; 2]> {
         } else {
             Vec3::Z
         };
-        if n.dot(pos) > 0.0 {
+        if n.dot(ray(p, pos)) > 0.0 {
             n = -n;
         }
         let mask = if continuous { 1.0 } else { 0.0 };
-        let radius_px = (p.hbao[0] * p.proj[3] / -pos.z).min(p.hbao_steps[3]);
+        let radius_px = (p.hbao[0] * p.proj[3] / clip_w(p, -pos.z)).min(p.hbao_steps[3]);
         if radius_px < 1.0 {
             return [1.0, mask];
         }

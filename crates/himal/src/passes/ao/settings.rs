@@ -137,10 +137,14 @@ pub struct AoUniform {
     /// xy this frame's sample offset (px, y down), zw the previous frame's:
     /// the view matrices carry them, the STF's reprojection takes them out.
     pub jitter: [f32; 4],
+    /// The projection's depth rows: P22, P23 (clip z), P32, P33 (clip w);
+    /// perspective (0, near, -1, 0) and orthographic cameras alike.
+    pub depth: [f32; 4],
 }
 
 impl AoUniform {
-    /// `proj` is the camera projection (reverse-Z, infinite far), `near` its near plane.
+    /// `proj` is the camera projection (reverse-Z: infinite far plane, or
+    /// orthographic), `near` its near plane.
     pub fn new(s: &AoSettings, proj: Mat4, near: f32, full: (u32, u32)) -> Self {
         let ao = s.ao_size(full);
         let size = |(w, h): (u32, u32)| [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32];
@@ -179,6 +183,7 @@ impl AoUniform {
                 if s.selective { 1.0 } else { 0.0 },
             ],
             jitter: [0.0; 4],
+            depth: [proj.z_axis.z, proj.w_axis.z, proj.z_axis.w, proj.w_axis.w],
         }
     }
 

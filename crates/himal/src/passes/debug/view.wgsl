@@ -52,8 +52,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         case 7u: { raw = vec4f(vec3f(m.w), 1.0); disp = vec3f(m.w); }
         case 8u: {
             raw = vec4f(vec3f(d), 1.0);
-            // distance = near / depth for an infinite reverse-Z projection; log scale 1 m .. 4 km
-            let dist = view.camera_position.w / max(d, 1e-9);
+            // log scale 1 m .. 4 km
+            let dist = view_distance(view, d);
             disp = vec3f(1.0 - clamp(log2(max(dist, 1.0)) / 12.0, 0.0, 1.0));
         }
         case 9u: {

@@ -41,6 +41,7 @@ pub fn face_camera(position: Vec3, face: usize) -> Camera {
         up,
         fov_y_deg: 90.0,
         near: PROBE_NEAR,
+        orthographic: None,
     }
 }
 

@@ -31,7 +31,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let d = textureLoad(depth, px, 0);
     // A point on the pixel's ray (depth 1 = the near plane under reverse-Z).
     let p = world_at_fragment(view, frag.xy, select(1.0, d, d > 0.0));
-    let v = normalize(view.camera_position.xyz - p);
+    let v = to_eye(view, p);
     var radiance: vec3f;
     if (d <= 0.0) {
         radiance = textureSampleLevel(env_specular, env_sampler, -v, 0.0).rgb;

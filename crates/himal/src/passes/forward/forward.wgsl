@@ -93,7 +93,7 @@ fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
     let ao = 1.0 + material.params.y * (occlusion - 1.0);
     let anisotropy = anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
     let surf = surface_from_material(in.color.rgb * base.rgb, 1.0 - roughness, in.surface.y, metallic, anisotropy);
-    let v = normalize(view.camera_position.xyz - in.world);
+    let v = to_eye(view, in.world);
     let n_o_v = max(dot(tbn[2], v), 1e-4);
     let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, anisotropy));
     let lod = roughness * f32(textureNumLevels(env_specular) - 1u);

@@ -144,9 +144,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
     let m = textureLoad(gbuffer_material, px, 0);
     let s = surface_from_material(albedo_ao.rgb, m.x, m.y, m.z, m.w);
-    let to_camera = view.camera_position.xyz - p;
-    let dist = length(to_camera);
-    let v = to_camera / dist;
+    let dist = length(view.camera_position.xyz - p);
+    let v = to_eye(view, p);
     var mask = vec4f(1.0);
     if (SHADOWS) {
         mask = textureLoad(shadow_mask, min(px, vec2i(textureDimensions(shadow_mask)) - 1), 0);

@@ -105,13 +105,25 @@ pub fn practical_splits(near: f32, far: f32, lambda: f32) -> [f32; CASCADES + 1]
 /// tan²(fov/2)(1 + aspect²). Depends on the slice only, never on the camera's
 /// position or orientation, so its size cannot change as the camera moves.
 pub fn slice_sphere(camera: &Camera, aspect: f32, d_near: f32, d_far: f32) -> (Vec3, f32) {
+    let forward = camera.forward.normalize_or(Vec3::NEG_Z);
+    // Orthographic: the slice is a box of the view's half extents.
+    if let Some(o) = camera.orthographic {
+        let half = Vec3::new(
+            o.half_height * aspect,
+            o.half_height,
+            0.5 * (d_far - d_near),
+        );
+        return (
+            camera.position + forward * (0.5 * (d_near + d_far)),
+            half.length(),
+        );
+    }
     let tan = (camera.fov_y_deg.to_radians() * 0.5).tan();
     let k2 = tan * tan * (1.0 + aspect * aspect);
     let t = ((d_near + d_far) * (1.0 + k2) * 0.5).min(d_far);
     let radius = ((t - d_near).powi(2) + d_near * d_near * k2)
         .sqrt()
         .max(((d_far - t).powi(2) + d_far * d_far * k2).sqrt());
-    let forward = camera.forward.normalize_or(Vec3::NEG_Z);
     (camera.position + forward * t, radius)
 }
 
@@ -142,4 +154,50 @@ pub fn fit_cascade(
     }
     let z_near = top_of(rotation, scene).max(c.z + radius);
     ortho_fit(rotation, c, half, z_near, c.z - radius, resolution)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The slice sphere holds every corner of the view slice, for a
+    /// perspective camera's frustum piece and an orthographic camera's box,
+    /// and the box's sphere is the tight one (its corners on the surface).
+    #[test]
+    fn slice_spheres_hold_the_slice_for_both_projections() {
+        let mut camera =
+            Camera::look_at(Vec3::new(3.0, 2.0, 5.0), Vec3::new(-1.0, 0.5, -4.0), 50.0);
+        let aspect = 1.6;
+        for ortho in [
+            None,
+            Some(crate::scene::Orthographic {
+                half_height: 7.0,
+                far: 300.0,
+            }),
+        ] {
+            camera.orthographic = ortho;
+            let inv = camera.view_projection(aspect).inverse();
+            let (d_n, d_f) = (4.0, 40.0);
+            let (c, r) = slice_sphere(&camera, aspect, d_n, d_f);
+            let mut farthest = 0.0f32;
+            for d in [d_n, d_f] {
+                // The depth of view distance d under this projection.
+                let p = camera.position + camera.forward * d;
+                let clip = camera.view_projection(aspect) * p.extend(1.0);
+                let z = clip.z / clip.w;
+                for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                    let q = inv * glam::Vec4::new(x, y, z, 1.0);
+                    let corner = q.truncate() / q.w;
+                    farthest = farthest.max(corner.distance(c));
+                }
+            }
+            assert!(
+                farthest <= r * (1.0 + 1e-4),
+                "{ortho:?}: corner at {farthest}, radius {r}"
+            );
+            if ortho.is_some() {
+                assert!((farthest - r).abs() < 1e-3 * r, "{farthest} vs {r}");
+            }
+        }
+    }
 }

@@ -436,10 +436,17 @@ fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
         .transform_vector3(Vec3::NEG_Z)
         .normalize_or(Vec3::NEG_Z);
     let up = world.transform_vector3(Vec3::Y).normalize_or(Vec3::Y);
-    let (fov, near) = match c.projection() {
-        gltf::camera::Projection::Perspective(p) => (p.yfov().to_degrees(), p.znear()),
-        // Orthographic cameras become 40-degree perspective ones.
-        gltf::camera::Projection::Orthographic(o) => (40.0, o.znear().max(0.01)),
+    let (fov, near, orthographic) = match c.projection() {
+        gltf::camera::Projection::Perspective(p) => (p.yfov().to_degrees(), p.znear(), None),
+        // The world scale of the node scales the view box (glTF 3.10.3).
+        gltf::camera::Projection::Orthographic(o) => {
+            let scale = world.transform_vector3(Vec3::Y).length();
+            let ortho = crate::scene::Orthographic {
+                half_height: (o.ymag().abs() * scale).max(1e-6),
+                far: o.zfar().max(o.znear() + 1e-3),
+            };
+            (40.0, o.znear().max(0.0), Some(ortho))
+        }
     };
     NamedCamera {
         name: c.name().unwrap_or(name).to_string(),
@@ -448,7 +455,9 @@ fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
             forward,
             up,
             fov_y_deg: if fov > 0.0 && fov < 179.0 { fov } else { 40.0 },
+            // An orthographic near plane may be 0; depth needs it in front.
             near: if near > 0.0 { near } else { 0.01 },
+            orthographic,
         },
     }
 }
