@@ -27,9 +27,20 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
     pub gltf: Option<String>,
     /// An equirectangular HDR environment (.hdr or .exr) lighting the scene
-    /// instead of the physical sky (replaces the scene's `[environment]`).
-    #[arg(long, value_name = "FILE", allow_hyphen_values = true)]
+    /// instead of the physical sky (replaces the scene's `[environment]`);
+    /// `studio`: the built-in neutral studio (the default with --gltf);
+    /// `sky`: the physical sky.
+    #[arg(long, value_name = "FILE|studio|sky", allow_hyphen_values = true)]
     pub env: Option<String>,
+    /// Orbit camera around the scene's bounds: degrees about +Y from the
+    /// front (+Z, positive toward +X), degrees above the horizon, and the
+    /// distance in metres (default: the bounds fill the view). A bare
+    /// --gltf opens at 35,20.
+    #[arg(long, value_name = "YAW,PITCH[,DISTANCE]", allow_hyphen_values = true)]
+    pub orbit: Option<String>,
+    /// Vertical field of view in degrees (replaces the camera's).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub fov: Option<f32>,
     /// Radiance scale of --env.
     #[arg(
         long,
@@ -523,6 +534,64 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     })
 }
 
+/// `--orbit`, `--fov` and `--camera` applied: a named camera, an orbit of
+/// the scene's bounds (a bare model's default: three-quarter), or the
+/// scene's first camera.
+pub fn view_camera(args: &RenderArgs, scene: &Scene, model: bool) -> Result<Camera> {
+    if let Some(fov) = args.fov
+        && !(fov.is_finite() && fov > 0.5 && fov < 179.0)
+    {
+        bail!("--fov {fov}: degrees in (0.5, 179)");
+    }
+    if args.orbit.is_some() && args.camera.is_some() {
+        bail!("--orbit places its own camera: leave out --camera");
+    }
+    let fov = args.fov.unwrap_or(40.0);
+    let orbit = match &args.orbit {
+        Some(spec) => Some(parse_orbit(spec)?),
+        None if model && args.camera.is_none() => {
+            let (yaw, pitch) = himal::scene::gltf::THREE_QUARTER;
+            Some((yaw, pitch, None))
+        }
+        None => None,
+    };
+    let mut camera = match orbit {
+        Some((yaw, pitch, distance)) => {
+            himal::scene::gltf::orbit_camera(&scene.bounds, yaw, pitch, distance, fov)
+        }
+        None => pick_camera(scene, args.camera.as_deref())?,
+    };
+    if let Some(fov) = args.fov {
+        camera.fov_y_deg = fov;
+    }
+    Ok(camera)
+}
+
+/// `YAW,PITCH[,DISTANCE]`: finite degrees, pitch within ±89.9, distance > 0.
+pub fn parse_orbit(spec: &str) -> Result<(f32, f32, Option<f32>)> {
+    let bad = || {
+        anyhow::anyhow!("--orbit {spec}: expected YAW,PITCH[,DISTANCE] (degrees, degrees, metres)")
+    };
+    let v: Vec<f32> = spec
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|_| bad()))
+        .collect::<Result<_>>()?;
+    if !(2..=3).contains(&v.len()) || v.iter().any(|x| !x.is_finite()) {
+        return Err(bad());
+    }
+    if v[1].abs() > 89.9 {
+        bail!(
+            "--orbit {spec}: pitch {} must lie within ±89.9 degrees",
+            v[1]
+        );
+    }
+    let distance = v.get(2).copied();
+    if distance.is_some_and(|d| d <= 0.0) {
+        bail!("--orbit {spec}: the distance must be positive");
+    }
+    Ok((v[0], v[1], distance))
+}
+
 /// The named camera, or the scene's first.
 pub fn pick_camera(scene: &Scene, name: Option<&str>) -> Result<Camera> {
     let origin = scene
@@ -610,12 +679,25 @@ pub fn setup(
     check_output_space(&args.out, width, height, args.frames, kind)?;
     let mut scene = args.load_scene()?;
     check_hero(&scene, args.shadows.hero.as_deref())?;
-    if let Some(env) = &args.env {
-        let mut desc = himal::scene::EnvironmentDesc::new(env);
-        desc.intensity = args.env_intensity;
-        scene.environment = Some(desc);
+    let model = args.gltf.is_some() || is_gltf(&args.scene);
+    // A model is judged under neutral studio light unless asked otherwise.
+    let env = match args.env.as_deref() {
+        Some("sky") => None,
+        Some("studio") => Some(himal::scene::STUDIO),
+        Some(file) => Some(file),
+        None if model => Some(himal::scene::STUDIO),
+        None => None,
+    };
+    match env {
+        Some(env) => {
+            let mut desc = himal::scene::EnvironmentDesc::new(env);
+            desc.intensity = args.env_intensity;
+            scene.environment = Some(desc);
+        }
+        None if args.env.is_some() => scene.environment = None,
+        None => {}
     }
-    let camera = pick_camera(&scene, args.camera.as_deref())?;
+    let camera = view_camera(args, &scene, model)?;
     let mut sun = scene.sun.clone();
     if let Some(t) = &args.time {
         sun.time_hours = himal::scene::parse_time(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;

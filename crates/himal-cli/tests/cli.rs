@@ -301,3 +301,46 @@ fn tonemap_flag_names_the_curves_and_keeps_the_white_point_reinhards() {
         "--white-point is Reinhard's",
     );
 }
+
+/// --orbit and --fov frame a model as another viewer's camera would; bad
+/// values are named.
+#[test]
+fn orbit_and_fov_are_checked() {
+    let out = common::temp_path("orbit").with_extension("png");
+    let out = out.to_string_lossy();
+    let args = [
+        "render",
+        "--gltf",
+        "builtin:DamagedHelmet.glb",
+        "--orbit",
+        "30,20,4",
+        "--fov",
+        "35",
+        "--size",
+        "32x32",
+        "--out",
+        &out,
+    ];
+    let (ok, _, err) = himal(&args);
+    assert!(ok, "{err}");
+    std::fs::remove_file(&*out).ok();
+    fails_with(
+        &["render", "--orbit", "30", "--size", "8x8"],
+        "YAW,PITCH[,DISTANCE]",
+    );
+    fails_with(
+        &["render", "--orbit", "0,95", "--size", "8x8"],
+        "within ±89.9",
+    );
+    fails_with(
+        &["render", "--orbit", "0,0,-1", "--size", "8x8"],
+        "distance must be positive",
+    );
+    fails_with(
+        &[
+            "render", "--orbit", "0,0", "--camera", "village", "--size", "8x8",
+        ],
+        "leave out --camera",
+    );
+    fails_with(&["render", "--fov", "0", "--size", "8x8"], "--fov 0");
+}

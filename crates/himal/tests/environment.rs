@@ -128,3 +128,34 @@ fn bad_environments_name_the_file() {
         .to_string();
     assert!(e.starts_with("bad.toml:3:"), "{e}");
 }
+
+/// The built-in studio (`--env studio`, the default for a bare `--gltf`):
+/// neutral white light, a key softbox front-right brighter than the fill
+/// front-left, a floor darker than the ceiling, scaled by the intensity.
+#[test]
+fn the_studio_environment_is_neutral_and_keyed_front_right() {
+    use himal::scene::STUDIO;
+    let studio = EnvironmentImage::load(&EnvironmentDesc::new(STUDIO)).expect("generated");
+    assert_eq!((studio.width, studio.height), (512, 256));
+    assert!(
+        studio
+            .texels
+            .iter()
+            .all(|t| t.is_finite() && t.x == t.y && t.y == t.z)
+    );
+    let at = |d: glam::Vec3| studio.sample(d.normalize()).x;
+    let (key, fill) = (
+        at(glam::Vec3::new(0.7, 0.55, 0.6)),
+        at(glam::Vec3::new(-0.8, 0.25, 0.55)),
+    );
+    let (floor, ceiling) = (at(glam::Vec3::NEG_Y), at(glam::Vec3::Y));
+    eprintln!("studio: key {key}, fill {fill}, floor {floor}, ceiling {ceiling}");
+    assert!(
+        key > 3.0 * fill && fill > 2.0 * ceiling && ceiling > floor,
+        "{key} {fill} {ceiling} {floor}"
+    );
+    let mut brighter = EnvironmentDesc::new(STUDIO);
+    brighter.intensity = 2.0;
+    let twice = EnvironmentImage::load(&brighter).expect("generated");
+    assert!((twice.sample(glam::Vec3::Y).x - 2.0 * ceiling).abs() < 1e-4);
+}

@@ -358,3 +358,36 @@ fn built_in_models_open_by_name() {
         "{e}"
     );
 }
+
+/// `--orbit YAW,PITCH[,DISTANCE]`: the camera sits on the orbit sphere at
+/// those angles, looks at the bounds' centre, and by default frames the
+/// bounding sphere (distance sin(fov/2) = 1.1 r); the front framing camera
+/// is the orbit at yaw 0, pitch atan(1/4).
+#[test]
+fn orbit_cameras_sit_where_their_angles_say() {
+    use himal::scene::Aabb;
+    use himal::scene::gltf::{framing_camera, orbit_camera};
+    let bounds = Aabb {
+        min: Vec3::new(-1.0, 0.0, -2.0),
+        max: Vec3::new(3.0, 2.0, 0.0),
+    };
+    let (centre, r) = (bounds.center(), bounds.extent().length() * 0.5);
+    let side = orbit_camera(&bounds, 90.0, 0.0, Some(10.0), 30.0);
+    assert!(
+        side.position.abs_diff_eq(centre + Vec3::X * 10.0, 1e-4),
+        "{}",
+        side.position
+    );
+    assert!(side.forward.abs_diff_eq(Vec3::NEG_X, 1e-5));
+    let above = orbit_camera(&bounds, -30.0, 45.0, None, 40.0);
+    let to = above.position - centre;
+    assert!((to.length() * 20f32.to_radians().sin() - 1.1 * r).abs() < 1e-3);
+    assert!((to.y / to.length() - 45f32.to_radians().sin()).abs() < 1e-5);
+    assert!(to.x < 0.0 && to.z > 0.0, "yaw -30: front-left, {to}");
+    let front = framing_camera(&bounds, 40.0);
+    let dir = (front.position - centre).normalize();
+    assert!(
+        dir.abs_diff_eq(Vec3::new(0.0, 0.25, 1.0).normalize(), 1e-5),
+        "{dir}"
+    );
+}

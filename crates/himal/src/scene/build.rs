@@ -169,7 +169,12 @@ pub(crate) fn build_scene(
     let lights = super::lights::build_lights(&ck, &file.light)?;
     let environment = match &file.environment {
         Some(e) => {
-            let mut desc = super::EnvironmentDesc::new(base_dir.join(e.file.get_ref()));
+            let file = e.file.get_ref();
+            let mut desc = super::EnvironmentDesc::new(if file == super::STUDIO {
+                std::path::PathBuf::from(file)
+            } else {
+                base_dir.join(file)
+            });
             if let Some(i) = &e.intensity {
                 desc.intensity = ck.range(i, "intensity", 0.0, 1e6)?;
             }

@@ -148,6 +148,35 @@ fn decode(
     }
 }
 
+/// The studio's radiance toward unit `d`: backdrop plus softboxes.
+fn studio_radiance(boxes: &[Softbox], d: Vec3) -> f32 {
+    let smooth = |e0: f32, e1: f32, x: f32| {
+        let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
+    // Cyclorama: 0.35 at the floor, 0.5 at the horizon, 0.8 overhead.
+    let mut l = if d.y >= 0.0 {
+        0.5 + 0.3 * d.y
+    } else {
+        0.5 - 0.15 * smooth(0.0, 0.3, -d.y)
+    };
+    for b in boxes {
+        // Angles from the box's centre along its horizontal and vertical axes.
+        let right = Vec3::Y.cross(b.toward).normalize_or(Vec3::X);
+        let up = b.toward.cross(right);
+        let forward = d.dot(b.toward);
+        if forward <= 0.0 {
+            continue;
+        }
+        let (x, y) = (d.dot(right).atan2(forward), d.dot(up).atan2(forward));
+        let feather = 0.04;
+        let inside = (1.0 - smooth(b.half.x - feather, b.half.x + feather, x.abs()))
+            * (1.0 - smooth(b.half.y - feather, b.half.y + feather, y.abs()));
+        l += b.radiance * inside;
+    }
+    l
+}
+
 fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         file: path.display().to_string(),
@@ -155,10 +184,79 @@ fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     }
 }
 
+/// The built-in studio environment's name (`--env studio`, the default
+/// for a bare `--gltf`).
+pub const STUDIO: &str = "builtin:studio";
+
+/// A softbox of the studio: a rectangle of constant radiance, feathered.
+struct Softbox {
+    /// Unit direction to its centre.
+    toward: Vec3,
+    /// Half extents in radians (along the horizon, up).
+    half: Vec2,
+    radiance: f32,
+}
+
 impl EnvironmentImage {
-    /// Reads `.hdr` (Radiance RGBE) or `.exr`, scaled by the intensity.
+    /// A neutral photo studio, generated: a grey cyclorama (brighter above,
+    /// a darker floor) lit by a key softbox front-right, a larger dim fill
+    /// front-left and a rim strip behind, all white (no tint to judge
+    /// materials by). Radiance relative, like an image's.
+    pub fn studio(desc: &EnvironmentDesc) -> Self {
+        let (width, height) = (512usize, 256usize);
+        let boxes = [
+            Softbox {
+                toward: Vec3::new(0.7, 0.55, 0.6).normalize(),
+                half: Vec2::new(0.32, 0.22),
+                radiance: 14.0,
+            },
+            Softbox {
+                toward: Vec3::new(-0.8, 0.25, 0.55).normalize(),
+                half: Vec2::new(0.5, 0.3),
+                radiance: 3.0,
+            },
+            Softbox {
+                toward: Vec3::new(0.0, 0.45, -1.0).normalize(),
+                half: Vec2::new(0.6, 0.06),
+                radiance: 9.0,
+            },
+        ];
+        let mut texels = Vec::with_capacity(width * height);
+        for j in 0..height {
+            for i in 0..width {
+                let theta = (j as f32 + 0.5) / height as f32 * std::f32::consts::PI;
+                let phi = ((i as f32 + 0.5) / width as f32 - 0.5) * std::f32::consts::TAU;
+                let d = Vec3::new(
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                    -theta.sin() * phi.cos(),
+                );
+                texels.push(Vec3::splat(
+                    studio_radiance(&boxes, d) * desc.intensity.max(0.0),
+                ));
+            }
+        }
+        Self {
+            width,
+            height,
+            texels,
+            rotation: desc.rotation_deg.to_radians(),
+        }
+    }
+
+    /// Reads `.hdr` (Radiance RGBE) or `.exr`, scaled by the intensity;
+    /// [`STUDIO`] is generated.
     pub fn load(desc: &EnvironmentDesc) -> Result<Self, SceneError> {
         let path = &desc.path;
+        if path.as_os_str() == STUDIO {
+            if !desc.intensity.is_finite() || desc.intensity < 0.0 {
+                return Err(invalid(
+                    path,
+                    format!("intensity {} must be >= 0", desc.intensity),
+                ));
+            }
+            return Ok(Self::studio(desc));
+        }
         let format = EnvironmentFormat::of(path)?;
         let meta =
             std::fs::metadata(path).map_err(|e| invalid(path, format!("cannot read: {e}")))?;

@@ -190,7 +190,7 @@ use glam::{Mat4, Vec3};
 use crate::budget::MemoryBudget;
 
 pub use camera::{Camera, DEFAULT_NEAR, Orthographic};
-pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage};
+pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
 pub use lights::{LightDesc, LightKind};

@@ -654,16 +654,38 @@ fn primitive(
 }
 
 /// A camera on +Z looking at the centre of `bounds` (glTF models face +Z),
-/// a little above it, far enough that the bounding sphere fills the
+/// 14° above it, far enough that the bounding sphere fills the
 /// vertical field of view `fov_y_deg` (square images) with a 10 % margin.
 pub fn framing_camera(bounds: &Aabb, fov_y_deg: f32) -> Camera {
+    orbit_camera(bounds, 0.0, 0.25f32.atan().to_degrees(), None, fov_y_deg)
+}
+
+/// The three-quarter view a bare `--gltf` opens with (front-right, above).
+pub const THREE_QUARTER: (f32, f32) = (35.0, 20.0);
+
+/// A camera orbiting the centre of `bounds`: `yaw_deg` about +Y from the
+/// front (+Z; positive toward +X), `pitch_deg` above the horizon, at
+/// `distance` (default: the bounding sphere fills `fov_y_deg` with a 10 %
+/// margin), looking at the centre.
+pub fn orbit_camera(
+    bounds: &Aabb,
+    yaw_deg: f32,
+    pitch_deg: f32,
+    distance: Option<f32>,
+    fov_y_deg: f32,
+) -> Camera {
     let (centre, radius) = if bounds.is_empty() {
         (Vec3::ZERO, 1.0)
     } else {
         (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
     };
-    let distance = 1.1 * radius / (fov_y_deg.to_radians() * 0.5).sin();
-    let direction = Vec3::new(0.0, 0.25, 1.0).normalize();
+    let distance = distance.unwrap_or_else(|| 1.1 * radius / (fov_y_deg.to_radians() * 0.5).sin());
+    let (yaw, pitch) = (yaw_deg.to_radians(), pitch_deg.to_radians());
+    let direction = Vec3::new(
+        pitch.cos() * yaw.sin(),
+        pitch.sin(),
+        pitch.cos() * yaw.cos(),
+    );
     let mut camera = Camera::look_at(centre + direction * distance, centre, fov_y_deg);
     camera.near = (distance - radius).max(distance * 1e-3) * 0.5;
     camera
