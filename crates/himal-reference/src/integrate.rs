@@ -107,7 +107,7 @@ where
 /// Deterministic quadrature of the integral of `f` over the cap of half-angle
 /// `theta_max` (pi for the whole sphere) around unit `axis`.
 ///
-/// Nodes are midpoints in s in [0,1] and phi, with theta = theta_max s^power:
+/// Nodes are midpoints in s in \[0,1\] and phi, with theta = theta_max s^power:
 /// power > 1 crowds nodes near the axis, so a lobe of width ~alpha around it
 /// is resolved when `n_s` >> (alpha / theta_max)^(-1/power). The Jacobian
 /// sin(theta) dtheta/ds is exact, so only f's variation limits accuracy.

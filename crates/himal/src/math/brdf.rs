@@ -3,7 +3,7 @@
 //!
 //! Anisotropic GGX D (Burley 2012), height-correlated anisotropic Smith
 //! visibility (Heitz 2014), Schlick Fresnel, Lambertian diffuse. Parameters
-//! are the talk's, all in [0,1]: glossiness (= smoothness), reflectance
+//! are the talk's, all in \[0,1\]: glossiness (= smoothness), reflectance
 //! (= F0 of a dielectric, taken literally), metallic, anisotropy.
 //! Equations and measured properties: `docs/techniques/M1.md`, `M2.md`.
 //!
@@ -45,7 +45,7 @@ pub fn alpha_xy(glossiness: f32, anisotropy: f32) -> Vec2 {
     Vec2::new(alpha / aspect, alpha * aspect).max(Vec2::splat(MIN_ALPHA))
 }
 
-/// The talk's material parameters, each in [0,1] (albedo per channel).
+/// The talk's material parameters, each in \[0,1\] (albedo per channel).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     pub albedo: Vec3,
@@ -210,7 +210,7 @@ pub fn specular_cos(s: &Surface, t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) ->
 /// returns f0 A + B (f90 = 1), for the ambient specular until the GPU DFG
 /// LUT lands. A and B are rational functions of (perceptual roughness r,
 /// n.v): numerators of total degree 3 (A) and 2 (B) over degree-2
-/// denominators (positive on [0,1]^2), fitted to our own split-sum
+/// denominators (positive on \[0,1\]^2), fitted to our own split-sum
 /// integrals for n.v in [0.05, 1]. Karis 2014's mobile fit was tried first
 /// and misses A by up to 0.36 here (it targets UE4's Schlick-Smith G).
 /// Errors against `dfg_reference.txt`: `docs/techniques/M1.md`.

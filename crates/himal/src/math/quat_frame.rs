@@ -81,7 +81,7 @@ pub fn largest_component(q: Vec4) -> usize {
 
 /// Appendix PackQuaternion: drop the largest component, flip the sign so it
 /// is positive (q and -q are the same rotation), rescale the smallest three
-/// from [-1/sqrt2, 1/sqrt2] to [0,1]; w = index / 3.
+/// from [-1/sqrt2, 1/sqrt2] to \[0,1\]; w = index / 3.
 pub fn pack_quat(q: Quat) -> Vec4 {
     let q = Vec4::from(q);
     let index = largest_component(q);
@@ -111,7 +111,7 @@ pub fn unpack_quat(p: Vec4) -> Quat {
     Quat::from_vec4(q)
 }
 
-/// What a store to an `Rgb10a2Unorm` target writes: clamp to [0,1], round to
+/// What a store to an `Rgb10a2Unorm` target writes: clamp to \[0,1\], round to
 /// nearest; x in bits 0..9, y 10..19, z 20..29, w 30..31.
 pub fn quantize_rgb10a2(p: Vec4) -> u32 {
     let unorm = |v: f32, max: f32| (v.clamp(0.0, 1.0) * max + 0.5) as u32;

@@ -333,7 +333,7 @@ impl EnvironmentImage {
         })
     }
 
-    /// Image coordinates in [0,1]² of direction `d`: longitude from -Z
+    /// Image coordinates in \[0,1\]² of direction `d`: longitude from -Z
     /// toward +X (the image centre looks down -Z, the default camera
     /// forward), latitude from +Y at the top; turned by `rotation`.
     pub fn uv(&self, d: Vec3) -> Vec2 {

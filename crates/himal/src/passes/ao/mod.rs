@@ -6,7 +6,7 @@
 //!   (AO res)        └─> ao.pack ─> ao.blur_x ─> ao.blur_y_stf ─> AO (full res, history)
 //!                        (full res)      history (previous) ─┘
 //! ```
-//! CPU twins: [`reference`]. Math and measurements: `docs/techniques/O1.md`..`O3.md`.
+//! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O3.md`.
 
 pub mod reference;
 mod settings;

@@ -6,7 +6,7 @@ use super::{ARGS_BYTES, CullLayout, LISTS, List};
 use crate::graph::{BufferAccess, BufferHandle, Node, PassContext};
 use crate::scene::lod::MAX_LODS;
 
-/// This frame's culled lists in the graph ([`CullPass::add`]).
+/// This frame's culled lists in the graph ([`super::CullPass::add`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Culled<'a> {
     /// Instance -> object: the identity at `0..objects` (draws recorded on

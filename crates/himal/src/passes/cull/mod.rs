@@ -11,7 +11,7 @@
 //! each static mesh's objects together, `gpu_scene::gpu_order`); chunks split
 //! batches into 64 objects, one workgroup each. The layout is built once per
 //! scene; the per-frame buffers have a fixed size ([`MAX_VIEWS`] views).
-//! CPU twin: [`reference`]. Adapters without indirect draws with a first
+//! CPU twin: [`mod@reference`]. Adapters without indirect draws with a first
 //! instance use the CPU path (`gpu_scene::SceneGpu::visible`, casters);
 //! the streamed pool, which has no per-object lists, is then culled by the
 //! twin and drawn directly ([`CullPath::Cpu`]).

@@ -3,7 +3,7 @@
 //! per roughness mip, and the split-sum DFG table computed on the GPU. The
 //! lighting pass reads the filtered cube along the M4 reflection vector.
 //! Re-run whenever the sky changes (time of day), not every frame.
-//! Math and figures: `docs/techniques/L4.md`; CPU twin: [`reference`].
+//! Math and figures: `docs/techniques/L4.md`; CPU twin: [`mod@reference`].
 
 pub mod probe;
 pub mod reference;

@@ -21,7 +21,7 @@ pub fn cube_face_direction(face: usize, uv: Vec2) -> Vec3 {
     .normalize()
 }
 
-/// Inverse of [`cube_face_direction`]: the face and uv in [0,1]^2 that `d` goes through.
+/// Inverse of [`cube_face_direction`]: the face and uv in \[0,1\]^2 that `d` goes through.
 pub fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
     let a = d.abs();
     let (face, s, t, m) = if a.x >= a.y && a.x >= a.z {

@@ -2,7 +2,7 @@
 //! light adaptation kept on the GPU, Kawase bloom, bloom composite and
 //! Reinhard `L/(1+L)` (optionally with a white point) at key 0.18, or the
 //! Khronos PBR Neutral, ACES or AgX curve ([`Tonemapper`]).
-//! CPU twin: [`reference`].
+//! CPU twin: [`mod@reference`].
 
 pub mod bloom;
 pub mod params;

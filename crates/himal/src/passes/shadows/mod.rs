@@ -4,7 +4,7 @@
 //! to one object ([`hero`]), all resolved in the full-screen `shadows.mask`
 //! pass into a shadow-mask texture (R = sun) that lighting reads. The filter
 //! is a per-texel rotated 16-tap Poisson disk (`shaders/shadow.wgsl`, twin
-//! [`reference`]). [`atlas`]: the S3 local-light atlas allocator.
+//! [`mod@reference`]). [`atlas`]: the S3 local-light atlas allocator.
 //! [`world_map`]: S2 in a streamed world (a camera-centred map refreshed
 //! where sectors stream in).
 //! Docs: `docs/techniques/S1.md`..`S4.md`.

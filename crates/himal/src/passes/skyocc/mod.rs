@@ -8,7 +8,7 @@
 //! rotated to the mean visible direction) plus (terrain, blurred) heights,
 //! stored in a fixed pool of texture-array layers with LRU eviction
 //! ([`pool`]). Lighting looks the sector up in a 32x32 table
-//! (`shaders/sky_occlusion.wgsl`). CPU twin: [`reference`]. Docs:
+//! (`shaders/sky_occlusion.wgsl`). CPU twin: [`mod@reference`]. Docs:
 //! `docs/techniques/L2.md`.
 //!
 //! In the streamed world the height fields follow the streaming: the

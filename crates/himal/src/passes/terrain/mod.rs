@@ -12,7 +12,7 @@
 //! Materials: layers by height and slope with procedural detail textures
 //! ([`textures`]) sampled at two scales, triplanar on steep slopes.
 //!
-//! CPU twin: [`reference`] (selection, morph, heights). Equations and
+//! CPU twin: [`mod@reference`] (selection, morph, heights). Equations and
 //! figures: docs/techniques/terrain.md.
 
 pub mod reference;

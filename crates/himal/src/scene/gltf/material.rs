@@ -29,7 +29,7 @@ pub enum AlphaMode {
 /// A texture used by a material slot and the UV set it reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
-    /// Index into [`PbrSet::textures`].
+    /// Index into [`super::PbrSet::textures`].
     pub texture: usize,
     pub tex_coord: u32,
 }
@@ -71,7 +71,7 @@ impl Default for SamplerDesc {
 /// A texture: an image and how to sample it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureSlot {
-    /// Index into [`PbrSet::images`].
+    /// Index into [`super::PbrSet::images`].
     pub image: usize,
     pub sampler: SamplerDesc,
 }

@@ -8,7 +8,7 @@
 //! - [`stream`]: residency around the camera, worker threads, fixed pools,
 //!   farthest-first eviction, a per-frame upload budget.
 //! - [`path`]: named cameras and the flight path across the world.
-//! - [`file`]: a world from a scene file's `[world]` table.
+//! - [`mod@file`]: a world from a scene file's `[world]` table.
 //!
 //! Nothing here touches the GPU; the renderer applies the uploads that
 //! [`stream::Streamer::update`] hands it. See `docs/world.md`.

@@ -1,7 +1,7 @@
 //! A1 SMAA 1x (Jimenez et al. 2012): `aa.smaa.edges` (luma, depth
 //! predicated), `aa.smaa.weights` (diagonal and orthogonal searches, corner
 //! detection, area lookups with himal's own lookup textures, [`lut`]),
-//! `aa.smaa.blend` (neighbourhood blending). CPU twins in [`reference`].
+//! `aa.smaa.blend` (neighbourhood blending). CPU twins in [`mod@reference`].
 
 pub mod lut;
 pub mod reference;

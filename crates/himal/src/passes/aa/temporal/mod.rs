@@ -1,6 +1,6 @@
 //! A2 temporal FLIPQUAD resolve (`aa.resolve`), A3 TAA (`aa.taa`), A4 unsharp
 //! (`aa.unsharp`), and the history they keep between frames. CPU twins in
-//! [`reference`].
+//! [`mod@reference`].
 
 pub mod buffers;
 pub mod reference;

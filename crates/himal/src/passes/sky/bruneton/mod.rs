@@ -5,7 +5,7 @@
 //! renderer; the sky pass draws from the tables (`SkyModel::Bruneton`) and
 //! [`SkyShProjector`] turns them into the SH3 sky light. Shaders:
 //! `shaders/atmosphere.wgsl`, `passes/sky/bruneton/*.wgsl`; CPU twin:
-//! [`reference`]. See `docs/techniques/L1.md`.
+//! [`mod@reference`]. See `docs/techniques/L1.md`.
 
 mod cache;
 mod compute;
