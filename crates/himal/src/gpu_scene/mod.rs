@@ -85,15 +85,32 @@ pub struct VisibleLists {
 
 impl VisibleLists {
     /// Draw calls these lists record in `scene` (its instancing and LOD
-    /// settings); textured draws change bind groups per draw and are never
-    /// merged.
+    /// settings); textured draws are merged within runs of one material.
     pub fn draw_calls(&self, scene: &SceneGpu) -> u32 {
         scene.draw_calls(&self.opaque)
             + scene.draw_calls(&self.vegetation)
-            + self.textured.len() as u32
+            + material_runs(&self.textured)
+                .map(|(_, draws)| scene.draw_calls(&draws))
+                .sum::<u32>()
             + self.gpu_view.map_or(0, |(_, calls)| calls)
             + self.pool_calls
     }
+}
+
+/// Consecutive textured draws of one material (one bind group), as
+/// (material, draws): each run is drawn as an ordinary list, so its objects
+/// of one mesh are instanced (glTF instancing, repeated nodes).
+pub fn material_runs(textured: &[(Draw, usize)]) -> impl Iterator<Item = (usize, Vec<Draw>)> + '_ {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        let material = textured.get(i)?.1;
+        let end = (i..textured.len())
+            .find(|&k| textured[k].1 != material)
+            .unwrap_or(textured.len());
+        let draws = textured[i..end].iter().map(|(d, _)| d.clone()).collect();
+        i = end;
+        Some((material, draws))
+    })
 }
 
 /// Consecutive draws of one mesh with consecutive objects, as one

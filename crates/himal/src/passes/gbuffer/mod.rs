@@ -347,21 +347,28 @@ impl GBufferPass {
                 }
                 if let Some(m) = &scene.materials {
                     let groups = m.bind_groups(&self.textured, ctx.device)?;
-                    for (draw, material) in textured {
+                    for (material, draws) in crate::gpu_scene::material_runs(textured) {
                         let Some((group, binding)) =
-                            groups.get(*material).zip(m.materials.get(*material))
+                            groups.get(material).zip(m.materials.get(material))
                         else {
                             continue;
                         };
                         let key = GBufferKey::textured(binding.double_sided, mip_bias);
-                        let one = std::slice::from_ref(draw);
-                        let level = lod_view.then(|| {
-                            let split = scene.split_levels(one);
-                            split.iter().position(|l| !l.is_empty()).unwrap_or(0) as u8
-                        });
-                        rp.set_pipeline(pipeline(at(key, level))?);
                         rp.set_bind_group(1, group, &[]);
-                        scene.draw_list(rp, one);
+                        if !lod_view {
+                            // Objects of one mesh in the run draw instanced.
+                            rp.set_pipeline(pipeline(key)?);
+                            scene.draw_list(rp, &draws);
+                            continue;
+                        }
+                        // `--view lod`: each draw with its level's pipeline.
+                        for draw in &draws {
+                            let one = std::slice::from_ref(draw);
+                            let split = scene.split_levels(one);
+                            let level = split.iter().position(|l| !l.is_empty()).unwrap_or(0);
+                            rp.set_pipeline(pipeline(at(key, Some(level as u8)))?);
+                            scene.draw_list(rp, one);
+                        }
                     }
                 }
                 if !vegetation.is_empty() {

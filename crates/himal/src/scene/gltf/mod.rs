@@ -10,6 +10,7 @@
 //! (`tangents.rs`). Every problem is an error naming the file.
 
 mod buffers;
+mod instancing;
 mod material;
 pub(crate) mod placement;
 mod tangents;
@@ -316,21 +317,40 @@ pub fn load_from_bytes_within(
         if let Some(m) = node.mesh() {
             let drawn = &primitive_mesh[m.index()];
             let count = drawn.len();
-            for (k, mesh) in drawn.iter().enumerate() {
-                let Some(mesh) = *mesh else { continue };
-                out.bounds = out.bounds.union(&meshes[mesh].bounds.transform(&world));
-                out.objects.push(Object {
-                    name: if count == 1 {
-                        name.clone()
-                    } else {
-                        format!("{name}.{k}")
-                    },
-                    mesh,
-                    transform: world,
-                    motion: None,
-                    foliage: None,
-                    ground: false,
-                });
+            // EXT_mesh_gpu_instancing: one object per instance, the
+            // instance's transform before the node's.
+            let instances = instancing::node_instances(&cx, &doc, &node, &buffers)?;
+            let placements = instances.as_deref().unwrap_or(&[Mat4::IDENTITY]);
+            let drawn_objects = out.objects.len() + placements.len() * count;
+            if drawn_objects as u64 > buffers::MAX_NODE_INSTANCES {
+                return Err(cx.invalid(format!(
+                    "node {} makes the file draw {drawn_objects} objects, more than {}",
+                    node.index(),
+                    buffers::MAX_NODE_INSTANCES
+                )));
+            }
+            for (i, instance) in placements.iter().enumerate() {
+                let transform = world * *instance;
+                let base = match instances {
+                    Some(_) => format!("{name}#{i}"),
+                    None => name.clone(),
+                };
+                for (k, mesh) in drawn.iter().enumerate() {
+                    let Some(mesh) = *mesh else { continue };
+                    out.bounds = out.bounds.union(&meshes[mesh].bounds.transform(&transform));
+                    out.objects.push(Object {
+                        name: if count == 1 {
+                            base.clone()
+                        } else {
+                            format!("{base}.{k}")
+                        },
+                        mesh,
+                        transform,
+                        motion: None,
+                        foliage: None,
+                        ground: false,
+                    });
+                }
             }
         }
         if let Some(c) = node.camera() {
@@ -349,7 +369,8 @@ pub fn load_from_bytes_within(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 3] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 4] = [
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_emissive_strength",
