@@ -35,6 +35,7 @@ fn gpu_mips_match_the_cpu_twin() {
     let texture = TextureRef {
         texture: 0,
         tex_coord: 0,
+        transform: None,
     };
     let pbr = PbrSet {
         materials: vec![PbrMaterial {

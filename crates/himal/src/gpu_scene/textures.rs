@@ -30,6 +30,9 @@ pub struct MaterialGpu {
     pub params: [f32; 4],
     /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off.
     pub alpha: [f32; 4],
+    /// KHR_texture_transform per slot (SLOTS order): the 2x3 matrix's two
+    /// rows (xyz), identity where the slot has none.
+    pub uv: [[f32; 4]; 12],
 }
 
 impl MaterialGpu {
@@ -49,8 +52,30 @@ impl MaterialGpu {
                 m.anisotropy_rotation,
             ],
             alpha: [mode, cutoff, 0.0, 0.0],
+            uv: uv_rows(m),
         }
     }
+}
+
+/// The slots' texture transforms as MaterialGpu::uv rows.
+fn uv_rows(m: &PbrMaterial) -> [[f32; 4]; 12] {
+    let slots = [
+        m.base_color_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        m.occlusion_texture,
+        m.emissive_texture,
+        m.anisotropy_texture,
+    ];
+    let mut rows = [[0.0; 4]; 12];
+    for (k, t) in slots.iter().enumerate() {
+        let r = t
+            .and_then(|t| t.transform)
+            .map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |x| x.rows());
+        rows[2 * k] = [r[0][0], r[0][1], r[0][2], 0.0];
+        rows[2 * k + 1] = [r[1][0], r[1][1], r[1][2], 0.0];
+    }
+    rows
 }
 
 /// The six texture slots of a material, as named in textured.wgsl.

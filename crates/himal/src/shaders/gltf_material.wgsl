@@ -12,7 +12,16 @@ struct MaterialGpu {
     params: vec4f,
     // x mode (0 opaque, 1 mask, 2 blend), y cut-off
     alpha: vec4f,
+    // KHR_texture_transform per slot (SLOT_*): rows 2k, 2k+1 of the 2x3 matrix
+    uv: array<vec4f, 12>,
 }
+
+const SLOT_BASE_COLOR: u32 = 0u;
+const SLOT_METAL_ROUGH: u32 = 1u;
+const SLOT_NORMAL: u32 = 2u;
+const SLOT_OCCLUSION: u32 = 3u;
+const SLOT_EMISSIVE: u32 = 4u;
+const SLOT_ANISOTROPY: u32 = 5u;
 
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
@@ -27,6 +36,14 @@ struct MaterialGpu {
 @group(1) @binding(10) var emissive_sampler: sampler;
 @group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
 @group(1) @binding(12) var anisotropy_sampler: sampler;
+
+// The UV a slot samples at: its KHR_texture_transform applied to `uv`
+// (CPU twin: scene::gltf::UvTransform::apply).
+fn material_uv(slot: u32, uv: vec2f) -> vec2f {
+    let r0 = material.uv[2u * slot];
+    let r1 = material.uv[2u * slot + 1u];
+    return vec2f(dot(r0.xy, uv) + r0.z, dot(r1.xy, uv) + r1.z);
+}
 
 // KHR_materials_anisotropy strength s at GGX alpha -> himal anisotropy with
 // the same alpha_t / alpha_b ratio (CPU twin: scene::gltf::anisotropy_from_khr).

@@ -65,13 +65,13 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
 
 @fragment
 fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
-    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
+    let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
     let alpha = material.base_color.a * base.a;
-    let ts = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
-    let at = textureSample(anisotropy_texture, anisotropy_sampler, in.uv).xyz;
-    let mr = textureSample(metal_rough_texture, metal_rough_sampler, in.uv);
-    let occlusion = textureSample(occlusion_texture, occlusion_sampler, in.uv).r;
-    let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let at = textureSample(anisotropy_texture, anisotropy_sampler, material_uv(SLOT_ANISOTROPY, in.uv)).xyz;
+    let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
+    let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
+    let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
     var n = normalize(in.normal);
     var tangent = in.tangent;
     if (!front) {
@@ -106,8 +106,8 @@ fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
 
 @fragment
 fn fs_emissive(in: VertexOut) -> @location(0) vec4f {
-    let base = textureSample(base_color_texture, base_color_sampler, in.uv);
-    let e = textureSample(emissive_texture, emissive_sampler, in.uv).rgb;
+    let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
+    let e = textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
     // MASK: the G-buffer discarded these texels; a surface behind at the
     // same depth must not glow.
     if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {

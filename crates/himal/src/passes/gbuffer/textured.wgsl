@@ -53,14 +53,14 @@ override LOD_VIEW: f32 = -1.0;
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
-    let base = textureSampleBias(base_color_texture, base_color_sampler, in.uv, MIP_BIAS);
+    let base = textureSampleBias(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv), MIP_BIAS);
     let alpha = material.base_color.a * base.a;
     // Every sample precedes the discards (uniform control flow for derivatives).
-    let ts = textureSampleBias(normal_texture, normal_sampler, in.uv, MIP_BIAS).xyz * 2.0 - 1.0;
-    let at = textureSampleBias(anisotropy_texture, anisotropy_sampler, in.uv, MIP_BIAS).xyz;
-    let mr = textureSampleBias(metal_rough_texture, metal_rough_sampler, in.uv, MIP_BIAS);
-    let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, in.uv, MIP_BIAS).r;
-    let emissive = textureSampleBias(emissive_texture, emissive_sampler, in.uv, MIP_BIAS).rgb;
+    let ts = textureSampleBias(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv), MIP_BIAS).xyz * 2.0 - 1.0;
+    let at = textureSampleBias(anisotropy_texture, anisotropy_sampler, material_uv(SLOT_ANISOTROPY, in.uv), MIP_BIAS).xyz;
+    let mr = textureSampleBias(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv), MIP_BIAS);
+    let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv), MIP_BIAS).r;
+    let emissive = textureSampleBias(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv), MIP_BIAS).rgb;
     if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
         discard;
     }

@@ -32,6 +32,96 @@ pub struct TextureRef {
     /// Index into [`super::PbrSet::textures`].
     pub texture: usize,
     pub tex_coord: u32,
+    /// `KHR_texture_transform` of this use of the texture.
+    pub transform: Option<UvTransform>,
+}
+
+/// `KHR_texture_transform`: uv' = T(offset) R(rotation) S(scale) (u, v, 1),
+/// R = [cos sin; -sin cos] as the extension specifies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub offset: glam::Vec2,
+    /// Radians.
+    pub rotation: f32,
+    pub scale: glam::Vec2,
+}
+
+impl UvTransform {
+    /// The two rows of the 2x3 matrix.
+    pub fn rows(&self) -> [[f32; 3]; 2] {
+        let (s, c) = self.rotation.sin_cos();
+        let (sx, sy) = (self.scale.x, self.scale.y);
+        [
+            [c * sx, s * sy, self.offset.x],
+            [-s * sx, c * sy, self.offset.y],
+        ]
+    }
+
+    pub fn apply(&self, uv: glam::Vec2) -> glam::Vec2 {
+        let [r0, r1] = self.rows();
+        glam::Vec2::new(
+            r0[0] * uv.x + r0[1] * uv.y + r0[2],
+            r1[0] * uv.x + r1[1] * uv.y + r1[2],
+        )
+    }
+}
+
+const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
+
+/// A texture info's `KHR_texture_transform` object (and the UV set it
+/// overrides to), checked finite.
+fn uv_transform(
+    cx: &GltfContext,
+    transform: Option<&gltf::json::Value>,
+    tex_coord: u32,
+) -> Result<(Option<UvTransform>, u32), SceneError> {
+    let Some(t) = transform else {
+        return Ok((None, tex_coord));
+    };
+    let pair = |key: &str, default: [f32; 2]| -> Result<glam::Vec2, SceneError> {
+        let Some(v) = t.get(key) else {
+            return Ok(glam::Vec2::from(default));
+        };
+        let a = v.as_array().filter(|a| a.len() == 2);
+        let xy: Option<Vec<f32>> = a.map(|a| {
+            a.iter()
+                .filter_map(|c| c.as_f64())
+                .map(|c| c as f32)
+                .collect()
+        });
+        match xy {
+            Some(xy) if xy.len() == 2 && xy.iter().all(|c| c.is_finite()) => {
+                Ok(glam::Vec2::new(xy[0], xy[1]))
+            }
+            _ => Err(cx.invalid(format!(
+                "KHR_texture_transform {key} {v}: expected two finite numbers"
+            ))),
+        }
+    };
+    let rotation = match t.get("rotation") {
+        None => 0.0,
+        Some(v) => v
+            .as_f64()
+            .map(|r| r as f32)
+            .filter(|r| r.is_finite())
+            .ok_or_else(|| {
+                cx.invalid(format!(
+                    "KHR_texture_transform rotation {v}: not a finite number"
+                ))
+            })?,
+    };
+    let tex_coord = t
+        .get("texCoord")
+        .and_then(|v| v.as_u64())
+        .map_or(tex_coord, |k| k as u32);
+    Ok((
+        Some(UvTransform {
+            offset: pair("offset", [0.0, 0.0])?,
+            rotation,
+            scale: pair("scale", [1.0, 1.0])?,
+        }),
+        tex_coord,
+    ))
 }
 
 /// glTF texture wrap modes.
@@ -236,11 +326,17 @@ pub(super) fn sampler(s: &gltf::texture::Sampler) -> SamplerDesc {
     out
 }
 
-fn texture_ref(info: &gltf::texture::Info) -> TextureRef {
-    TextureRef {
+fn texture_ref(cx: &GltfContext, info: &gltf::texture::Info) -> Result<TextureRef, SceneError> {
+    let (transform, tex_coord) = uv_transform(
+        cx,
+        info.extensions().and_then(|e| e.get(TEXTURE_TRANSFORM)),
+        info.tex_coord(),
+    )?;
+    Ok(TextureRef {
         texture: info.texture().index(),
-        tex_coord: info.tex_coord(),
-    }
+        tex_coord,
+        transform,
+    })
 }
 
 /// `{ "index": i, "texCoord": k }` of an extension, checked against the texture count.
@@ -252,10 +348,16 @@ fn json_texture_ref(
     let Some(v) = v else { return Ok(None) };
     let index = v.get("index").and_then(|i| i.as_u64());
     match index {
-        Some(i) if (i as usize) < textures => Ok(Some(TextureRef {
-            texture: i as usize,
-            tex_coord: v.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0) as u32,
-        })),
+        Some(i) if (i as usize) < textures => {
+            let tex_coord = v.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0) as u32;
+            let ext = v.get("extensions").and_then(|e| e.get(TEXTURE_TRANSFORM));
+            let (transform, tex_coord) = uv_transform(cx, ext, tex_coord)?;
+            Ok(Some(TextureRef {
+                texture: i as usize,
+                tex_coord,
+                transform,
+            }))
+        }
         _ => Err(cx.invalid(format!(
             "KHR_materials_anisotropy texture {v} names no texture (there are {textures})"
         ))),
@@ -327,23 +429,43 @@ pub(super) fn material(
         emissive: Vec3::from(emissive) * emissive_strength.max(0.0),
         alpha_mode,
         double_sided: m.double_sided(),
-        base_color_texture: pbr.base_color_texture().as_ref().map(texture_ref),
-        metallic_roughness_texture: pbr.metallic_roughness_texture().as_ref().map(texture_ref),
-        emissive_texture: m.emissive_texture().as_ref().map(texture_ref),
+        base_color_texture: pbr
+            .base_color_texture()
+            .map(|t| texture_ref(cx, &t))
+            .transpose()?,
+        metallic_roughness_texture: (pbr.metallic_roughness_texture())
+            .map(|t| texture_ref(cx, &t))
+            .transpose()?,
+        emissive_texture: m
+            .emissive_texture()
+            .map(|t| texture_ref(cx, &t))
+            .transpose()?,
         ..PbrMaterial::default()
     };
     if let Some(n) = m.normal_texture() {
         out.normal_scale = n.scale();
+        let (transform, tex_coord) = uv_transform(
+            cx,
+            n.extensions().and_then(|e| e.get(TEXTURE_TRANSFORM)),
+            n.tex_coord(),
+        )?;
         out.normal_texture = Some(TextureRef {
             texture: n.texture().index(),
-            tex_coord: n.tex_coord(),
+            tex_coord,
+            transform,
         });
     }
     if let Some(o) = m.occlusion_texture() {
         out.occlusion_strength = o.strength().clamp(0.0, 1.0);
+        let (transform, tex_coord) = uv_transform(
+            cx,
+            o.extensions().and_then(|e| e.get(TEXTURE_TRANSFORM)),
+            o.tex_coord(),
+        )?;
         out.occlusion_texture = Some(TextureRef {
             texture: o.texture().index(),
-            tex_coord: o.tex_coord(),
+            tex_coord,
+            transform,
         });
     }
     // The gltf crate has no typed KHR_materials_anisotropy: read the JSON.

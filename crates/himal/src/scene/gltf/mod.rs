@@ -21,7 +21,7 @@ use glam::{Mat4, Vec3};
 
 pub use material::{
     AlphaMode, GLTF_DIELECTRIC_F0, ImageData, PbrMaterial, SamplerDesc, TextureRef, TextureSlot,
-    Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
+    UvTransform, Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
 };
 
 pub(crate) use buffers::GltfContext;
@@ -369,11 +369,12 @@ pub fn load_from_bytes_within(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 4] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 5] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
 ];
 
 /// A required extension the loader does not implement is an error naming
