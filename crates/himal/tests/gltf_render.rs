@@ -168,13 +168,7 @@ fn orthographic_cameras_project_in_parallel() {
 /// README's "correct" look); albedo seen straight on.
 #[test]
 fn texture_transforms_show_the_samples_checks() {
-    let scene = Scene::from_gltf(&common::gltf_sample("TextureTransformTest")).expect("model");
-    let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 0.0, 0.0, None, 40.0);
-    let mut settings = FrameSettings::new(256, 256, scene.sun.clone());
-    settings.view = "albedo".parse().expect("view");
-    let mut r = common::renderer(&scene);
-    let img = r.render(&camera, &settings).expect("frame").image;
-    let px = img.to_rgba_f32().expect("rgba");
+    let px = straight_on("TextureTransformTest", 256, "albedo");
     // The top row's quads (measured on the render: x 38..93, 100..155,
     // 162..217; y 67..122), 6 px inside their edges.
     let quads = [(44, 87), (106, 149), (168, 211)];
@@ -201,5 +195,96 @@ fn texture_transforms_show_the_samples_checks() {
         // rest its white mark); before, the yellow not-supported image.
         assert_eq!(yellow, 0, "quad {k}: the not-supported image shows");
         assert!(hit * 2 > n, "quad {k}: {hit}/{n} pixels {}", expected[k]);
+    }
+}
+
+/// Renders `model` straight on (orbit 0, 0) at `size`² with `view`.
+fn straight_on(model: &str, size: u32, view: &str) -> Vec<[f32; 4]> {
+    let scene = Scene::from_gltf(&common::gltf_sample(model)).expect("model");
+    let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 0.0, 0.0, None, 40.0);
+    let mut settings = FrameSettings::new(size, size, scene.sun.clone());
+    settings.view = view.parse().expect("view");
+    let mut r = common::renderer(&scene);
+    let img = r.render(&camera, &settings).expect("frame").image;
+    img.to_rgba_f32().expect("rgba")
+}
+
+/// VertexColorTest: COLOR_0 multiplies the base colour, so the top
+/// ("test") row of checks looks like the bottom ("sample pass") row; an
+/// engine ignoring vertex colours shows X marks in the top row's other
+/// channels. Mean albedo of each top quad against the quad below it (the
+/// checks sit a pixel or two apart between rows: means, not pixels).
+#[test]
+fn vertex_colours_make_the_test_row_match_the_sample_row() {
+    let px = straight_on("VertexColorTest", 384, "albedo");
+    // Quads measured on the render: x 101..155, 165..219, 234..288; the top
+    // row at y 126..179, the bottom row 101 px lower.
+    let mean = |x0: u32, x1: u32, y0: u32| {
+        let mut m = [0.0f32; 3];
+        for y in y0..y0 + 45 {
+            for x in x0..x1 {
+                let p = px[(y * 384 + x) as usize];
+                (0..3).for_each(|c| m[c] += p[c]);
+            }
+        }
+        m.map(|v| v / (45 * (x1 - x0)) as f32)
+    };
+    for (k, (x0, x1)) in [(105, 151), (169, 215), (238, 284)].into_iter().enumerate() {
+        let (test, sample) = (mean(x0, x1, 130), mean(x0, x1, 231));
+        eprintln!("check {k}: test row {test:?}, sample row {sample:?}");
+        // The other two channels carry the X marks when COLOR_0 is ignored.
+        for c in (0..3).filter(|&c| c != k) {
+            // Measured 2026-12-03: differences below 0.01.
+            assert!(
+                (test[c] - sample[c]).abs() < 0.03,
+                "check {k} channel {c}: {} vs {}",
+                test[c],
+                sample[c]
+            );
+        }
+        assert!(
+            test[k] > 2.0 * test[(k + 1) % 3],
+            "check {k} is its colour: {test:?}"
+        );
+    }
+}
+
+/// EmissiveStrengthTest: each cube doubles the one before's emissive
+/// strength (1x .. 16x). The emitted light alone, the HDR frame minus the
+/// same frame with emission off, must step by 2 from cube to cube.
+#[test]
+fn emissive_strength_doubles_from_cube_to_cube() {
+    let mut scene = Scene::from_gltf(&common::gltf_sample("EmissiveStrengthTest")).expect("model");
+    let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 0.0, 0.0, None, 40.0);
+    let mut settings = FrameSettings::new(256, 256, scene.sun.clone());
+    settings.view = "lighting".parse().expect("view");
+    settings.raw = true;
+    let hdr = |scene: &Scene| {
+        let img = common::renderer(scene)
+            .render(&camera, &settings)
+            .expect("frame")
+            .image;
+        img.to_rgba_f32().expect("rgba")
+    };
+    let lit = hdr(&scene);
+    for m in &mut scene.pbr.materials {
+        m.emissive = glam::Vec3::ZERO;
+    }
+    let dark = hdr(&scene);
+    // Cube face centres measured on the render (faces 12-14 px wide).
+    let e: Vec<f32> = [60u32, 94, 130, 164, 199]
+        .iter()
+        .map(|&x| {
+            let i = (116 * 256 + x) as usize;
+            let l = |p: [f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            l(lit[i]) - l(dark[i])
+        })
+        .collect();
+    eprintln!("emitted luminance per cube: {e:?}");
+    for w in e.windows(2) {
+        let ratio = w[1] / w[0];
+        // Measured 2026-12-03: 2.00 each (fp16 HDR); without the extension
+        // every ratio is 1.
+        assert!((1.9..=2.1).contains(&ratio), "ratio {ratio} in {e:?}");
     }
 }
