@@ -393,3 +393,51 @@ fn triangle_strips_and_fans_load_and_points_and_lines_are_named() {
         );
     }
 }
+
+/// Morph targets were ignored: SimpleMorph drew its base shape. The mesh's
+/// default weights (0.5, 0.5) now morph the positions: P0 + 0.5 dP0 +
+/// 0.5 dP1, read here from the file's accessors by hand.
+#[test]
+fn morph_targets_apply_the_default_weights() {
+    let path = common::gltf_sample("SimpleMorph");
+    let a = gltf::load(&path).expect("loads");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let uri = json["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let bin = std::fs::read(path.with_file_name(uri)).unwrap();
+    let vec3 = |accessor: usize, i: usize| -> Vec3 {
+        let acc = &json["accessors"][accessor];
+        let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+        let base =
+            view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0);
+        let stride = view["byteStride"].as_u64().unwrap_or(12);
+        let at = (base + stride * i as u64) as usize;
+        let f = |k: usize| f32::from_le_bytes(bin[at + 4 * k..at + 4 * k + 4].try_into().unwrap());
+        Vec3::new(f(0), f(1), f(2))
+    };
+    let m = &a.meshes[0];
+    let n = json["accessors"][1]["count"].as_u64().unwrap() as usize;
+    assert_eq!(m.vertices.len(), n);
+    let mut moved = 0;
+    for (i, v) in m.vertices.iter().enumerate() {
+        let expected = vec3(1, i) + 0.5 * vec3(2, i) + 0.5 * vec3(3, i);
+        assert!(
+            Vec3::from(v.position).abs_diff_eq(expected, 1e-6),
+            "vertex {i}"
+        );
+        moved += (expected != vec3(1, i)) as usize;
+    }
+    assert!(moved > 0, "the targets move some vertices");
+}
+
+/// Skins and animations are not applied yet: said once, not silently.
+#[test]
+fn skins_and_animations_are_named_in_the_load_warnings() {
+    let a = gltf::load(&common::gltf_sample("Fox")).expect("loads");
+    let w = a.warnings.join("\n");
+    assert!(w.contains("skin") && w.contains("animations"), "{w}");
+    assert!(
+        w.contains("Survey") && w.contains("Walk") && w.contains("Run"),
+        "{w}"
+    );
+}

@@ -271,8 +271,45 @@ pub fn load_from_bytes_within(
             not_drawn.join(", ")
         ));
     }
-    for w in &warnings {
-        log::warn!("{}: {w}", cx.path.display());
+    let names = |v: Vec<String>| v.join(", ");
+    if doc.skins().len() > 0 {
+        warnings.push(format!(
+            "does not apply its {} skin(s): skinned meshes are drawn in their bind pose",
+            doc.skins().len()
+        ));
+    }
+    if doc.animations().len() > 0 {
+        let list = doc.animations().map(|a| {
+            a.name()
+                .map_or_else(|| format!("animation{}", a.index()), str::to_string)
+        });
+        warnings.push(format!(
+            "does not play its animations (the nodes are drawn at rest): {}",
+            names(list.collect())
+        ));
+    }
+    // One UV set per primitive: the base colour texture's.
+    let mixed_sets: Vec<String> = (pbr.materials.iter())
+        .filter(|m| {
+            let base = m.base_color_texture.map_or(0, |t| t.tex_coord);
+            [
+                m.metallic_roughness_texture,
+                m.normal_texture,
+                m.occlusion_texture,
+                m.emissive_texture,
+                m.anisotropy_texture,
+            ]
+            .iter()
+            .flatten()
+            .any(|t| t.tex_coord != base)
+        })
+        .map(|m| m.name.clone())
+        .collect();
+    if !mixed_sets.is_empty() {
+        warnings.push(format!(
+            "materials read textures through more than one UV set; every slot uses the base colour's: {}",
+            names(mixed_sets)
+        ));
     }
 
     if pbr
@@ -300,6 +337,7 @@ pub fn load_from_bytes_within(
         Some(s) => s.nodes().collect(),
         None => Vec::new(),
     };
+    let mut reweighted = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
@@ -315,6 +353,9 @@ pub fn load_from_bytes_within(
             .name()
             .map_or_else(|| format!("node{}", node.index()), str::to_string);
         if let Some(m) = node.mesh() {
+            if node.weights().is_some_and(|w| Some(w) != m.weights()) {
+                reweighted.push(name.clone());
+            }
             let drawn = &primitive_mesh[m.index()];
             let count = drawn.len();
             // EXT_mesh_gpu_instancing: one object per instance, the
@@ -362,6 +403,15 @@ pub fn load_from_bytes_within(
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
+    }
+    if !reweighted.is_empty() {
+        out.warnings.push(format!(
+            "nodes with their own morph weights are drawn with their mesh's default weights: {}",
+            reweighted.join(", ")
+        ));
+    }
+    for w in &out.warnings {
+        log::warn!("{}: {w}", cx.path.display());
     }
     out.meshes = meshes;
     Ok(out)
@@ -571,11 +621,52 @@ fn primitive(
 ) -> Result<Mesh, SceneError> {
     let name = primitive_name(mesh, p);
     let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    let positions: Vec<[f32; 3]> = reader
+    let mut positions: Vec<[f32; 3]> = reader
         .read_positions()
         .ok_or_else(|| cx.invalid(format!("mesh \"{name}\" has no POSITION")))?
         .collect();
     let n = positions.len();
+    // Morph targets at the mesh's default weights (glTF 2.0 3.7.2.2:
+    // P = P0 + sum w_i dP_i, likewise normals and tangents).
+    let weights = mesh.weights().unwrap_or(&[]);
+    if weights.iter().any(|w| !w.is_finite()) {
+        return Err(cx.invalid(format!("mesh \"{name}\": non-finite morph weights")));
+    }
+    let mut normal_deltas: Vec<(f32, Vec<[f32; 3]>)> = Vec::new();
+    let mut tangent_deltas: Vec<(f32, Vec<[f32; 3]>)> = Vec::new();
+    for (k, (dp, dn, dt)) in reader.read_morph_targets().enumerate() {
+        let w = weights.get(k).copied().unwrap_or(0.0);
+        if w == 0.0 {
+            continue;
+        }
+        let read = |d: Vec<[f32; 3]>, what: &str| {
+            if d.len() != n {
+                return Err(cx.invalid(format!(
+                    "mesh \"{name}\": morph target {k} {what} has {} elements, POSITION {n}",
+                    d.len()
+                )));
+            }
+            Ok(d)
+        };
+        if let Some(dp) = dp {
+            for (p, d) in positions.iter_mut().zip(read(dp.collect(), "POSITION")?) {
+                (0..3).for_each(|c| p[c] += w * d[c]);
+            }
+        }
+        if let Some(dn) = dn {
+            normal_deltas.push((w, read(dn.collect(), "NORMAL")?));
+        }
+        if let Some(dt) = dt {
+            tangent_deltas.push((w, read(dt.collect(), "TANGENT")?));
+        }
+    }
+    let morph = |values: &mut [[f32; 3]], deltas: &[(f32, Vec<[f32; 3]>)]| {
+        for (w, d) in deltas {
+            for (v, d) in values.iter_mut().zip(d) {
+                (0..3).for_each(|c| v[c] += w * d[c]);
+            }
+        }
+    };
     let count_ok = |len: usize, what: &str| {
         if len == n {
             Ok(())
@@ -617,7 +708,12 @@ fn primitive(
     };
     count_ok(uvs.len(), "TEXCOORD")?;
     let normals: Vec<[f32; 3]> = match reader.read_normals() {
-        Some(r) => r.collect(),
+        Some(r) => {
+            let mut normals: Vec<[f32; 3]> = r.collect();
+            morph(&mut normals, &normal_deltas);
+            normals
+        }
+        // From the morphed positions.
         None => tangents::flat_normals(&positions, &indices),
     };
     count_ok(normals.len(), "NORMAL")?;
@@ -644,9 +740,11 @@ fn primitive(
         Some(t) => {
             let t: Vec<[f32; 4]> = t.collect();
             count_ok(t.len(), "TANGENT")?;
-            for (v, t) in vertices.iter_mut().zip(t) {
+            let mut xyz: Vec<[f32; 3]> = t.iter().map(|t| [t[0], t[1], t[2]]).collect();
+            morph(&mut xyz, &tangent_deltas);
+            for ((v, t), m) in vertices.iter_mut().zip(&t).zip(xyz) {
                 let w = if t[3] < 0.0 { -1.0 } else { 1.0 };
-                v.tangent = [t[0], t[1], t[2], w];
+                v.tangent = [m[0], m[1], m[2], w];
             }
         }
         // Only normal-mapped or anisotropic materials need a tangent frame from the UVs.
