@@ -492,7 +492,7 @@ pub fn world() -> std::sync::Arc<himal::scene::world::World> {
     std::sync::Arc::new(himal::scene::world::World::new(Default::default()))
 }
 
-fn is_gltf(spec: &str) -> bool {
+pub(crate) fn is_gltf(spec: &str) -> bool {
     let lower = spec.to_ascii_lowercase();
     lower.ends_with(".gltf") || lower.ends_with(".glb")
 }

@@ -18,16 +18,18 @@ use himal::present::{Hud, Overlay, Presenter};
 use himal::scene::Camera;
 use himal::{FrameSettings, Renderer, ViewBuffer};
 use winit::application::ApplicationHandler;
-use winit::event::{DeviceEvent, ElementState, MouseButton, WindowEvent};
+use winit::event::{DeviceEvent, ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
+use crate::orbit::Orbit;
 use crate::render::RenderArgs;
 
-pub const HELP: &str = "WASD move, Q/E down/up, Shift fast, right mouse drag look, \
+pub const HELP: &str = "Orbit (models): left drag turn, middle drag pan, wheel zoom, F frame, O fly; \
+fly: WASD move, Q/E down/up, Shift fast, right mouse drag look, O orbit; \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
-7 TAA on AO and motion, 8 sky model, 9 tone mapper, F fly the world's path, H HUD, P screenshot, Esc quit";
+7 TAA on AO and motion, 8 sky model, 9 tone mapper, F fly the world's path (worlds), H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -78,6 +80,8 @@ struct Held {
     up: f32,
     fast: bool,
     looking: bool,
+    orbiting: bool,
+    panning: bool,
 }
 
 /// Longest simulation step (camera, clock, flight path): a stall must not
@@ -134,6 +138,8 @@ struct Viewer {
     rate: FrameRate,
     screenshot: bool,
     error: Option<anyhow::Error>,
+    /// The orbit camera (models; O toggles it), `None` when flying.
+    orbit: Option<Orbit>,
     /// The world's flight path F flies, and whether it is flying and where (s).
     path: Option<himal::scene::world::FlightPath>,
     flying: bool,
@@ -202,12 +208,26 @@ impl Viewer {
             }
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
-            KeyCode::KeyF => self.flying = self.path.is_some() && !self.flying,
+            // A world flies its path; anything else is framed.
+            KeyCode::KeyF if self.path.is_some() => self.flying = !self.flying,
+            KeyCode::KeyF => {
+                self.orbit = Some(Orbit::framing(&self.scene.bounds, self.camera.fov_y_deg))
+            }
+            KeyCode::KeyO => {
+                self.orbit = match self.orbit {
+                    Some(_) => None,
+                    None => Some(Orbit::around(&self.camera, &self.scene.bounds)),
+                }
+            }
             _ => {}
         }
     }
 
     fn step_camera(&mut self, dt: f32) {
+        if let Some(o) = &self.orbit {
+            self.camera = o.camera(self.camera.fov_y_deg);
+            return;
+        }
         // A 10 km world is crossed at flying speed, a valley at walking speed.
         let base = if self.path.is_some() { 40.0 } else { 4.0 };
         let speed = if self.held.fast { 5.0 * base } else { base } * dt;
@@ -610,12 +630,23 @@ impl ApplicationHandler for Viewer {
                     event_loop.exit();
                 }
             }
-            WindowEvent::MouseInput {
-                state,
-                button: MouseButton::Right,
-                ..
-            } => {
-                self.held.looking = state == ElementState::Pressed;
+            WindowEvent::MouseInput { state, button, .. } => {
+                let down = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Right => self.held.looking = down,
+                    MouseButton::Left => self.held.orbiting = down,
+                    MouseButton::Middle => self.held.panning = down,
+                    _ => {}
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                if let Some(o) = &mut self.orbit {
+                    o.zoom(steps);
+                }
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 let PhysicalKey::Code(code) = event.physical_key else {
@@ -641,10 +672,16 @@ impl ApplicationHandler for Viewer {
     }
 
     fn device_event(&mut self, _: &ActiveEventLoop, _: winit::event::DeviceId, event: DeviceEvent) {
-        if let DeviceEvent::MouseMotion { delta } = event
-            && self.held.looking
-        {
-            self.look(delta.0 as f32, delta.1 as f32);
+        let DeviceEvent::MouseMotion { delta } = event else {
+            return;
+        };
+        let (dx, dy) = (delta.0 as f32, delta.1 as f32);
+        let (fov, height) = (self.camera.fov_y_deg, self.settings.height);
+        match &mut self.orbit {
+            Some(o) if self.held.orbiting => o.rotate(dx, dy),
+            Some(o) if self.held.panning => o.pan(dx, dy, fov, height),
+            None if self.held.looking => self.look(dx, dy),
+            _ => {}
         }
     }
 
@@ -732,6 +769,9 @@ pub fn run(view: &ViewArgs) -> Result<()> {
             })?),
             Err(_) => None,
         };
+    // A model is orbited, a world or scene flown.
+    let orbit = (args.gltf.is_some() || crate::render::is_gltf(&args.scene))
+        .then(|| Orbit::around(&camera, &scene.bounds));
     let mut viewer = Viewer {
         args: args.clone(),
         scene,
@@ -752,6 +792,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         screenshot: false,
         error: None,
         flying: view.path.is_some(),
+        orbit,
         path,
         path_t: 0.0,
     };

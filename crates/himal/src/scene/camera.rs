@@ -56,6 +56,24 @@ impl Camera {
         }
     }
 
+    /// Camera at `distance` from `target`, `yaw_deg` about +Y from +Z
+    /// (positive toward +X) and `pitch_deg` above the horizon, looking at it.
+    pub fn orbit(
+        target: Vec3,
+        yaw_deg: f32,
+        pitch_deg: f32,
+        distance: f32,
+        fov_y_deg: f32,
+    ) -> Camera {
+        let (yaw, pitch) = (yaw_deg.to_radians(), pitch_deg.to_radians());
+        let direction = Vec3::new(
+            pitch.cos() * yaw.sin(),
+            pitch.sin(),
+            pitch.cos() * yaw.cos(),
+        );
+        Camera::look_at(target + direction * distance, target, fov_y_deg)
+    }
+
     /// World to view: right-handed view space, camera looks down -Z, Y up.
     pub fn view(&self) -> Mat4 {
         let forward = self.forward.normalize_or(Vec3::NEG_Z);

@@ -800,13 +800,7 @@ pub fn orbit_camera(
         (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
     };
     let distance = distance.unwrap_or_else(|| 1.1 * radius / (fov_y_deg.to_radians() * 0.5).sin());
-    let (yaw, pitch) = (yaw_deg.to_radians(), pitch_deg.to_radians());
-    let direction = Vec3::new(
-        pitch.cos() * yaw.sin(),
-        pitch.sin(),
-        pitch.cos() * yaw.cos(),
-    );
-    let mut camera = Camera::look_at(centre + direction * distance, centre, fov_y_deg);
+    let mut camera = Camera::orbit(centre, yaw_deg, pitch_deg, distance, fov_y_deg);
     camera.near = (distance - radius).max(distance * 1e-3) * 0.5;
     camera
 }
