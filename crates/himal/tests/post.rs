@@ -181,19 +181,7 @@ fn adaptation_follows_the_exponential_law_after_a_step() {
     let adapted = adapted_buffer(&ctx.device);
     let settings = AdaptationSettings::default();
     let dt = 1.0 / 30.0;
-    let post = uniform_buffer(
-        ctx,
-        "test.post",
-        &PostUniform::new(
-            0.18,
-            0.0,
-            None,
-            &BloomSettings::default(),
-            &settings,
-            dt,
-            true,
-        ),
-    );
+    let post = post_uniform(ctx, &BloomSettings::default(), &settings, dt);
     let (mut cpu_l_a, mut worst_step, mut worst_chain) = (0.0f64, 0.0f64, 0.0f64);
     let (mut prev_gpu, mut peak) = (0.0f64, 0.0f64);
     for frame in 0..40 {
@@ -272,19 +260,7 @@ fn gpu_bloom(
         threshold,
         ..Default::default()
     };
-    let post = uniform_buffer(
-        ctx,
-        "test.post",
-        &PostUniform::new(
-            0.18,
-            0.0,
-            None,
-            &settings,
-            &AdaptationSettings::default(),
-            0.0,
-            true,
-        ),
-    );
+    let post = post_uniform(ctx, &settings, &AdaptationSettings::default(), 0.0);
     let exposure_buffer = uniform_like_storage(ctx, [0.0, exposure, 0.0, 0.0]);
     let mut g = FrameGraph::new();
     let inputs = BloomInputs {
@@ -300,6 +276,20 @@ fn gpu_bloom(
     g.mark_output(out);
     submit(ctx, g);
     download(ctx, &dst)
+}
+
+/// The post uniform at key 0.18, no EV bias or white point, starting adapted.
+fn post_uniform(
+    ctx: &GpuContext,
+    bloom: &BloomSettings,
+    adaptation: &AdaptationSettings,
+    dt: f32,
+) -> wgpu::Buffer {
+    uniform_buffer(
+        ctx,
+        "test.post",
+        &PostUniform::new(0.18, 0.0, None, bloom, adaptation, dt, true),
+    )
 }
 
 fn uniform_like_storage(ctx: &GpuContext, v: [f32; 4]) -> wgpu::Buffer {
@@ -430,18 +420,11 @@ fn tone_mappers_match_their_cpu_twins_within_one_step() {
     let bloom = BloomPass::new(ctx).expect("bloom (its sampler)");
     let strip = quantize(&tonemap_strip());
     let hdr = upload(ctx, &strip);
-    let post = uniform_buffer(
+    let post = post_uniform(
         ctx,
-        "test.post",
-        &PostUniform::new(
-            0.18,
-            0.0,
-            None,
-            &BloomSettings::default(),
-            &AdaptationSettings::default(),
-            0.0,
-            true,
-        ),
+        &BloomSettings::default(),
+        &AdaptationSettings::default(),
+        0.0,
     );
     // Exposure 0.18 at key 0.18: scale 1, the strip's values go in as they are.
     let exposure = uniform_like_storage(ctx, [0.0, 0.18, 0.0, 0.0]);
