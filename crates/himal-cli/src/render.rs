@@ -38,6 +38,9 @@ pub struct RenderArgs {
     /// --gltf opens at 35,20.
     #[arg(long, value_name = "YAW,PITCH[,DISTANCE]", allow_hyphen_values = true)]
     pub orbit: Option<String>,
+    /// With --gltf: the KHR_materials_variants variant to show (by name).
+    #[arg(long, value_name = "NAME", allow_hyphen_values = true)]
+    pub variant: Option<String>,
     /// Vertical field of view in degrees (replaces the camera's).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f32>,
@@ -468,9 +471,20 @@ impl RenderArgs {
     /// The `--gltf` model (read as glTF whatever its name ends with), else
     /// `--scene` ([`load_scene`]).
     pub fn load_scene(&self) -> Result<Scene> {
-        match &self.gltf {
-            Some(path) => Ok(Scene::from_gltf(Path::new(path))?),
-            None => load_scene(&self.scene),
+        let budget = crate::memory_budget()?;
+        match (&self.gltf, &self.variant) {
+            (Some(path), variant) => Ok(Scene::from_gltf_variant(
+                Path::new(path),
+                budget,
+                variant.as_deref(),
+            )?),
+            (None, Some(_)) if is_gltf(&self.scene) => Ok(Scene::from_gltf_variant(
+                Path::new(&self.scene),
+                budget,
+                self.variant.as_deref(),
+            )?),
+            (None, Some(v)) => bail!("--variant {v}: variants are a glTF model's (--gltf FILE)"),
+            (None, None) => load_scene(&self.scene),
         }
     }
 

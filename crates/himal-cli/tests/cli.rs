@@ -344,3 +344,27 @@ fn orbit_and_fov_are_checked() {
     );
     fails_with(&["render", "--fov", "0", "--size", "8x8"], "--fov 0");
 }
+
+#[test]
+fn variant_names_the_files_variants() {
+    let chair = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/assets/gltf/SheenChair/glTF/SheenChair.gltf"
+    );
+    fails_with(
+        &[
+            "render",
+            "--gltf",
+            chair,
+            "--variant",
+            "Tartan",
+            "--size",
+            "8x8",
+        ],
+        "Mango Velvet, Peacock Velvet",
+    );
+    fails_with(
+        &["render", "--variant", "Tartan", "--size", "8x8"],
+        "variants are a glTF model's",
+    );
+}

@@ -441,3 +441,34 @@ fn skins_and_animations_are_named_in_the_load_warnings() {
         "{w}"
     );
 }
+
+/// KHR_materials_variants: SheenChair's seat is "Mango Velvet" by default
+/// (its primitive's material) and "Peacock Velvet" when asked for; an
+/// unknown variant is an error listing the file's.
+#[test]
+fn material_variants_pick_the_mapped_materials() {
+    use himal::budget::MemoryBudget;
+    let path = common::gltf_sample("SheenChair");
+    let material_of_seat = |variant: Option<&str>| {
+        let a = gltf::load_with(&path, MemoryBudget::default(), variant).expect("loads");
+        assert_eq!(a.variants, ["Mango Velvet", "Peacock Velvet"]);
+        let m = a.pbr.material_of(0).expect("seat material");
+        a.pbr.materials[m].name.clone()
+    };
+    assert_eq!(material_of_seat(None), "fabric Mystere Mango Velvet");
+    assert_eq!(
+        material_of_seat(Some("Mango Velvet")),
+        "fabric Mystere Mango Velvet"
+    );
+    assert_eq!(
+        material_of_seat(Some("Peacock Velvet")),
+        "fabric Mystere Peacock Velvet"
+    );
+    let e = gltf::load_with(&path, MemoryBudget::default(), Some("Tartan"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("Tartan") && e.contains("Mango Velvet, Peacock Velvet"),
+        "{e}"
+    );
+}

@@ -652,6 +652,16 @@ impl Scene {
 
     /// [`Scene::from_gltf`] with an explicit memory budget.
     pub fn from_gltf_within(path: &Path, budget: MemoryBudget) -> Result<Scene, SceneError> {
+        Self::from_gltf_variant(path, budget, None)
+    }
+
+    /// [`Scene::from_gltf_within`] with `KHR_materials_variants` variant
+    /// `variant` (by name; an unknown one is an error listing the file's).
+    pub fn from_gltf_variant(
+        path: &Path,
+        budget: MemoryBudget,
+        variant: Option<&str>,
+    ) -> Result<Scene, SceneError> {
         let mut asset = match path.to_str().and_then(|p| p.strip_prefix(builtin::PREFIX)) {
             Some(name) => {
                 let bytes = builtin::model(name).ok_or_else(|| SceneError::Invalid {
@@ -661,9 +671,9 @@ impl Scene {
                         builtin::names().join(", ")
                     ),
                 })?;
-                gltf::load_from_bytes_within(path, bytes, budget)?
+                gltf::load_from_bytes_with(path, bytes, budget, variant)?
             }
-            None => gltf::load_within(path, budget)?,
+            None => gltf::load_with(path, budget, variant)?,
         };
         mirror_meshes(&mut asset.meshes, &mut asset.objects, &mut asset.pbr);
         let mut cameras = vec![NamedCamera {

@@ -105,6 +105,8 @@ pub struct GltfAsset {
     /// What the file holds that himal does not show (also logged once at
     /// load): unimplemented extensions, point and line primitives.
     pub warnings: Vec<String>,
+    /// `KHR_materials_variants` names, in the file's order.
+    pub variants: Vec<String>,
 }
 
 /// Loads a .gltf (with its .bin and images) or a .glb file.
@@ -115,6 +117,16 @@ pub fn load(path: &Path) -> Result<GltfAsset, SceneError> {
 /// [`load`] with meshes and images charged against `budget` before they
 /// are read.
 pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<GltfAsset, SceneError> {
+    load_with(path, budget, None)
+}
+
+/// [`load_within`] with the materials of `KHR_materials_variants` variant
+/// `variant` (by name; `None`: the default materials).
+pub fn load_with(
+    path: &Path,
+    budget: MemoryBudget,
+    variant: Option<&str>,
+) -> Result<GltfAsset, SceneError> {
     let io = |source| SceneError::Io {
         path: path.to_path_buf(),
         source,
@@ -131,7 +143,7 @@ pub fn load_within(path: &Path, budget: MemoryBudget) -> Result<GltfAsset, Scene
         .check("the file", meta.len())
         .map_err(|e| cx.invalid(e))?;
     let bytes = std::fs::read(path).map_err(io)?;
-    load_from_bytes_within(path, &bytes, budget)
+    load_from_bytes_with(path, &bytes, budget, variant)
 }
 
 /// Like [`load`] for bytes already read; `path` names it and resolves URIs.
@@ -144,6 +156,16 @@ pub fn load_from_bytes_within(
     path: &Path,
     bytes: &[u8],
     budget: MemoryBudget,
+) -> Result<GltfAsset, SceneError> {
+    load_from_bytes_with(path, bytes, budget, None)
+}
+
+/// [`load_from_bytes_within`] with variant `variant` (see [`load_with`]).
+pub fn load_from_bytes_with(
+    path: &Path,
+    bytes: &[u8],
+    budget: MemoryBudget,
+    variant: Option<&str>,
 ) -> Result<GltfAsset, SceneError> {
     let cx = GltfContext {
         path: path.to_path_buf(),
@@ -240,6 +262,20 @@ pub fn load_from_bytes_within(
     let default_material = pbr.materials.len();
     let fallback = PbrMaterial::default();
 
+    let variants = variant_names(&doc);
+    let selected = match variant {
+        None => None,
+        Some(name) => Some(variants.iter().position(|v| v == name).ok_or_else(|| {
+            cx.invalid(if variants.is_empty() {
+                format!("--variant {name}: the file has no KHR_materials_variants")
+            } else {
+                format!(
+                    "no variant \"{name}\" (the file's: {})",
+                    variants.join(", ")
+                )
+            })
+        })?),
+    };
     // Meshes: one himal mesh per triangle primitive; points and lines are
     // named in a warning, not drawn.
     let mut primitive_mesh: Vec<Vec<Option<usize>>> = Vec::new();
@@ -255,7 +291,14 @@ pub fn load_from_bytes_within(
                 of_mesh.push(None);
                 continue;
             }
-            let material = p.material().index().unwrap_or(default_material);
+            let mapped = selected.and_then(|v| variant_material(&p, v));
+            if let Some(bad) = mapped.filter(|&i| i >= default_material) {
+                return Err(cx.invalid(format!(
+                    "{}: KHR_materials_variants maps to material {bad}, which does not exist ({default_material} materials)",
+                    primitive_name(&m, &p)
+                )));
+            }
+            let material = mapped.or(p.material().index()).unwrap_or(default_material);
             let desc = pbr.materials.get(material).unwrap_or(&fallback);
             let mesh = primitive(&cx, &m, &p, &buffers, desc)?;
             pbr.mesh_material.push((meshes.len(), material));
@@ -332,6 +375,7 @@ pub fn load_from_bytes_within(
         bounds: Aabb::EMPTY,
         meshes: Vec::new(),
         warnings,
+        variants,
     };
     let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(s) => s.nodes().collect(),
@@ -419,11 +463,12 @@ pub fn load_from_bytes_within(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 5] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 6] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_emissive_strength",
+    "KHR_materials_variants",
     "KHR_texture_transform",
 ];
 
@@ -461,6 +506,43 @@ fn check_extensions(
             ignored.join(", ")
         )
     }))
+}
+
+/// The names of the file's `KHR_materials_variants`.
+fn variant_names(doc: &gltf::Document) -> Vec<String> {
+    let list = doc
+        .extensions()
+        .and_then(|e| e.get("KHR_materials_variants"))
+        .and_then(|v| v.get("variants"))
+        .and_then(|v| v.as_array());
+    list.map(|l| {
+        l.iter()
+            .enumerate()
+            .map(|(i, v)| {
+                v.get("name")
+                    .and_then(|n| n.as_str())
+                    .map_or_else(|| format!("variant{i}"), str::to_string)
+            })
+            .collect()
+    })
+    .unwrap_or_default()
+}
+
+/// The material primitive `p` maps variant `variant` to, if it does.
+fn variant_material(p: &gltf::Primitive, variant: usize) -> Option<usize> {
+    let mappings = p
+        .extensions()?
+        .get("KHR_materials_variants")?
+        .get("mappings")?
+        .as_array()?;
+    mappings.iter().find_map(|m| {
+        let listed = m.get("variants")?.as_array()?;
+        listed
+            .iter()
+            .any(|v| v.as_u64() == Some(variant as u64))
+            .then(|| m.get("material")?.as_u64().map(|i| i as usize))
+            .flatten()
+    })
 }
 
 /// Triangle lists, strips and fans are drawn (strips and fans as lists).
