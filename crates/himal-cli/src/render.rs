@@ -548,6 +548,27 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     })
 }
 
+/// `--env` on `scene`: a file, `studio`, `sky`; by default a `model`
+/// (a glTF file) is judged under neutral studio light, a scene keeps its own.
+pub fn apply_environment(args: &RenderArgs, scene: &mut Scene, model: bool) {
+    let env = match args.env.as_deref() {
+        Some("sky") => None,
+        Some("studio") => Some(himal::scene::STUDIO),
+        Some(file) => Some(file),
+        None if model => Some(himal::scene::STUDIO),
+        None => None,
+    };
+    match env {
+        Some(env) => {
+            let mut desc = himal::scene::EnvironmentDesc::new(env);
+            desc.intensity = args.env_intensity;
+            scene.environment = Some(desc);
+        }
+        None if args.env.is_some() => scene.environment = None,
+        None => {}
+    }
+}
+
 /// `--orbit`, `--fov` and `--camera` applied: a named camera, an orbit of
 /// the scene's bounds (a bare model's default: three-quarter), or the
 /// scene's first camera.
@@ -694,23 +715,7 @@ pub fn setup(
     let mut scene = args.load_scene()?;
     check_hero(&scene, args.shadows.hero.as_deref())?;
     let model = args.gltf.is_some() || is_gltf(&args.scene);
-    // A model is judged under neutral studio light unless asked otherwise.
-    let env = match args.env.as_deref() {
-        Some("sky") => None,
-        Some("studio") => Some(himal::scene::STUDIO),
-        Some(file) => Some(file),
-        None if model => Some(himal::scene::STUDIO),
-        None => None,
-    };
-    match env {
-        Some(env) => {
-            let mut desc = himal::scene::EnvironmentDesc::new(env);
-            desc.intensity = args.env_intensity;
-            scene.environment = Some(desc);
-        }
-        None if args.env.is_some() => scene.environment = None,
-        None => {}
-    }
+    apply_environment(args, &mut scene, model);
     let camera = view_camera(args, &scene, model)?;
     let mut sun = scene.sun.clone();
     if let Some(t) = &args.time {

@@ -125,6 +125,12 @@ struct Viewer {
     recoveries: u32,
     /// Test hook ($HIMAL_VIEW_LOSE_DEVICE_AT): destroy the device before this frame.
     lose_device_at: Option<u32>,
+    /// Test hook ($HIMAL_VIEW_OPEN_AT=FRAME:FILE): open FILE before that
+    /// frame as a dropped file would be.
+    open_at: Option<(u32, std::path::PathBuf)>,
+    /// A model was opened in the window: the scene is no longer the
+    /// command line's.
+    opened: bool,
     camera: Camera,
     settings: FrameSettings,
     present: PresentMode,
@@ -350,22 +356,68 @@ impl Viewer {
              and its resources",
             self.frames
         );
+        self.rebuild()?;
+        eprintln!("device recreated on {}", self.renderer.context().info.name);
+        Ok(())
+    }
+
+    /// A new device and renderer for `self.scene`, and the window's
+    /// presentation on it.
+    fn rebuild(&mut self) -> Result<()> {
         // The presentation holds the old device's surface: drop it first.
         let window = self.window.take().map(|(w, _)| w);
-        let mut renderer = self
-            .args
-            .open_renderer(self.args.gpu.context()?, &self.scene)?;
+        let mut renderer = if self.opened {
+            Renderer::new(self.args.gpu.context()?, &self.scene)?
+        } else {
+            self.args
+                .open_renderer(self.args.gpu.context()?, &self.scene)?
+        };
         self.args.post.configure(&mut renderer, &self.args.gpu)?;
         self.renderer = renderer;
         if let Some(window) = window {
             let presentation = self.presentation(&window)?;
             self.window = Some((window, presentation));
         }
-        eprintln!("device recreated on {}", self.renderer.context().info.name);
+        Ok(())
+    }
+
+    /// Opens glTF model `path` in place of the scene (a dropped file): lit
+    /// and framed as `--gltf` would be. A file that does not load is
+    /// reported and the current scene kept.
+    fn open_model(&mut self, path: &std::path::Path) -> Result<()> {
+        let mut scene = match himal::scene::Scene::from_gltf(path) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e} (keeping the current scene)");
+                return Ok(());
+            }
+        };
+        crate::render::apply_environment(&self.args, &mut scene, true);
+        // --gltf's field of view, not the previous scene camera's.
+        self.camera.fov_y_deg = self.args.fov.unwrap_or(40.0);
+        let orbit = Orbit::framing(&scene.bounds, self.camera.fov_y_deg);
+        // This frame already looks at the model.
+        self.camera = orbit.camera(self.camera.fov_y_deg);
+        self.orbit = Some(orbit);
+        // The scene's own sun and no world haze, as `--gltf` starts with.
+        let fresh =
+            FrameSettings::new(self.settings.width, self.settings.height, scene.sun.clone());
+        self.settings.sun = fresh.sun;
+        self.settings.aerial_extinction = fresh.aerial_extinction;
+        self.scene = scene;
+        (self.path, self.flying, self.opened) = (None, false, true);
+        self.rebuild()?;
+        if let Some((window, _)) = &self.window {
+            window.set_title(&format!("himal — {}", path.display()));
+        }
+        println!("opened {}", path.display());
         Ok(())
     }
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        if let Some((_, path)) = self.open_at.take_if(|(at, _)| *at == self.frames) {
+            self.open_model(&path)?;
+        }
         let Some((window, _)) = &self.window else {
             return Ok(());
         };
@@ -623,6 +675,12 @@ impl ApplicationHandler for Viewer {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::DroppedFile(path) => {
+                if let Err(e) = self.open_model(&path) {
+                    self.error = Some(e);
+                    event_loop.exit();
+                }
+            }
             WindowEvent::RedrawRequested => {
                 self.step_camera(sim_step((Instant::now() - self.last).as_secs_f32()));
                 if let Err(e) = self.redraw(event_loop).or_else(|e| self.recover(e)) {
@@ -772,12 +830,26 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     // A model is orbited, a world or scene flown.
     let orbit = (args.gltf.is_some() || crate::render::is_gltf(&args.scene))
         .then(|| Orbit::around(&camera, &scene.bounds));
+    let open_at = match std::env::var("HIMAL_VIEW_OPEN_AT") {
+        Ok(v) => {
+            let (frame, file) = v
+                .split_once(':')
+                .with_context(|| format!("HIMAL_VIEW_OPEN_AT={v}: expected FRAME:FILE"))?;
+            let frame = frame
+                .parse::<u32>()
+                .with_context(|| format!("HIMAL_VIEW_OPEN_AT={v}: expected a frame number"))?;
+            Some((frame, std::path::PathBuf::from(file)))
+        }
+        Err(_) => None,
+    };
     let mut viewer = Viewer {
         args: args.clone(),
         scene,
         renderer,
         recoveries: 0,
         lose_device_at,
+        open_at,
+        opened: false,
         camera,
         settings,
         present: view.present,
