@@ -562,6 +562,8 @@ pub fn apply_environment(args: &RenderArgs, scene: &mut Scene, model: bool) {
         Some(env) => {
             let mut desc = himal::scene::EnvironmentDesc::new(env);
             desc.intensity = args.env_intensity;
+            // A file's directional light is its sun: kept under the image.
+            desc.sun = scene.sun.light.is_some();
             scene.environment = Some(desc);
         }
         None if args.env.is_some() => scene.environment = None,
@@ -896,4 +898,36 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     println!("pipelines: {stats}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        render: RenderArgs,
+    }
+
+    /// The studio replaced the sun, and with it a glTF file's directional
+    /// light (which stands in for the sun): it is kept under the studio.
+    #[test]
+    fn a_models_directional_light_stays_under_the_studio() {
+        let args = Cli::parse_from(["himal"]).render;
+        let mut scene = Scene::demo().expect("demo");
+        apply_environment(&args, &mut scene, true);
+        let env = scene.environment.clone().expect("studio");
+        assert!(env.path.as_os_str() == himal::scene::STUDIO && !env.sun);
+        scene.sun.light = Some(himal::scene::SunLight {
+            to_light: glam::Vec3::Y,
+            illuminance_klux: glam::Vec3::ONE,
+        });
+        apply_environment(&args, &mut scene, true);
+        assert!(
+            scene.environment.expect("studio").sun,
+            "the file's light is dropped"
+        );
+    }
 }
