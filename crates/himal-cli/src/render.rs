@@ -513,16 +513,30 @@ pub(crate) fn is_gltf(spec: &str) -> bool {
 
 /// The streamed world `spec` names: the built-in one, or a scene file with
 /// a `[world]` table (its cameras first, then the world's); `None` for a
-/// scene of objects. The file is parsed again on each call.
+/// scene of objects. Each spec is read and built once per process (the
+/// scene and the renderer both ask, and the viewer again after a device
+/// loss).
 pub fn world_of(spec: &str) -> Result<Option<std::sync::Arc<himal::scene::world::World>>> {
-    if spec == WORLD {
-        return Ok(Some(world()));
-    }
+    type Worlds =
+        std::collections::HashMap<String, Option<std::sync::Arc<himal::scene::world::World>>>;
+    static WORLDS: std::sync::OnceLock<std::sync::Mutex<Worlds>> = std::sync::OnceLock::new();
     if spec == "demo" || is_gltf(spec) {
         return Ok(None);
     }
-    let file = himal::scene::world::WorldFile::load(Path::new(spec))?;
-    Ok(file.map(|f| std::sync::Arc::new(f.into_world())))
+    let worlds = WORLDS.get_or_init(Default::default);
+    if let Some(w) = worlds.lock().ok().and_then(|m| m.get(spec).cloned()) {
+        return Ok(w);
+    }
+    let world = if spec == WORLD {
+        Some(world())
+    } else {
+        let file = himal::scene::world::WorldFile::load(Path::new(spec))?;
+        file.map(|f| std::sync::Arc::new(f.into_world()))
+    };
+    if let Ok(mut m) = worlds.lock() {
+        m.insert(spec.to_string(), world.clone());
+    }
+    Ok(world)
 }
 
 /// The renderer for `spec` (see [`load_scene`]): the streamed world or `scene`.
@@ -929,5 +943,26 @@ mod tests {
             scene.environment.expect("studio").sun,
             "the file's light is dropped"
         );
+    }
+
+    /// The world file was parsed twice per run (once for the scene, once
+    /// for the renderer): the second ask gets the same world.
+    #[test]
+    fn a_world_is_read_once_per_spec() {
+        let spec = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../himal/tests/scenes/world_heightmap.toml"
+        );
+        let (a, b) = (world_of(spec).expect("a"), world_of(spec).expect("b"));
+        assert!(std::sync::Arc::ptr_eq(
+            &a.expect("a world"),
+            &b.expect("a world")
+        ));
+        let (a, b) = (world_of(WORLD).expect("a"), world_of(WORLD).expect("b"));
+        assert!(std::sync::Arc::ptr_eq(
+            &a.expect("world"),
+            &b.expect("world")
+        ));
+        assert!(world_of("demo").expect("demo").is_none());
     }
 }
