@@ -472,3 +472,62 @@ fn material_variants_pick_the_mapped_materials() {
         "{e}"
     );
 }
+
+/// KHR_mesh_quantization: integer positions (SHORT), normals (normalized
+/// BYTE) and UVs (normalized UNSIGNED_SHORT), dequantized by the node's
+/// scale, load as the floats they stand for; without the extension named
+/// the same accessors are an error naming the rule.
+#[test]
+fn quantized_attributes_load_as_floats() {
+    let mut bin: Vec<u8> = Vec::new();
+    let corners: [[i16; 3]; 4] = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]];
+    for c in corners {
+        // Vertex attributes stay 4-byte aligned: 6 bytes + 2 of padding.
+        bin.extend(c.iter().flat_map(|v| v.to_le_bytes()));
+        bin.extend([0, 0]);
+    }
+    for _ in 0..4 {
+        bin.extend([0u8, 0, 127, 0]);
+    }
+    for uv in [[0u16, 0], [65535, 0], [65535, 65535], [0, 65535]] {
+        bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|v| v.to_le_bytes()));
+    let json = |used: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},{used}"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"scale":[0.5,0.5,0.5]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}},"indices":3}}]}}],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":32,"byteStride":8}},{{"buffer":0,"byteOffset":32,"byteLength":16,"byteStride":4}},
+{{"buffer":0,"byteOffset":48,"byteLength":16,"byteStride":4}},{{"buffer":0,"byteOffset":64,"byteLength":12}}],
+"accessors":[{{"bufferView":0,"componentType":5122,"count":4,"type":"VEC3","min":[0,0,0],"max":[2,2,0]}},
+{{"bufferView":1,"componentType":5120,"normalized":true,"count":4,"type":"VEC3"}},
+{{"bufferView":2,"componentType":5123,"normalized":true,"count":4,"type":"VEC2"}},
+{{"bufferView":3,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
+            bin.len(),
+            common::base64(&bin)
+        )
+    };
+    let dir = std::env::temp_dir().join(format!("himal-quantized-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("quad.gltf");
+    let used = r#""extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],"#;
+    std::fs::write(&path, json(used)).expect("write");
+    let a = gltf::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let m = &a.meshes[0];
+    for (v, c) in m.vertices.iter().zip(corners) {
+        assert_eq!(v.position, c.map(f32::from));
+        assert_eq!(v.normal, [0.0, 0.0, 1.0]);
+    }
+    assert_eq!(m.vertices[2].uv, [1.0, 1.0]);
+    // The node's scale dequantizes: the quad spans 0..1 in the world.
+    assert!(
+        a.bounds.max.abs_diff_eq(Vec3::new(1.0, 1.0, 0.0), 1e-6),
+        "{:?}",
+        a.bounds
+    );
+    std::fs::write(&path, json("")).expect("write");
+    let e = gltf::load(&path).unwrap_err().to_string();
+    assert!(e.contains("POSITION") && e.contains("VEC3 of FLOAT"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -188,12 +188,71 @@ struct Allowed {
     text: &'static str,
 }
 
-fn allowed(semantic: Option<&gltf::Semantic>) -> Option<Allowed> {
+/// What `semantic` may be stored as; `quantized`: the file uses
+/// KHR_mesh_quantization (integer positions, normals, tangents, UVs).
+fn allowed(semantic: Option<&gltf::Semantic>, quantized: bool) -> Option<Allowed> {
     use gltf::Semantic as S;
     use gltf::accessor::DataType as T;
     use gltf::accessor::Dimensions as D;
     const FLOAT: &[(T, bool)] = &[(T::F32, false)];
     const UNIT: &[(T, bool)] = &[(T::F32, false), (T::U8, true), (T::U16, true)];
+    // KHR_mesh_quantization's table.
+    const Q_POSITION: &[(T, bool)] = &[
+        (T::F32, false),
+        (T::I8, false),
+        (T::I8, true),
+        (T::U8, false),
+        (T::U8, true),
+        (T::I16, false),
+        (T::I16, true),
+        (T::U16, false),
+        (T::U16, true),
+    ];
+    const Q_DIRECTION: &[(T, bool)] = &[(T::F32, false), (T::I8, true), (T::I16, true)];
+    const Q_UV: &[(T, bool)] = &[
+        (T::F32, false),
+        (T::I8, false),
+        (T::I8, true),
+        (T::U8, false),
+        (T::U8, true),
+        (T::I16, false),
+        (T::I16, true),
+        (T::U16, false),
+        (T::U16, true),
+    ];
+    if quantized {
+        match semantic {
+            Some(S::Positions) => {
+                return Some(Allowed {
+                    dims: &[D::Vec3],
+                    components: Q_POSITION,
+                    text: "VEC3 of FLOAT or (KHR_mesh_quantization) BYTE / SHORT, signed or not, normalized or not",
+                });
+            }
+            Some(S::Normals) => {
+                return Some(Allowed {
+                    dims: &[D::Vec3],
+                    components: Q_DIRECTION,
+                    text: "VEC3 of FLOAT or (KHR_mesh_quantization) normalized BYTE / SHORT",
+                });
+            }
+            Some(S::Tangents) => {
+                return Some(Allowed {
+                    dims: &[D::Vec4],
+                    components: Q_DIRECTION,
+                    text: "VEC4 of FLOAT or (KHR_mesh_quantization) normalized BYTE / SHORT",
+                });
+            }
+            Some(S::TexCoords(_)) => {
+                return Some(Allowed {
+                    dims: &[D::Vec2],
+                    components: Q_UV,
+                    text: "VEC2 of FLOAT or (KHR_mesh_quantization) BYTE / SHORT, signed or not, normalized or not",
+                });
+            }
+            _ => {}
+        }
+    }
     Some(match semantic {
         None => Allowed {
             dims: &[D::Scalar],
@@ -257,8 +316,9 @@ pub(super) fn check_attribute_types(
     cx: &GltfContext,
     doc: &gltf::Document,
 ) -> Result<(), SceneError> {
-    let check = |path: String, semantic: Option<&gltf::Semantic>, a: &gltf::Accessor| {
-        let Some(rule) = allowed(semantic) else {
+    let quantized = doc.extensions_used().any(|e| e == "KHR_mesh_quantization");
+    let check = |path: String, semantic: Option<&gltf::Semantic>, a: &gltf::Accessor, q: bool| {
+        let Some(rule) = allowed(semantic, q) else {
             return Ok(());
         };
         let fits = rule.dims.contains(&a.dimensions())
@@ -278,11 +338,11 @@ pub(super) fn check_attribute_types(
         for p in mesh.primitives() {
             let at = format!("meshes[{}].primitives[{}]", mesh.index(), p.index());
             if let Some(a) = p.indices() {
-                check(format!("{at}.indices"), None, &a)?;
+                check(format!("{at}.indices"), None, &a, quantized)?;
             }
             for (semantic, a) in p.attributes() {
                 let path = format!("{at}.attributes.{}", semantic.to_string());
-                check(path, Some(&semantic), &a)?;
+                check(path, Some(&semantic), &a, quantized)?;
             }
             for (t, target) in p.morph_targets().enumerate() {
                 let named = [
@@ -292,9 +352,9 @@ pub(super) fn check_attribute_types(
                 ];
                 for (name, a) in named {
                     let Some(a) = a else { continue };
-                    // Displacements: VEC3 of FLOAT (no quantization extension).
+                    // Displacements: VEC3 of FLOAT (quantized targets are not read).
                     let s = gltf::Semantic::Positions;
-                    check(format!("{at}.targets[{t}].{name}"), Some(&s), &a)?;
+                    check(format!("{at}.targets[{t}].{name}"), Some(&s), &a, false)?;
                 }
             }
         }
@@ -514,4 +574,40 @@ pub(super) fn check_document(
         }
     }
     Ok(())
+}
+
+/// The elements of accessor `a` as floats (glTF 2.0 3.11): FLOAT as stored,
+/// normalized integers to [0, 1] (unsigned) or [-1, 1] (signed, the most
+/// negative value clamped), other integers as their values. `None` when
+/// its type has no `N`-component reading or the data cannot be read.
+pub(super) fn read_floats<'a, const N: usize>(
+    a: &gltf::Accessor<'a>,
+    data: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'a [u8]>,
+) -> Option<Vec<[f32; N]>>
+where
+    [f32; N]: gltf::accessor::Item,
+    [i8; N]: gltf::accessor::Item,
+    [u8; N]: gltf::accessor::Item,
+    [i16; N]: gltf::accessor::Item,
+    [u16; N]: gltf::accessor::Item,
+{
+    use gltf::accessor::{DataType as T, Iter};
+    let norm = a.normalized();
+    let scale = |max: f32| move |c: f32| if norm { (c / max).max(-1.0) } else { c };
+    Some(match a.data_type() {
+        T::F32 => Iter::<[f32; N]>::new(a.clone(), data)?.collect(),
+        T::I8 => Iter::<[i8; N]>::new(a.clone(), data)?
+            .map(|v| v.map(|c| scale(127.0)(c as f32)))
+            .collect(),
+        T::U8 => Iter::<[u8; N]>::new(a.clone(), data)?
+            .map(|v| v.map(|c| scale(255.0)(c as f32)))
+            .collect(),
+        T::I16 => Iter::<[i16; N]>::new(a.clone(), data)?
+            .map(|v| v.map(|c| scale(32767.0)(c as f32)))
+            .collect(),
+        T::U16 => Iter::<[u16; N]>::new(a.clone(), data)?
+            .map(|v| v.map(|c| scale(65535.0)(c as f32)))
+            .collect(),
+        T::U32 => return None,
+    })
 }

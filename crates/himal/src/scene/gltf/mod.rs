@@ -463,12 +463,13 @@ pub fn load_from_bytes_with(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 6] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_emissive_strength",
     "KHR_materials_variants",
+    "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
 
@@ -694,19 +695,23 @@ fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Punc
     }
 }
 
-fn primitive(
+fn primitive<'a>(
     cx: &GltfContext,
-    mesh: &gltf::Mesh,
-    p: &gltf::Primitive,
-    buffers: &[Vec<u8>],
+    mesh: &gltf::Mesh<'a>,
+    p: &gltf::Primitive<'a>,
+    buffers: &'a [Vec<u8>],
     material: &PbrMaterial,
 ) -> Result<Mesh, SceneError> {
     let name = primitive_name(mesh, p);
     let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    let mut positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or_else(|| cx.invalid(format!("mesh \"{name}\" has no POSITION")))?
-        .collect();
+    // Attributes read as floats whatever their storage (KHR_mesh_quantization).
+    let data = |b: gltf::Buffer<'a>| buffers.get(b.index()).map(Vec::as_slice);
+    let unreadable = |what: &str| cx.invalid(format!("mesh \"{name}\": {what} cannot be read"));
+    let attribute = |semantic: gltf::Semantic| p.get(&semantic);
+    let mut positions: Vec<[f32; 3]> = match attribute(gltf::Semantic::Positions) {
+        Some(a) => buffers::read_floats::<3>(&a, data).ok_or_else(|| unreadable("POSITION"))?,
+        None => return Err(cx.invalid(format!("mesh \"{name}\" has no POSITION"))),
+    };
     let n = positions.len();
     // Morph targets at the mesh's default weights (glTF 2.0 3.7.2.2:
     // P = P0 + sum w_i dP_i, likewise normals and tangents).
@@ -778,8 +783,8 @@ fn primitive(
         )));
     }
     let uv_set = material.base_color_texture.map_or(0, |t| t.tex_coord);
-    let uvs: Vec<[f32; 2]> = match reader.read_tex_coords(uv_set) {
-        Some(t) => t.into_f32().collect(),
+    let uvs: Vec<[f32; 2]> = match attribute(gltf::Semantic::TexCoords(uv_set)) {
+        Some(a) => buffers::read_floats::<2>(&a, data).ok_or_else(|| unreadable("TEXCOORD"))?,
         None if material.base_color_texture.is_some() => {
             return Err(cx.invalid(format!(
                 "mesh \"{name}\": its material's base colour texture reads TEXCOORD_{uv_set}, \
@@ -789,9 +794,10 @@ fn primitive(
         None => vec![[0.0; 2]; n],
     };
     count_ok(uvs.len(), "TEXCOORD")?;
-    let normals: Vec<[f32; 3]> = match reader.read_normals() {
-        Some(r) => {
-            let mut normals: Vec<[f32; 3]> = r.collect();
+    let normals: Vec<[f32; 3]> = match attribute(gltf::Semantic::Normals) {
+        Some(a) => {
+            let mut normals =
+                buffers::read_floats::<3>(&a, data).ok_or_else(|| unreadable("NORMAL"))?;
             morph(&mut normals, &normal_deltas);
             normals
         }
@@ -818,9 +824,9 @@ fn primitive(
         })
         .collect();
     let mut indices = indices;
-    match reader.read_tangents() {
-        Some(t) => {
-            let t: Vec<[f32; 4]> = t.collect();
+    match attribute(gltf::Semantic::Tangents) {
+        Some(a) => {
+            let t = buffers::read_floats::<4>(&a, data).ok_or_else(|| unreadable("TANGENT"))?;
             count_ok(t.len(), "TANGENT")?;
             let mut xyz: Vec<[f32; 3]> = t.iter().map(|t| [t[0], t[1], t[2]]).collect();
             morph(&mut xyz, &tangent_deltas);
