@@ -113,8 +113,9 @@ fn vec3s<'a>(
     if (a.data_type(), a.dimensions()) != (DataType::F32, Dimensions::Vec3) {
         return Err(cx.invalid(format!("{what}: must be VEC3 of FLOAT")));
     }
-    let v: Vec<Vec3> = gltf::accessor::Iter::<[f32; 3]>::new(a.clone(), data)
+    let v: Vec<Vec3> = super::buffers::read_floats::<3>(a, data)
         .ok_or_else(|| cx.invalid(format!("{what}: cannot be read")))?
+        .into_iter()
         .map(Vec3::from)
         .collect();
     if v.iter().any(|v| !v.is_finite()) {
@@ -134,23 +135,15 @@ fn quats<'a>(
     if a.dimensions() != Dimensions::Vec4 {
         return Err(cx.invalid(format!("{what}: must be VEC4")));
     }
-    let unreadable = || cx.invalid(format!("{what}: cannot be read"));
-    let raw: Vec<[f32; 4]> = match (a.data_type(), a.normalized()) {
-        (DataType::F32, _) => gltf::accessor::Iter::<[f32; 4]>::new(a.clone(), data)
-            .ok_or_else(unreadable)?
-            .collect(),
-        (DataType::I16, true) => gltf::accessor::Iter::<[i16; 4]>::new(a.clone(), data)
-            .ok_or_else(unreadable)?
-            .map(|q| q.map(|c| (c as f32 / 32767.0).max(-1.0)))
-            .collect(),
-        (DataType::I8, true) => gltf::accessor::Iter::<[i8; 4]>::new(a.clone(), data)
-            .ok_or_else(unreadable)?
-            .map(|q| q.map(|c| (c as f32 / 127.0).max(-1.0)))
-            .collect(),
-        _ => {
-            return Err(cx.invalid(format!("{what}: must be FLOAT or normalized BYTE / SHORT")));
-        }
-    };
+    let rotation_type = matches!(
+        (a.data_type(), a.normalized()),
+        (DataType::F32, _) | (DataType::I16, true) | (DataType::I8, true)
+    );
+    if !rotation_type {
+        return Err(cx.invalid(format!("{what}: must be FLOAT or normalized BYTE / SHORT")));
+    }
+    let raw = super::buffers::read_floats::<4>(a, data)
+        .ok_or_else(|| cx.invalid(format!("{what}: cannot be read")))?;
     raw.into_iter()
         .map(|q| {
             let q = Quat::from_array(q);
