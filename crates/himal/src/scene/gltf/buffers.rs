@@ -196,8 +196,8 @@ fn allowed(semantic: Option<&gltf::Semantic>, quantized: bool) -> Option<Allowed
     use gltf::accessor::Dimensions as D;
     const FLOAT: &[(T, bool)] = &[(T::F32, false)];
     const UNIT: &[(T, bool)] = &[(T::F32, false), (T::U8, true), (T::U16, true)];
-    // KHR_mesh_quantization's table.
-    const Q_POSITION: &[(T, bool)] = &[
+    // KHR_mesh_quantization's table (positions and UVs: any 8 or 16 bit).
+    const Q_ANY: &[(T, bool)] = &[
         (T::F32, false),
         (T::I8, false),
         (T::I8, true),
@@ -209,23 +209,12 @@ fn allowed(semantic: Option<&gltf::Semantic>, quantized: bool) -> Option<Allowed
         (T::U16, true),
     ];
     const Q_DIRECTION: &[(T, bool)] = &[(T::F32, false), (T::I8, true), (T::I16, true)];
-    const Q_UV: &[(T, bool)] = &[
-        (T::F32, false),
-        (T::I8, false),
-        (T::I8, true),
-        (T::U8, false),
-        (T::U8, true),
-        (T::I16, false),
-        (T::I16, true),
-        (T::U16, false),
-        (T::U16, true),
-    ];
     if quantized {
         match semantic {
             Some(S::Positions) => {
                 return Some(Allowed {
                     dims: &[D::Vec3],
-                    components: Q_POSITION,
+                    components: Q_ANY,
                     text: "VEC3 of FLOAT or (KHR_mesh_quantization) BYTE / SHORT, signed or not, normalized or not",
                 });
             }
@@ -246,7 +235,7 @@ fn allowed(semantic: Option<&gltf::Semantic>, quantized: bool) -> Option<Allowed
             Some(S::TexCoords(_)) => {
                 return Some(Allowed {
                     dims: &[D::Vec2],
-                    components: Q_UV,
+                    components: Q_ANY,
                     text: "VEC2 of FLOAT or (KHR_mesh_quantization) BYTE / SHORT, signed or not, normalized or not",
                 });
             }
