@@ -29,7 +29,7 @@ use crate::render::RenderArgs;
 pub const HELP: &str = "Orbit (models): left drag turn, middle drag pan, wheel zoom, F frame, O fly; \
 fly: WASD move, Q/E down/up, Shift fast, right mouse drag look, O orbit; \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
-7 TAA on AO and motion, 8 sky model, 9 tone mapper, F fly the world's path (worlds), H HUD, P screenshot, Esc quit";
+7 TAA on AO and motion, 8 sky model, 9 tone mapper, -/= exposure, B studio/sky light, F fly the world's path (worlds), H HUD, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -131,6 +131,8 @@ struct Viewer {
     /// A model was opened in the window: the scene is no longer the
     /// command line's.
     opened: bool,
+    /// The scene's environment changed (B): rebuild before the next frame.
+    rebuild_pending: bool,
     camera: Camera,
     settings: FrameSettings,
     present: PresentMode,
@@ -156,6 +158,17 @@ impl Viewer {
     fn toggle(&mut self, key: KeyCode) {
         let s = &mut self.settings;
         match key {
+            KeyCode::Equal => s.exposure_ev = (s.exposure_ev + 0.5).min(10.0),
+            KeyCode::Minus => s.exposure_ev = (s.exposure_ev - 0.5).max(-10.0),
+            // Studio light or the physical sky: the environment is part of
+            // the renderer's resources, rebuilt before the next frame.
+            KeyCode::KeyB if self.renderer.world().is_none() => {
+                self.scene.environment = match self.scene.environment {
+                    Some(_) => None,
+                    None => Some(himal::scene::EnvironmentDesc::new(himal::scene::STUDIO)),
+                };
+                self.rebuild_pending = true;
+            }
             KeyCode::KeyT => s.sun.time_hours = (s.sun.time_hours + 0.5).rem_euclid(24.0),
             KeyCode::KeyG => s.sun.time_hours = (s.sun.time_hours - 0.5).rem_euclid(24.0),
             KeyCode::KeyV => {
@@ -291,11 +304,20 @@ impl Viewer {
                 on(s.sky_occlusion)
             ),
             format!(
-                "[7] TAA on AO+motion {}  [8] sky {:?}  [9] tone {}  [V] {}",
+                "[7] TAA on AO+motion {}  [8] sky {:?}  [V] {}",
                 on(s.aa_buffers.any()),
                 s.sky_model,
-                s.tonemapper.name(),
                 view_name(s.view)
+            ),
+            format!(
+                "[9] tone {}  [-/=] {:+.1} EV  [B] light {}",
+                s.tonemapper.name(),
+                s.exposure_ev,
+                match &self.scene.environment {
+                    None => "sky".to_string(),
+                    Some(e) if e.path.as_os_str() == himal::scene::STUDIO => "studio".to_string(),
+                    Some(e) => e.path.display().to_string(),
+                }
             ),
         ];
         if let Some(w) = world {
@@ -417,6 +439,9 @@ impl Viewer {
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         if let Some((_, path)) = self.open_at.take_if(|(at, _)| *at == self.frames) {
             self.open_model(&path)?;
+        }
+        if std::mem::take(&mut self.rebuild_pending) {
+            self.rebuild()?;
         }
         let Some((window, _)) = &self.window else {
             return Ok(());
@@ -850,6 +875,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         lose_device_at,
         open_at,
         opened: false,
+        rebuild_pending: false,
         camera,
         settings,
         present: view.present,
