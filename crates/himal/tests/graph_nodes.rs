@@ -283,7 +283,9 @@ fn history_rings_rotate_count_and_reset() {
     let desc = TextureDesc::new_2d(8, 4, FORMAT);
     h.declare(&ctx.device, "test.ring", &desc, 3);
     assert_eq!(h.frames("test.ring"), 0);
-    let id = |t: Option<&wgpu::Texture>| format!("{:?}", t.expect("declared"));
+    // By identity (wgpu compares textures by id): their Debug text also
+    // shows the error sink's lock state, which other tests' threads change.
+    let id = |t: Option<&wgpu::Texture>| t.expect("declared").clone();
     let mut seen = std::collections::HashSet::new();
     for frame in 1..=4u32 {
         let next = id(h.texture("test.ring", 0));
