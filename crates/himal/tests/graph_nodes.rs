@@ -286,11 +286,13 @@ fn history_rings_rotate_count_and_reset() {
     // By identity (wgpu compares textures by id): their Debug text also
     // shows the error sink's lock state, which other tests' threads change.
     let id = |t: Option<&wgpu::Texture>| t.expect("declared").clone();
-    let mut seen = std::collections::HashSet::new();
+    let mut seen: Vec<wgpu::Texture> = Vec::new();
     for frame in 1..=4u32 {
         let next = id(h.texture("test.ring", 0));
         let before = id(h.texture("test.ring", 1));
-        seen.insert(next.clone());
+        if !seen.contains(&next) {
+            seen.push(next.clone());
+        }
         let mut g = FrameGraph::new();
         let ring = h.import(&mut g, "test.ring").expect("declared");
         assert_eq!(ring.frames, frame - 1);
