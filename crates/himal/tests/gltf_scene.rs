@@ -403,21 +403,8 @@ fn gpu_instancing_nodes_draw_every_instance_instanced() {
     assert_eq!(scene.objects.len(), 125);
     assert!(scene.objects.iter().all(|o| o.mesh == 0));
     // The accessors, read by hand: TRANSLATION 3, ROTATION 4, SCALE 5.
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    let bin = std::fs::read(path.with_file_name("SimpleInstancing_data.bin")).unwrap();
-    let floats = |accessor: usize, i: usize, n: usize| -> Vec<f32> {
-        let a = &json["accessors"][accessor];
-        let v = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
-        let base = v["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
-        let stride = v["byteStride"].as_u64().unwrap_or(4 * n as u64);
-        (0..n)
-            .map(|c| {
-                let at = (base + stride * i as u64 + 4 * c as u64) as usize;
-                f32::from_le_bytes(bin[at..at + 4].try_into().unwrap())
-            })
-            .collect()
-    };
+    let file = common::GltfFile::open(&path);
+    let floats = |accessor: usize, i: usize, n: usize| file.element(accessor, i, n);
     for i in [0, 62, 124] {
         let (t, r, s) = (floats(3, i, 3), floats(4, i, 4), floats(5, i, 3));
         let expected = glam::Mat4::from_scale_rotation_translation(

@@ -695,7 +695,7 @@ orbit = { radius = 2, period = -8, phase = 90, turn = true }
     assert_eq!((bf.pattern, bf.sway), (AlphaPattern::Leaves, 0.03));
     assert_eq!(s.meshes[b.mesh].triangle_count(), 40);
     assert!(sp.foliage.is_none() && g.motion.is_none());
-    let orbit = sp.motion.expect("motion").orbit;
+    let orbit = sp.motion.as_ref().and_then(|m| m.orbit).expect("orbit");
     assert_eq!((orbit.radius, orbit.period, orbit.turn), (2.0, -8.0, true));
     // Phase 90 degrees: (0, -2) at t = 0; clockwise, a quarter turn later at (2, 0).
     let at = |t: f32| sp.transform_at(t).w_axis.truncate();

@@ -379,7 +379,9 @@ pub struct Object {
 impl Object {
     /// Local to world at time `t` (seconds); `transform` for static objects.
     pub fn transform_at(&self, t: f32) -> Mat4 {
-        self.motion.map_or(self.transform, |m| m.transform_at(t))
+        self.motion
+            .as_ref()
+            .map_or(self.transform, |m| m.transform_at(t))
     }
 
     /// World bounds over all time: the path swept by a moving object, the
@@ -387,16 +389,23 @@ impl Object {
     pub fn swept_bounds(&self, mesh_bounds: &Aabb) -> Aabb {
         let mut b = mesh_bounds.transform(&self.transform);
         if let Some(m) = &self.motion {
-            // The bounds' sphere around its centre, swept around the circle.
-            let local = mesh_bounds.transform(&m.base);
-            let r = if m.orbit.turn {
-                Vec3::splat(local.extent().length() * 0.5)
-            } else {
-                local.extent() * 0.5
+            // Animated: the mesh's bounds over every clip.
+            let local = match &m.animated {
+                Some(a) => a.swept.transform(&m.base),
+                None => mesh_bounds.transform(&m.base),
             };
-            let c = local.center();
-            let reach = Vec3::new(m.orbit.radius, 0.0, m.orbit.radius);
-            b = b.union(&Aabb::new(c - reach - r, c + reach + r));
+            b = b.union(&local);
+            if let Some(orbit) = &m.orbit {
+                // The bounds' sphere around its centre, swept around the circle.
+                let r = if orbit.turn {
+                    Vec3::splat(local.extent().length() * 0.5)
+                } else {
+                    local.extent() * 0.5
+                };
+                let c = local.center();
+                let reach = Vec3::new(orbit.radius, 0.0, orbit.radius);
+                b = b.union(&Aabb::new(c - reach - r, c + reach + r));
+            }
         }
         if let Some(f) = &self.foliage {
             let pad = Vec3::new(f.sway, 0.0, f.sway) * std::f32::consts::SQRT_2;
@@ -697,6 +706,59 @@ impl Scene {
             probes: Vec::new(),
             environment: None,
         })
+    }
+
+    /// The names of the glTF animations the scene's objects can play, in
+    /// file order (each name once).
+    pub fn animations(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        let rigs = (self.objects.iter())
+            .filter_map(|o| o.motion.as_ref()?.animated.as_ref())
+            .map(|a| &a.rig);
+        for clip in rigs.flat_map(|r| &r.clips) {
+            if !names.contains(&clip.name) {
+                names.push(clip.name.clone());
+            }
+        }
+        names
+    }
+
+    /// Plays glTF animation `name` on every object whose file has it
+    /// (`None`: every animated object holds its rest pose). The error lists
+    /// the animations there are.
+    pub fn set_animation(&mut self, name: Option<&str>) -> Result<(), SceneError> {
+        let known = self.animations();
+        if let Some(name) = name.filter(|n| !known.iter().any(|k| k == n)) {
+            return Err(SceneError::Invalid {
+                file: self
+                    .path
+                    .as_ref()
+                    .map_or_else(|| "<scene>".to_string(), |p| p.display().to_string()),
+                message: if known.is_empty() {
+                    format!("--animation {name}: the scene has no animations")
+                } else {
+                    format!(
+                        "no animation \"{name}\" (the scene's: {})",
+                        known.join(", ")
+                    )
+                },
+            });
+        }
+        for o in &mut self.objects {
+            let Some(a) = o.motion.as_mut().and_then(|m| m.animated.as_mut()) else {
+                continue;
+            };
+            match name {
+                None => a.clip = None,
+                Some(n) => {
+                    if let Some(c) = a.rig.clip(n) {
+                        a.clip = Some(c);
+                    }
+                }
+            }
+            o.transform = o.transform_at(0.0);
+        }
+        Ok(())
     }
 
     /// The camera called `name`; the error lists the names there are.

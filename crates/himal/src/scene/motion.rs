@@ -1,4 +1,5 @@
-//! Moving objects: a horizontal circular path at constant speed (`orbit`).
+//! Moving objects: a horizontal circular path at constant speed (`orbit`),
+//! and glTF animation (`gltf::Animated`) on top of it.
 //!
 //! The object's placed `position` is the path's centre. At time `t`
 //! (seconds) the object sits at
@@ -11,6 +12,8 @@
 //! translates, so every point of it moves by the same vector.
 
 use glam::{Mat4, Quat, Vec3};
+
+use super::gltf::Animated;
 
 /// A closed circular path over the ground (scene key `orbit`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,16 +60,37 @@ impl Orbit {
     }
 }
 
-/// How an object changes over time.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How an object changes over time: a path, a glTF animation, or both
+/// (a skinned character walking a circle).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Motion {
-    pub orbit: Orbit,
+    /// The path; `None` keeps `base`.
+    pub orbit: Option<Orbit>,
     /// Transform at the orbit's centre (before the path offset).
     pub base: Mat4,
+    /// The object's glTF node animation or skin, applied before `base`.
+    pub animated: Option<Animated>,
 }
 
 impl Motion {
+    /// A path alone.
+    pub fn orbit(orbit: Orbit, base: Mat4) -> Self {
+        Motion {
+            orbit: Some(orbit),
+            base,
+            animated: None,
+        }
+    }
+
+    /// Object to world at `t`: path(base) · animated node.
     pub fn transform_at(&self, t: f32) -> Mat4 {
-        self.orbit.transform_at(&self.base, t)
+        let placed = match &self.orbit {
+            Some(o) => o.transform_at(&self.base, t),
+            None => self.base,
+        };
+        match &self.animated {
+            Some(a) => placed * a.local_at(t),
+            None => placed,
+        }
     }
 }

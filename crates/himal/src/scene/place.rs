@@ -117,7 +117,7 @@ impl Placer {
                 Some(r) if prim == "grass" || prim == "bush" => {
                     return Err(ck.err(&r.span(), format!("`orbit` does not apply to {prim}")));
                 }
-                Some(r) => Some(orbit(world, r)?),
+                Some(r) => Some(orbit(world.ck, r)?),
                 None => None,
             };
             let snap = o.snap_to_ground.as_ref().filter(|s| *s.get_ref());
@@ -242,10 +242,7 @@ impl Placer {
                 let mut transform = trs(Vec3::new(base.x, y, base.z), rotation, scale);
                 let motion = orbit.map(|mut orbit| {
                     orbit.centre = Vec3::new(base.x, y, base.z);
-                    Motion {
-                        orbit,
-                        base: transform,
-                    }
+                    Motion::orbit(orbit, transform)
                 });
                 if let Some(m) = &motion {
                     transform = m.transform_at(0.0);
@@ -268,8 +265,8 @@ impl Placer {
 }
 
 /// Checked `orbit = { radius, period, phase, turn }`; the centre is set at placement.
-fn orbit(world: &World, o: &toml::Spanned<FileOrbit>) -> Result<Orbit> {
-    let ck = world.ck;
+/// An `orbit = { radius, period, phase, turn }` table (centre left at 0).
+pub(crate) fn orbit(ck: &super::build::Checker, o: &toml::Spanned<FileOrbit>) -> Result<Orbit> {
     let f = o.get_ref();
     let period = *f.period.get_ref();
     if !(period.is_finite() && period != 0.0) {

@@ -124,6 +124,61 @@ pub fn gltf_sample(model: &str) -> PathBuf {
     gltf_asset(model, &format!("{model}.gltf"))
 }
 
+/// A `.gltf` file's JSON and buffers read by hand, independently of the
+/// loader, for tests that check what it read.
+pub struct GltfFile {
+    pub json: serde_json::Value,
+    buffers: Vec<Vec<u8>>,
+}
+
+impl GltfFile {
+    /// Reads `path` and its `.bin` buffers (file URIs only).
+    pub fn open(path: &Path) -> Self {
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let buffers = (json["buffers"].as_array().unwrap().iter())
+            .map(|b| std::fs::read(path.with_file_name(b["uri"].as_str().unwrap())).unwrap())
+            .collect();
+        GltfFile { json, buffers }
+    }
+
+    /// Elements in accessor `accessor`.
+    pub fn count(&self, accessor: usize) -> usize {
+        self.json["accessors"][accessor]["count"].as_u64().unwrap() as usize
+    }
+
+    /// Element `i` of accessor `accessor` (`n` components of float, unsigned
+    /// byte or unsigned short, not normalised), as f32.
+    pub fn element(&self, accessor: usize, i: usize, n: usize) -> Vec<f32> {
+        let a = &self.json["accessors"][accessor];
+        let view = &self.json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let bin = &self.buffers[view["buffer"].as_u64().unwrap() as usize];
+        let size = match a["componentType"].as_u64().unwrap() {
+            5126 => 4,
+            5123 => 2,
+            5121 => 1,
+            t => panic!("component type {t}"),
+        };
+        let base = view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
+        let stride = view["byteStride"].as_u64().unwrap_or((size * n) as u64);
+        (0..n)
+            .map(|c| {
+                let at = (base + stride * i as u64) as usize + size * c;
+                match size {
+                    4 => f32::from_le_bytes(bin[at..at + 4].try_into().unwrap()),
+                    2 => u16::from_le_bytes(bin[at..at + 2].try_into().unwrap()) as f32,
+                    _ => bin[at] as f32,
+                }
+            })
+            .collect()
+    }
+
+    /// Element `i` of a VEC3 float accessor.
+    pub fn vec3(&self, accessor: usize, i: usize) -> Vec3 {
+        Vec3::from_slice(&self.element(accessor, i, 3))
+    }
+}
+
 /// Standard base64 with padding (for `data:` URIs in generated glTF files).
 pub fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

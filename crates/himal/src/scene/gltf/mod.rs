@@ -9,6 +9,7 @@
 //! which material. Missing tangents are generated with MikkTSpace
 //! (`tangents.rs`). Every problem is an error naming the file.
 
+mod animation;
 mod buffers;
 mod instancing;
 mod material;
@@ -24,6 +25,10 @@ pub use material::{
     UvTransform, Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
 };
 
+pub use animation::{
+    Animated, Channel, Clip, Interpolation, Rig, RigNode, Skin, SkinVertex, SkinVertices, Target,
+    Trs, skin_vertex,
+};
 pub(crate) use buffers::GltfContext;
 use buffers::{
     check_accessors, check_attribute_types, check_document, check_image_sources, check_nodes,
@@ -280,6 +285,7 @@ pub fn load_from_bytes_with(
     // named in a warning, not drawn.
     let mut primitive_mesh: Vec<Vec<Option<usize>>> = Vec::new();
     let mut meshes = Vec::new();
+    let mut mesh_skin: Vec<Option<Vec<SkinVertex>>> = Vec::new();
     let mut gltf_primitives = 0;
     let mut not_drawn = Vec::new();
     for m in doc.meshes() {
@@ -300,10 +306,11 @@ pub fn load_from_bytes_with(
             }
             let material = mapped.or(p.material().index()).unwrap_or(default_material);
             let desc = pbr.materials.get(material).unwrap_or(&fallback);
-            let mesh = primitive(&cx, &m, &p, &buffers, desc)?;
+            let (mesh, skin) = primitive(&cx, &m, &p, &buffers, desc)?;
             pbr.mesh_material.push((meshes.len(), material));
             of_mesh.push(Some(meshes.len()));
             meshes.push(mesh);
+            mesh_skin.push(skin);
         }
         primitive_mesh.push(of_mesh);
     }
@@ -315,22 +322,36 @@ pub fn load_from_bytes_with(
         ));
     }
     let names = |v: Vec<String>| v.join(", ");
-    if doc.skins().len() > 0 {
-        warnings.push(format!(
-            "does not apply its {} skin(s): skinned meshes are drawn in their bind pose",
-            doc.skins().len()
-        ));
-    }
-    if doc.animations().len() > 0 {
-        let list = doc.animations().map(|a| {
-            a.name()
-                .map_or_else(|| format!("animation{}", a.index()), str::to_string)
-        });
-        warnings.push(format!(
-            "does not play its animations (the nodes are drawn at rest): {}",
-            names(list.collect())
-        ));
-    }
+    let rig = animation::read_rig(&cx, &doc, &buffers, &mut warnings)?.map(std::sync::Arc::new);
+    // Nodes an animation moves: targeted by a channel, or below one that is.
+    let moved: Vec<bool> = match &rig {
+        Some(rig) => {
+            let mut moved = vec![false; rig.nodes.len()];
+            for ch in rig.clips.iter().flat_map(|c| &c.channels) {
+                moved[ch.node] = true;
+            }
+            (0..moved.len())
+                .map(|mut n| {
+                    loop {
+                        if moved[n] {
+                            break true;
+                        }
+                        match rig.nodes[n].parent {
+                            Some(p) => n = p,
+                            None => break false,
+                        }
+                    }
+                })
+                .collect()
+        }
+        None => Vec::new(),
+    };
+    // The clip played until the caller picks one (Scene::set_animation).
+    let first_clip = rig
+        .as_ref()
+        .and_then(|r| (!r.clips.is_empty()).then_some(0));
+    let mut unskinned = Vec::new();
+    let mut skinned_meshes = std::collections::HashSet::new();
     // One UV set per primitive: the base colour texture's.
     let mixed_sets: Vec<String> = (pbr.materials.iter())
         .filter(|m| {
@@ -421,9 +442,57 @@ pub fn load_from_bytes_with(
                     None => name.clone(),
                 };
                 for (k, mesh) in drawn.iter().enumerate() {
-                    let Some(mesh) = *mesh else { continue };
-                    out.bounds = out.bounds.union(&meshes[mesh].bounds.transform(&transform));
-                    out.objects.push(Object {
+                    let Some(mut mesh) = *mesh else { continue };
+                    let rig = rig.as_ref().filter(|_| instances.is_none());
+                    let skin = node.skin().map(|s| s.index());
+                    if skin.is_some() && mesh_skin[mesh].is_none() {
+                        unskinned.push(format!("{name} ({})", meshes[mesh].name));
+                    }
+                    let animated = match (rig, skin.filter(|_| mesh_skin[mesh].is_some())) {
+                        (Some(rig), Some(skin)) => {
+                            // Each skinned node deforms its own copy.
+                            if !skinned_meshes.insert(mesh) {
+                                meshes.push(meshes[mesh].clone());
+                                mesh_skin.push(mesh_skin[mesh].clone());
+                                if let Some(m) = out.pbr.material_of(mesh) {
+                                    out.pbr.mesh_material.push((meshes.len() - 1, m));
+                                }
+                                mesh = meshes.len() - 1;
+                            }
+                            let vertices = mesh_skin[mesh].clone().unwrap_or_default();
+                            let joints = rig.skins[skin].joints.len();
+                            if let Some(bad) = (vertices.iter().zip(0..))
+                                .find(|(v, _)| v.joints.iter().any(|&j| j as usize >= joints))
+                            {
+                                return Err(cx.invalid(format!(
+                                    "mesh \"{}\": vertex {} names joint {:?} of skin {skin}, which has {joints}",
+                                    meshes[mesh].name, bad.1, bad.0.joints
+                                )));
+                            }
+                            Some(skinned(
+                                rig,
+                                node.index(),
+                                skin,
+                                first_clip,
+                                vertices,
+                                &mut meshes[mesh],
+                            ))
+                        }
+                        (Some(rig), None) if moved[node.index()] => Some(Animated {
+                            rig: rig.clone(),
+                            node: node.index(),
+                            skin: None,
+                            clip: first_clip,
+                            swept: animation::swept_rigid(rig, node.index(), &meshes[mesh].bounds),
+                        }),
+                        _ => None,
+                    };
+                    let motion = animated.map(|a| crate::scene::Motion {
+                        orbit: None,
+                        base: Mat4::IDENTITY,
+                        animated: Some(a),
+                    });
+                    let mut object = Object {
                         name: if count == 1 {
                             base.clone()
                         } else {
@@ -431,10 +500,13 @@ pub fn load_from_bytes_with(
                         },
                         mesh,
                         transform,
-                        motion: None,
+                        motion,
                         foliage: None,
                         ground: false,
-                    });
+                    };
+                    object.transform = object.transform_at(0.0);
+                    out.bounds = out.bounds.union(&object.swept_bounds(&meshes[mesh].bounds));
+                    out.objects.push(object);
                 }
             }
         }
@@ -448,6 +520,12 @@ pub fn load_from_bytes_with(
             stack.push((child, world, depth + 1));
         }
     }
+    if !unskinned.is_empty() {
+        out.warnings.push(format!(
+            "skinned nodes whose primitives have no JOINTS_0 and WEIGHTS_0 are drawn rigid: {}",
+            unskinned.join(", ")
+        ));
+    }
     if !reweighted.is_empty() {
         out.warnings.push(format!(
             "nodes with their own morph weights are drawn with their mesh's default weights: {}",
@@ -459,6 +537,32 @@ pub fn load_from_bytes_with(
     }
     out.meshes = meshes;
     Ok(out)
+}
+
+/// The object of skinned mesh `mesh` on node `node`: its vertices become
+/// the pose at t = 0 of `clip` (what static consumers and the first frame
+/// see), its bounds those over every clip.
+fn skinned(
+    rig: &std::sync::Arc<Rig>,
+    node: usize,
+    skin: usize,
+    clip: Option<usize>,
+    vertices: Vec<SkinVertex>,
+    mesh: &mut Mesh,
+) -> Animated {
+    let joints = rig.joint_matrices(skin, &rig.pose(clip, 0.0));
+    for (v, s) in mesh.vertices.iter_mut().zip(&vertices) {
+        (v.position, v.normal, v.tangent) = skin_vertex(s, &joints);
+    }
+    let swept = animation::swept_skinned(rig, skin, &vertices);
+    mesh.bounds = swept;
+    Animated {
+        rig: rig.clone(),
+        node,
+        skin: Some((skin, std::sync::Arc::new(vertices))),
+        clip,
+        swept,
+    }
 }
 
 /// The extensions the loader reads (the gltf crate's typed ones and
@@ -695,13 +799,15 @@ fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Punc
     }
 }
 
+/// One primitive as a mesh, with its bind-pose skin vertices where it has
+/// JOINTS_0 and WEIGHTS_0 (else `None`).
 fn primitive<'a>(
     cx: &GltfContext,
     mesh: &gltf::Mesh<'a>,
     p: &gltf::Primitive<'a>,
     buffers: &'a [Vec<u8>],
     material: &PbrMaterial,
-) -> Result<Mesh, SceneError> {
+) -> Result<(Mesh, Option<Vec<SkinVertex>>), SceneError> {
     let name = primitive_name(mesh, p);
     let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     // Attributes read as floats whatever their storage (KHR_mesh_quantization).
@@ -824,6 +930,7 @@ fn primitive<'a>(
         })
         .collect();
     let mut indices = indices;
+    let mut remap: Option<Vec<u32>> = None;
     match attribute(gltf::Semantic::Tangents) {
         Some(a) => {
             let t = buffers::read_floats::<4>(&a, data).ok_or_else(|| unreadable("TANGENT"))?;
@@ -837,7 +944,8 @@ fn primitive<'a>(
         }
         // Only normal-mapped or anisotropic materials need a tangent frame from the UVs.
         None if material.normal_texture.is_some() || material.anisotropy_strength > 0.0 => {
-            (vertices, indices) = tangents::generate(&vertices, &indices);
+            let (v, i, origins) = tangents::generate(&vertices, &indices);
+            (vertices, indices, remap) = (v, i, Some(origins));
         }
         None => {}
     }
@@ -853,12 +961,57 @@ fn primitive<'a>(
         v.tangent[..3].copy_from_slice(&t.to_array());
     }
     let bounds = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
-    Ok(Mesh {
-        name,
-        vertices,
-        indices,
-        bounds,
-    })
+    let skin = match (reader.read_joints(0), reader.read_weights(0)) {
+        (Some(j), Some(w)) => {
+            let joints: Vec<[u16; 4]> = j.into_u16().collect();
+            let weights: Vec<[f32; 4]> = w.into_f32().collect();
+            count_ok(joints.len(), "JOINTS_0")?;
+            count_ok(weights.len(), "WEIGHTS_0")?;
+            if !weights.iter().flatten().all(|w| w.is_finite() && *w >= 0.0) {
+                return Err(cx.invalid(format!(
+                    "mesh \"{name}\": WEIGHTS_0 must be finite and not negative"
+                )));
+            }
+            let skin_vertex = |(k, v): (usize, &Vertex)| {
+                let i = remap.as_ref().map_or(k, |r| r[k] as usize);
+                let w = weights[i];
+                let sum: f32 = w.iter().sum();
+                // glTF asks for a sum of 1; exporters round. No weight: joint 0.
+                let weights = if sum > 0.0 {
+                    w.map(|x| x / sum)
+                } else {
+                    [1.0, 0.0, 0.0, 0.0]
+                };
+                let [px, py, pz] = v.position;
+                let [nx, ny, nz] = v.normal;
+                SkinVertex {
+                    position: [px, py, pz, 0.0],
+                    normal: [nx, ny, nz, 0.0],
+                    tangent: v.tangent,
+                    weights,
+                    // Unweighted slots may hold anything; they read joint 0.
+                    joints: std::array::from_fn(|c| {
+                        if weights[c] > 0.0 {
+                            u32::from(joints[i][c])
+                        } else {
+                            0
+                        }
+                    }),
+                }
+            };
+            Some(vertices.iter().enumerate().map(skin_vertex).collect())
+        }
+        _ => None,
+    };
+    Ok((
+        Mesh {
+            name,
+            vertices,
+            indices,
+            bounds,
+        },
+        skin,
+    ))
 }
 
 /// A camera on +Z looking at the centre of `bounds` (glTF models face +Z),

@@ -39,9 +39,11 @@ impl mikktspace::Geometry for Corners<'_> {
 }
 
 /// MikkTSpace tangents (w = handedness, bitangent = cross(n, t) * w) for an
-/// indexed triangle list; returns the re-welded vertices and indices.
-/// Degenerate UVs keep a tangent perpendicular to the normal.
-pub(super) fn generate(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Vec<u32>) {
+/// indexed triangle list; returns the re-welded vertices, indices, and each
+/// new vertex's original (attributes the `Vertex` does not hold, such as
+/// joints and weights, follow it). Degenerate UVs keep a tangent
+/// perpendicular to the normal.
+pub(super) fn generate(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Vec<u32>, Vec<u32>) {
     let mut corners: Vec<Vertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
     let ok = mikktspace::generate_tangents(&mut Corners {
         vertices: &mut corners,
@@ -57,23 +59,24 @@ pub(super) fn generate(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Ve
             v.tangent = [t.x, t.y, t.z, 1.0];
         }
     }
-    weld(corners)
+    weld(corners, indices)
 }
 
-/// Merges bit-identical vertices.
-fn weld(corners: Vec<Vertex>) -> (Vec<Vertex>, Vec<u32>) {
-    let mut map: HashMap<[u32; 20], u32> = HashMap::with_capacity(corners.len());
-    let mut vertices = Vec::new();
+/// Merges bit-identical corners of one original vertex.
+fn weld(corners: Vec<Vertex>, origins: &[u32]) -> (Vec<Vertex>, Vec<u32>, Vec<u32>) {
+    let mut map: HashMap<([u32; 20], u32), u32> = HashMap::with_capacity(corners.len());
+    let (mut vertices, mut remap) = (Vec::new(), Vec::new());
     let mut indices = Vec::with_capacity(corners.len());
-    for v in corners {
+    for (v, &origin) in corners.into_iter().zip(origins) {
         let key: [u32; 20] = bytemuck::cast(v);
-        let i = *map.entry(key).or_insert_with(|| {
+        let i = *map.entry((key, origin)).or_insert_with(|| {
             vertices.push(v);
+            remap.push(origin);
             vertices.len() as u32 - 1
         });
         indices.push(i);
     }
-    (vertices, indices)
+    (vertices, indices, remap)
 }
 
 /// Per-vertex normals (area-weighted face normals) for primitives without NORMAL.

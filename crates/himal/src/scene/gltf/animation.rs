@@ -1,0 +1,506 @@
+//! glTF skins and animations (glTF 2.0 3.7.3, 3.11): the node tree kept
+//! for playback, keyframe sampling, joint matrices, and the skinning math
+//! that `passes/skin` runs on the GPU (its CPU twin is [`skin_vertex`]).
+//! Equations and conventions: docs/gltf.md, "Animation and skinning".
+
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Quat, Vec3, Vec4};
+
+use super::buffers::GltfContext;
+use crate::scene::{Aabb, SceneError};
+
+/// Largest accepted keyframe count per channel (and joints per skin).
+const MAX_KEYS: usize = 1 << 20;
+/// Times the swept bounds sample each clip at (plus every keyframe time of
+/// short clips).
+const BOUND_SAMPLES: usize = 64;
+
+/// A node's local transform as translation, rotation, scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// One node of the file's hierarchy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigNode {
+    pub name: String,
+    pub parent: Option<usize>,
+    /// The node's own matrix (kept exact where no channel animates it).
+    pub rest: Mat4,
+    /// `rest` as TRS: what channels override.
+    pub rest_trs: Trs,
+}
+
+/// What a channel animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+/// Keyframe interpolation (glTF 2.0 3.11.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    /// Hermite spline; each key holds (in-tangent, value, out-tangent).
+    CubicSpline,
+}
+
+/// One animated property of one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub target: Target,
+    pub interpolation: Interpolation,
+    /// Ascending key times in seconds.
+    pub times: Vec<f32>,
+    /// One value per key (three for cubic splines); xyz for translation and
+    /// scale, a quaternion (xyzw) for rotation.
+    pub values: Vec<Vec4>,
+}
+
+impl Channel {
+    /// The channel's value at `t` seconds (held before the first and after
+    /// the last key).
+    pub fn sample(&self, t: f32) -> Vec4 {
+        let (times, cubic) = (
+            &self.times,
+            self.interpolation == Interpolation::CubicSpline,
+        );
+        let value = |k: usize| {
+            if cubic {
+                self.values[3 * k + 1]
+            } else {
+                self.values[k]
+            }
+        };
+        let last = times.len() - 1;
+        if t <= times[0] || last == 0 {
+            return value(0);
+        }
+        if t >= times[last] {
+            return value(last);
+        }
+        // times[k] <= t < times[k + 1]
+        let k = times.partition_point(|&x| x <= t) - 1;
+        let dt = times[k + 1] - times[k];
+        let s = if dt > 0.0 { (t - times[k]) / dt } else { 0.0 };
+        let rotation = self.target == Target::Rotation;
+        match self.interpolation {
+            Interpolation::Step => value(k),
+            Interpolation::Linear if rotation => {
+                let (a, b) = (Quat::from_vec4(value(k)), Quat::from_vec4(value(k + 1)));
+                Vec4::from(a.normalize().slerp(b.normalize(), s))
+            }
+            Interpolation::Linear => value(k).lerp(value(k + 1), s),
+            Interpolation::CubicSpline => {
+                // p(s) = (2s³-3s²+1)v_k + (s³-2s²+s)dt·b_k + (-2s³+3s²)v_k+1 + (s³-s²)dt·a_k+1
+                let (s2, s3) = (s * s, s * s * s);
+                let out_tangent = self.values[3 * k + 2];
+                let in_tangent = self.values[3 * (k + 1)];
+                let p = value(k) * (2.0 * s3 - 3.0 * s2 + 1.0)
+                    + out_tangent * (dt * (s3 - 2.0 * s2 + s))
+                    + value(k + 1) * (-2.0 * s3 + 3.0 * s2)
+                    + in_tangent * (dt * (s3 - s2));
+                if rotation { p.normalize_or(Vec4::W) } else { p }
+            }
+        }
+    }
+}
+
+/// A named animation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    pub name: String,
+    /// The last key time of any channel (seconds); playback loops over it.
+    pub duration: f32,
+    pub channels: Vec<Channel>,
+}
+
+/// A skin: its joints (node indices) and their inverse bind matrices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    pub joints: Vec<usize>,
+    pub inverse_bind: Vec<Mat4>,
+}
+
+/// The file's node tree, skins and clips: everything playback needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rig {
+    pub nodes: Vec<RigNode>,
+    pub skins: Vec<Skin>,
+    pub clips: Vec<Clip>,
+    /// Node indices, parents before children.
+    order: Vec<usize>,
+}
+
+impl Rig {
+    /// The index of the clip called `name`.
+    pub fn clip(&self, name: &str) -> Option<usize> {
+        self.clips.iter().position(|c| c.name == name)
+    }
+
+    /// Local transforms of every node under clip `clip` at `t` seconds
+    /// (looped over the clip's duration).
+    fn locals(&self, clip: Option<usize>, t: f32) -> Vec<Mat4> {
+        let mut locals: Vec<Mat4> = self.nodes.iter().map(|n| n.rest).collect();
+        let Some(clip) = clip.and_then(|c| self.clips.get(c)) else {
+            return locals;
+        };
+        let t = if clip.duration > 0.0 {
+            t.rem_euclid(clip.duration)
+        } else {
+            0.0
+        };
+        let mut trs: Vec<Option<Trs>> = vec![None; self.nodes.len()];
+        for ch in &clip.channels {
+            let v = ch.sample(t);
+            let n = trs[ch.node].get_or_insert(self.nodes[ch.node].rest_trs);
+            match ch.target {
+                Target::Translation => n.translation = v.truncate(),
+                Target::Rotation => n.rotation = Quat::from_vec4(v).normalize(),
+                Target::Scale => n.scale = v.truncate(),
+            }
+        }
+        for (l, trs) in locals.iter_mut().zip(trs) {
+            if let Some(trs) = trs {
+                *l = trs.matrix();
+            }
+        }
+        locals
+    }
+
+    /// World (file space) transforms of every node under `clip` at `t`.
+    pub fn pose(&self, clip: Option<usize>, t: f32) -> Vec<Mat4> {
+        let mut world = self.locals(clip, t);
+        for &n in &self.order {
+            if let Some(p) = self.nodes[n].parent {
+                world[n] = world[p] * world[n];
+            }
+        }
+        world
+    }
+
+    /// Joint matrices of skin `skin` in pose `pose` ([`Rig::pose`]):
+    /// J_i = W(joint_i) · IBM_i.
+    pub fn joint_matrices(&self, skin: usize, pose: &[Mat4]) -> Vec<Mat4> {
+        let s = &self.skins[skin];
+        (s.joints.iter().zip(&s.inverse_bind))
+            .map(|(&j, ibm)| pose[j] * *ibm)
+            .collect()
+    }
+
+    /// Times to sample for bounds over every clip: evenly spaced and every
+    /// key time of the clip.
+    fn sample_times(&self) -> Vec<(Option<usize>, f32)> {
+        let mut out = vec![(None, 0.0)];
+        for (c, clip) in self.clips.iter().enumerate() {
+            out.extend(
+                (0..=BOUND_SAMPLES)
+                    .map(|i| (Some(c), clip.duration * i as f32 / BOUND_SAMPLES as f32)),
+            );
+            let keys = clip.channels.iter().flat_map(|ch| ch.times.iter().copied());
+            out.extend(keys.take(4 * BOUND_SAMPLES).map(|t| (Some(c), t)));
+        }
+        out
+    }
+}
+
+/// A skinned mesh vertex in its bind pose, as `passes/skin` reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SkinVertex {
+    /// xyz: bind-pose position; w: the output vertex (u32 bits, set at upload).
+    pub position: [f32; 4],
+    pub normal: [f32; 4],
+    /// xyz: tangent, w: handedness.
+    pub tangent: [f32; 4],
+    /// Sum 1.
+    pub weights: [f32; 4],
+    /// Indices into the skin's joints (offset to the scene's joint buffer at upload).
+    pub joints: [u32; 4],
+}
+
+/// The skinned position, normal and tangent of `v` under joint matrices
+/// `joints` (the CPU twin of `passes/skin/skin.wgsl`): with
+/// M = Σ w_i J[j_i], p' = M p, n' = normalize(M n), t' = M t made
+/// orthogonal to n' and normalised.
+/// (Normals by M, not its inverse transpose: exact for rotation and uniform
+/// scale, as three.js and Filament do. A direction M collapses keeps its
+/// bind-pose value.)
+pub fn skin_vertex(v: &SkinVertex, joints: &[Mat4]) -> ([f32; 3], [f32; 3], [f32; 4]) {
+    let mut m = Mat4::ZERO;
+    for (w, j) in v.weights.iter().zip(v.joints) {
+        if *w != 0.0 {
+            m += *joints.get(j as usize).unwrap_or(&Mat4::IDENTITY) * *w;
+        }
+    }
+    let p = m.transform_point3(Vec3::from_slice(&v.position[..3]));
+    let n = m.transform_vector3(Vec3::from_slice(&v.normal[..3]));
+    let t = m.transform_vector3(Vec3::from_slice(&v.tangent[..3]));
+    let n = n.normalize_or(Vec3::from_slice(&v.normal[..3]));
+    // Blended matrices are not rotations: the tangent is made orthogonal to
+    // the normal again (the vertex contract).
+    let t = (t - n * n.dot(t)).normalize_or(Vec3::from_slice(&v.tangent[..3]));
+    (p.to_array(), n.to_array(), [t.x, t.y, t.z, v.tangent[3]])
+}
+
+/// Bind-pose vertices with their joints and weights, shared by the objects
+/// of one skinned mesh.
+pub type SkinVertices = Arc<Vec<SkinVertex>>;
+
+/// An object moved by a rig: its node's animated transform, or (skinned)
+/// its skin's joints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Animated {
+    pub rig: Arc<Rig>,
+    pub node: usize,
+    /// Skinned: the skin and the mesh's bind-pose vertices.
+    pub skin: Option<(usize, SkinVertices)>,
+    /// The clip played; `None` holds the rest pose.
+    pub clip: Option<usize>,
+    /// Bounds of the object's mesh over every clip, in file space.
+    pub swept: Aabb,
+}
+
+impl Animated {
+    /// File-space transform of the object at `t`: its node's world
+    /// transform; identity for skinned meshes (glTF: a skinned mesh's node
+    /// transform is ignored, the joints place it).
+    pub fn local_at(&self, t: f32) -> Mat4 {
+        if self.skin.is_some() {
+            return Mat4::IDENTITY;
+        }
+        self.rig.pose(self.clip, t)[self.node]
+    }
+
+    /// Joint matrices at `t` (skinned objects; empty otherwise).
+    pub fn joints_at(&self, t: f32) -> Vec<Mat4> {
+        match &self.skin {
+            Some((skin, _)) => {
+                let pose = self.rig.pose(self.clip, t);
+                self.rig.joint_matrices(*skin, &pose)
+            }
+            None => Vec::new(),
+        }
+    }
+}
+
+/// Bounds of a rigid node's mesh (`mesh` bounds) over every clip.
+pub(super) fn swept_rigid(rig: &Rig, node: usize, mesh: &Aabb) -> Aabb {
+    (rig.sample_times().into_iter()).fold(Aabb::EMPTY, |b, (c, t)| {
+        b.union(&mesh.transform(&rig.pose(c, t)[node]))
+    })
+}
+
+/// Bounds of a skinned mesh over every clip (and the rest pose).
+pub(super) fn swept_skinned(rig: &Rig, skin: usize, vertices: &[SkinVertex]) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for (c, t) in rig.sample_times() {
+        let joints = rig.joint_matrices(skin, &rig.pose(c, t));
+        b = b.union(&Aabb::from_points(
+            vertices
+                .iter()
+                .map(|v| Vec3::from(skin_vertex(v, &joints).0)),
+        ));
+    }
+    b
+}
+
+/// Reads the file's node tree, skins and clips; `None` when the file has
+/// neither skins nor animations. Channels on morph weights are named in
+/// `warnings` (the weights stay the mesh's defaults).
+pub(super) fn read_rig(
+    cx: &GltfContext,
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+    warnings: &mut Vec<String>,
+) -> Result<Option<Rig>, SceneError> {
+    if doc.skins().len() == 0 && doc.animations().len() == 0 {
+        return Ok(None);
+    }
+    let data = |b: gltf::Buffer| buffers.get(b.index()).map(Vec::as_slice);
+    let mut nodes: Vec<RigNode> = doc
+        .nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            RigNode {
+                name: n
+                    .name()
+                    .map_or_else(|| format!("node{}", n.index()), str::to_string),
+                parent: None,
+                rest: Mat4::from_cols_array_2d(&n.transform().matrix()),
+                rest_trs: Trs {
+                    translation: Vec3::from(t),
+                    rotation: Quat::from_array(r).normalize(),
+                    scale: Vec3::from(s),
+                },
+            }
+        })
+        .collect();
+    for n in doc.nodes() {
+        for c in n.children() {
+            if nodes[c.index()].parent.is_some() {
+                return Err(cx.invalid(format!("node {} has more than one parent", c.index())));
+            }
+            nodes[c.index()].parent = Some(n.index());
+        }
+    }
+    let order = parents_first(cx, &nodes)?;
+
+    let mut skins = Vec::new();
+    for s in doc.skins() {
+        let joints: Vec<usize> = s.joints().map(|j| j.index()).collect();
+        if joints.is_empty() || joints.len() > MAX_KEYS {
+            return Err(cx.invalid(format!("skin {} has {} joints", s.index(), joints.len())));
+        }
+        let inverse_bind: Vec<Mat4> = match s.reader(data).read_inverse_bind_matrices() {
+            Some(m) => m.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
+            None => vec![Mat4::IDENTITY; joints.len()],
+        };
+        if inverse_bind.len() != joints.len() || !inverse_bind.iter().all(Mat4::is_finite) {
+            return Err(cx.invalid(format!(
+                "skin {}: {} finite inverse bind matrices for {} joints expected",
+                s.index(),
+                inverse_bind.len(),
+                joints.len()
+            )));
+        }
+        skins.push(Skin {
+            joints,
+            inverse_bind,
+        });
+    }
+
+    let mut clips = Vec::new();
+    let mut morph_channels = Vec::new();
+    for a in doc.animations() {
+        let name = a
+            .name()
+            .map_or_else(|| format!("animation{}", a.index()), str::to_string);
+        let mut channels = Vec::new();
+        for ch in a.channels() {
+            use gltf::animation::{Property, util::ReadOutputs};
+            let bad = |what: String| cx.invalid(format!("animation \"{name}\": {what}"));
+            let target = match ch.target().property() {
+                Property::Translation => Target::Translation,
+                Property::Rotation => Target::Rotation,
+                Property::Scale => Target::Scale,
+                Property::MorphTargetWeights => {
+                    morph_channels.push(name.clone());
+                    continue;
+                }
+            };
+            let reader = ch.reader(data);
+            let times: Vec<f32> = match reader.read_inputs() {
+                Some(i) => i.collect(),
+                None => return Err(bad("a sampler's input cannot be read".into())),
+            };
+            let v3 = |v: [f32; 3]| Vec4::new(v[0], v[1], v[2], 0.0);
+            let values: Vec<Vec4> = match reader.read_outputs() {
+                Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
+                    v.map(v3).collect()
+                }
+                Some(ReadOutputs::Rotations(r)) => r.into_f32().map(Vec4::from).collect(),
+                _ => return Err(bad("a sampler's output cannot be read".into())),
+            };
+            let interpolation = match ch.sampler().interpolation() {
+                gltf::animation::Interpolation::Step => Interpolation::Step,
+                gltf::animation::Interpolation::Linear => Interpolation::Linear,
+                gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+            };
+            let per_key = if interpolation == Interpolation::CubicSpline {
+                3
+            } else {
+                1
+            };
+            if times.is_empty() || times.len() > MAX_KEYS {
+                return Err(bad(format!("a channel has {} keys", times.len())));
+            }
+            if values.len() != times.len() * per_key {
+                return Err(bad(format!(
+                    "a channel has {} keys and {} values ({per_key} per key expected)",
+                    times.len(),
+                    values.len()
+                )));
+            }
+            if !times.iter().all(|t| t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+                return Err(bad("key times must be finite and ascending".into()));
+            }
+            if !values.iter().all(|v| v.is_finite()) {
+                return Err(bad("non-finite key values".into()));
+            }
+            channels.push(Channel {
+                node: ch.target().node().index(),
+                target,
+                interpolation,
+                times,
+                values,
+            });
+        }
+        let duration = (channels.iter())
+            .filter_map(|c| c.times.last().copied())
+            .fold(0.0f32, f32::max);
+        clips.push(Clip {
+            name,
+            duration,
+            channels,
+        });
+    }
+    if !morph_channels.is_empty() {
+        morph_channels.dedup();
+        warnings.push(format!(
+            "does not animate morph weights (drawn at the mesh's default weights): {}",
+            morph_channels.join(", ")
+        ));
+    }
+    Ok(Some(Rig {
+        nodes,
+        skins,
+        clips,
+        order,
+    }))
+}
+
+/// Node indices with every parent before its children; a cycle is an error.
+fn parents_first(cx: &GltfContext, nodes: &[RigNode]) -> Result<Vec<usize>, SceneError> {
+    let mut depth: Vec<Option<usize>> = vec![None; nodes.len()];
+    for start in 0..nodes.len() {
+        let mut chain = vec![start];
+        while let Some(&n) = chain.last() {
+            if depth[n].is_some() {
+                chain.pop();
+                break;
+            }
+            match nodes[n].parent {
+                Some(p) if depth[p].is_none() => {
+                    if chain.len() > nodes.len() {
+                        return Err(cx.invalid("the node hierarchy has a cycle"));
+                    }
+                    chain.push(p);
+                }
+                _ => break,
+            }
+        }
+        // Resolve from the top of the chain down.
+        while let Some(n) = chain.pop() {
+            depth[n] = Some(nodes[n].parent.and_then(|p| depth[p]).map_or(0, |d| d + 1));
+        }
+    }
+    let mut order: Vec<usize> = (0..nodes.len()).collect();
+    order.sort_by_key(|&n| depth[n]);
+    Ok(order)
+}
