@@ -2,6 +2,7 @@
 //! technique's CPU half) and [`build`] (the graph).
 //!
 //! ```text
+//! [skin ─> skin.copy] (skinned meshes posed into the scene's vertex buffer)
 //! cull (V6: camera, cascades, static tiles, L2 sectors) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
 //! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
@@ -40,6 +41,7 @@ use crate::passes::post::{
     TonemapPass,
 };
 use crate::passes::shadows::{ShadowPass, ShadowStats};
+use crate::passes::skin::SkinPass;
 use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
 use crate::passes::terrain::{TerrainPass, TerrainStats, TerrainView};
@@ -48,6 +50,8 @@ use crate::settings::{Culling, FrameSettings, ViewBuffer};
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
+    /// Skinned meshes posed before anything draws them.
+    pub skin: SkinPass,
     /// V6: per-instance frustum culling on the GPU.
     pub cull: CullPass,
     pub shadows: ShadowPass,
@@ -85,6 +89,7 @@ impl Passes {
         use crate::passes::envmap::ENVMAP_SIZE;
         use crate::settings::DISPLAY_FORMAT;
         Ok(Self {
+            skin: SkinPass::new(ctx)?,
             cull: CullPass::new(ctx, gpu)?,
             shadows: ShadowPass::new(ctx, scene)?,
             gbuffer: GBufferPass::new(ctx)?,
@@ -339,6 +344,8 @@ pub fn build<'a>(
     let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
     g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
+    // Skinned meshes posed into the scene's vertex buffer first.
+    passes.skin.add(&mut g, scene);
     // V6: the camera's and the cascades' objects, culled on the GPU.
     let culled = passes.cull.add(&mut g);
     let visible = Some(&passes.gbuffer.visible);

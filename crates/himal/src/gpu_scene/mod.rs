@@ -11,8 +11,10 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::gpu::{GpuContext, GpuError};
+use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
+pub mod skin;
 pub mod textures;
 pub mod uniforms;
 
@@ -332,6 +334,28 @@ pub struct SceneGpu {
     /// V6: merge runs of consecutive objects into instanced draws
     /// (`FrameSettings::instancing`, set per frame).
     pub instancing: AtomicBool,
+    /// Skinned meshes (`passes/skin`); `None` without any.
+    pub skins: Option<skin::SkinGpu>,
+}
+
+/// The skinned meshes of `scene` with the object that poses each (the
+/// first, where objects share one: a mesh has one pose).
+fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
+    let mut out: Vec<(usize, crate::scene::gltf::Animated)> = Vec::new();
+    for o in &scene.objects {
+        let Some(a) = o.motion.as_ref().and_then(|m| m.animated.as_ref()) else {
+            continue;
+        };
+        if a.skin.is_none() || o.mesh >= scene.meshes.len() {
+            continue;
+        }
+        if out.iter().any(|(m, _)| *m == o.mesh) {
+            log::warn!("skinned mesh {} is posed by its first object only", o.mesh);
+            continue;
+        }
+        out.push((o.mesh, a.clone()));
+    }
+    out
 }
 
 /// Vertex attributes of [`Vertex`], locations as in gbuffer.wgsl.
@@ -361,16 +385,22 @@ impl SceneGpu {
     ) -> Result<Self, GpuError> {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
-        let mut ranges = Vec::with_capacity(scene.meshes.len());
-        let mut lods = Vec::with_capacity(scene.meshes.len());
-        let mut mean_area = Vec::with_capacity(scene.meshes.len());
-        let mut area_histograms = Vec::with_capacity(scene.meshes.len());
-        for mesh in &scene.meshes {
-            ranges.push((
+        let n = scene.meshes.len();
+        let mut ranges = vec![(0, 0, 0); n];
+        let mut lods = vec![Vec::new(); n];
+        let mut mean_area = vec![0.0; n];
+        let mut area_histograms = vec![Vec::new(); n];
+        // Skinned meshes first: one range the skin pass copies into.
+        let skinned = skin_jobs(scene);
+        let mut order: Vec<usize> = skinned.iter().map(|(mesh, _)| *mesh).collect();
+        order.extend((0..n).filter(|m| !skinned.iter().any(|(s, _)| s == m)));
+        for mi in order {
+            let mesh = &scene.meshes[mi];
+            ranges[mi] = (
                 indices.len() as u32,
                 mesh.indices.len() as u32,
                 vertices.len() as i32,
-            ));
+            );
             let mut levels = vec![LodRange {
                 first_index: indices.len() as u32,
                 index_count: mesh.indices.len() as u32,
@@ -392,13 +422,30 @@ impl SceneGpu {
                     indices.extend_from_slice(&lod.indices);
                 }
             }
-            lods.push(levels);
-            area_histograms.push(histograms);
-            mean_area.push(crate::scene::lod::geometric_mean_area(
-                &mesh.vertices,
-                &mesh.indices,
-            ));
+            lods[mi] = levels;
+            area_histograms[mi] = histograms;
+            mean_area[mi] = crate::scene::lod::geometric_mean_area(&mesh.vertices, &mesh.indices);
         }
+        let skins = (!skinned.is_empty()).then(|| {
+            let (mut sources, mut jobs, mut first_joint) = (Vec::new(), Vec::new(), 0u32);
+            for (_, a) in &skinned {
+                let Some((skin, bind)) = &a.skin else {
+                    continue;
+                };
+                let joint_count = a.rig.skins[*skin].joints.len() as u32;
+                sources.extend(bind.iter().map(|v| SkinVertex {
+                    joints: v.joints.map(|j| j + first_joint),
+                    ..*v
+                }));
+                jobs.push(skin::SkinJob {
+                    animated: a.clone(),
+                    first_joint,
+                    joint_count,
+                });
+                first_joint += joint_count;
+            }
+            skin::SkinGpu::new(&ctx.device, jobs, &sources, &vertices[..sources.len()], 0)
+        });
         let mut objects = Vec::with_capacity(scene.objects.len());
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
         let (mut draws_textured, mut draws_blend, mut draws_emissive) =
@@ -527,7 +574,8 @@ impl SceneGpu {
                 vertices: init(
                     "scene.vertices",
                     bytemuck::cast_slice(&vertices),
-                    wgpu::BufferUsages::VERTEX,
+                    // The skin pass copies the posed vertices in.
+                    wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                 ),
                 indices: init(
                     "scene.indices",
@@ -565,6 +613,7 @@ impl SceneGpu {
                 triangles,
                 bytes,
                 instancing: AtomicBool::new(true),
+                skins,
             }
         })
     }
@@ -581,6 +630,9 @@ impl SceneGpu {
             );
             let offset = *i as u64 * std::mem::size_of::<ObjectGpu>() as u64;
             queue.write_buffer(&self.objects, offset, bytemuck::bytes_of(&gpu));
+        }
+        if let Some(skins) = &self.skins {
+            skins.update(queue, time);
         }
     }
 

@@ -12,6 +12,7 @@ pub mod gbuffer;
 pub mod lighting;
 pub mod post;
 pub mod shadows;
+pub mod skin;
 pub mod sky;
 pub mod skyocc;
 pub mod terrain;
