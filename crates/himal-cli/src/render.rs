@@ -41,6 +41,18 @@ pub struct RenderArgs {
     /// With --gltf: the KHR_materials_variants variant to show (by name).
     #[arg(long, value_name = "NAME", allow_hyphen_values = true)]
     pub variant: Option<String>,
+    /// glTF animation to play, by name (`none`: the rest pose; default: each
+    /// file's first). `himal info --gltf FILE` lists them.
+    #[arg(long, value_name = "NAME|none", allow_hyphen_values = true)]
+    pub animation: Option<String>,
+    /// Animation clock of the first frame in seconds (later frames add 1/30 s each).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "SECONDS",
+        allow_hyphen_values = true
+    )]
+    pub at: f32,
     /// Vertical field of view in degrees (replaces the camera's).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f32>,
@@ -471,6 +483,19 @@ impl RenderArgs {
     /// The `--gltf` model (read as glTF whatever its name ends with), else
     /// `--scene` ([`load_scene`]).
     pub fn load_scene(&self) -> Result<Scene> {
+        if !self.at.is_finite() {
+            bail!("--at {}: seconds, a finite number", self.at);
+        }
+        let mut scene = self.load_model()?;
+        match self.animation.as_deref() {
+            None => {}
+            Some("none") => scene.set_animation(None)?,
+            Some(name) => scene.set_animation(Some(name))?,
+        }
+        Ok(scene)
+    }
+
+    fn load_model(&self) -> Result<Scene> {
         let budget = crate::memory_budget()?;
         match (&self.gltf, &self.variant) {
             (Some(path), variant) => Ok(Scene::from_gltf_variant(
@@ -873,7 +898,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             cam.position += cam.forward * (args.speed * i as f32);
         }
         // Animation (moving objects, sway) at 30 frames per second of sequence time.
-        settings.time_s = i as f32 / 30.0;
+        settings.time_s = args.at + i as f32 / 30.0;
         // Offline frames wait for every sector in range: the same image on every run.
         renderer.settle_world(&cam, std::time::Duration::from_secs(600))?;
         let frame = renderer.render(&cam, &settings)?;
