@@ -6,10 +6,14 @@
 pub const PREFIX: &str = "builtin:";
 
 /// (name, GLB bytes).
-const MODELS: [(&str, &[u8]); 1] = [(
-    "DamagedHelmet.glb",
-    include_bytes!("../../../../assets/DamagedHelmet/DamagedHelmet.glb"),
-)];
+const MODELS: [(&str, &[u8]); 2] = [
+    (
+        "DamagedHelmet.glb",
+        include_bytes!("../../../../assets/DamagedHelmet/DamagedHelmet.glb"),
+    ),
+    // The walking character (skinned, three clips).
+    ("Fox.glb", include_bytes!("../../../../assets/Fox/Fox.glb")),
+];
 
 /// The bytes of built-in model `name` (without the prefix).
 pub fn model(name: &str) -> Option<&'static [u8]> {

@@ -121,6 +121,10 @@ pub(crate) struct FileGltf {
     pub rest_on: Option<Spanned<String>>,
     /// Skip (with a warning) when the file does not exist.
     pub optional: Option<bool>,
+    /// The model moves along a circle around `translation` (as objects' `orbit`).
+    pub orbit: Option<Spanned<FileOrbit>>,
+    /// The glTF animation it plays (default: its first; "none": rest pose).
+    pub animation: Option<Spanned<String>>,
 }
 
 /// `rotation = 30` (degrees about +Y) or `rotation = [x, y, z, w]` (unit quaternion).

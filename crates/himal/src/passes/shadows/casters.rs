@@ -83,11 +83,17 @@ impl Casters {
         }
     }
 
-    /// Index of the object called `name`, or of the first moving object.
+    /// Index of the object called `name`, or of the first skinned object
+    /// (a character), or of the first moving object.
     pub fn hero_index(&self, name: Option<&str>) -> Option<usize> {
+        let skinned = |o: &Object| {
+            (o.motion.as_ref())
+                .is_some_and(|m| m.animated.as_ref().is_some_and(|a| a.skin.is_some()))
+        };
         match name {
             Some(n) => self.objects.iter().position(|(o, _)| o.name == n),
-            None => self.moving.iter().position(|&m| m),
+            None => (self.objects.iter().position(|(o, _)| skinned(o)))
+                .or_else(|| self.moving.iter().position(|&m| m)),
         }
     }
 

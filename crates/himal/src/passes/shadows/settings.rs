@@ -47,7 +47,8 @@ pub struct ShadowSettings {
     pub static_draw_cap: u32,
     /// Hero map edge in texels (S4); 0 = no hero map.
     pub hero_resolution: u32,
-    /// Object given the hero map; `None` = the scene's first moving object.
+    /// Object given the hero map; `None` = the scene's first skinned object,
+    /// else its first moving object.
     pub hero: Option<String>,
     /// Local-light shadow atlas edge in texels (S3); 0 = no local shadows.
     pub atlas_resolution: u32,

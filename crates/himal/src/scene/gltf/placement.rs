@@ -11,7 +11,7 @@ use glam::{Mat4, Quat, Vec3};
 use super::{GltfAsset, PbrSet, TextureRef};
 use crate::scene::build::{Checker, trs};
 use crate::scene::file::{FileGltf, GltfRotation};
-use crate::scene::{LightDesc, Mesh, Object, SceneError};
+use crate::scene::{LightDesc, Mesh, Motion, Object, SceneError};
 
 /// What the scene file's `[[gltf]]` entries add to the scene.
 #[derive(Default)]
@@ -126,18 +126,68 @@ pub(crate) fn place_all(
             .name
             .as_ref()
             .map_or_else(|| format!("gltf{k}"), |n| n.get_ref().clone());
-        merge(&mut out, meshes, asset, transform, &prefix);
+        let mut asset = asset;
+        if let Some(name) = &g.animation {
+            play(ck, &mut asset, name)?;
+        }
+        let orbit = match &g.orbit {
+            Some(o) => Some(crate::scene::place::orbit(ck, o).map(|mut o| {
+                o.centre = transform.w_axis.truncate();
+                o
+            })?),
+            None => None,
+        };
+        merge(&mut out, meshes, asset, transform, orbit, &prefix);
     }
     Ok(out)
 }
 
-/// Appends `asset` under `transform`, renumbering meshes, materials,
-/// textures and images.
+/// The entry's `animation`: the clip every animated object of `asset`
+/// plays, or `"none"` for the rest pose; an unknown name lists the file's.
+fn play(
+    ck: &Checker,
+    asset: &mut GltfAsset,
+    name: &toml::Spanned<String>,
+) -> Result<(), SceneError> {
+    let wanted = (name.get_ref() != "none").then(|| name.get_ref().as_str());
+    let mut clips: Vec<String> = Vec::new();
+    for o in &mut asset.objects {
+        let Some(a) = o.motion.as_mut().and_then(|m| m.animated.as_mut()) else {
+            continue;
+        };
+        for c in &a.rig.clips {
+            if !clips.contains(&c.name) {
+                clips.push(c.name.clone());
+            }
+        }
+        a.clip = wanted.and_then(|w| a.rig.clip(w));
+        o.transform = o.transform_at(0.0);
+    }
+    match wanted {
+        Some(w) if !clips.iter().any(|c| c == w) => Err(ck.err(
+            &name.span(),
+            format!(
+                "animation \"{w}\": {} has {}",
+                asset.path.display(),
+                if clips.is_empty() {
+                    "no animations".to_string()
+                } else {
+                    clips.join(", ")
+                }
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Appends `asset` under `transform` (moving along `orbit` if given),
+/// renumbering meshes, materials, textures and images.
 fn merge(
     out: &mut Placed,
     meshes: &mut Vec<Mesh>,
     asset: GltfAsset,
     transform: Mat4,
+    orbit: Option<crate::scene::Orbit>,
     prefix: &str,
 ) {
     let mesh_base = meshes.len();
@@ -179,15 +229,27 @@ fn merge(
             .map(|(m, mat)| (m + mesh_base, mat + material_base)),
     );
     meshes.extend(asset.meshes);
-    out.objects
-        .extend(asset.objects.into_iter().map(|o| Object {
+    out.objects.extend(asset.objects.into_iter().map(|o| {
+        // The entry's transform (and path) before the file's own motion.
+        let motion = match o.motion {
+            Some(m) => Some(Motion {
+                orbit,
+                base: transform * m.base,
+                ..m
+            }),
+            None => orbit.map(|orbit| Motion::orbit(orbit, transform * o.transform)),
+        };
+        let mut object = Object {
             name: format!("{prefix}/{}", o.name),
             mesh: o.mesh + mesh_base,
             transform: transform * o.transform,
-            motion: None,
+            motion,
             foliage: None,
             ground: false,
-        }));
+        };
+        object.transform = object.transform_at(0.0);
+        object
+    }));
     let directional: Vec<&str> = (asset.lights.iter())
         .filter(|l| l.kind == super::LightKind::Directional)
         .map(|l| l.name.as_str())
