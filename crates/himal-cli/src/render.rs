@@ -42,7 +42,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME", allow_hyphen_values = true)]
     pub variant: Option<String>,
     /// glTF animation to play, by name (`none`: the rest pose; default: each
-    /// file's first). `himal info --gltf FILE` lists them.
+    /// file's first); an unknown name is an error listing the scene's.
     #[arg(long, value_name = "NAME|none", allow_hyphen_values = true)]
     pub animation: Option<String>,
     /// Animation clock of the first frame in seconds (later frames add 1/30 s each).

@@ -636,6 +636,24 @@ impl SceneGpu {
         }
     }
 
+    /// Plays glTF animation `name` on the uploaded objects whose file has
+    /// it (`None`: every animated object holds its rest pose), as
+    /// [`Scene::set_animation`] does on a scene; nothing is re-uploaded.
+    pub fn set_animation(&mut self, name: Option<&str>) {
+        let play = |a: &mut crate::scene::gltf::Animated| match name {
+            None => a.clip = None,
+            Some(n) => a.clip = a.rig.clip(n).or(a.clip),
+        };
+        for (_, o) in &mut self.animated {
+            if let Some(a) = o.motion.as_mut().and_then(|m| m.animated.as_mut()) {
+                play(a);
+            }
+        }
+        for job in self.skins.iter_mut().flat_map(|s| &mut s.jobs) {
+            play(&mut job.animated);
+        }
+    }
+
     /// Writes object records from `first_object` on (streamed regions).
     pub fn write_objects(&self, queue: &wgpu::Queue, first_object: u32, objects: &[ObjectGpu]) {
         let offset = first_object as u64 * std::mem::size_of::<ObjectGpu>() as u64;

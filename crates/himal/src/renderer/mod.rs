@@ -256,6 +256,13 @@ impl Renderer {
         rows
     }
 
+    /// Plays glTF animation `name` from the next frame on (`None`: the rest
+    /// pose); see [`crate::scene::Scene::set_animation`], whose check of the
+    /// name the caller makes.
+    pub fn set_animation(&mut self, name: Option<&str>) {
+        self.res.scene.set_animation(name);
+    }
+
     /// Forgets the previous frame (camera cut): motion vectors become zero,
     /// the next frame starts adapted, every history ring starts again.
     pub fn reset_history(&mut self) {
