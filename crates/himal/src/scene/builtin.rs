@@ -24,3 +24,23 @@ pub fn model(name: &str) -> Option<&'static [u8]> {
 pub fn names() -> Vec<&'static str> {
     MODELS.iter().map(|(n, _)| *n).collect()
 }
+
+/// Loads glTF `path` (variant `variant`, charged to `budget`): the built-in
+/// model a `builtin:NAME` path names, else the file. The one place both
+/// `--gltf` and `[[gltf]]` entries read a model.
+pub(crate) fn load_gltf(
+    path: &std::path::Path,
+    budget: crate::budget::MemoryBudget,
+    variant: Option<&str>,
+) -> Result<super::gltf::GltfAsset, super::SceneError> {
+    match path.to_str().and_then(|p| p.strip_prefix(PREFIX)) {
+        Some(name) => {
+            let bytes = model(name).ok_or_else(|| super::SceneError::Invalid {
+                file: path.display().to_string(),
+                message: format!("no such built-in model (built in: {})", names().join(", ")),
+            })?;
+            super::gltf::load_from_bytes_with(path, bytes, budget, variant)
+        }
+        None => super::gltf::load_with(path, budget, variant),
+    }
+}

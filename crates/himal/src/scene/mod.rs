@@ -671,19 +671,7 @@ impl Scene {
         budget: MemoryBudget,
         variant: Option<&str>,
     ) -> Result<Scene, SceneError> {
-        let mut asset = match path.to_str().and_then(|p| p.strip_prefix(builtin::PREFIX)) {
-            Some(name) => {
-                let bytes = builtin::model(name).ok_or_else(|| SceneError::Invalid {
-                    file: path.display().to_string(),
-                    message: format!(
-                        "no such built-in model (built in: {})",
-                        builtin::names().join(", ")
-                    ),
-                })?;
-                gltf::load_from_bytes_with(path, bytes, budget, variant)?
-            }
-            None => gltf::load_with(path, budget, variant)?,
-        };
+        let mut asset = builtin::load_gltf(path, budget, variant)?;
         mirror_meshes(&mut asset.meshes, &mut asset.objects, &mut asset.pbr);
         let mut cameras = vec![NamedCamera {
             name: "default".into(),

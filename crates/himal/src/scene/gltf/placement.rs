@@ -86,22 +86,7 @@ pub(crate) fn place_all(
             continue;
         }
         let mut transform = entry_transform(ck, g)?;
-        let asset = match builtin {
-            Some(name) => {
-                let bytes = crate::scene::builtin::model(name).ok_or_else(|| {
-                    ck.err(
-                        &g.file.span(),
-                        format!(
-                            "no built-in model \"{name}\" (built in: {})",
-                            crate::scene::builtin::names().join(", ")
-                        ),
-                    )
-                })?;
-                super::load_from_bytes_within(&path, bytes, budget)
-            }
-            None => super::load_within(&path, budget),
-        }
-        .map_err(|e| {
+        let asset = crate::scene::builtin::load_gltf(&path, budget, None).map_err(|e| {
             ck.err(
                 &g.file.span(),
                 format!("glTF \"{}\": {e}", g.file.get_ref()),
