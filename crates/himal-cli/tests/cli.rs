@@ -64,7 +64,10 @@ fn malformed_scene_names_file_and_line() {
 fn graph_lists_passes_in_order() {
     let (ok, out, err) = himal(&["render", "--graph", "--size", "64x36"]);
     assert!(ok, "{err}");
+    // The demo's fox is posed first (skin, then its copy into the vertices).
     let order = [
+        "skin",
+        "skin.copy",
         "gbuffer",
         "lighting.deferred",
         "sky",
@@ -366,5 +369,38 @@ fn variant_names_the_files_variants() {
     fails_with(
         &["render", "--variant", "Tartan", "--size", "8x8"],
         "variants are a glTF model's",
+    );
+}
+
+#[test]
+fn animation_names_the_scenes_clips_and_at_is_checked() {
+    let fox = "builtin:Fox.glb";
+    let args = [
+        "render",
+        "--gltf",
+        fox,
+        "--size",
+        "8x8",
+        "--animation",
+        "Swim",
+    ];
+    fails_with(
+        &args,
+        "no animation \"Swim\" (the scene's: Survey, Walk, Run)",
+    );
+    let helmet = [
+        "render",
+        "--gltf",
+        "builtin:DamagedHelmet.glb",
+        "--size",
+        "8x8",
+    ];
+    fails_with(
+        &[&helmet[..], &["--animation", "Walk"]].concat(),
+        "the scene has no animations",
+    );
+    fails_with(
+        &["render", "--gltf", fox, "--size", "8x8", "--at", "nan"],
+        "--at NaN",
     );
 }

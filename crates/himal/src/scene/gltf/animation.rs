@@ -236,7 +236,7 @@ pub struct SkinVertex {
 
 /// The skinned position, normal and tangent of `v` under joint matrices
 /// `joints` (the CPU twin of `passes/skin/skin.wgsl`): with
-/// M = Σ w_i J[j_i], p' = M p, n' = normalize(M n), t' = M t made
+/// M = Σ w_i J\[j_i\], p' = M p, n' = normalize(M n), t' = M t made
 /// orthogonal to n' and normalised.
 /// (Normals by M, not its inverse transpose: exact for rotation and uniform
 /// scale, as three.js and Filament do. A direction M collapses keeps its
