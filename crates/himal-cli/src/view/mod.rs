@@ -214,8 +214,12 @@ impl Viewer {
             .filter(|(at, _)| *at == frame)
             .map(|(_, k)| *k)
             .collect();
-        for key in pressed {
-            self.toggle(key);
+        if !pressed.is_empty() {
+            for key in pressed {
+                self.toggle(key);
+            }
+            // This frame's camera follows the keys, as after a real press.
+            self.step_camera(0.0);
         }
         if std::mem::take(&mut self.rebuild_pending) {
             self.rebuild()?;
