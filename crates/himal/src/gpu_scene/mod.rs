@@ -73,7 +73,9 @@ pub fn gpu_order(scene: &Scene) -> Vec<usize> {
 /// What a G-buffer pass draws ([`SceneGpu::visible`]).
 #[derive(Clone, Debug, Default)]
 pub struct VisibleLists {
+    /// Opaque objects inside the view (early-Z pipeline, no discard).
     pub opaque: Vec<Draw>,
+    /// Alpha-tested, swaying vegetation inside the view.
     pub vegetation: Vec<Draw>,
     /// glTF draws with their material.
     pub textured: Vec<(Draw, usize)>,
@@ -163,8 +165,11 @@ pub fn draw_calls(draws: &[Draw], instancing: bool) -> u32 {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ObjectGpu {
+    /// Object to world at this frame's time (column-major).
     pub model: [[f32; 4]; 4],
+    /// Inverse transpose of `model` (normals).
     pub normal_matrix: [[f32; 4]; 4],
+    /// `model` at the previous frame's time (motion vectors).
     pub prev_model: [[f32; 4]; 4],
     /// x alpha pattern (0 opaque, 1 grass, 2 leaves), y sway amplitude (m),
     /// zw sway weight of leaves (local bottom y, 1 / height); see [`crate::scene::Foliage`].
@@ -189,7 +194,9 @@ impl ObjectGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct ObjectBounds {
+    /// xyz: world box centre; w: triangle size (m).
     pub center: [f32; 4],
+    /// xyz: world box half extent; w: linear scale.
     pub half_extent: [f32; 4],
 }
 
@@ -214,10 +221,12 @@ impl ObjectBounds {
         }
     }
 
+    /// The box's centre.
     pub fn center(&self) -> glam::Vec3 {
         glam::Vec3::from_slice(&self.center[..3])
     }
 
+    /// The box's half extent.
     pub fn half_extent(&self) -> glam::Vec3 {
         glam::Vec3::from_slice(&self.half_extent[..3])
     }
@@ -228,7 +237,9 @@ impl ObjectBounds {
 /// only, the CPU path pops).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LodView {
+    /// Camera position (distances to boxes).
     pub eye: glam::Vec3,
+    /// Thresholds, band and scale of the selection.
     pub selection: crate::scene::lod::Selection,
 }
 
@@ -239,8 +250,11 @@ pub struct LodView {
 /// CPU twin where that path is off).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoolRegion {
+    /// The scene mesh every object of the region draws.
     pub mesh: u32,
+    /// First object record of the region.
     pub first_object: u32,
+    /// Object records reserved.
     pub capacity: u32,
     /// Culled beyond this distance from the camera (m; 0: no limit).
     pub max_distance: f32,
@@ -251,6 +265,7 @@ pub struct PoolRegion {
 pub struct PoolSpec {
     /// The scene mesh every object of the region draws.
     pub mesh: usize,
+    /// Object records to reserve.
     pub capacity: u32,
     /// Per-class distance culling (m; 0: no limit).
     pub max_distance: f32,
@@ -269,7 +284,9 @@ const _: () = assert!(
 /// One level of a mesh in the index buffer (E2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodRange {
+    /// First index of the level in the index buffer.
     pub first_index: u32,
+    /// Indices of the level.
     pub index_count: u32,
     /// Geometric error (mesh units; 0 for LOD0).
     pub error: f32,
@@ -278,15 +295,23 @@ pub struct LodRange {
 /// One indexed draw of one object.
 #[derive(Clone, Debug)]
 pub struct Draw {
+    /// First index in the index buffer.
     pub first_index: u32,
+    /// Indices drawn.
     pub index_count: u32,
+    /// Offset added to each index (the mesh's first vertex).
     pub base_vertex: i32,
+    /// The object record (GPU order) the draw is placed by.
     pub object: u32,
 }
 
+/// The scene uploaded: geometry, object records, draw lists, LODs, materials, skins.
 pub struct SceneGpu {
+    /// Every mesh's [`Vertex`] records (skinned meshes first).
     pub vertices: wgpu::Buffer,
+    /// Every mesh's indices, LOD levels after LOD0.
     pub indices: wgpu::Buffer,
+    /// [`ObjectGpu`] per object (GPU order), then the streamed regions.
     pub objects: wgpu::Buffer,
     /// Instance -> object for draws recorded on the CPU: the identity, so a
     /// draw of instances `k..k+n` draws objects `k..k+n` (the GPU-culled
@@ -329,7 +354,9 @@ pub struct SceneGpu {
     pub pool: Vec<PoolRegion>,
     /// Per mesh: first index, index count and base vertex of LOD0.
     pub mesh_ranges: Vec<(u32, u32, i32)>,
+    /// Triangles of every object at LOD0.
     pub triangles: u64,
+    /// GPU bytes of the upload (geometry, objects, materials).
     pub bytes: u64,
     /// V6: merge runs of consecutive objects into instanced draws
     /// (`FrameSettings::instancing`, set per frame).
@@ -363,6 +390,7 @@ pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_arra
     0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4, 5 => Float32x4
 ];
 
+/// The vertex buffer layout of [`Vertex`] (stride 80 bytes).
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -372,6 +400,7 @@ pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
 }
 
 impl SceneGpu {
+    /// Uploads `scene` with no streamed regions.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
         Self::upload_with_pool(ctx, scene, &[])
     }

@@ -11,11 +11,15 @@ use crate::scene::gltf::{Animated, SkinVertex};
 /// One skinned object: its rig binding and its first joint in `joints`.
 #[derive(Clone, Debug)]
 pub struct SkinJob {
+    /// The object's rig binding: its clip and skin.
     pub animated: Animated,
+    /// Offset of its joints in [`SkinGpu::joints`].
     pub first_joint: u32,
+    /// Joints of its skin.
     pub joint_count: u32,
 }
 
+/// Buffers of `passes/skin` for every skinned mesh of one uploaded scene.
 pub struct SkinGpu {
     /// [`SkinVertex`] per skinned vertex, joints offset to `joints`.
     pub sources: wgpu::Buffer,
@@ -26,9 +30,11 @@ pub struct SkinGpu {
     pub skinned: wgpu::Buffer,
     /// Uniform: (vertex count, 0, 0, 0).
     pub params: wgpu::Buffer,
+    /// Skinned vertices of all jobs.
     pub vertex_count: u32,
     /// The first skinned vertex in the scene's vertex buffer.
     pub first_vertex: u32,
+    /// The skinned objects, in the order of their vertices and joints.
     pub jobs: Vec<SkinJob>,
 }
 

@@ -200,11 +200,14 @@ pub use motion::{Motion, Orbit};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
+    /// Object-space position (metres for scene primitives).
     pub position: [f32; 3],
+    /// Unit object-space normal.
     pub normal: [f32; 3],
     /// xyz: unit tangent along +u; w: handedness sign (+1/-1), glTF convention
     /// (bitangent = cross(normal, tangent.xyz) * w).
     pub tangent: [f32; 4],
+    /// Texture coordinates (glTF convention: v down the image).
     pub uv: [f32; 2],
     /// Linear albedo rgb; a = material (baked) ambient occlusion.
     pub color: [f32; 4],
@@ -218,20 +221,25 @@ const _: () = assert!(std::mem::size_of::<Vertex>() == 80);
 /// Axis-aligned bounding box. The empty box has `min > max` (+inf / -inf).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Lowest corner.
     pub min: Vec3,
+    /// Highest corner.
     pub max: Vec3,
 }
 
 impl Aabb {
+    /// The box of no points: the identity of [`Aabb::union`].
     pub const EMPTY: Aabb = Aabb {
         min: Vec3::INFINITY,
         max: Vec3::NEG_INFINITY,
     };
 
+    /// The box from `min` to `max`.
     pub fn new(min: Vec3, max: Vec3) -> Self {
         Aabb { min, max }
     }
 
+    /// The smallest box holding `points` (empty for none).
     pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
         points.into_iter().fold(Aabb::EMPTY, |b, p| Aabb {
             min: b.min.min(p),
@@ -239,10 +247,12 @@ impl Aabb {
         })
     }
 
+    /// Whether the box holds no point (`min > max` on an axis).
     pub fn is_empty(&self) -> bool {
         self.min.cmpgt(self.max).any()
     }
 
+    /// The smallest box holding both.
     pub fn union(&self, other: &Aabb) -> Aabb {
         Aabb {
             min: self.min.min(other.min),
@@ -250,6 +260,7 @@ impl Aabb {
         }
     }
 
+    /// The middle of the box.
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
@@ -273,10 +284,12 @@ impl Aabb {
             || all(&|c| c.z > c.w)
     }
 
+    /// Edge lengths (`max - min`).
     pub fn extent(&self) -> Vec3 {
         self.max - self.min
     }
 
+    /// The eight corners; bit 0 of the index picks x, bit 1 y, bit 2 z.
     pub fn corners(&self) -> [Vec3; 8] {
         let (a, b) = (self.min, self.max);
         std::array::from_fn(|i| {
@@ -296,10 +309,12 @@ impl Aabb {
         Aabb::from_points(self.corners().map(|c| m.transform_point3(c)))
     }
 
+    /// Whether `p` lies inside the box grown by `tolerance`.
     pub fn contains_point(&self, p: Vec3, tolerance: f32) -> bool {
         p.cmpge(self.min - tolerance).all() && p.cmple(self.max + tolerance).all()
     }
 
+    /// Whether `other` lies inside the box grown by `tolerance`.
     pub fn contains(&self, other: &Aabb, tolerance: f32) -> bool {
         other.is_empty()
             || (self.contains_point(other.min, tolerance)
@@ -310,13 +325,18 @@ impl Aabb {
 /// Triangle list, counter-clockwise front faces seen from outside.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
+    /// Name for messages and statistics.
     pub name: String,
+    /// Vertices, indexed by `indices`.
     pub vertices: Vec<Vertex>,
+    /// Triangle list, counter-clockwise front faces.
     pub indices: Vec<u32>,
+    /// Object-space bounds of the vertices (for skinned meshes: over every clip).
     pub bounds: Aabb,
 }
 
 impl Mesh {
+    /// Triangles in `indices`.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
@@ -363,7 +383,9 @@ pub(crate) fn mirror_meshes(
 /// An instance of a mesh in the world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
+    /// Unique within the scene (copies: `name#i`; glTF objects: `entry/node`).
     pub name: String,
+    /// Index into [`Scene::meshes`].
     pub mesh: usize,
     /// Local to world (translation * rotation * scale) at time 0.
     pub transform: Mat4,
@@ -427,12 +449,14 @@ pub enum AlphaPattern {
 /// Vegetation drawing parameters (GPU `Object.params`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Foliage {
+    /// The cut-out shape the shader tests.
     pub pattern: AlphaPattern,
     /// Sway amplitude (metres) at full weight; see `docs/techniques/vegetation.md`.
     pub sway: f32,
     /// Sway weight source: grass uses `v^2`; leaves use
     /// `((y_local - sway_base) * sway_inv_height)^2` (0 at the bush's bottom).
     pub sway_base: f32,
+    /// 1 / card height (the leaves' sway weight).
     pub sway_inv_height: f32,
 }
 
@@ -451,13 +475,19 @@ impl Foliage {
 /// Material parameters as written in the scene file (albedo already linear).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialDesc {
+    /// The name objects refer to it by.
     pub name: String,
     /// Linear albedo; for metals their F0 colour.
     pub albedo: Vec3,
+    /// Perceptual smoothness, 1 - roughness (M1).
     pub glossiness: f32,
+    /// F0 of a dielectric, [0, 1].
     pub reflectance: f32,
+    /// 0 dielectric, 1 metal.
     pub metallic: f32,
+    /// Anisotropy strength along the tangent (M1).
     pub anisotropy: f32,
+    /// Material ambient occlusion, multiplied into the indirect light.
     pub ao: f32,
 }
 
@@ -516,8 +546,11 @@ pub fn parse_time(text: &str) -> Result<f32, String> {
 pub struct SunDesc {
     /// Local solar time in hours, [0, 24).
     pub time_hours: f32,
+    /// Degrees north (positive) or south.
     pub latitude_deg: f32,
+    /// 1..=366 (the sun's declination).
     pub day_of_year: u32,
+    /// Atmospheric turbidity (Preetham sky), [1, 10].
     pub turbidity: f32,
     /// A directional light that stands in for the computed sun (a glTF
     /// file's `KHR_lights_punctual` directional light): the sky and the
@@ -547,8 +580,11 @@ impl Default for SunDesc {
 }
 
 #[derive(Clone, Debug, PartialEq)]
+/// A camera with the name `--camera` picks it by.
 pub struct NamedCamera {
+    /// Unique within the scene.
     pub name: String,
+    /// Pose and projection.
     pub camera: Camera,
 }
 
@@ -558,10 +594,15 @@ pub struct Scene {
     /// The file it came from: the loaded path, or the `origin` given to
     /// [`Scene::from_toml_str`]; `None` only for scenes assembled in code.
     pub path: Option<PathBuf>,
+    /// Every mesh; objects and the PBR set index them.
     pub meshes: Vec<Mesh>,
+    /// Every placed object.
     pub objects: Vec<Object>,
+    /// Scene-file materials (by name in `[[object]]`).
     pub materials: Vec<MaterialDesc>,
+    /// Named cameras; the first is the default.
     pub cameras: Vec<NamedCamera>,
+    /// The sun's time and place, or a light standing in for it.
     pub sun: SunDesc,
     /// Point and spot lights (`[[light]]`, S3).
     pub lights: Vec<LightDesc>,

@@ -15,12 +15,14 @@ use crate::graph::{BufferAccess, FrameGraph};
 /// Threads per workgroup of `skin.wgsl`.
 const GROUP: u32 = 64;
 
+/// The skinning pipeline (one compute entry point).
 pub struct SkinPass {
     program: Program,
     pipeline: wgpu::ComputePipeline,
 }
 
 impl SkinPass {
+    /// Compiles `skin.wgsl`.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/skin/skin.wgsl")?;
         let pipeline = program.compute_pipeline(ctx, "cs_main", &[])?;

@@ -20,12 +20,16 @@ const BOUND_SAMPLES: usize = 64;
 /// A node's local transform as translation, rotation, scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
+    /// Metres in the parent's frame.
     pub translation: Vec3,
+    /// Unit quaternion.
     pub rotation: Quat,
+    /// Per-axis scale.
     pub scale: Vec3,
 }
 
 impl Trs {
+    /// T · R · S.
     pub fn matrix(&self) -> Mat4 {
         Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
     }
@@ -34,7 +38,9 @@ impl Trs {
 /// One node of the file's hierarchy.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RigNode {
+    /// The node's name in the file (`node<i>` when it has none).
     pub name: String,
+    /// The parent node; `None` for roots.
     pub parent: Option<usize>,
     /// The node's own matrix (kept exact where no channel animates it).
     pub rest: Mat4,
@@ -45,15 +51,20 @@ pub struct RigNode {
 /// What a channel animates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Target {
+    /// The node's translation (a vector key).
     Translation,
+    /// The node's rotation (a quaternion key).
     Rotation,
+    /// The node's scale (a vector key).
     Scale,
 }
 
 /// Keyframe interpolation (glTF 2.0 3.11.2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interpolation {
+    /// Each key's value holds until the next key.
     Step,
+    /// Linear between keys (slerp for rotations).
     Linear,
     /// Hermite spline; each key holds (in-tangent, value, out-tangent).
     CubicSpline,
@@ -62,8 +73,11 @@ pub enum Interpolation {
 /// One animated property of one node.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
+    /// Index of the animated node in [`Rig::nodes`].
     pub node: usize,
+    /// The property animated.
     pub target: Target,
+    /// How values between keys are found.
     pub interpolation: Interpolation,
     /// Ascending key times in seconds.
     pub times: Vec<f32>,
@@ -124,24 +138,31 @@ impl Channel {
 /// A named animation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Clip {
+    /// The clip's name in the file (`animation<i>` when it has none).
     pub name: String,
     /// The last key time of any channel (seconds); playback loops over it.
     pub duration: f32,
+    /// What the clip animates, one channel per node property.
     pub channels: Vec<Channel>,
 }
 
 /// A skin: its joints (node indices) and their inverse bind matrices.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Skin {
+    /// The joints' node indices, in the order JOINTS_0 indexes them.
     pub joints: Vec<usize>,
+    /// IBM_i: bind pose to joint i's space, one per joint.
     pub inverse_bind: Vec<Mat4>,
 }
 
 /// The file's node tree, skins and clips: everything playback needs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rig {
+    /// Every node of the file, in file order (channels and joints index it).
     pub nodes: Vec<RigNode>,
+    /// The file's skins, in file order.
     pub skins: Vec<Skin>,
+    /// The file's animations, in file order.
     pub clips: Vec<Clip>,
     /// Node indices, parents before children.
     order: Vec<usize>,
@@ -225,6 +246,7 @@ impl Rig {
 pub struct SkinVertex {
     /// xyz: bind-pose position; w: the output vertex (u32 bits, set at upload).
     pub position: [f32; 4],
+    /// xyz: bind-pose normal; w: 0.
     pub normal: [f32; 4],
     /// xyz: tangent, w: handedness.
     pub tangent: [f32; 4],
@@ -266,7 +288,9 @@ pub type SkinVertices = Arc<Vec<SkinVertex>>;
 /// its skin's joints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Animated {
+    /// The rig of the object's file (shared by its objects).
     pub rig: Arc<Rig>,
+    /// The object's node in the rig.
     pub node: usize,
     /// Skinned: the skin and the mesh's bind-pose vertices.
     pub skin: Option<(usize, SkinVertices)>,

@@ -46,8 +46,11 @@ pub(crate) const MAX_ELEMENTS: usize = 1 << 26;
 /// Materials and textures of the textured G-buffer path.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PbrSet {
+    /// The file's materials (and glTF's default one, appended when used).
     pub materials: Vec<PbrMaterial>,
+    /// Texture slots: an image and a sampler each.
     pub textures: Vec<TextureSlot>,
+    /// Decoded images (RGBA8), indexed by the slots.
     pub images: Vec<ImageData>,
     /// `(mesh index in the scene, material index)`: meshes drawn textured.
     pub mesh_material: Vec<(usize, usize)>,
@@ -66,11 +69,15 @@ impl PbrSet {
 /// KHR_lights_punctual kinds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightKind {
+    /// Parallel light (lux); the scene's sun.
     Directional,
+    /// Omnidirectional (candela).
     Point,
     /// Cone angles in radians.
     Spot {
+        /// Full-intensity half angle.
         inner_cone: f32,
+        /// Cut-off half angle.
         outer_cone: f32,
     },
 }
@@ -79,12 +86,17 @@ pub enum LightKind {
 /// wiring into lighting is the lead's, with the S3 point / spot lights).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PunctualLight {
+    /// The light's name (its node's when it has none).
     pub name: String,
+    /// Directional, point or spot.
     pub kind: LightKind,
-    /// Linear colour times intensity (candela for point / spot, lux for directional).
+    /// Linear colour, not scaled by `intensity`.
     pub color: Vec3,
+    /// The file's intensity (candela for point and spot, lux for directional).
     pub intensity: f32,
+    /// Distance where the light reaches zero; `None`: unbounded (inverse square).
     pub range: Option<f32>,
+    /// World position of its node.
     pub position: Vec3,
     /// Unit direction the light points to (the node's -Z).
     pub direction: Vec3,
@@ -93,6 +105,7 @@ pub struct PunctualLight {
 /// A loaded glTF file.
 #[derive(Clone, Debug)]
 pub struct GltfAsset {
+    /// The file it was read from (errors and warnings name it).
     pub path: PathBuf,
     /// One per primitive, in (mesh, primitive) order.
     pub meshes: Vec<Mesh>,
@@ -100,10 +113,13 @@ pub struct GltfAsset {
     pub objects: Vec<Object>,
     /// `pbr.mesh_material` indexes `meshes`.
     pub pbr: PbrSet,
+    /// The file's cameras at their nodes.
     pub cameras: Vec<NamedCamera>,
+    /// The file's KHR_lights_punctual lights at their nodes.
     pub lights: Vec<PunctualLight>,
-    /// Counts as in the file: meshes, primitives.
+    /// Meshes in the file.
     pub gltf_meshes: usize,
+    /// Primitives in the file, points and lines included.
     pub gltf_primitives: usize,
     /// World bounds of all objects.
     pub bounds: Aabb,
