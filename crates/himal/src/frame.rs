@@ -54,24 +54,41 @@ pub struct Passes {
     pub skin: SkinPass,
     /// V6: per-instance frustum culling on the GPU.
     pub cull: CullPass,
+    /// S1-S4: cascades, static map, hero map, local-light atlas and the mask.
     pub shadows: ShadowPass,
+    /// The deferred G-buffer (per-vertex and textured glTF materials).
     pub gbuffer: GBufferPass,
+    /// B1: HBAO, its stability mask, and the bilateral blurs.
     pub ao: AoPass,
+    /// L3/L4: the environment cube captured and GGX-filtered.
     pub envmap: EnvMapPass,
+    /// `--view env-probe` / `env-mirror`: the filtered cube shown.
     pub env_view: EnvViewPass,
+    /// L3: the environment probes and their relit cubes.
     pub probes: ProbeSet,
+    /// Deferred lighting, one pipeline per `LightingKey`.
     pub lighting: LightingPass,
+    /// L1: the sky behind the geometry (Bruneton or Preetham).
     pub sky: SkyPass,
+    /// L2: sky-occlusion sectors and their visibility.
     pub skyocc: SkyOccPass,
+    /// glTF emission and alpha-blended surfaces after lighting.
     pub forward: ForwardPass,
+    /// H2: the log-average luminance.
     pub luminance: LuminancePass,
+    /// H2: light adaptation on the GPU.
     pub adapt: AdaptPass,
+    /// H3: the Kawase bloom chain.
     pub bloom: BloomPass,
+    /// H1: the tone mappers and the bloom composite.
     pub tonemap: TonemapPass,
+    /// A1/A2: SMAA edges, weights and blend.
     pub smaa: SmaaPass,
+    /// A2/A3: temporal resolve, TAA and unsharp mask.
     pub temporal: TemporalPass,
     /// A3 TAA on the AO and the motion vectors (`--aa-buffers`).
     pub aa_buffers: BufferTaaPass,
+    /// Debug views of the G-buffer, depth, HDR and bloom (`--view`).
     pub debug: DebugPass,
     /// The world's CDLOD terrain (`--scene world`; `None` for plain scenes).
     pub terrain: Option<TerrainPass>,
@@ -116,21 +133,31 @@ impl Passes {
 
 /// What each technique's CPU planning reads from the renderer this frame.
 pub struct PlanInputs<'a> {
+    /// The device and queue.
     pub ctx: &'a GpuContext,
+    /// The scene as uploaded.
     pub scene: &'a SceneGpu,
+    /// This frame's settings.
     pub settings: &'a FrameSettings,
+    /// This frame's camera.
     pub camera: &'a Camera,
     /// Jittered projection (A2) and the frame's and last frame's jitter (px).
     pub proj: Mat4,
+    /// This frame's jitter (px).
     pub jitter: [f32; 2],
+    /// The previous frame's jitter (px).
     pub prev_jitter: [f32; 2],
+    /// Unit vector towards the sun.
     pub sun_direction: Vec3,
+    /// The temporal rings (AO, colour, buffer TAA).
     pub history: &'a History,
 }
 
 /// What the CPU half measured.
 pub struct Planned {
+    /// What the shadow planning chose (casters, draws, static slice).
     pub shadows: ShadowStats,
+    /// Sky-occlusion sectors planned and rendered.
     pub sky_occlusion: SkyOccStats,
     /// The world's terrain selection (`None`: no terrain).
     pub terrain: Option<TerrainStats>,
@@ -283,20 +310,28 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
 
 /// What the frame reads that outlives it.
 pub struct FrameInputs<'a> {
+    /// The device and queue.
     pub ctx: &'a GpuContext,
+    /// Every pass's pipelines.
     pub passes: &'a Passes,
+    /// The scene as uploaded.
     pub scene: &'a SceneGpu,
     /// Frame constants: bound wherever a shader names them.
     pub view: &'a wgpu::Buffer,
+    /// The lighting uniform (`passes::lighting`), bound by name.
     pub lighting: &'a wgpu::Buffer,
+    /// The sky uniform (with the sun disk), bound by name.
     pub sky: &'a wgpu::Buffer,
     /// Sky parameters without the sun disk (environment maps: the sun is lit analytically).
     pub sky_no_disk: &'a wgpu::Buffer,
     /// The probe whose relit cube feeds ambient specular (L3), and whether
     /// its G-buffer cube must be captured this frame; `None`: the sky alone.
     pub probe: Option<(usize, bool)>,
+    /// The luminance reduction's buffers.
     pub luminance: &'a LuminanceBuffers,
+    /// The post uniform, the adapted luminance and the bloom chain length.
     pub post: PostFrame<'a>,
+    /// The texture the frame ends in.
     pub output: &'a wgpu::Texture,
     /// Every temporal ring (AO, colour and buffer TAA), declared beforehand.
     pub history: &'a History,
@@ -311,7 +346,9 @@ pub struct FrameInputs<'a> {
 /// The anti-aliasing of one frame (mode, SMAA subsample, buffer TAAs).
 #[derive(Clone, Copy)]
 pub struct FrameAa {
+    /// The anti-aliasing mode.
     pub mode: AaMode,
+    /// SMAA T2x: which of the two subsamples this frame renders.
     pub subsample: u32,
     /// Buffers with their own TAA (`None`: none).
     pub buffers: Option<AaBuffers>,
