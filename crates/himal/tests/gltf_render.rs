@@ -288,3 +288,31 @@ fn emissive_strength_doubles_from_cube_to_cube() {
         assert!((1.9..=2.1).contains(&ratio), "ratio {ratio} in {e:?}");
     }
 }
+
+/// The G-buffer and forward passes made a bind group per material every
+/// frame; `MaterialGroups` makes them once per uploaded scene: a second
+/// frame gets the same groups, a new upload (another `SceneGpu::id`) new
+/// ones.
+#[test]
+fn material_bind_groups_are_made_once_per_scene() {
+    let scene = Scene::from_gltf(std::path::Path::new("builtin:DamagedHelmet.glb")).unwrap();
+    let ctx = common::context();
+    let program =
+        himal::gpu::pipeline::Program::new(&ctx, "passes/gbuffer/textured.wgsl").expect("program");
+    let groups = himal::gpu_scene::textures::MaterialGroups::default();
+    let first = himal::gpu_scene::SceneGpu::upload(&ctx, &scene).expect("upload");
+    let m = first.materials.as_ref().expect("materials");
+    let a = groups.get(first.id, m, &program, &ctx.device).unwrap();
+    let b = groups.get(first.id, m, &program, &ctx.device).unwrap();
+    assert!(std::sync::Arc::ptr_eq(&a, &b) && groups.builds() == 1);
+    assert_eq!(a.len(), m.materials.len());
+    let second = himal::gpu_scene::SceneGpu::upload(&ctx, &scene).expect("upload");
+    assert_ne!(first.id, second.id);
+    let c = groups.get(
+        second.id,
+        second.materials.as_ref().unwrap(),
+        &program,
+        &ctx.device,
+    );
+    assert!(!std::sync::Arc::ptr_eq(&a, &c.unwrap()) && groups.builds() == 2);
+}

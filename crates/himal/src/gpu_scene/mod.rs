@@ -363,7 +363,13 @@ pub struct SceneGpu {
     pub instancing: AtomicBool,
     /// Skinned meshes (`passes/skin`); `None` without any.
     pub skins: Option<skin::SkinGpu>,
+    /// Unique per upload: what caches of scene resources are keyed by
+    /// ([`textures::MaterialGroups`]).
+    pub id: u64,
 }
+
+/// The next [`SceneGpu::id`].
+static NEXT_SCENE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 /// The skinned meshes of `scene` with the object that poses each (the
 /// first, where objects share one: a mesh has one pose).
@@ -643,6 +649,7 @@ impl SceneGpu {
                 bytes,
                 instancing: AtomicBool::new(true),
                 skins,
+                id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             }
         })
     }

@@ -143,6 +143,47 @@ pub fn mip_count(width: u32, height: u32) -> u32 {
     32 - width.max(height).max(1).leading_zeros()
 }
 
+/// One program's material bind groups ([`MaterialTextures::bind_groups`]),
+/// made on first use for an uploaded scene and kept: frames draw with them
+/// instead of creating one per material every frame (as the G-buffer and
+/// forward passes once did).
+#[derive(Default)]
+pub struct MaterialGroups {
+    cached: std::sync::Mutex<Option<(u64, std::sync::Arc<Vec<wgpu::BindGroup>>)>>,
+    builds: std::sync::atomic::AtomicU32,
+}
+
+impl MaterialGroups {
+    /// The bind groups of `program` for scene `scene_id`'s `materials`
+    /// (`SceneGpu::id`): built once per scene.
+    pub fn get(
+        &self,
+        scene_id: u64,
+        materials: &MaterialTextures,
+        program: &Program,
+        device: &wgpu::Device,
+    ) -> Result<std::sync::Arc<Vec<wgpu::BindGroup>>, GpuError> {
+        let mut cached = (self.cached.lock()).map_err(|_| {
+            GpuError::Other("material bind groups: a panic poisoned the cache".into())
+        })?;
+        if let Some((id, groups)) = cached.as_ref()
+            && *id == scene_id
+        {
+            return Ok(groups.clone());
+        }
+        let groups = std::sync::Arc::new(materials.bind_groups(program, device)?);
+        self.builds
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        *cached = Some((scene_id, groups.clone()));
+        Ok(groups)
+    }
+
+    /// How many times the groups were built (tests: once per scene).
+    pub fn builds(&self) -> u32 {
+        self.builds.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
 impl MaterialTextures {
     /// One bind group (group 1: `material` and the `<slot>_texture` /
     /// `<slot>_sampler` pairs) per material, for any program declaring that

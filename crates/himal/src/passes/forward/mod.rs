@@ -77,6 +77,8 @@ pub struct ForwardPass {
     program: Program,
     /// `SceneGpu::draws_blend` indices, far to near (see [`ForwardPass::sort`]).
     order: Vec<usize>,
+    /// The materials' bind groups, made once per scene.
+    pub material_groups: crate::gpu_scene::textures::MaterialGroups,
 }
 
 impl ForwardPass {
@@ -84,6 +86,7 @@ impl ForwardPass {
         Ok(Self {
             program: Program::new(ctx, "passes/forward/forward.wgsl")?,
             order: Vec::new(),
+            material_groups: Default::default(),
         })
     }
 
@@ -261,7 +264,7 @@ impl ForwardPass {
                 let Some(m) = &scene.materials else {
                     return Ok(());
                 };
-                let groups = m.bind_groups(&self.program, ctx.device)?;
+                let groups = (self.material_groups).get(scene.id, m, &self.program, ctx.device)?;
                 scene.bind_geometry(rp);
                 for (draw, material) in &draws {
                     let Some((group, binding)) =

@@ -154,6 +154,8 @@ pub struct GBufferPass {
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
+    /// Their bind groups, made once per scene.
+    pub material_groups: crate::gpu_scene::textures::MaterialGroups,
 }
 
 impl GBufferPass {
@@ -163,6 +165,7 @@ impl GBufferPass {
             lod_view: false,
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
+            material_groups: Default::default(),
         };
         pass.pipeline(ctx, GBufferKey::VERTEX)?;
         Ok(pass)
@@ -346,7 +349,8 @@ impl GBufferPass {
                     }
                 }
                 if let Some(m) = &scene.materials {
-                    let groups = m.bind_groups(&self.textured, ctx.device)?;
+                    let groups =
+                        (self.material_groups).get(scene.id, m, &self.textured, ctx.device)?;
                     for (material, draws) in crate::gpu_scene::material_runs(textured) {
                         let Some((group, binding)) =
                             groups.get(material).zip(m.materials.get(material))
