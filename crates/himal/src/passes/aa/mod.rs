@@ -18,16 +18,22 @@ use temporal::{RESOLVED_FORMAT, ResolveMode};
 
 /// What the anti-aliasing chain of one frame needs.
 pub struct AaFrame<'a> {
+    /// Anti-aliasing mode of this frame: which passes the chain runs.
     pub mode: AaMode,
     /// SMAA area-table subsample index of this frame.
     pub subsample: u32,
     /// Holds the temporal modes' rings ([`temporal::declare_history`]).
     pub history: &'a History,
+    /// SMAA pipelines (the `smaa`, `smaa-t2x` and `hraa` modes).
     pub smaa: &'a SmaaPass,
+    /// Resolve, TAA and unsharp pipelines (the temporal modes).
     pub temporal: &'a TemporalPass,
+    /// G-buffer depth (depth predication of SMAA).
     pub depth: TextureHandle,
     /// G-buffer tangent frame (normal predication of SMAA).
     pub normals: TextureHandle,
+    /// Motion vectors the resolve and the TAA reproject with: the G-buffer's, or `aa.taa_motion`'s
+    /// (`motion_jitter_free`).
     pub motion: TextureHandle,
     /// `motion` is `aa.taa_motion`'s stabilised jitter-free motion.
     pub motion_jitter_free: bool,

@@ -33,8 +33,11 @@ use std::f64::consts::PI;
 /// samples on an edge or a corner are shared with the neighbours) and weight.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PatternSample {
+    /// Horizontal position in the pixel (0: left edge, 1: right edge).
     pub x: f64,
+    /// Vertical position in the pixel (0: top edge, 1: bottom edge).
     pub y: f64,
+    /// Weight in the pixel's value (a pattern's weights sum to 1).
     pub weight: f64,
 }
 
@@ -45,9 +48,11 @@ const fn s(x: f64, y: f64, weight: f64) -> PatternSample {
 /// A sampling pattern and the talk's error estimate for it (where given).
 #[derive(Clone, Debug)]
 pub struct SamplePattern {
+    /// Name in the study's table (`quincunx`, `FLIPQUAD`, ...).
     pub name: &'static str,
     /// Samples rendered per pixel (shared samples count once).
     pub cost: f64,
+    /// The samples of one pixel.
     pub samples: Vec<PatternSample>,
     /// The talk's E (slide "TEMPORAL SUPERSAMPLING", after [Laine 06]); 1x says ">1.0".
     pub talk: Option<f64>,
@@ -168,12 +173,15 @@ pub fn orientation_weight(theta: f64, p: i32) -> f64 {
 /// One line of the study.
 #[derive(Clone, Debug)]
 pub struct PatternResult {
+    /// The pattern's [`SamplePattern::name`].
     pub name: &'static str,
+    /// Samples rendered per pixel ([`SamplePattern::cost`]).
     pub cost: f64,
     /// Weighted RMS coverage error (fraction of a pixel).
     pub rms: f64,
     /// √2 · `rms` / rms(1x centre) (the reported E).
     pub e: f64,
+    /// The talk's E for comparison ([`SamplePattern::talk`]).
     pub talk: Option<f64>,
 }
 

@@ -45,6 +45,7 @@ impl AaMode {
     /// Every name `--aa` knows.
     pub const NAMES: [&'static str; 6] = ["none", "smaa", "smaa-t2x", "tfq", "taa", "hraa"];
 
+    /// The mode of an `--aa` name (one of [`AaMode::NAMES`]); an error names the known ones.
     pub fn parse(name: &str) -> Result<Self, String> {
         match name {
             "none" => Ok(Self::None),
@@ -60,6 +61,7 @@ impl AaMode {
         }
     }
 
+    /// The mode's `--aa` name (inverse of [`AaMode::parse`]).
     pub fn name(self) -> &'static str {
         match self {
             Self::None => "none",
@@ -136,6 +138,7 @@ impl AaBuffers {
         Ok(b)
     }
 
+    /// Whether any buffer gets its own TAA.
     pub fn any(self) -> bool {
         self.ao || self.motion
     }

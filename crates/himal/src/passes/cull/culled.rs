@@ -34,7 +34,10 @@ pub enum CulledArgs<'a> {
     /// non-empty lists one instanced draw each (`instanced`) or one draw
     /// per instance (the per-object path).
     Cpu {
+        /// The arguments, laid out as the GPU's (per view, batch, kind and level; scene batches
+        /// empty).
         args: &'a [[u32; 5]],
+        /// Each non-empty list is one instanced draw, else one draw per instance.
         instanced: bool,
     },
 }

@@ -49,8 +49,11 @@ pub const MAX_OBJECTS: u32 = 1 << 24;
 /// fading into the next (complementary screen-door masks).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
+    /// Drawn whole at its level.
     Steady = 0,
+    /// Fading out of its level (screen-door dithered).
     FadeOut = 1,
+    /// Fading into the next coarser level, drawn at that level with the complementary mask.
     FadeIn = 2,
 }
 
@@ -75,6 +78,7 @@ struct ParamsGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct CullView {
+    /// The planes as (n, w): a point p is inside where `n . p + w >= 0` for all six.
     pub planes: [[f32; 4]; 6],
 }
 
@@ -133,8 +137,11 @@ impl CullView {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct ChunkGpu {
+    /// Index of the chunk's batch in [`CullLayout::batches`].
     pub batch: u32,
+    /// First object of the chunk.
     pub first_object: u32,
+    /// Objects in the chunk ([`CHUNK`] at most; 0 in a streamed region until it is filled).
     pub count: u32,
     _pad: u32,
 }
@@ -144,10 +151,15 @@ pub struct ChunkGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BatchGpu {
+    /// First of the batch's chunks in [`CullLayout::chunks`].
     pub first_chunk: u32,
+    /// Chunks of the batch.
     pub chunks: u32,
+    /// First of the batch's consecutive objects.
     pub first_object: u32,
+    /// Levels of the mesh in `lod` (1: LOD0 alone).
     pub lods: u32,
+    /// Base vertex of the mesh in the scene's vertex buffer (all levels).
     pub base_vertex: i32,
     /// Culled beyond this distance from the LOD eye (m; 0: no limit).
     pub max_distance: f32,
@@ -161,17 +173,24 @@ pub struct BatchGpu {
 /// Which pipeline a batch draws with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum List {
+    /// The opaque batches: the scene's runs, then the streamed regions.
     Opaque,
+    /// The vegetation batches.
     Vegetation,
 }
 
 /// The scene's batches and chunks: opaque batches first, then vegetation.
 #[derive(Clone, Debug, Default)]
 pub struct CullLayout {
+    /// Every batch: the opaque ones, then vegetation.
     pub batches: Vec<BatchGpu>,
+    /// Every batch's chunks, in batch order.
     pub chunks: Vec<ChunkGpu>,
+    /// Culling bounds per object (the CPU copy of `cull.bounds`).
     pub bounds: Vec<ObjectBounds>,
+    /// Opaque batches (streamed regions included): the first in `batches`.
     pub opaque_batches: u32,
+    /// Vegetation batches, after the opaque ones.
     pub vegetation_batches: u32,
     /// Objects in the scene (the stride of the per-view instance lists).
     pub objects: u32,
@@ -310,9 +329,14 @@ pub enum CullPath {
     /// lists uploaded and drawn directly; scene objects are left to the
     /// passes' own CPU lists. `instanced`: one draw per list, else per
     /// instance.
-    Cpu { instanced: bool },
+    Cpu {
+        /// One instanced draw per non-empty list, else one draw per instance.
+        instanced: bool,
+    },
 }
 
+/// V6 culling: the `cull` node's pipelines and buffers, the scene's layout and the CPU path's
+/// lists.
 pub struct CullPass {
     program: Program,
     test: wgpu::ComputePipeline,
@@ -325,6 +349,7 @@ pub struct CullPass {
     batches: wgpu::Buffer,
     /// The identity, then [`MAX_VIEWS`] lists of `objects` entries (fixed).
     instances: wgpu::Buffer,
+    /// The scene's batches and chunks (bounds follow the streamed regions).
     pub layout: CullLayout,
     /// Why the GPU path cannot run here (`None`: it can).
     unsupported: Option<String>,

@@ -12,7 +12,9 @@ use crate::scene::lod::{MAX_LODS, choice_for, distance_to_box, fade_step};
 /// (object | fade code << 24, in object order).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CullResult {
+    /// The indirect arguments of each list.
     pub args: Vec<[u32; 5]>,
+    /// The instance entries of each list.
     pub instances: Vec<Vec<u32>>,
 }
 

@@ -50,6 +50,7 @@ impl BrunetonSky {
     }
 }
 
+/// The sky drawn behind the scene into the HDR target: Preetham, Bruneton or an HDR environment.
 pub struct SkyPass {
     program: Program,
     pipeline: wgpu::RenderPipeline,
@@ -75,6 +76,8 @@ fn sky_depth_test() -> wgpu::DepthStencilState {
 }
 
 impl SkyPass {
+    /// The Preetham sky pipeline; Bruneton needs [`SkyPass::set_bruneton`] or
+    /// [`SkyPass::prepare_bruneton`].
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/sky/draw.wgsl")?;
         let targets = [target(HDR_FORMAT)];
@@ -139,6 +142,7 @@ impl SkyPass {
         Ok(timings)
     }
 
+    /// The Bruneton tables and what draws from them, once set.
     pub fn bruneton(&self) -> Option<&BrunetonSky> {
         self.bruneton.as_ref()
     }

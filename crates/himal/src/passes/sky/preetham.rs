@@ -28,14 +28,17 @@ pub const GROUND_FACTOR: f32 = 0.1;
 /// Sky radiance scale reached once the sun is TWILIGHT_END_DEG below the
 /// horizon (nautical twilight); night is dark but not black.
 pub const NIGHT_FLOOR: f32 = 1.0e-4;
+/// Sun depression (deg below the horizon) at which the twilight fade reaches [`NIGHT_FLOOR`].
 pub const TWILIGHT_END_DEG: f32 = 12.0;
 /// Turbidity range of the sky model (Preetham fitted and plotted 2..10; below
 /// ~1.23 the zenith luminance formula turns negative).
 pub const TURBIDITY_MIN: f32 = 2.0;
+/// Highest turbidity of the model (hazy); higher values are clamped.
 pub const TURBIDITY_MAX: f32 = 10.0;
 /// Sun disk soft edge: the profile 1 - smoothstep(inner, outer, angle) falls
 /// to one half at the sun's angular radius.
 pub const SUN_DISK_INNER_FACTOR: f32 = 0.5;
+/// Outer end of the sun disk's profile, in sun radii (zero beyond).
 pub const SUN_DISK_OUTER_FACTOR: f32 = 1.5;
 
 /// Preetham sky for one sun direction and turbidity.
@@ -63,9 +66,13 @@ pub struct PreethamSky {
 pub struct SkyGpuParams {
     /// Perez coefficients A..E, each (x, y, Y, 0).
     pub perez_a: [f32; 4],
+    /// Perez coefficient B (x, y, Y, 0).
     pub perez_b: [f32; 4],
+    /// Perez coefficient C (x, y, Y, 0).
     pub perez_c: [f32; 4],
+    /// Perez coefficient D (x, y, Y, 0).
     pub perez_d: [f32; 4],
+    /// Perez coefficient E (x, y, Y, 0).
     pub perez_e: [f32; 4],
     /// Zenith (x, y, Y kcd/m^2); w = sky radiance scale (twilight factor).
     pub zenith_xyy: [f32; 4],
@@ -285,6 +292,7 @@ impl PreethamSky {
         (self.perez.map(|c| c.x), self.perez.map(|c| c.y))
     }
 
+    /// Unit vector towards the true sun (not clamped above the horizon).
     pub fn sun_direction(&self) -> Vec3 {
         self.sun_dir
     }
@@ -294,6 +302,7 @@ impl PreethamSky {
         self.theta_s
     }
 
+    /// Turbidity of the model, clamped to [`TURBIDITY_MIN`]..=[`TURBIDITY_MAX`].
     pub fn turbidity(&self) -> f32 {
         self.turbidity
     }
@@ -308,6 +317,7 @@ impl PreethamSky {
         self.sun_illuminance
     }
 
+    /// The uniform of `sky.wgsl`'s `SkyParams` for this sky.
     pub fn gpu_params(&self) -> SkyGpuParams {
         let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
         SkyGpuParams {

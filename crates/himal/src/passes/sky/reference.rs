@@ -32,6 +32,7 @@ pub struct SkyLight {
     pub sun_direction: Vec3,
     /// Sun illuminance at the ground, linear RGB klux (zero at night).
     pub sun_illuminance: Vec3,
+    /// The Preetham sky model of this time of day (radiance, GPU parameters).
     pub sky: PreethamSky,
     /// Sky and ground-bounce irradiance SH (sun excluded; it is a separate
     /// directional light). See [`sky_and_ground_irradiance_sh`].

@@ -19,10 +19,12 @@ pub const SUN_ANGULAR_RADIUS_DEG: f32 = 0.2666;
 /// 0 deg, full from this elevation up (smoothstep). Avoids a pop at sunset.
 pub const SUN_HORIZON_FADE_DEG: f32 = 2.0;
 
+/// Where the sun stands: direction, elevation and azimuth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SunPosition {
     /// Unit vector towards the sun, world space (below the horizon at night).
     pub direction: Vec3,
+    /// Degrees above the horizon (negative below).
     pub elevation_deg: f32,
     /// From north (-Z) towards east (+X), in [0, 360).
     pub azimuth_deg: f32,

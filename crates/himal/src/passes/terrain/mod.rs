@@ -48,9 +48,13 @@ pub const SHADOW_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth3
 /// The detail pattern a layer's textures are generated with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DetailKind {
+    /// Clumped grass blades with a hue variation.
     Grass,
+    /// Ridged rock with strata and grain.
     Rock,
+    /// Smooth drifts with glossiness sparkle.
     Snow,
+    /// Soil with scattered pebbles.
     Soil,
 }
 
@@ -60,6 +64,7 @@ pub enum DetailKind {
 pub struct TerrainLayerDesc {
     /// Linear albedo.
     pub albedo: Vec3,
+    /// Glossiness in 0..1 (the detail texture varies it around this).
     pub glossiness: f32,
     /// Heights in metres where the layer holds (infinite: no limit).
     pub height: [f32; 2],
@@ -71,6 +76,7 @@ pub struct TerrainLayerDesc {
     pub slope_blend: f32,
     /// Noise amplitude in metres added to the height before the test.
     pub jitter: f32,
+    /// The pattern of the layer's procedural detail textures.
     pub detail: DetailKind,
     /// Metres per repeat of the near detail scale (the far one is 7.3x).
     pub detail_scale: f32,
@@ -137,6 +143,7 @@ pub struct TerrainDesc {
     pub origin: Vec2,
     /// Sectors per side (160 in the real world).
     pub sectors: u32,
+    /// Side of a sector in metres (one fine tile each).
     pub sector_size: f32,
     /// Fine samples per sector side including the shared edge (65: 1 m).
     pub tile_res: u32,
@@ -146,6 +153,7 @@ pub struct TerrainDesc {
     pub coarse: Vec<f32>,
     /// Fine tiles resident at most (texture array layers).
     pub fine_slots: u32,
+    /// Material layers, base first (1..=[`MAX_LAYERS`]).
     pub layers: Vec<TerrainLayerDesc>,
 }
 
@@ -229,6 +237,7 @@ pub struct TerrainView {
 }
 
 impl TerrainView {
+    /// The view of `camera` rendering a frame of `size` (width, height; px).
     pub fn from_camera(camera: &crate::scene::Camera, size: (u32, u32)) -> Self {
         let (w, h) = (size.0.max(1) as f32, size.1.max(1) as f32);
         Self {
@@ -242,7 +251,9 @@ impl TerrainView {
 /// One frame's selection.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainStats {
+    /// The camera's per-level ranges and morph constants.
     pub ranges: Ranges,
+    /// What the camera view's selection did.
     pub camera: SelectStats,
     /// Per shadow view.
     pub shadows: Vec<SelectStats>,
@@ -343,22 +354,32 @@ fn patch_layout() -> wgpu::VertexBufferLayout<'static> {
 /// the coarse grid, the tile array and the page table.
 #[derive(Clone, Copy)]
 pub struct TerrainHeights<'a> {
+    /// The `TerrainParams` uniform.
     pub params: &'a wgpu::Buffer,
+    /// The coarse height grid over the whole world.
     pub coarse: &'a wgpu::TextureView,
+    /// The fine tile pool (one array layer per slot).
     pub fine: &'a wgpu::TextureView,
+    /// The page table: per sector the slot of its tile, or [`reference::NONE`].
     pub pages: &'a wgpu::TextureView,
 }
 
 /// The CPU side of the height data (behind a lock: tiles stream in through `&self`).
 pub struct TerrainCpu {
+    /// Coarse grid, page table and resident tiles (a mirror of the textures).
     pub heights: Heights,
+    /// Min/max heights that bound the selection's nodes.
     pub pyramid: Pyramid,
 }
 
+/// The CDLOD terrain: height textures and tile streaming, material layers, the per-view patch
+/// selection, and the G-buffer and shadow pipelines.
 pub struct TerrainPass {
     /// `--view lod` this frame (`frame::plan`).
     pub lod_view: bool,
+    /// The world's layout (sectors, spacings, levels).
     pub geometry: Geometry,
+    /// LOD knobs the ranges and selection read each frame.
     pub settings: TerrainSettings,
     program: Program,
     shadow_program: Program,

@@ -31,10 +31,15 @@ pub const MORPH_END: f32 = 0.99;
 /// The world's layout derived from a [`TerrainDesc`] (validated).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Geometry {
+    /// World x, z of the world's min corner.
     pub origin: Vec2,
+    /// Sectors per side.
     pub sectors: u32,
+    /// Side of a sector (metres).
     pub sector_size: f32,
+    /// Fine samples per tile side, including the shared edge.
     pub tile_res: u32,
+    /// Spacing of the coarse grid (metres).
     pub coarse_spacing: f32,
     /// `s_0 = sector_size / (tile_res - 1)`.
     pub fine_spacing: f32,
@@ -43,7 +48,9 @@ pub struct Geometry {
     /// `c` with `coarse_spacing = s_0 2^c`: levels `l >= c` read only the
     /// coarse grid (their vertices lie on its points).
     pub coarse_level: u32,
+    /// Side of the world's square, `sectors sector_size` (metres).
     pub world_size: f32,
+    /// Fine tiles resident at most (the pool's slots).
     pub fine_slots: u32,
 }
 
@@ -136,7 +143,9 @@ impl Geometry {
 /// (a mirror of the GPU's textures, for bounds and the twin).
 #[derive(Clone, Debug)]
 pub struct Heights {
+    /// The world's layout.
     pub geometry: Geometry,
+    /// Row-major coarse heights (`coarse_n^2`, row = z; metres).
     pub coarse: Vec<f32>,
     /// `sectors^2`, row = z: the slot holding the sector's tile, or [`NONE`].
     pub pages: Vec<u32>,
@@ -314,6 +323,7 @@ pub struct Pyramid {
 }
 
 impl Pyramid {
+    /// The pyramid of `h`'s coarse grid and resident tiles.
     pub fn new(h: &Heights) -> Self {
         let n0 = h.geometry.coarse_n - 1;
         let mut base = vec![[0.0; 2]; (n0 * n0) as usize];
@@ -438,6 +448,7 @@ pub struct Ranges {
     /// ... and `1 / (end_l - start_l)`, `end_l = MORPH_END r_l` (0 at the
     /// top level: no coarser level to morph to).
     pub morph_scale: [f32; MAX_LEVELS],
+    /// Continuous morph (off: vertices snap, [`TerrainSettings::morph`]).
     pub morph: bool,
 }
 
@@ -518,8 +529,11 @@ impl Ranges {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Patch {
+    /// World x, z of the patch's min corner.
     pub origin: [f32; 2],
+    /// LOD level of the patch's node.
     pub level: u32,
+    /// Padding to 16 bytes.
     pub _pad: u32,
 }
 
@@ -535,6 +549,7 @@ pub struct SelectStats {
 }
 
 impl SelectStats {
+    /// Patches selected over all levels (dropped ones excluded).
     pub fn patches(&self) -> u32 {
         self.per_level.iter().sum()
     }
@@ -566,12 +581,17 @@ impl Bounds {
 
 /// The quadtree selection (Strugar 2009, `LODSelect`) for one view.
 pub struct Selector<'s> {
+    /// The world's layout.
     pub geometry: &'s Geometry,
+    /// Height bounds of the nodes.
     pub pyramid: &'s Pyramid,
+    /// The view's per-level ranges.
     pub ranges: &'s Ranges,
     /// The LOD eye (the camera, also for shadow views, so they match).
     pub eye: Vec3,
+    /// The view's culling volume (the camera's or a shadow view's).
     pub frustum: &'s CullView,
+    /// Patches `out` may hold; the rest are counted in [`SelectStats::dropped`].
     pub capacity: usize,
 }
 

@@ -7,12 +7,16 @@ use super::lut;
 /// A small RGBA float image (row-major).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plane<const N: usize> {
+    /// Width in texels.
     pub width: usize,
+    /// Height in texels.
     pub height: usize,
+    /// Texels, row-major (`y * width + x`).
     pub texels: Vec<[f32; N]>,
 }
 
 impl<const N: usize> Plane<N> {
+    /// A `width` x `height` plane of zeros.
     pub fn new(width: usize, height: usize) -> Self {
         Self {
             width,
@@ -62,12 +66,21 @@ impl<const N: usize> Plane<N> {
 /// Edge-detection settings (the WGSL override constants).
 #[derive(Clone, Copy, Debug)]
 pub struct EdgeSettings {
+    /// Gamma-encoded luma contrast at which an edge starts (`THRESHOLD`).
     pub threshold: f32,
+    /// Predicated thresholding: the threshold depends on whether depth (and normals) show a
+    /// geometric edge.
     pub predication: bool,
+    /// Relative depth step to a neighbour that counts as a geometric edge.
     pub predication_threshold: f32,
+    /// Factor on the threshold under predication (raises it off geometric edges).
     pub predication_scale: f32,
+    /// How far a geometric edge lowers the predicated threshold: `scale threshold (1 - strength
+    /// edge)`.
     pub predication_strength: f32,
+    /// Normal discontinuities count as geometric edges too.
     pub normal_predication: bool,
+    /// Neighbours' normals whose cosine falls below this make a geometric edge (0.906: about 25°).
     pub normal_cos: f32,
 }
 
@@ -170,11 +183,14 @@ pub fn detect_edges(
 
 /// The lookup textures as float planes (what the GPU samples).
 pub struct Luts {
+    /// The area texture: blending weights by edge distances and crossing pattern (RG).
     pub area: Plane<2>,
+    /// The search texture: the edge searches' length corrections (R).
     pub search: Plane<1>,
 }
 
 impl Luts {
+    /// Decodes the generated lookup textures (`smaa::lut`) into float planes.
     pub fn generate() -> Self {
         let area_bytes = lut::area_texture();
         let (aw, ah) = lut::AREA_SIZE;

@@ -16,6 +16,7 @@ pub const AO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The buffer TAAs' history rings in the graph's [`History`].
 pub const AO_HISTORY: &str = "aa.taa_ao.history";
+/// The `aa.taa_motion` ring (stabilised jitter-free motion).
 pub const MOTION_HISTORY: &str = "aa.taa_motion.history";
 
 /// Declares both rings for a `size` frame (before the graph is built).
@@ -51,6 +52,7 @@ pub struct BufferTaaPass {
 }
 
 impl BufferTaaPass {
+    /// Creates both buffer TAA pipelines, their parameter uniforms and the linear sampler.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let ao_program = Program::new(ctx, "passes/aa/temporal/taa_ao.wgsl")?;
         let motion = Step::new(

@@ -70,6 +70,8 @@ impl Default for TemporalTuning {
 }
 
 impl AaParams {
+    /// Parameters of a frame sampled at `jitter` after one at `prev_jitter`, with `history_frames`
+    /// consecutive frames of history and jitter `phase` (0: frame A, 1: B).
     pub fn new(
         jitter: [f32; 2],
         prev_jitter: [f32; 2],
@@ -110,7 +112,9 @@ pub enum ResolveMode {
 /// frame's anti-aliased samples before the resolve (N, N−1, N−2), the
 /// jitter-free motion and the TAA colour.
 pub const RAW_HISTORY: &str = "aa.raw";
+/// The ring of the jitter-free motion ([`MOTION_FORMAT`]).
 pub const MOTION_HISTORY: &str = "aa.motion";
+/// The ring of the TAA colour ([`RESOLVED_FORMAT`]).
 pub const TAA_HISTORY: &str = "aa.taa";
 
 /// Declares the three rings for a `size` frame whose samples are `raw_format`.

@@ -36,11 +36,17 @@ pub const TRANSMITTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba3
 /// a 3D texture of (nu * mu_s) x mu x r.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableSizes {
+    /// Transmittance table: width (mu) x height (r), texels.
     pub transmittance: (u32, u32),
+    /// Irradiance table: width (mu_s) x height (r), texels.
     pub irradiance: (u32, u32),
+    /// Scattering samples in r (altitude): the 3D texture's depth.
     pub r: u32,
+    /// Scattering samples in mu (view zenith cosine): the 3D texture's height.
     pub mu: u32,
+    /// Scattering samples in mu_s (sun zenith cosine), inner to nu in the width.
     pub mu_s: u32,
+    /// Scattering samples in nu (cosine of the view-sun angle), outer in the width.
     pub nu: u32,
     /// Scattering-density quadrature: n polar x 2n azimuthal directions.
     pub density_samples: u32,
@@ -95,17 +101,27 @@ impl TableSizes {
 /// 680, 550, 440 nm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AtmosphereConfig {
+    /// Radius of the ground sphere (km).
     pub bottom_radius_km: f32,
+    /// Radius of the top of the atmosphere (km).
     pub top_radius_km: f32,
+    /// Rayleigh scattering (= extinction) at the ground (1/km).
     pub rayleigh_scattering: Vec3,
+    /// Altitude over which the Rayleigh density falls by 1/e (km).
     pub rayleigh_scale_height_km: f32,
+    /// Mie scattering at the ground (1/km).
     pub mie_scattering: Vec3,
+    /// Mie extinction at the ground (1/km; scattering / 0.9 for Earth).
     pub mie_extinction: Vec3,
+    /// Altitude over which the Mie density falls by 1/e (km).
     pub mie_scale_height_km: f32,
+    /// Asymmetry of the Cornette-Shanks Mie phase function (> 0: forward).
     pub mie_g: f32,
     /// Ozone absorption at peak density; tent profile 0 at 10 and 40 km, 1 at 25 km.
     pub absorption_extinction: Vec3,
+    /// Lambertian albedo of the ground sphere (linear RGB): light bounced into the sky.
     pub ground_albedo: Vec3,
+    /// Angular radius of the sun disk (rad).
     pub sun_angular_radius: f32,
     /// Lowest sun cosine the tables cover (102 degrees: twilight).
     pub mu_s_min: f32,
@@ -113,6 +129,7 @@ pub struct AtmosphereConfig {
     pub view_altitude_km: f32,
     /// Night floor added to the sky radiance (kcd/m^2, linear RGB).
     pub night_radiance: Vec3,
+    /// Resolutions of the precomputed tables.
     pub sizes: TableSizes,
 }
 
@@ -142,6 +159,8 @@ pub fn moon_light(sun: Vec3) -> Option<(Vec3, Vec3)> {
 pub const GROUND_BLEND_Y: f32 = 0.1;
 
 impl AtmosphereConfig {
+    /// Earth's atmosphere (Bruneton 2017's demo values, [`GROUND_ALBEDO`], a viewer 200 m up) with
+    /// tables of `sizes`.
     pub fn earth(sizes: TableSizes) -> Self {
         let mie_scattering = Vec3::splat(3.996e-3);
         AtmosphereConfig {
@@ -163,6 +182,8 @@ impl AtmosphereConfig {
         }
     }
 
+    /// The `AtmosphereParams` uniform: these values, and the ozone tent, sun illuminance and
+    /// ground blend in the spare w slots.
     pub fn gpu_params(&self) -> AtmosphereGpuParams {
         let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
         let s = &self.sizes;
@@ -197,22 +218,38 @@ impl AtmosphereConfig {
 
 /// Ozone tent (Bruneton 2017): density = 1/15 h - 2/3 below 25 km, -1/15 h + 8/3 above.
 pub const OZONE_LAYER_WIDTH_KM: f32 = 25.0;
+/// The tent as `AtmosphereParams::ozone_density`: slope (1/km) and constant below
+/// [`OZONE_LAYER_WIDTH_KM`], then above.
 pub const OZONE_TENT: [f32; 4] = [1.0 / 15.0, -2.0 / 3.0, -1.0 / 15.0, 8.0 / 3.0];
 
 /// Uniform twin of `AtmosphereParams` in `shaders/atmosphere.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct AtmosphereGpuParams {
+    /// Bottom and top radius (km), Mie g, mu_s_min.
     pub shape: [f32; 4],
+    /// Rayleigh scattering = extinction (1/km); w the density's exponential scale, -1 / scale
+    /// height (1/km).
     pub rayleigh_scattering: [f32; 4],
+    /// Mie scattering (1/km); w the density's exponential scale (1/km).
     pub mie_scattering: [f32; 4],
+    /// Mie extinction (1/km); w the width of the lower ozone layer (km).
     pub mie_extinction: [f32; 4],
+    /// Ozone absorption at peak density (1/km); w the sun's angular radius (rad).
     pub absorption_extinction: [f32; 4],
+    /// Ozone tent ([`OZONE_TENT`]): lower layer slope and constant, upper layer slope and
+    /// constant.
     pub ozone_density: [f32; 4],
+    /// Ground albedo; w the radiance scale (klux of the extraterrestrial sun).
     pub ground_albedo: [f32; 4],
+    /// Solar irradiance at the top in table units (1); w the viewer's altitude (km).
     pub solar_irradiance: [f32; 4],
+    /// Transmittance width, height; irradiance width, height (texels).
     pub sizes_2d: [f32; 4],
+    /// Scattering-table sizes in r, mu, mu_s, nu.
     pub sizes_4d: [f32; 4],
+    /// Night sky floor (linear RGB, kcd/m^2); w the ground blend width in -dir.y
+    /// ([`GROUND_BLEND_Y`]).
     pub night_radiance: [f32; 4],
 }
 
@@ -221,6 +258,7 @@ pub const MAX_SCATTERING_ORDER: u32 = 4;
 
 /// The precomputed tables (GPU) and the parameters they were made with.
 pub struct BrunetonTables {
+    /// The atmosphere and table sizes the tables were computed for.
     pub config: AtmosphereConfig,
     /// `AtmosphereGpuParams` uniform.
     pub params: wgpu::Buffer,
@@ -232,6 +270,7 @@ pub struct BrunetonTables {
     pub scattering: wgpu::Texture,
     /// Single Rayleigh and single Mie scattering (no phase function).
     pub single_rayleigh: wgpu::Texture,
+    /// Single Mie scattering on its own (no phase function; the sky applies the Mie phase).
     pub single_mie: wgpu::Texture,
     /// Linear clamp-to-edge sampler of every table.
     pub sampler: wgpu::Sampler,
@@ -306,9 +345,13 @@ impl BrunetonTables {
 
 /// Texture views of the tables the sky is drawn from.
 pub struct TableViews {
+    /// View of [`BrunetonTables::transmittance`].
     pub transmittance: wgpu::TextureView,
+    /// View of [`BrunetonTables::scattering`].
     pub scattering: wgpu::TextureView,
+    /// View of [`BrunetonTables::single_mie`].
     pub single_mie: wgpu::TextureView,
+    /// View of [`BrunetonTables::irradiance`].
     pub irradiance: wgpu::TextureView,
 }
 

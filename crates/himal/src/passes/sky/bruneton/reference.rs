@@ -15,18 +15,21 @@ fn dv(v: Vec3) -> DVec3 {
     v.as_dvec3()
 }
 
+/// Distance (km) from radius `r` along zenith cosine `mu` to the top of the atmosphere.
 pub fn distance_to_top(c: &AtmosphereConfig, r: f64, mu: f64) -> f64 {
     let top = f64::from(c.top_radius_km);
     let disc = r * r * (mu * mu - 1.0) + top * top;
     (-r * mu + disc.max(0.0).sqrt()).max(0.0)
 }
 
+/// Distance (km) from (r, mu) to the ground sphere, where [`ray_intersects_ground`] holds.
 pub fn distance_to_bottom(c: &AtmosphereConfig, r: f64, mu: f64) -> f64 {
     let bottom = f64::from(c.bottom_radius_km);
     let disc = r * r * (mu * mu - 1.0) + bottom * bottom;
     (-r * mu - disc.max(0.0).sqrt()).max(0.0)
 }
 
+/// Whether the ray from radius `r` with zenith cosine `mu` hits the ground sphere.
 pub fn ray_intersects_ground(c: &AtmosphereConfig, r: f64, mu: f64) -> bool {
     let bottom = f64::from(c.bottom_radius_km);
     mu < 0.0 && r * r * (mu * mu - 1.0) + bottom * bottom >= 0.0
@@ -87,10 +90,12 @@ pub fn transmittance_to_top(c: &AtmosphereConfig, r: f64, mu: f64, steps: u32) -
     transmittance_segment(c, r, mu, distance_to_top(c, r, mu), steps)
 }
 
+/// Rayleigh phase function at scattering-angle cosine `nu` (1/sr).
 pub fn rayleigh_phase(nu: f64) -> f64 {
     3.0 / (16.0 * std::f64::consts::PI) * (1.0 + nu * nu)
 }
 
+/// Cornette-Shanks Mie phase function of asymmetry `g` at scattering-angle cosine `nu` (1/sr).
 pub fn mie_phase(g: f64, nu: f64) -> f64 {
     let k = 3.0 / (8.0 * std::f64::consts::PI) * (1.0 - g * g) / (2.0 + g * g);
     k * (1.0 + nu * nu) / (1.0 + g * g - 2.0 * g * nu).powf(1.5)
@@ -289,7 +294,9 @@ pub fn scattering_uvwz(
 
 /// A read-back RGBA table with the GPU sampler's filtering (linear, clamp to edge).
 pub struct CpuTable {
+    /// Width, height and depth in texels (depth 1 for the 2D tables).
     pub size: (u32, u32, u32),
+    /// RGBA texels, row-major, slice after slice.
     pub texels: Vec<[f32; 4]>,
 }
 
@@ -302,6 +309,7 @@ fn linear_axis(u: f64, n: u32) -> (usize, usize, f64) {
 }
 
 impl CpuTable {
+    /// RGB of texel (x, y, z), unfiltered.
     pub fn texel(&self, x: u32, y: u32, z: u32) -> Vec3 {
         let (w, h, _) = self.size;
         let t = self.texels[((z * h + y) * w + x) as usize];
@@ -325,6 +333,7 @@ impl CpuTable {
         lerp(plane(z0), plane(z1), tz)
     }
 
+    /// Reads `texture` back from the GPU, every depth slice.
     pub fn read(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Self, GpuError> {
         let depth = texture.depth_or_array_layers();
         let mut texels = Vec::new();
@@ -340,15 +349,22 @@ impl CpuTable {
 
 /// Read-back tables and the CPU twin of `bruneton_sky_radiance`.
 pub struct CpuTables {
+    /// The atmosphere the tables were computed for (their parametrisation).
     pub config: AtmosphereConfig,
+    /// Read-back [`BrunetonTables::transmittance`].
     pub transmittance: CpuTable,
+    /// Read-back [`BrunetonTables::scattering`].
     pub scattering: CpuTable,
+    /// Read-back [`BrunetonTables::single_rayleigh`].
     pub single_rayleigh: CpuTable,
+    /// Read-back [`BrunetonTables::single_mie`].
     pub single_mie: CpuTable,
+    /// Read-back [`BrunetonTables::irradiance`].
     pub irradiance: CpuTable,
 }
 
 impl CpuTables {
+    /// Reads every table of `tables` back from the GPU.
     pub fn read(ctx: &GpuContext, tables: &BrunetonTables) -> Result<Self, GpuError> {
         Ok(CpuTables {
             config: tables.config.clone(),
@@ -360,6 +376,7 @@ impl CpuTables {
         })
     }
 
+    /// T(r, mu) to the top of the atmosphere, looked up in the table as the shaders do.
     pub fn transmittance_to_top(&self, r: f64, mu: f64) -> DVec3 {
         let (u, v) = transmittance_uv(&self.config, r, mu);
         self.transmittance.sample(u, v, 0.5)

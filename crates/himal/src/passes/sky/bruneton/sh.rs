@@ -26,6 +26,7 @@ pub struct SkyShProjector {
 }
 
 impl SkyShProjector {
+    /// Creates the projection pipeline and its buffers (quadrature rows, sun, output).
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/sky/bruneton/sky_sh.wgsl")?;
         let pipeline = program.compute_pipeline(ctx, "cs_sky_sh", &[])?;
