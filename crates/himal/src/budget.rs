@@ -10,11 +10,11 @@ use std::fmt;
 pub const MEMORY_BUDGET_ENV: &str = "HIMAL_MEMORY_BUDGET";
 
 /// Resident bytes one mesh vertex costs from generation to upload: the CPU
-/// `Vertex` (80 bytes), its GPU copy (host memory on lavapipe) and the
+/// `Vertex` (88 bytes), its GPU copy (host memory on lavapipe) and the
 /// transient build copies. Measured: a 4,096-segment plane (16.8 M
 /// vertices, 101 M indices) peaked 4.55 GB above the empty scene, 2.6 times
 /// its 1.74 GB of vertex and index data; charged at 3 times.
-pub const MESH_BYTES_PER_VERTEX: u64 = 3 * 80;
+pub const MESH_BYTES_PER_VERTEX: u64 = 3 * 88;
 /// Resident bytes per index (3 times 4 bytes, as above).
 pub const MESH_BYTES_PER_INDEX: u64 = 3 * 4;
 /// Resident bytes per output pixel of the frame's targets (G-buffer,

@@ -8,7 +8,7 @@
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
-//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
+//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.layers ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
 //!          │        (--aa: post.tonemap ─> [aa.smaa.edges ─> .weights ─> .blend] ─> [aa.resolve ─> aa.taa ─> aa.unsharp] ─> output,
@@ -514,6 +514,8 @@ pub fn build<'a>(
         scene,
         envmap: &passes.envmap,
         env,
+        shadow_mask,
+        ao: ao_targets.map(|t| t.ao),
     };
     let hdr = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let measured = passes.luminance.add(&mut g, hdr, size, luminance);

@@ -528,3 +528,47 @@ fn quantized_attributes_load_as_floats() {
     assert!(e.contains("POSITION") && e.contains("VEC3 of FLOAT"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// KHR_materials_clearcoat and KHR_materials_sheen are read with their
+/// factors and textures (ClearCoatTest, SheenChair), and MultiUVTest's
+/// emissive slot keeps TEXCOORD_1; none of the three is warned about.
+#[test]
+fn clearcoat_sheen_and_second_uv_sets_load() {
+    let a = gltf::load(&common::gltf_sample("ClearCoatTest")).expect("loads");
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    let m = |name: &str| {
+        (a.pbr.materials.iter().find(|m| m.name == name))
+            .unwrap_or_else(|| panic!("material {name}"))
+    };
+    let simple = m("Simple_Coated");
+    assert_eq!((simple.clearcoat, simple.clearcoat_roughness), (1.0, 0.03));
+    assert!(simple.layered() && !m("Simple_Base").layered());
+    assert!(m("Partial_Coated").clearcoat_texture.is_some());
+    assert!(
+        m("RoughVariations_Coated")
+            .clearcoat_roughness_texture
+            .is_some()
+    );
+    let coat_normal = m("CoatNorm_Coated");
+    assert!(coat_normal.clearcoat_normal_texture.is_some() && coat_normal.normal_texture.is_none());
+    assert_eq!(coat_normal.clearcoat_normal_scale, 1.0);
+
+    let a = gltf::load(&common::gltf_sample("SheenChair")).expect("loads");
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    let mango = (a.pbr.materials.iter())
+        .find(|m| m.name == "fabric Mystere Mango Velvet")
+        .expect("mango");
+    assert_eq!(mango.sheen_color, Vec3::new(1.0, 0.329, 0.1));
+    assert_eq!(mango.sheen_roughness, 0.8);
+
+    let a = gltf::load(&common::gltf_sample("MultiUVTest")).expect("loads");
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    let m = &a.pbr.materials[0];
+    assert_eq!(m.emissive_texture.map(|t| t.tex_coord), Some(1));
+    assert_eq!(m.base_color_texture.map(|t| t.tex_coord), Some(0));
+    // The vertices carry both sets: TEXCOORD_1 spans [0, 0.25].
+    let uv1_max = (a.meshes.iter().flat_map(|m| &m.vertices))
+        .map(|v| v.uv1[0].max(v.uv1[1]))
+        .fold(0.0f32, f32::max);
+    assert!((uv1_max - 0.25).abs() < 1e-6, "{uv1_max}");
+}

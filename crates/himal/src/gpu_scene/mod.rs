@@ -329,6 +329,9 @@ pub struct SceneGpu {
     /// Opaque / mask glTF objects whose material emits (`forward.emissive`);
     /// each is in `draws_textured` too.
     pub draws_emissive: Vec<(Draw, usize)>,
+    /// Opaque / mask glTF objects with a clearcoat or sheen layer
+    /// (`forward.layers`); each is in `draws_textured` too.
+    pub draws_layered: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
     pub materials: Option<textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
@@ -392,11 +395,12 @@ fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
 }
 
 /// Vertex attributes of [`Vertex`], locations as in gbuffer.wgsl.
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
-    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4, 5 => Float32x4
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4, 5 => Float32x4,
+    6 => Float32x2
 ];
 
-/// The vertex buffer layout of [`Vertex`] (stride 80 bytes).
+/// The vertex buffer layout of [`Vertex`] (stride 88 bytes).
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -485,6 +489,7 @@ impl SceneGpu {
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
         let (mut draws_textured, mut draws_blend, mut draws_emissive) =
             (Vec::new(), Vec::new(), Vec::new());
+        let mut draws_layered = Vec::new();
         let mut animated = Vec::new();
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
@@ -544,6 +549,9 @@ impl SceneGpu {
                     } else {
                         if m.is_some_and(|m| m.emissive.max_element() > 0.0) {
                             draws_emissive.push((draw.clone(), material));
+                        }
+                        if m.is_some_and(|m| m.layered()) {
+                            draws_layered.push((draw.clone(), material));
                         }
                         draws_textured.push((draw, material));
                     }
@@ -634,6 +642,7 @@ impl SceneGpu {
                 draws_textured,
                 draws_blend,
                 draws_emissive,
+                draws_layered,
                 materials,
                 animated,
                 bounds,

@@ -15,7 +15,7 @@ use crate::gpu::pipeline::target;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::scene::gltf::{
-    AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, Wrap,
+    AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TEXTURE_SLOTS, Wrap,
 };
 
 /// Twin of `MaterialGpu` in shaders/gltf_material.wgsl.
@@ -30,9 +30,14 @@ pub struct MaterialGpu {
     pub params: [f32; 4],
     /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off.
     pub alpha: [f32; 4],
+    /// KHR_materials_clearcoat: x factor, y roughness, z normal scale.
+    pub clearcoat: [f32; 4],
+    /// KHR_materials_sheen: rgb colour (linear), a roughness.
+    pub sheen: [f32; 4],
     /// KHR_texture_transform per slot (SLOTS order): the 2x3 matrix's two
-    /// rows (xyz), identity where the slot has none.
-    pub uv: [[f32; 4]; 12],
+    /// rows (xyz), identity where the slot has none; the first row's w is
+    /// the slot's UV set (0: `Vertex::uv`, 1: `Vertex::uv1`).
+    pub uv: [[f32; 4]; 2 * TEXTURE_SLOTS],
 }
 
 impl MaterialGpu {
@@ -52,47 +57,55 @@ impl MaterialGpu {
                 m.anisotropy_rotation,
             ],
             alpha: [mode, cutoff, 0.0, 0.0],
+            clearcoat: [
+                m.clearcoat,
+                m.clearcoat_roughness,
+                m.clearcoat_normal_scale,
+                0.0,
+            ],
+            sheen: m.sheen_color.extend(m.sheen_roughness).to_array(),
             uv: uv_rows(m),
         }
     }
 }
 
-/// The slots' texture transforms as MaterialGpu::uv rows.
-fn uv_rows(m: &PbrMaterial) -> [[f32; 4]; 12] {
-    let slots = [
-        m.base_color_texture,
-        m.metallic_roughness_texture,
-        m.normal_texture,
-        m.occlusion_texture,
-        m.emissive_texture,
-        m.anisotropy_texture,
-    ];
-    let mut rows = [[0.0; 4]; 12];
+/// The slots' texture transforms and UV sets as MaterialGpu::uv rows.
+fn uv_rows(m: &PbrMaterial) -> [[f32; 4]; 2 * TEXTURE_SLOTS] {
+    let slots = m.texture_refs();
+    let mut rows = [[0.0; 4]; 2 * TEXTURE_SLOTS];
     for (k, t) in slots.iter().enumerate() {
         let r = t
             .and_then(|t| t.transform)
             .map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |x| x.rows());
-        rows[2 * k] = [r[0][0], r[0][1], r[0][2], 0.0];
+        // The loader moved sets past 1 to set 0 (and warned).
+        let set = t.map_or(0.0, |t| t.tex_coord.min(1) as f32);
+        rows[2 * k] = [r[0][0], r[0][1], r[0][2], set];
         rows[2 * k + 1] = [r[1][0], r[1][1], r[1][2], 0.0];
     }
     rows
 }
 
-/// The six texture slots of a material, as named in textured.wgsl.
-pub const SLOTS: [&str; 6] = [
+/// The texture slots of a material, as named in shaders/gltf_material.wgsl
+/// (`PbrMaterial::texture_refs` order).
+pub const SLOTS: [&str; TEXTURE_SLOTS] = [
     "base_color",
     "metal_rough",
     "normal",
     "occlusion",
     "emissive",
     "anisotropy",
+    "clearcoat",
+    "clearcoat_roughness",
+    "clearcoat_normal",
+    "sheen_color",
+    "sheen_roughness",
 ];
 
 /// One material's GPU resources: (view, sampler) per slot and its uniform.
 pub struct MaterialBinding {
     pub uniform: wgpu::Buffer,
     /// Per slot: index into `MaterialTextures::views` and `samplers`.
-    pub slots: [(usize, usize); 6],
+    pub slots: [(usize, usize); TEXTURE_SLOTS],
     pub double_sided: bool,
 }
 
@@ -245,16 +258,19 @@ impl MaterialTextures {
         let flat = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[1], false)?;
         let along_t = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[2], false)?;
         for m in &pbr.materials {
-            let refs: [(Option<TextureRef>, bool, usize); 6] = [
-                (m.base_color_texture, true, white_srgb),
-                (m.metallic_roughness_texture, false, white),
-                (m.normal_texture, false, flat),
-                (m.occlusion_texture, false, white),
-                (m.emissive_texture, true, white_srgb),
-                (m.anisotropy_texture, false, along_t),
-            ];
-            let mut slots = [(0, 0); 6];
-            for (slot, (r, srgb, fallback)) in slots.iter_mut().zip(refs) {
+            // Per slot: sRGB or linear, and the default where it is absent.
+            let (srgb, fallback) = (
+                [
+                    true, false, false, false, true, false, false, false, false, true, false,
+                ],
+                [
+                    white_srgb, white, flat, white, white_srgb, along_t, white, white, flat,
+                    white_srgb, white,
+                ],
+            );
+            let refs = (m.texture_refs().into_iter().zip(srgb)).zip(fallback);
+            let mut slots = [(0, 0); TEXTURE_SLOTS];
+            for (slot, ((r, srgb), fallback)) in slots.iter_mut().zip(refs) {
                 *slot = match r.and_then(|r| pbr.textures.get(r.texture)) {
                     Some(t) => {
                         let image = pbr.images.get(t.image).ok_or_else(|| {

@@ -196,7 +196,7 @@ pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
 pub use lights::{LightDesc, LightKind};
 pub use motion::{Motion, Orbit};
 
-/// One vertex as the G-buffer pass reads it (80 bytes).
+/// One vertex as the G-buffer pass reads it (88 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
@@ -213,10 +213,13 @@ pub struct Vertex {
     pub color: [f32; 4],
     /// Glossiness, reflectance, metallic, anisotropy (TECHNIQUES.md M1), each in [0, 1].
     pub surface: [f32; 4],
+    /// The second texture coordinate set (glTF `TEXCOORD_1`; zero where
+    /// the mesh has none). Material slots pick `uv` or `uv1`.
+    pub uv1: [f32; 2],
 }
 
-// The GPU vertex layout depends on this size.
-const _: () = assert!(std::mem::size_of::<Vertex>() == 80);
+// The GPU vertex layout (and passes/skin's output stride) depends on this size.
+const _: () = assert!(std::mem::size_of::<Vertex>() == 88);
 
 /// Axis-aligned bounding box. The empty box has `min > max` (+inf / -inf).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -48,6 +48,7 @@ impl MeshBuilder {
             uv,
             color: self.color,
             surface: self.surface,
+            uv1: uv,
         });
         index
     }

@@ -8,6 +8,15 @@
 #import sh
 #import math
 
+// The lighting uniform as the forward passes read it (passes/lighting's
+// `lighting` frame constant).
+struct Lighting {
+    sun_direction: vec4f,
+    sun_illuminance: vec4f,
+    sky_irradiance: Sh9,
+    fog: vec4f,
+}
+
 fn forward_shade_premultiplied(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
         sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9,
         prefiltered: vec3f, dfg: vec2f, ao: f32, emissive: vec3f, alpha: f32) -> vec4f {

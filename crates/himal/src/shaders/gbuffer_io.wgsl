@@ -9,6 +9,8 @@ struct GBufferVertexIn {
     @location(3) uv: vec2f,
     @location(4) color: vec4f,
     @location(5) surface: vec4f,
+    // TEXCOORD_1 (glTF materials pick a set per slot: gltf_material.wgsl)
+    @location(6) uv1: vec2f,
     // objects[instances[instance]] is the object drawn (V6)
     @builtin(instance_index) instance: u32,
 }

@@ -1,6 +1,6 @@
 // A glTF material as the textured G-buffer (passes/gbuffer/textured.wgsl)
 // and the forward passes (passes/forward/forward.wgsl) bind it: the factors
-// and the six texture/sampler pairs of group 1 (renderer/textures.rs
+// and the eleven texture/sampler pairs of group 1 (renderer/textures.rs
 // `MaterialTextures::bind_groups`), and what both derive from them.
 #import scene
 
@@ -12,8 +12,13 @@ struct MaterialGpu {
     params: vec4f,
     // x mode (0 opaque, 1 mask, 2 blend), y cut-off
     alpha: vec4f,
-    // KHR_texture_transform per slot (SLOT_*): rows 2k, 2k+1 of the 2x3 matrix
-    uv: array<vec4f, 12>,
+    // KHR_materials_clearcoat: x factor, y roughness, z normal scale
+    clearcoat: vec4f,
+    // KHR_materials_sheen: rgb colour (linear), a roughness
+    sheen: vec4f,
+    // KHR_texture_transform per slot (SLOT_*): rows 2k, 2k+1 of the 2x3
+    // matrix in xyz; row 2k's w is the slot's UV set (0 or 1)
+    uv: array<vec4f, 22>,
 }
 
 const SLOT_BASE_COLOR: u32 = 0u;
@@ -22,6 +27,11 @@ const SLOT_NORMAL: u32 = 2u;
 const SLOT_OCCLUSION: u32 = 3u;
 const SLOT_EMISSIVE: u32 = 4u;
 const SLOT_ANISOTROPY: u32 = 5u;
+const SLOT_CLEARCOAT: u32 = 6u;
+const SLOT_CLEARCOAT_ROUGHNESS: u32 = 7u;
+const SLOT_CLEARCOAT_NORMAL: u32 = 8u;
+const SLOT_SHEEN_COLOR: u32 = 9u;
+const SLOT_SHEEN_ROUGHNESS: u32 = 10u;
 
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
@@ -36,12 +46,26 @@ const SLOT_ANISOTROPY: u32 = 5u;
 @group(1) @binding(10) var emissive_sampler: sampler;
 @group(1) @binding(11) var anisotropy_texture: texture_2d<f32>;
 @group(1) @binding(12) var anisotropy_sampler: sampler;
+// Layers (forward.layers): clearcoat R, clearcoat roughness G, coat normal,
+// sheen colour RGB (sRGB), sheen roughness A.
+@group(1) @binding(13) var clearcoat_texture: texture_2d<f32>;
+@group(1) @binding(14) var clearcoat_sampler: sampler;
+@group(1) @binding(15) var clearcoat_roughness_texture: texture_2d<f32>;
+@group(1) @binding(16) var clearcoat_roughness_sampler: sampler;
+@group(1) @binding(17) var clearcoat_normal_texture: texture_2d<f32>;
+@group(1) @binding(18) var clearcoat_normal_sampler: sampler;
+@group(1) @binding(19) var sheen_color_texture: texture_2d<f32>;
+@group(1) @binding(20) var sheen_color_sampler: sampler;
+@group(1) @binding(21) var sheen_roughness_texture: texture_2d<f32>;
+@group(1) @binding(22) var sheen_roughness_sampler: sampler;
 
-// The UV a slot samples at: its KHR_texture_transform applied to `uv`
-// (CPU twin: scene::gltf::UvTransform::apply).
-fn material_uv(slot: u32, uv: vec2f) -> vec2f {
+// The UV a slot samples at: its set of `uvs` (TEXCOORD_0 in xy, _1 in zw)
+// with its KHR_texture_transform applied (CPU twin:
+// scene::gltf::UvTransform::apply).
+fn material_uv(slot: u32, uvs: vec4f) -> vec2f {
     let r0 = material.uv[2u * slot];
     let r1 = material.uv[2u * slot + 1u];
+    let uv = select(uvs.xy, uvs.zw, r0.w > 0.5);
     return vec2f(dot(r0.xy, uv) + r0.z, dot(r1.xy, uv) + r1.z);
 }
 

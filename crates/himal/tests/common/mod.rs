@@ -429,3 +429,21 @@ pub fn cube_gltf(name: &str, node: &str, material: &str) -> PathBuf {
     std::fs::write(&path, json).expect("write temporary glTF");
     path
 }
+
+/// Ray `o + t d` against triangle `v` (Möller–Trumbore, both sides): the
+/// distance t > 0 and the barycentric weights of v\[0\], v\[1\], v\[2\].
+#[allow(dead_code)]
+pub fn ray_triangle(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, Vec3)> {
+    let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let s = o - v[0];
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let w = d.dot(q) / det;
+    let t = e2.dot(q) / det;
+    (u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > 0.0).then(|| (t, Vec3::new(1.0 - u - w, u, w)))
+}

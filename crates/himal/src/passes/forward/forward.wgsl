@@ -18,14 +18,7 @@
 #import sh
 #import envmap
 #import forward
-#import object_vertex
-
-struct Lighting {
-    sun_direction: vec4f,
-    sun_illuminance: vec4f,
-    sky_irradiance: Sh9,
-    fog: vec4f,
-}
+#import forward_vertex
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -36,35 +29,13 @@ struct Lighting {
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;
 
-struct VertexOut {
-    // invariant: the emissive pass's depth test Equal must see the G-buffer's value
-    @builtin(position) @invariant clip: vec4f,
-    @location(0) normal: vec3f,
-    @location(1) tangent: vec4f,
-    @location(2) color: vec4f,
-    @location(3) surface: vec4f,
-    @location(4) world: vec3f,
-    @location(6) uv: vec2f,
-}
-
 @vertex
-fn vs_main(in: GBufferVertexIn) -> VertexOut {
-    let o = objects[instance_object(instances[in.instance])];
-    // The same call as textured.wgsl: the same clip position (@invariant).
-    let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
-    var out: VertexOut;
-    out.uv = in.uv;
-    out.clip = v.clip;
-    out.world = v.world.xyz;
-    out.normal = v.normal;
-    out.tangent = gltf_world_tangent(o, v.tangent, in.tangent.w);
-    out.color = in.color;
-    out.surface = in.surface;
-    return out;
+fn vs_main(in: GBufferVertexIn) -> ForwardVertexOut {
+    return forward_vertex(objects[instance_object(instances[in.instance])], in, view);
 }
 
 @fragment
-fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
+fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
     let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
     let alpha = material.base_color.a * base.a;
     let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
@@ -105,7 +76,7 @@ fn fs_blend(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
 }
 
 @fragment
-fn fs_emissive(in: VertexOut) -> @location(0) vec4f {
+fn fs_emissive(in: ForwardVertexOut) -> @location(0) vec4f {
     let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
     let e = textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
     // MASK: the G-buffer discarded these texels; a surface behind at the

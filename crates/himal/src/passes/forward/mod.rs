@@ -1,6 +1,9 @@
 //! Forward passes after lighting and sky (issue #8, docs/gltf.md):
 //! `forward.emissive` adds the emission of opaque and mask glTF materials
-//! (an additive draw with depth test Equal against the G-buffer depth), and
+//! (an additive draw with depth test Equal against the G-buffer depth),
+//! `forward.layers` puts their clearcoat and sheen over the deferred base
+//! (depth Equal, One / OneMinusSrcAlpha: `layers.wgsl`, shading in
+//! `shaders/layers.wgsl`, CPU twin [`reference::layers_shade`]), and
 //! `forward.blend` draws alpha BLEND materials back to front (per object,
 //! by the distance of its bounds' centre) with premultiplied alpha into the
 //! HDR target, lit by the unshadowed sun, the sky SH and the filtered
@@ -14,31 +17,53 @@ use glam::Vec3;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu, vertex_layout};
-use crate::graph::{FrameGraph, TextureHandle};
+use crate::graph::{Fallback, FrameGraph, TextureHandle};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::DEPTH_FORMAT;
 use crate::passes::lighting::HDR_FORMAT;
 
-/// A forward permutation: which fragment entry and whether back faces are drawn.
+/// Which forward pass a permutation belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ForwardKind {
+    /// `forward.emissive`: emission added where the G-buffer kept the surface.
+    Emissive,
+    /// `forward.layers`: clearcoat and sheen over the deferred base.
+    Layers,
+    /// `forward.blend`: alpha BLEND surfaces, premultiplied over.
+    Blend,
+}
+
+/// A forward permutation: which pass and whether back faces are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ForwardKey {
-    pub emissive: bool,
+    pub kind: ForwardKind,
     pub double_sided: bool,
 }
 
 impl ForwardKey {
-    /// The permutations `scene`'s emissive and blend draws use.
+    /// The permutations `scene`'s emissive, layered and blend draws use.
     pub fn for_scene(scene: &SceneGpu) -> Vec<ForwardKey> {
         let mut keys = Vec::new();
         let Some(m) = &scene.materials else {
             return keys;
         };
-        let emissive = scene.draws_emissive.iter().map(|(_, mat)| (true, *mat));
-        let blend = scene.draws_blend.iter().map(|(_, mat, _)| (false, *mat));
-        for (emissive, mat) in emissive.chain(blend) {
+        let of = |kind, draws: &[(Draw, usize)]| {
+            draws
+                .iter()
+                .map(move |(_, mat)| (kind, *mat))
+                .collect::<Vec<_>>()
+        };
+        let blend = scene
+            .draws_blend
+            .iter()
+            .map(|(_, mat, _)| (ForwardKind::Blend, *mat));
+        let all = (of(ForwardKind::Emissive, &scene.draws_emissive).into_iter())
+            .chain(of(ForwardKind::Layers, &scene.draws_layered))
+            .chain(blend);
+        for (kind, mat) in all {
             if let Some(binding) = m.materials.get(mat) {
                 let key = ForwardKey {
-                    emissive,
+                    kind,
                     double_sided: binding.double_sided,
                 };
                 if !keys.contains(&key) {
@@ -50,7 +75,7 @@ impl ForwardKey {
     }
 }
 
-/// What the forward passes read that outlives the frame.
+/// What the forward passes read.
 #[derive(Clone, Copy)]
 pub struct ForwardInputs<'a> {
     pub scene: &'a SceneGpu,
@@ -58,6 +83,10 @@ pub struct ForwardInputs<'a> {
     /// after this frame's filtering.
     pub envmap: &'a EnvMapPass,
     pub env: TextureHandle,
+    /// The sun's shadow mask (`forward.layers`; `None` without shadows).
+    pub shadow_mask: Option<TextureHandle>,
+    /// Screen-space AO (`forward.layers`; `None` without SSAO).
+    pub ao: Option<TextureHandle>,
 }
 
 /// Indices of `centres` ordered far to near from `camera` (ties keep their order).
@@ -73,20 +102,50 @@ pub fn back_to_front(centres: &[Vec3], camera: Vec3) -> Vec<usize> {
     order
 }
 
+/// The forward passes: their programs, the blend order and the sheen table.
 pub struct ForwardPass {
     program: Program,
+    layers: Program,
     /// `SceneGpu::draws_blend` indices, far to near (see [`ForwardPass::sort`]).
     order: Vec<usize>,
-    /// The materials' bind groups, made once per scene.
+    /// The materials' bind groups of `forward.wgsl`, made once per scene.
     pub material_groups: crate::gpu_scene::textures::MaterialGroups,
+    /// The same for `layers.wgsl`.
+    pub layer_groups: crate::gpu_scene::textures::MaterialGroups,
+    /// E(n.v, roughness) of the sheen lobe ([`reference::sheen_albedo_table`]), R32Float.
+    sheen_albedo: wgpu::TextureView,
 }
 
 impl ForwardPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        use wgpu::util::DeviceExt;
+        let n = reference::SHEEN_TABLE_SIZE as u32;
+        let table = ctx.device.create_texture_with_data(
+            &ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("forward.sheen_albedo"),
+                size: wgpu::Extent3d {
+                    width: n,
+                    height: n,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(reference::sheen_albedo_table()),
+        );
         Ok(Self {
             program: Program::new(ctx, "passes/forward/forward.wgsl")?,
+            layers: Program::new(ctx, "passes/forward/layers.wgsl")?,
             order: Vec::new(),
             material_groups: Default::default(),
+            layer_groups: Default::default(),
+            sheen_albedo: table.create_view(&Default::default()),
         })
     }
 
@@ -97,37 +156,52 @@ impl ForwardPass {
         key: ForwardKey,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         use wgpu::{BlendComponent as C, BlendFactor as F, BlendOperation as Op};
-        let (blend, compare, entry, label) = if key.emissive {
-            // Add colour, keep the HDR alpha.
-            let add = C {
-                src_factor: F::One,
-                dst_factor: F::One,
-                operation: Op::Add,
-            };
-            let keep = C {
-                src_factor: F::Zero,
-                dst_factor: F::One,
-                operation: Op::Add,
-            };
-            let state = wgpu::BlendState {
-                color: add,
-                alpha: keep,
-            };
-            (
-                state,
-                wgpu::CompareFunction::Equal,
-                "fs_emissive",
-                "forward.emissive",
-            )
-        } else {
-            let state = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
-            // reverse-Z: nearer is larger
-            (
-                state,
-                wgpu::CompareFunction::Greater,
-                "fs_blend",
-                "forward.blend",
-            )
+        // The HDR alpha is kept by the draws over opaque surfaces.
+        let keep = C {
+            src_factor: F::Zero,
+            dst_factor: F::One,
+            operation: Op::Add,
+        };
+        let (program, blend, compare, entry, label) = match key.kind {
+            ForwardKind::Emissive => {
+                let add = C {
+                    src_factor: F::One,
+                    dst_factor: F::One,
+                    operation: Op::Add,
+                };
+                let state = wgpu::BlendState {
+                    color: add,
+                    alpha: keep,
+                };
+                let equal = wgpu::CompareFunction::Equal;
+                (
+                    &self.program,
+                    state,
+                    equal,
+                    "fs_emissive",
+                    "forward.emissive",
+                )
+            }
+            ForwardKind::Layers => {
+                // out = layers + base (1 - a)
+                let over = C {
+                    src_factor: F::One,
+                    dst_factor: F::OneMinusSrcAlpha,
+                    operation: Op::Add,
+                };
+                let state = wgpu::BlendState {
+                    color: over,
+                    alpha: keep,
+                };
+                let equal = wgpu::CompareFunction::Equal;
+                (&self.layers, state, equal, "fs_layers", "forward.layers")
+            }
+            ForwardKind::Blend => {
+                let state = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
+                // reverse-Z: nearer is larger
+                let nearer = wgpu::CompareFunction::Greater;
+                (&self.program, state, nearer, "fs_blend", "forward.blend")
+            }
         };
         let targets = [Some(wgpu::ColorTargetState {
             format: HDR_FORMAT,
@@ -158,7 +232,7 @@ impl ForwardPass {
             },
             constants: &[],
         };
-        self.program.render_pipeline(ctx, &spec)
+        program.render_pipeline(ctx, &spec)
     }
 
     /// Orders the blend draws far to near from `camera` (call before the frame).
@@ -167,8 +241,9 @@ impl ForwardPass {
         self.order = back_to_front(&centres, camera);
     }
 
-    /// Adds `forward.emissive` and `forward.blend` (each only when the scene
-    /// has such draws) on top of `hdr`; returns the new HDR version.
+    /// Adds `forward.emissive`, `forward.layers` and `forward.blend` (each
+    /// only when the scene has such draws) on top of `hdr`; returns the new
+    /// HDR version.
     pub fn add<'a>(
         &'a self,
         ctx: &GpuContext,
@@ -180,17 +255,17 @@ impl ForwardPass {
         let scene = inputs.scene;
         let mut hdr = hdr;
         if !scene.draws_emissive.is_empty() {
-            let draws: Vec<(Draw, usize)> = scene.draws_emissive.clone();
-            hdr = self.add_pass(
-                ctx,
-                graph,
-                "forward.emissive",
-                true,
-                hdr,
-                depth,
-                draws,
-                inputs,
-            );
+            let draws: &'a [(Draw, usize)] = &scene.draws_emissive;
+            let node = graph.raster("forward.emissive", &self.program);
+            hdr = self.add_pass(ctx, node, ForwardKind::Emissive, hdr, depth, draws, inputs);
+        }
+        if !scene.draws_layered.is_empty() {
+            let draws: &'a [(Draw, usize)] = &scene.draws_layered;
+            let node = (graph.raster("forward.layers", &self.layers))
+                .optional("shadow_mask", inputs.shadow_mask, Fallback::White)
+                .optional("ao", inputs.ao, Fallback::White)
+                .external("sheen_albedo_load", &self.sheen_albedo);
+            hdr = self.add_pass(ctx, node, ForwardKind::Layers, hdr, depth, draws, inputs);
         }
         if !scene.draws_blend.is_empty() {
             let mut draws: Vec<(Draw, usize)> = self
@@ -207,41 +282,37 @@ impl ForwardPass {
                     .map(|(d, m, _)| (d.clone(), *m))
                     .collect();
             }
-            hdr = self.add_pass(
-                ctx,
-                graph,
-                "forward.blend",
-                false,
-                hdr,
-                depth,
-                draws,
-                inputs,
-            );
+            let node = graph.raster("forward.blend", &self.program);
+            hdr = self.add_pass(ctx, node, ForwardKind::Blend, hdr, depth, draws, inputs);
         }
         hdr
     }
 
-    /// One forward node over `draws` (view and lighting are frame constants).
+    /// Completes forward node `node` over `draws` (view and lighting are
+    /// frame constants) and returns its HDR output.
     #[allow(clippy::too_many_arguments)]
     fn add_pass<'a>(
         &'a self,
         ctx: &GpuContext,
-        graph: &mut FrameGraph<'a>,
-        id: &str,
-        emissive: bool,
+        node: crate::graph::Node<'_, 'a>,
+        kind: ForwardKind,
         hdr: TextureHandle,
         depth: TextureHandle,
-        draws: Vec<(Draw, usize)>,
+        draws: impl AsRef<[(Draw, usize)]> + 'a,
         inputs: ForwardInputs<'a>,
     ) -> TextureHandle {
         let scene = inputs.scene;
+        let (program, groups) = match kind {
+            ForwardKind::Layers => (&self.layers, &self.layer_groups),
+            _ => (&self.program, &self.material_groups),
+        };
         // The permutations these draws use, from the shared cache.
         let mut pipelines: Vec<(ForwardKey, Result<wgpu::RenderPipeline, GpuError>)> = Vec::new();
         if let Some(m) = &scene.materials {
-            for (_, material) in &draws {
+            for (_, material) in draws.as_ref() {
                 if let Some(binding) = m.materials.get(*material) {
                     let key = ForwardKey {
-                        emissive,
+                        kind,
                         double_sided: binding.double_sided,
                     };
                     if !pipelines.iter().any(|(k, _)| *k == key) {
@@ -250,9 +321,7 @@ impl ForwardPass {
                 }
             }
         }
-        graph
-            .raster(id, &self.program)
-            .uniform("objects", &scene.objects)
+        node.uniform("objects", &scene.objects)
             .uniform("instances", &scene.instances)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &inputs.envmap.sampler)
@@ -264,16 +333,16 @@ impl ForwardPass {
                 let Some(m) = &scene.materials else {
                     return Ok(());
                 };
-                let groups = (self.material_groups).get(scene.id, m, &self.program, ctx.device)?;
+                let groups = groups.get(scene.id, m, program, ctx.device)?;
                 scene.bind_geometry(rp);
-                for (draw, material) in &draws {
+                for (draw, material) in draws.as_ref() {
                     let Some((group, binding)) =
                         groups.get(*material).zip(m.materials.get(*material))
                     else {
                         continue;
                     };
                     let key = ForwardKey {
-                        emissive,
+                        kind,
                         double_sided: binding.double_sided,
                     };
                     match pipelines.iter().find(|(k, _)| *k == key) {

@@ -25,7 +25,8 @@ struct VertexOut {
     @location(3) surface: vec4f,
     @location(4) curr_clip: vec4f,
     @location(5) prev_clip: vec4f,
-    @location(6) uv: vec2f,
+    // TEXCOORD_0 in xy, TEXCOORD_1 in zw (material_uv picks per slot)
+    @location(6) uv: vec4f,
 }
 
 @vertex
@@ -33,7 +34,7 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let o = objects[instance_object(instances[in.instance])];
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;
-    out.uv = in.uv;
+    out.uv = vec4f(in.uv, in.uv1);
     out.curr_clip = v.clip;
     out.prev_clip = v.prev_clip;
     out.clip = v.clip;

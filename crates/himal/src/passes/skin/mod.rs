@@ -25,7 +25,11 @@ impl SkinPass {
     /// Compiles `skin.wgsl`.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/skin/skin.wgsl")?;
-        let pipeline = program.compute_pipeline(ctx, "cs_main", &[])?;
+        let pipeline = program.compute_pipeline(
+            ctx,
+            "cs_main",
+            &[("VERTEX_FLOATS", (VERTEX_BYTES / 4) as f64)],
+        )?;
         Ok(Self { program, pipeline })
     }
 

@@ -2,8 +2,8 @@
 // M = sum_i w_i J[j_i]; p' = M p, n' = normalize(M n), t' = M t made
 // orthogonal to n' and normalised (a direction M collapses keeps its
 // bind-pose value). Written into the
-// scene-layout vertex (20 floats: position 0..3, normal 3..6, tangent
-// 6..10; the rest is left as uploaded). CPU twin:
+// scene-layout vertex (VERTEX_FLOATS floats: position 0..3, normal 3..6,
+// tangent 6..10; the rest is left as uploaded). CPU twin:
 // scene::gltf::skin_vertex. docs/gltf.md, "Animation and skinning".
 
 struct SkinVertex {
@@ -31,6 +31,9 @@ fn normalize_or(v: vec3f, fallback: vec3f) -> vec3f {
     return select(fallback, v / l, l > 0.0 && l < 3.0e38);
 }
 
+// size_of::<scene::Vertex>() / 4, set by passes/skin/mod.rs.
+override VERTEX_FLOATS: u32;
+
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let i = id.x;
@@ -49,7 +52,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     // Blended matrices are not rotations: orthogonal to n again.
     let mt = (m * vec4f(v.tangent.xyz, 0.0)).xyz;
     let t = normalize_or(mt - n * dot(n, mt), v.tangent.xyz);
-    let o = i * 20u;
+    let o = i * VERTEX_FLOATS;
     skinned[o + 0u] = p.x;
     skinned[o + 1u] = p.y;
     skinned[o + 2u] = p.z;

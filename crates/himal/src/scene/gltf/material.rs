@@ -13,6 +13,9 @@ use glam::{Vec3, Vec4};
 use super::{GltfContext, MAX_TEXTURE_SIZE};
 use crate::scene::SceneError;
 
+/// Texture slots of a material (`PbrMaterial::texture_refs`).
+pub const TEXTURE_SLOTS: usize = 11;
+
 /// Reflectance (F0) of glTF dielectrics: ior 1.5.
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
 
@@ -203,6 +206,27 @@ pub struct PbrMaterial {
     pub emissive_texture: Option<TextureRef>,
     /// RG direction in [-1, 1] (tangent, bitangent), B strength.
     pub anisotropy_texture: Option<TextureRef>,
+    /// KHR_materials_clearcoat `clearcoatFactor` in [0, 1] (0: no coat).
+    pub clearcoat: f32,
+    /// The coat's perceptual roughness.
+    pub clearcoat_roughness: f32,
+    /// The coat normal texture's `scale`.
+    pub clearcoat_normal_scale: f32,
+    /// R × `clearcoat`.
+    pub clearcoat_texture: Option<TextureRef>,
+    /// G × `clearcoat_roughness`.
+    pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// The coat's own normal map (absent: the geometric normal, as the
+    /// extension says, not the base's normal map).
+    pub clearcoat_normal_texture: Option<TextureRef>,
+    /// KHR_materials_sheen `sheenColorFactor`, linear (0: no sheen).
+    pub sheen_color: Vec3,
+    /// The sheen's perceptual roughness.
+    pub sheen_roughness: f32,
+    /// RGB (sRGB) × `sheen_color`.
+    pub sheen_color_texture: Option<TextureRef>,
+    /// A × `sheen_roughness`.
+    pub sheen_roughness_texture: Option<TextureRef>,
 }
 
 impl Default for PbrMaterial {
@@ -226,6 +250,16 @@ impl Default for PbrMaterial {
             occlusion_texture: None,
             emissive_texture: None,
             anisotropy_texture: None,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
+            clearcoat_normal_scale: 1.0,
+            clearcoat_texture: None,
+            clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
+            sheen_color: Vec3::ZERO,
+            sheen_roughness: 0.0,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
         }
     }
 }
@@ -251,8 +285,8 @@ impl PbrMaterial {
         ]
     }
 
-    /// Number of texture slots in use.
-    pub fn texture_count(&self) -> usize {
+    /// The texture slots in `gpu_scene::textures::SLOTS` order.
+    pub fn texture_refs(&self) -> [Option<TextureRef>; TEXTURE_SLOTS] {
         [
             self.base_color_texture,
             self.metallic_roughness_texture,
@@ -260,10 +294,45 @@ impl PbrMaterial {
             self.occlusion_texture,
             self.emissive_texture,
             self.anisotropy_texture,
+            self.clearcoat_texture,
+            self.clearcoat_roughness_texture,
+            self.clearcoat_normal_texture,
+            self.sheen_color_texture,
+            self.sheen_roughness_texture,
         ]
-        .iter()
-        .flatten()
-        .count()
+    }
+
+    /// The slots' references, mutable, in the same order.
+    pub fn texture_refs_mut(&mut self) -> [&mut Option<TextureRef>; TEXTURE_SLOTS] {
+        [
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.normal_texture,
+            &mut self.occlusion_texture,
+            &mut self.emissive_texture,
+            &mut self.anisotropy_texture,
+            &mut self.clearcoat_texture,
+            &mut self.clearcoat_roughness_texture,
+            &mut self.clearcoat_normal_texture,
+            &mut self.sheen_color_texture,
+            &mut self.sheen_roughness_texture,
+        ]
+    }
+
+    /// Whether the material has a clearcoat or sheen layer over its base
+    /// (drawn by `forward.layers`, passes/forward).
+    pub fn layered(&self) -> bool {
+        self.clearcoat > 0.0 || self.sheen_color.max_element() > 0.0
+    }
+
+    /// Number of texture slots in use.
+    pub fn texture_count(&self) -> usize {
+        self.texture_refs().iter().flatten().count()
+    }
+
+    /// Whether a texture slot reads UV set `set`.
+    pub fn reads_uv_set(&self, set: u32) -> bool {
+        (self.texture_refs().iter().flatten()).any(|t| t.tex_coord == set)
     }
 }
 
@@ -339,9 +408,10 @@ fn texture_ref(cx: &GltfContext, info: &gltf::texture::Info) -> Result<TextureRe
     })
 }
 
-/// `{ "index": i, "texCoord": k }` of an extension, checked against the texture count.
+/// `{ "index": i, "texCoord": k }` of extension `ext`, checked against the texture count.
 fn json_texture_ref(
     cx: &GltfContext,
+    ext: &str,
     v: Option<&gltf::json::Value>,
     textures: usize,
 ) -> Result<Option<TextureRef>, SceneError> {
@@ -359,14 +429,15 @@ fn json_texture_ref(
             }))
         }
         _ => Err(cx.invalid(format!(
-            "KHR_materials_anisotropy texture {v} names no texture (there are {textures})"
+            "{ext} texture {v} names no texture (there are {textures})"
         ))),
     }
 }
 
-/// Finite number from extension JSON, `default` when absent.
+/// Finite number from extension `ext`'s JSON, `default` when absent.
 fn json_f32(
     cx: &GltfContext,
+    ext: &str,
     v: &gltf::json::Value,
     key: &str,
     default: f32,
@@ -375,9 +446,7 @@ fn json_f32(
         None => Ok(default),
         Some(x) => match x.as_f64() {
             Some(f) if f.is_finite() => Ok(f as f32),
-            _ => Err(cx.invalid(format!(
-                "KHR_materials_anisotropy {key} = {x} is not a number"
-            ))),
+            _ => Err(cx.invalid(format!("{ext} {key} = {x} is not a number"))),
         },
     }
 }
@@ -469,10 +538,50 @@ pub(super) fn material(
         });
     }
     // The gltf crate has no typed KHR_materials_anisotropy: read the JSON.
-    if let Some(a) = m.extension_value("KHR_materials_anisotropy") {
-        out.anisotropy_strength = json_f32(cx, a, "anisotropyStrength", 0.0)?.clamp(0.0, 1.0);
-        out.anisotropy_rotation = json_f32(cx, a, "anisotropyRotation", 0.0)?;
-        out.anisotropy_texture = json_texture_ref(cx, a.get("anisotropyTexture"), textures)?;
+    const ANISOTROPY: &str = "KHR_materials_anisotropy";
+    if let Some(a) = m.extension_value(ANISOTROPY) {
+        let f = |key, default| json_f32(cx, ANISOTROPY, a, key, default);
+        out.anisotropy_strength = f("anisotropyStrength", 0.0)?.clamp(0.0, 1.0);
+        out.anisotropy_rotation = f("anisotropyRotation", 0.0)?;
+        out.anisotropy_texture =
+            json_texture_ref(cx, ANISOTROPY, a.get("anisotropyTexture"), textures)?;
+    }
+    // Layers over the base (passes/forward `forward.layers`), read from the JSON.
+    const CLEARCOAT: &str = "KHR_materials_clearcoat";
+    if let Some(c) = m.extension_value(CLEARCOAT) {
+        let f = |key, default| json_f32(cx, CLEARCOAT, c, key, default);
+        let t = |key| json_texture_ref(cx, CLEARCOAT, c.get(key), textures);
+        out.clearcoat = f("clearcoatFactor", 0.0)?.clamp(0.0, 1.0);
+        out.clearcoat_roughness = f("clearcoatRoughnessFactor", 0.0)?.clamp(0.0, 1.0);
+        out.clearcoat_texture = t("clearcoatTexture")?;
+        out.clearcoat_roughness_texture = t("clearcoatRoughnessTexture")?;
+        out.clearcoat_normal_texture = t("clearcoatNormalTexture")?;
+        if let Some(n) = c.get("clearcoatNormalTexture") {
+            out.clearcoat_normal_scale = json_f32(cx, CLEARCOAT, n, "scale", 1.0)?;
+        }
+    }
+    const SHEEN: &str = "KHR_materials_sheen";
+    if let Some(sh) = m.extension_value(SHEEN) {
+        let colour = match sh.get("sheenColorFactor") {
+            None => Vec3::ZERO,
+            Some(v) => {
+                let c: Vec<f32> = (v.as_array().into_iter().flatten())
+                    .filter_map(|x| x.as_f64().map(|x| x as f32))
+                    .collect();
+                if c.len() != 3 || !c.iter().all(|x| x.is_finite()) {
+                    return Err(cx.invalid(format!(
+                        "{SHEEN} sheenColorFactor {v}: expected three finite numbers"
+                    )));
+                }
+                Vec3::from_slice(&c).clamp(Vec3::ZERO, Vec3::ONE)
+            }
+        };
+        out.sheen_color = colour;
+        out.sheen_roughness = json_f32(cx, SHEEN, sh, "sheenRoughnessFactor", 0.0)?.clamp(0.0, 1.0);
+        out.sheen_color_texture =
+            json_texture_ref(cx, SHEEN, sh.get("sheenColorTexture"), textures)?;
+        out.sheen_roughness_texture =
+            json_texture_ref(cx, SHEEN, sh.get("sheenRoughnessTexture"), textures)?;
     }
     Ok(out)
 }

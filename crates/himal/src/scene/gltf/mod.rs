@@ -21,8 +21,9 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 pub use material::{
-    AlphaMode, GLTF_DIELECTRIC_F0, ImageData, PbrMaterial, SamplerDesc, TextureRef, TextureSlot,
-    UvTransform, Wrap, anisotropy_from_khr, glossiness_from_roughness, srgb8_to_linear,
+    AlphaMode, GLTF_DIELECTRIC_F0, ImageData, PbrMaterial, SamplerDesc, TEXTURE_SLOTS, TextureRef,
+    TextureSlot, UvTransform, Wrap, anisotropy_from_khr, glossiness_from_roughness,
+    srgb8_to_linear,
 };
 
 pub use animation::{
@@ -368,27 +369,33 @@ pub fn load_from_bytes_with(
         .and_then(|r| (!r.clips.is_empty()).then_some(0));
     let mut unskinned = Vec::new();
     let mut skinned_meshes = std::collections::HashSet::new();
-    // One UV set per primitive: the base colour texture's.
-    let mixed_sets: Vec<String> = (pbr.materials.iter())
-        .filter(|m| {
-            let base = m.base_color_texture.map_or(0, |t| t.tex_coord);
-            [
-                m.metallic_roughness_texture,
-                m.normal_texture,
-                m.occlusion_texture,
-                m.emissive_texture,
-                m.anisotropy_texture,
-            ]
-            .iter()
-            .flatten()
-            .any(|t| t.tex_coord != base)
-        })
+    // Two UV sets per vertex (`Vertex::uv`, `uv1`): slots reading a later
+    // set read TEXCOORD_0 instead, named here.
+    let mut past_second: Vec<String> = Vec::new();
+    for m in &mut pbr.materials {
+        let name = m.name.clone();
+        for t in m.texture_refs_mut().into_iter().flatten() {
+            if t.tex_coord > 1 {
+                past_second.push(format!("{name} (TEXCOORD_{})", t.tex_coord));
+                t.tex_coord = 0;
+            }
+        }
+    }
+    let blended_layers: Vec<String> = (pbr.materials.iter())
+        .filter(|m| m.layered() && m.alpha_mode == AlphaMode::Blend)
         .map(|m| m.name.clone())
         .collect();
-    if !mixed_sets.is_empty() {
+    if !blended_layers.is_empty() {
         warnings.push(format!(
-            "materials read textures through more than one UV set; every slot uses the base colour's: {}",
-            names(mixed_sets)
+            "alpha BLEND materials are drawn without their clearcoat or sheen: {}",
+            names(blended_layers)
+        ));
+    }
+    if !past_second.is_empty() {
+        past_second.dedup();
+        warnings.push(format!(
+            "himal reads TEXCOORD_0 and TEXCOORD_1; textures of these materials read a later set and are drawn with TEXCOORD_0: {}",
+            names(past_second)
         ));
     }
 
@@ -583,11 +590,13 @@ fn skinned(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 9] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
+    "KHR_materials_sheen",
     "KHR_materials_variants",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
@@ -904,18 +913,23 @@ fn primitive<'a>(
             "mesh \"{name}\": index {bad} is out of range (vertices: {n})"
         )));
     }
-    let uv_set = material.base_color_texture.map_or(0, |t| t.tex_coord);
-    let uvs: Vec<[f32; 2]> = match attribute(gltf::Semantic::TexCoords(uv_set)) {
-        Some(a) => buffers::read_floats::<2>(&a, data).ok_or_else(|| unreadable("TEXCOORD"))?,
-        None if material.base_color_texture.is_some() => {
-            return Err(cx.invalid(format!(
-                "mesh \"{name}\": its material's base colour texture reads TEXCOORD_{uv_set}, \
-                 which the primitive does not have"
-            )));
-        }
-        None => vec![[0.0; 2]; n],
+    // TEXCOORD_0 and _1; a set a texture reads must be there.
+    let read_uvs = |set: u32| -> Result<Vec<[f32; 2]>, SceneError> {
+        let uvs = match attribute(gltf::Semantic::TexCoords(set)) {
+            Some(a) => buffers::read_floats::<2>(&a, data).ok_or_else(|| unreadable("TEXCOORD"))?,
+            None if material.reads_uv_set(set) => {
+                return Err(cx.invalid(format!(
+                    "mesh \"{name}\": its material \"{}\" reads TEXCOORD_{set}, \
+                     which the primitive does not have",
+                    material.name
+                )));
+            }
+            None => vec![[0.0; 2]; n],
+        };
+        count_ok(uvs.len(), "TEXCOORD")?;
+        Ok(uvs)
     };
-    count_ok(uvs.len(), "TEXCOORD")?;
+    let (uvs, uvs1) = (read_uvs(0)?, read_uvs(1)?);
     let normals: Vec<[f32; 3]> = match attribute(gltf::Semantic::Normals) {
         Some(a) => {
             let mut normals =
@@ -942,6 +956,7 @@ fn primitive<'a>(
                 uv: uvs[i],
                 color: [color[0] * c[0], color[1] * c[1], color[2] * c[2], color[3]],
                 surface,
+                uv1: uvs1[i],
             }
         })
         .collect();
@@ -960,7 +975,8 @@ fn primitive<'a>(
         }
         // Only normal-mapped or anisotropic materials need a tangent frame from the UVs.
         None if material.normal_texture.is_some() || material.anisotropy_strength > 0.0 => {
-            let (v, i, origins) = tangents::generate(&vertices, &indices);
+            let set = material.normal_texture.map_or(0, |t| t.tex_coord);
+            let (v, i, origins) = tangents::generate(&vertices, &indices, set);
             (vertices, indices, remap) = (v, i, Some(origins));
         }
         None => {}

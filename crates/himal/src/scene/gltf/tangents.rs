@@ -11,6 +11,8 @@ use crate::scene::Vertex;
 
 struct Corners<'a> {
     vertices: &'a mut [Vertex],
+    /// The UV set the normal texture reads (0: `uv`, 1: `uv1`).
+    set: u32,
 }
 
 impl mikktspace::Geometry for Corners<'_> {
@@ -30,7 +32,8 @@ impl mikktspace::Geometry for Corners<'_> {
     /// without the flip every handedness sign comes out inverted (tested
     /// against NormalTangentMirrorTest's exported tangents).
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-        let [u, v] = self.vertices[face * 3 + vert].uv;
+        let corner = &self.vertices[face * 3 + vert];
+        let [u, v] = if self.set == 1 { corner.uv1 } else { corner.uv };
         [u, 1.0 - v]
     }
     fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
@@ -39,14 +42,19 @@ impl mikktspace::Geometry for Corners<'_> {
 }
 
 /// MikkTSpace tangents (w = handedness, bitangent = cross(n, t) * w) for an
-/// indexed triangle list; returns the re-welded vertices, indices, and each
+/// indexed triangle list, along UV set `set` (the normal texture's); returns the re-welded vertices, indices, and each
 /// new vertex's original (attributes the `Vertex` does not hold, such as
 /// joints and weights, follow it). Degenerate UVs keep a tangent
 /// perpendicular to the normal.
-pub(super) fn generate(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Vec<u32>, Vec<u32>) {
+pub(super) fn generate(
+    vertices: &[Vertex],
+    indices: &[u32],
+    set: u32,
+) -> (Vec<Vertex>, Vec<u32>, Vec<u32>) {
     let mut corners: Vec<Vertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
     let ok = mikktspace::generate_tangents(&mut Corners {
         vertices: &mut corners,
+        set,
     });
     if !ok {
         log::warn!("MikkTSpace failed; tangents follow the normals' perpendicular");
@@ -64,11 +72,12 @@ pub(super) fn generate(vertices: &[Vertex], indices: &[u32]) -> (Vec<Vertex>, Ve
 
 /// Merges bit-identical corners of one original vertex.
 fn weld(corners: Vec<Vertex>, origins: &[u32]) -> (Vec<Vertex>, Vec<u32>, Vec<u32>) {
-    let mut map: HashMap<([u32; 20], u32), u32> = HashMap::with_capacity(corners.len());
+    const WORDS: usize = std::mem::size_of::<Vertex>() / 4;
+    let mut map: HashMap<([u32; WORDS], u32), u32> = HashMap::with_capacity(corners.len());
     let (mut vertices, mut remap) = (Vec::new(), Vec::new());
     let mut indices = Vec::with_capacity(corners.len());
     for (v, &origin) in corners.into_iter().zip(origins) {
-        let key: [u32; 20] = bytemuck::cast(v);
+        let key: [u32; WORDS] = bytemuck::cast(v);
         let i = *map.entry((key, origin)).or_insert_with(|| {
             vertices.push(v);
             remap.push(origin);

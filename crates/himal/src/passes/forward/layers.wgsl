@@ -1,0 +1,85 @@
+// forward.layers: KHR_materials_sheen and KHR_materials_clearcoat over the
+// deferred base of opaque and mask glTF surfaces (docs/gltf.md "Clearcoat
+// and sheen"). Drawn where the G-buffer kept this surface (depth Equal, the
+// clip position @invariant as in textured.wgsl), blended One,
+// OneMinusSrcAlpha: out = layers + base * s_sheen * s_coat
+// (shaders/layers.wgsl, CPU twin passes/forward/reference.rs `layers_shade`).
+// The sun is shadowed by this pixel's mask, the environment occluded by
+// the material's occlusion times SSAO: the surface is the G-buffer's.
+#import gbuffer_io
+#import view
+#import tangent_frame
+#import scene
+#import gltf_material
+#import brdf
+#import forward
+#import forward_vertex
+#import layers
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+@group(0) @binding(2) var<uniform> lighting: Lighting;
+@group(0) @binding(3) var env_specular: texture_cube<f32>;
+@group(0) @binding(4) var env_sampler: sampler;
+@group(0) @binding(5) var dfg_lut: texture_2d<f32>;
+// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
+@group(0) @binding(6) var<storage, read> instances: array<u32>;
+// The sun's visibility in .r (1x1 white without shadows).
+@group(0) @binding(7) var shadow_mask: texture_2d<f32>;
+// Screen-space AO in .x (1x1 white without SSAO).
+@group(0) @binding(8) var ao: texture_2d<f32>;
+// E(n.v, roughness) of the sheen lobe (passes/forward/reference.rs `sheen_albedo_table`).
+@group(0) @binding(9) var sheen_albedo_load: texture_2d<f32>;
+
+@vertex
+fn vs_main(in: GBufferVertexIn) -> ForwardVertexOut {
+    return forward_vertex(objects[instance_object(instances[in.instance])], in, view);
+}
+
+fn load_clamped(t: texture_2d<f32>, px: vec2i) -> vec4f {
+    return textureLoad(t, min(px, vec2i(textureDimensions(t)) - 1), 0);
+}
+
+@fragment
+fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
+    let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
+    let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
+    let cc = textureSample(clearcoat_texture, clearcoat_sampler, material_uv(SLOT_CLEARCOAT, in.uv)).r;
+    let ccr = textureSample(clearcoat_roughness_texture, clearcoat_roughness_sampler, material_uv(SLOT_CLEARCOAT_ROUGHNESS, in.uv)).g;
+    let ccn = textureSample(clearcoat_normal_texture, clearcoat_normal_sampler, material_uv(SLOT_CLEARCOAT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let sc = textureSample(sheen_color_texture, sheen_color_sampler, material_uv(SLOT_SHEEN_COLOR, in.uv)).rgb;
+    let sr = textureSample(sheen_roughness_texture, sheen_roughness_sampler, material_uv(SLOT_SHEEN_ROUGHNESS, in.uv)).a;
+    // MASK: the G-buffer discarded these texels (as fs_emissive).
+    if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {
+        discard;
+    }
+    var n = normalize(in.normal);
+    var tangent = in.tangent;
+    if (!front) {
+        n = -n;
+        tangent.w = -tangent.w;
+    }
+    // The base's normal map for the sheen; the coat's own (flat by default:
+    // the geometric normal) for the coat.
+    let n_base = apply_normal_map(n, tangent, normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4))));
+    let n_coat = apply_normal_map(n, tangent, normalize(vec3f(ccn.xy * material.clearcoat.z, max(ccn.z, 1e-4))));
+    let m = Layers(material.sheen.rgb * sc, saturate(material.sheen.a * sr),
+        saturate(material.clearcoat.x * cc), saturate(material.clearcoat.y * ccr));
+
+    let px = vec2i(in.clip.xy);
+    let v = to_eye(view, in.world);
+    let levels = f32(textureNumLevels(env_specular) - 1u);
+    let r_sheen = reflect(-v, n_base);
+    let r_coat = reflect(-v, n_coat);
+    var light: LayerLight;
+    light.sun_direction = lighting.sun_direction.xyz;
+    light.sun = lighting.sun_illuminance.rgb * load_clamped(shadow_mask, px).r;
+    light.sheen_env = textureSampleLevel(env_specular, env_sampler, r_sheen, m.sheen_roughness * levels).rgb;
+    light.coat_env = textureSampleLevel(env_specular, env_sampler, r_coat, m.clearcoat_roughness * levels).rgb;
+    let n_o_v_coat = max(dot(n_coat, v), 1e-4);
+    light.coat_dfg = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v_coat, m.clearcoat_roughness), 0.0).xy;
+    light.sheen_albedo = sheen_albedo_lookup(sheen_albedo_load, dot(n_base, v), m.sheen_roughness);
+    light.ao = (1.0 + material.params.y * (occlusion - 1.0)) * load_clamped(ao, px).x;
+    return layers_shade(m, n_base, n_coat, v, light);
+}
