@@ -432,3 +432,65 @@ fn sheen_albedo_table_is_converged_and_energy_bounded() {
         "96 cells off the 384-cell integral by {worst}"
     );
 }
+
+/// `unlit_radiance` (shaders/forward.wgsl) against its CPU twin. Input: 9
+/// vec4 of SH, then per case base colour, sun direction, sun illuminance.
+const UNLIT_KERNEL: &str = r#"#import forward
+@group(0) @binding(0) var<storage, read> input: array<vec4f>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4f>;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3u) {
+    let i = id.x;
+    let base = 9u + i * 3u;
+    if base + 2u >= arrayLength(&input) { return; }
+    var sh: Sh9;
+    for (var k = 0u; k < 9u; k = k + 1u) { sh.c[k] = input[k]; }
+    output[i] = vec4f(unlit_radiance(input[base].xyz, input[base + 1u].xyz, input[base + 2u].xyz, sh), 0.0);
+}
+"#;
+
+#[test]
+fn unlit_radiance_matches_its_cpu_twin() {
+    use himal::passes::forward::reference::unlit_radiance;
+    let mut rng = Pcg32::new(31);
+    let sky = Sh9Rgb {
+        c: std::array::from_fn(|k| {
+            Vec3::new(30.0, 35.0, 45.0) * if k == 0 { 1.0 } else { 0.2 } * (1.0 + rng.next_f32())
+        }),
+    };
+    let mut input: Vec<[f32; 4]> = sky.c.iter().map(|c| c.extend(0.0).to_array()).collect();
+    let mut cases = Vec::new();
+    for _ in 0..128 {
+        let base = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let light = ForwardLight {
+            sun_direction: uniform_sample_sphere(rng.next_vec2()),
+            sun_illuminance: Vec3::new(90.0, 85.0, 80.0) * rng.next_f32(),
+            sky_irradiance: sky,
+            prefiltered: Vec3::ZERO,
+            dfg: Vec2::ZERO,
+        };
+        input.extend([
+            base.extend(0.0).to_array(),
+            light.sun_direction.extend(0.0).to_array(),
+            light.sun_illuminance.extend(0.0).to_array(),
+        ]);
+        cases.push(unlit_radiance(base, &light));
+    }
+    let out = run_compute(
+        UNLIT_KERNEL,
+        "cs_main",
+        bytemuck::cast_slice(&input),
+        (cases.len() * 16) as u64,
+        [(cases.len() as u32).div_ceil(64), 1, 1],
+    )
+    .unwrap_or_else(|e| panic!("unlit kernel: {e}"));
+    let gpu: &[[f32; 4]] = bytemuck::cast_slice(&out);
+    let mut worst = 0.0f32;
+    for (cpu, g) in cases.iter().zip(gpu) {
+        let g = Vec3::from_slice(&g[..3]);
+        worst = worst.max(((g - *cpu).abs() / cpu.abs().max(Vec3::splat(1e-2))).max_element());
+    }
+    eprintln!("unlit GPU vs CPU: worst relative {worst:.2e}");
+    assert!(worst < 1e-5, "worst relative difference {worst}");
+}

@@ -538,3 +538,46 @@ fn sheen_brightens_the_fabric_and_nothing_else() {
     // Measured 2026-12-03: +21.2 % over 2,472 pixels, none off the fabric.
     assert!(added > 0.1 * base, "sheen added {added} to {base}");
 }
+
+/// UnlitTest: "the visible surface of these two objects should appear as a
+/// uniform color, so much so that the 3D effect is intentionally lost".
+/// Each object's HDR pixels (drawn alone) are one colour, the base colour
+/// factor's: channel ratios as the factor's. Lit (the flag cleared), the
+/// same objects shade with their faces.
+#[test]
+fn unlit_objects_are_one_uniform_colour() {
+    let scene =
+        Scene::from_gltf(&common::gltf_sample("UnlitTest")).expect("loads (required extension)");
+    let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 35.0, 20.0, None, 40.0);
+    let spread = |scene: &Scene, node: &str| {
+        let px: Vec<glam::Vec3> = alone(scene, node, &camera, 96)
+            .into_iter()
+            .flatten()
+            .map(|(c, _)| c)
+            .collect();
+        let mean = px.iter().copied().sum::<glam::Vec3>() / px.len() as f32;
+        let worst = (px.iter()).map(|c| ((*c - mean).abs() / mean.max_element()).max_element());
+        (mean, worst.fold(0.0f32, f32::max), px.len())
+    };
+    for (node, factor) in [
+        ("Orange Object", [1.0, 0.2176376, 0.0]),
+        ("Blue Object", [0.0, 0.2176376, 1.0]),
+    ] {
+        let (mean, worst, n) = spread(&scene, node);
+        let ratio = mean / mean.max_element();
+        eprintln!("{node}: {n} px, mean {mean}, ratios {ratio}, worst deviation {worst:.2e}");
+        assert!(n > 500, "{node}: {n} pixels");
+        // Measured 2026-12-03: 0 (every covered pixel the same fp16 value).
+        assert!(worst < 0.01, "{node}: worst deviation {worst}");
+        assert!(
+            (ratio - glam::Vec3::from(factor)).abs().max_element() < 1e-3,
+            "{node}: {ratio}"
+        );
+        let mut lit = scene.clone();
+        for m in &mut lit.pbr.materials {
+            m.unlit = false;
+        }
+        let (_, lit_worst, _) = spread(&lit, node);
+        assert!(lit_worst > 0.1, "{node} lit: {lit_worst}");
+    }
+}

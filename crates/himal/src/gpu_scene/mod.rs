@@ -332,6 +332,9 @@ pub struct SceneGpu {
     /// Opaque / mask glTF objects with a clearcoat or sheen layer
     /// (`forward.layers`); each is in `draws_textured` too.
     pub draws_layered: Vec<(Draw, usize)>,
+    /// Opaque / mask glTF objects with an unlit material (`forward.unlit`);
+    /// each is in `draws_textured` too.
+    pub draws_unlit: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
     pub materials: Option<textures::MaterialTextures>,
     /// Moving objects with their index into `objects`, rewritten per frame.
@@ -489,7 +492,7 @@ impl SceneGpu {
         let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
         let (mut draws_textured, mut draws_blend, mut draws_emissive) =
             (Vec::new(), Vec::new(), Vec::new());
-        let mut draws_layered = Vec::new();
+        let (mut draws_layered, mut draws_unlit) = (Vec::new(), Vec::new());
         let mut animated = Vec::new();
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
@@ -547,8 +550,11 @@ impl SceneGpu {
                             .transform(&object.transform);
                         draws_blend.push((draw, material, bounds.center()));
                     } else {
-                        if m.is_some_and(|m| m.emissive.max_element() > 0.0) {
+                        if m.is_some_and(|m| m.emits()) {
                             draws_emissive.push((draw.clone(), material));
+                        }
+                        if m.is_some_and(|m| m.unlit) {
+                            draws_unlit.push((draw.clone(), material));
                         }
                         if m.is_some_and(|m| m.layered()) {
                             draws_layered.push((draw.clone(), material));
@@ -643,6 +649,7 @@ impl SceneGpu {
                 draws_blend,
                 draws_emissive,
                 draws_layered,
+                draws_unlit,
                 materials,
                 animated,
                 bounds,

@@ -28,7 +28,7 @@ pub struct MaterialGpu {
     pub emissive: [f32; 4],
     /// x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad).
     pub params: [f32; 4],
-    /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off.
+    /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit.
     pub alpha: [f32; 4],
     /// KHR_materials_clearcoat: x factor, y roughness, z normal scale.
     pub clearcoat: [f32; 4],
@@ -56,7 +56,7 @@ impl MaterialGpu {
                 m.anisotropy_strength,
                 m.anisotropy_rotation,
             ],
-            alpha: [mode, cutoff, 0.0, 0.0],
+            alpha: [mode, cutoff, m.unlit as u32 as f32, 0.0],
             clearcoat: [
                 m.clearcoat,
                 m.clearcoat_roughness,

@@ -7,6 +7,7 @@
 #import brdf
 #import sh
 #import math
+#import color
 
 // The lighting uniform as the forward passes read it (passes/lighting's
 // `lighting` frame constant).
@@ -28,4 +29,14 @@ fn forward_shade_premultiplied(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3
     c += emissive;
     let a = saturate(alpha);
     return vec4f(c * a, a);
+}
+
+// KHR_materials_unlit: the base colour shown as it is. himal's radiance has
+// units (kcd/m^2), so "as it is" means as bright as a white Lambertian
+// surface facing the sun would be, (E_sun + E_sky(l)) / pi, its luminance
+// only (the colour stays the material's). CPU twin:
+// passes/forward/reference.rs `unlit_radiance`.
+fn unlit_radiance(base: vec3f, sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9) -> vec3f {
+    let e = sun_illuminance + max(sh9_eval(sky_irradiance, sun_direction), vec3f(0.0));
+    return base * (luminance(e) / PI);
 }

@@ -10,7 +10,7 @@ struct MaterialGpu {
     emissive: vec4f,
     // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
     params: vec4f,
-    // x mode (0 opaque, 1 mask, 2 blend), y cut-off
+    // x mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit
     alpha: vec4f,
     // KHR_materials_clearcoat: x factor, y roughness, z normal scale
     clearcoat: vec4f,

@@ -8,6 +8,9 @@
 // - fs_emissive (`forward.emissive`): emissive factor x texture of opaque and
 //   mask materials added (One, One) where the G-buffer kept this surface
 //   (depth Equal; the clip position is @invariant here and in textured.wgsl).
+// - fs_unlit (`forward.unlit`): KHR_materials_unlit surfaces replace the
+//   deferred result where the G-buffer kept them (`unlit_radiance`); BLEND
+//   unlit ones take it in fs_blend.
 // Material sampling follows passes/gbuffer/textured.wgsl.
 #import gbuffer_io
 #import view
@@ -43,6 +46,12 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
     let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
     let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
     let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
+    if (material.alpha.z > 0.5) {
+        let c = unlit_radiance(in.color.rgb * base.rgb, lighting.sun_direction.xyz,
+            lighting.sun_illuminance.rgb, lighting.sky_irradiance);
+        let a = saturate(alpha);
+        return vec4f(c * a, a);
+    }
     var n = normalize(in.normal);
     var tangent = in.tangent;
     if (!front) {
@@ -85,4 +94,17 @@ fn fs_emissive(in: ForwardVertexOut) -> @location(0) vec4f {
         discard;
     }
     return vec4f(material.emissive.rgb * e, 0.0);
+}
+
+// forward.unlit: KHR_materials_unlit opaque and mask surfaces replace what
+// the deferred pass shaded there (blend: colour One, Zero; depth Equal).
+@fragment
+fn fs_unlit(in: ForwardVertexOut) -> @location(0) vec4f {
+    let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
+    if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {
+        discard;
+    }
+    let c = unlit_radiance(in.color.rgb * base.rgb, lighting.sun_direction.xyz,
+        lighting.sun_illuminance.rgb, lighting.sky_irradiance);
+    return vec4f(c, 1.0);
 }

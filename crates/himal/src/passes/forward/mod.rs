@@ -1,7 +1,8 @@
 //! Forward passes after lighting and sky (issue #8, docs/gltf.md):
 //! `forward.emissive` adds the emission of opaque and mask glTF materials
 //! (an additive draw with depth test Equal against the G-buffer depth),
-//! `forward.layers` puts their clearcoat and sheen over the deferred base
+//! `forward.unlit` replaces the deferred result with KHR_materials_unlit
+//! surfaces' base colour ([`reference::unlit_radiance`]), `forward.layers` puts their clearcoat and sheen over the deferred base
 //! (depth Equal, One / OneMinusSrcAlpha: `layers.wgsl`, shading in
 //! `shaders/layers.wgsl`, CPU twin [`reference::layers_shade`]), and
 //! `forward.blend` draws alpha BLEND materials back to front (per object,
@@ -27,6 +28,8 @@ use crate::passes::lighting::HDR_FORMAT;
 pub enum ForwardKind {
     /// `forward.emissive`: emission added where the G-buffer kept the surface.
     Emissive,
+    /// `forward.unlit`: unlit surfaces replace the deferred result.
+    Unlit,
     /// `forward.layers`: clearcoat and sheen over the deferred base.
     Layers,
     /// `forward.blend`: alpha BLEND surfaces, premultiplied over.
@@ -58,6 +61,7 @@ impl ForwardKey {
             .iter()
             .map(|(_, mat, _)| (ForwardKind::Blend, *mat));
         let all = (of(ForwardKind::Emissive, &scene.draws_emissive).into_iter())
+            .chain(of(ForwardKind::Unlit, &scene.draws_unlit))
             .chain(of(ForwardKind::Layers, &scene.draws_layered))
             .chain(blend);
         for (kind, mat) in all {
@@ -182,6 +186,19 @@ impl ForwardPass {
                     "forward.emissive",
                 )
             }
+            ForwardKind::Unlit => {
+                let replace = C {
+                    src_factor: F::One,
+                    dst_factor: F::Zero,
+                    operation: Op::Add,
+                };
+                let state = wgpu::BlendState {
+                    color: replace,
+                    alpha: keep,
+                };
+                let equal = wgpu::CompareFunction::Equal;
+                (&self.program, state, equal, "fs_unlit", "forward.unlit")
+            }
             ForwardKind::Layers => {
                 // out = layers + base (1 - a)
                 let over = C {
@@ -241,7 +258,8 @@ impl ForwardPass {
         self.order = back_to_front(&centres, camera);
     }
 
-    /// Adds `forward.emissive`, `forward.layers` and `forward.blend` (each
+    /// Adds `forward.emissive`, `forward.unlit`, `forward.layers` and
+    /// `forward.blend` (each
     /// only when the scene has such draws) on top of `hdr`; returns the new
     /// HDR version.
     pub fn add<'a>(
@@ -258,6 +276,11 @@ impl ForwardPass {
             let draws: &'a [(Draw, usize)] = &scene.draws_emissive;
             let node = graph.raster("forward.emissive", &self.program);
             hdr = self.add_pass(ctx, node, ForwardKind::Emissive, hdr, depth, draws, inputs);
+        }
+        if !scene.draws_unlit.is_empty() {
+            let draws: &'a [(Draw, usize)] = &scene.draws_unlit;
+            let node = graph.raster("forward.unlit", &self.program);
+            hdr = self.add_pass(ctx, node, ForwardKind::Unlit, hdr, depth, draws, inputs);
         }
         if !scene.draws_layered.is_empty() {
             let draws: &'a [(Draw, usize)] = &scene.draws_layered;

@@ -225,3 +225,16 @@ pub fn layers_shade(m: &Layers, n: Vec3, n_c: Vec3, v: Vec3, light: &LayerLight)
     let s_sheen = 1.0 - m.sheen_color.max_element() * light.sheen_albedo;
     (sheen * s_coat + coat).extend(1.0 - s_sheen * s_coat)
 }
+
+/// KHR_materials_unlit radiance of base colour `base` (linear): as bright
+/// as a white Lambertian surface facing the sun, (E_sun + E_sky(l)) / π,
+/// its Rec. 709 luminance only, so the colour is the material's.
+pub fn unlit_radiance(base: Vec3, light: &ForwardLight) -> Vec3 {
+    let e = light.sun_illuminance
+        + light
+            .sky_irradiance
+            .eval(light.sun_direction)
+            .max(Vec3::ZERO);
+    let luminance = e.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    base * (luminance / PI)
+}

@@ -227,6 +227,9 @@ pub struct PbrMaterial {
     pub sheen_color_texture: Option<TextureRef>,
     /// A × `sheen_roughness`.
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_unlit: the base colour is shown as it is, not lit
+    /// (`forward.unlit`); the other properties are ignored.
+    pub unlit: bool,
 }
 
 impl Default for PbrMaterial {
@@ -260,6 +263,7 @@ impl Default for PbrMaterial {
             sheen_roughness: 0.0,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            unlit: false,
         }
     }
 }
@@ -322,7 +326,12 @@ impl PbrMaterial {
     /// Whether the material has a clearcoat or sheen layer over its base
     /// (drawn by `forward.layers`, passes/forward).
     pub fn layered(&self) -> bool {
-        self.clearcoat > 0.0 || self.sheen_color.max_element() > 0.0
+        !self.unlit && (self.clearcoat > 0.0 || self.sheen_color.max_element() > 0.0)
+    }
+
+    /// Whether the material emits light (`forward.emissive`; unlit ones do not).
+    pub fn emits(&self) -> bool {
+        !self.unlit && self.emissive.max_element() > 0.0
     }
 
     /// Number of texture slots in use.
@@ -560,6 +569,7 @@ pub(super) fn material(
             out.clearcoat_normal_scale = json_f32(cx, CLEARCOAT, n, "scale", 1.0)?;
         }
     }
+    out.unlit = m.extension_value("KHR_materials_unlit").is_some();
     const SHEEN: &str = "KHR_materials_sheen";
     if let Some(sh) = m.extension_value(SHEEN) {
         let colour = match sh.get("sheenColorFactor") {

@@ -590,13 +590,14 @@ fn skinned(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 9] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 10] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_sheen",
+    "KHR_materials_unlit",
     "KHR_materials_variants",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
@@ -930,6 +931,16 @@ fn primitive<'a>(
         Ok(uvs)
     };
     let (uvs, uvs1) = (read_uvs(0)?, read_uvs(1)?);
+    // Later sets are drawn with TEXCOORD_0 (warned at load) but must exist.
+    for t in material.texture_refs().iter().flatten() {
+        if t.tex_coord > 1 && attribute(gltf::Semantic::TexCoords(t.tex_coord)).is_none() {
+            return Err(cx.invalid(format!(
+                "mesh \"{name}\": its material \"{}\" reads TEXCOORD_{}, \
+                 which the primitive does not have",
+                material.name, t.tex_coord
+            )));
+        }
+    }
     let normals: Vec<[f32; 3]> = match attribute(gltf::Semantic::Normals) {
         Some(a) => {
             let mut normals =
