@@ -261,3 +261,27 @@ fn the_frame_draws_the_pose_at_its_time() {
     assert!(same < 1e-3, "GPU pose vs CPU pose: {same}");
     assert!(moved > 5e-3, "the pose changed the image: {moved}");
 }
+
+/// The objects of one rig share its pose per frame: asking again at the
+/// same time reuses it (the rigid path evaluated the whole rig once per
+/// object before), a new time computes one new pose, and the shared pose
+/// is the one `Rig::pose` gives.
+#[test]
+fn a_rigs_pose_is_computed_once_per_time() {
+    let scene = Scene::from_gltf(&common::gltf_sample("Fox")).expect("fox");
+    let fox = animated(&scene)[0];
+    let rig = &fox.rig;
+    let before = rig.poses_computed();
+    let a = fox.joints_at(0.5);
+    let b = fox.joints_at(0.5);
+    assert_eq!(a, b);
+    assert_eq!(
+        rig.poses_computed(),
+        before + 1,
+        "the same time again reuses the pose"
+    );
+    fox.joints_at(0.6);
+    assert_eq!(rig.poses_computed(), before + 2);
+    let (skin, _) = fox.skin.as_ref().expect("skinned");
+    assert_eq!(a, rig.joint_matrices(*skin, &rig.pose(fox.clip, 0.5)));
+}

@@ -692,17 +692,13 @@ impl SceneGpu {
     /// it (`None`: every animated object holds its rest pose), as
     /// [`Scene::set_animation`] does on a scene; nothing is re-uploaded.
     pub fn set_animation(&mut self, name: Option<&str>) {
-        let play = |a: &mut crate::scene::gltf::Animated| match name {
-            None => a.clip = None,
-            Some(n) => a.clip = a.rig.clip(n).or(a.clip),
-        };
         for (_, o) in &mut self.animated {
             if let Some(a) = o.motion.as_mut().and_then(|m| m.animated.as_mut()) {
-                play(a);
+                a.play(name);
             }
         }
         for job in self.skins.iter_mut().flat_map(|s| &mut s.jobs) {
-            play(&mut job.animated);
+            job.animated.play(name);
         }
     }
 

@@ -780,14 +780,7 @@ impl Scene {
             let Some(a) = o.motion.as_mut().and_then(|m| m.animated.as_mut()) else {
                 continue;
             };
-            match name {
-                None => a.clip = None,
-                Some(n) => {
-                    if let Some(c) = a.rig.clip(n) {
-                        a.clip = Some(c);
-                    }
-                }
-            }
+            a.play(name);
             o.transform = o.transform_at(0.0);
         }
         Ok(())

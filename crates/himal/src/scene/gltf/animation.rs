@@ -166,6 +166,38 @@ pub struct Rig {
     pub clips: Vec<Clip>,
     /// Node indices, parents before children.
     order: Vec<usize>,
+    /// The last pose computed: every object of the rig asks for the same
+    /// (clip, time) in a frame, which is then computed once.
+    cache: PoseCache,
+}
+
+/// (clip, time bits, pose).
+type CachedPose = (Option<usize>, u32, Arc<Vec<Mat4>>);
+
+/// The last (clip, time, pose) of a rig. Not part of its value: clones
+/// start empty, and equality ignores it.
+#[derive(Default)]
+struct PoseCache {
+    last: std::sync::Mutex<Option<CachedPose>>,
+    computed: std::sync::atomic::AtomicU64,
+}
+
+impl Clone for PoseCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl PartialEq for PoseCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for PoseCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PoseCache")
+    }
 }
 
 impl Rig {
@@ -213,6 +245,36 @@ impl Rig {
             }
         }
         world
+    }
+
+    /// [`Rig::pose`] through the rig's cache of the last pose: the objects
+    /// of one rig share one evaluation per frame (O(nodes + channels), not
+    /// that per object).
+    pub fn pose_shared(&self, clip: Option<usize>, t: f32) -> Arc<Vec<Mat4>> {
+        let key = (clip, t.to_bits());
+        let mut last = match self.cache.last.lock() {
+            Ok(l) => l,
+            // A panic while holding it left at worst a stale entry: recompute.
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        if let Some((c, bits, pose)) = last.as_ref()
+            && (*c, *bits) == key
+        {
+            return pose.clone();
+        }
+        let pose = Arc::new(self.pose(clip, t));
+        self.cache
+            .computed
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        *last = Some((clip, key.1, pose.clone()));
+        pose
+    }
+
+    /// How many poses [`Rig::pose_shared`] computed (tests: once per time).
+    pub fn poses_computed(&self) -> u64 {
+        self.cache
+            .computed
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Joint matrices of skin `skin` in pose `pose` ([`Rig::pose`]):
@@ -301,6 +363,15 @@ pub struct Animated {
 }
 
 impl Animated {
+    /// Plays clip `name` (`None`: the rest pose). A rig without that clip
+    /// keeps playing its own (scenes mixing files: each plays what it has).
+    pub fn play(&mut self, name: Option<&str>) {
+        match name {
+            None => self.clip = None,
+            Some(n) => self.clip = self.rig.clip(n).or(self.clip),
+        }
+    }
+
     /// File-space transform of the object at `t`: its node's world
     /// transform; identity for skinned meshes (glTF: a skinned mesh's node
     /// transform is ignored, the joints place it).
@@ -308,14 +379,14 @@ impl Animated {
         if self.skin.is_some() {
             return Mat4::IDENTITY;
         }
-        self.rig.pose(self.clip, t)[self.node]
+        self.rig.pose_shared(self.clip, t)[self.node]
     }
 
     /// Joint matrices at `t` (skinned objects; empty otherwise).
     pub fn joints_at(&self, t: f32) -> Vec<Mat4> {
         match &self.skin {
             Some((skin, _)) => {
-                let pose = self.rig.pose(self.clip, t);
+                let pose = self.rig.pose_shared(self.clip, t);
                 self.rig.joint_matrices(*skin, &pose)
             }
             None => Vec::new(),
@@ -496,6 +567,7 @@ pub(super) fn read_rig(
         skins,
         clips,
         order,
+        cache: PoseCache::default(),
     }))
 }
 

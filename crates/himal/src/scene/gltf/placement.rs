@@ -145,7 +145,7 @@ fn play(
                 clips.push(c.name.clone());
             }
         }
-        a.clip = wanted.and_then(|w| a.rig.clip(w));
+        a.play(wanted);
         o.transform = o.transform_at(0.0);
     }
     match wanted {
