@@ -572,3 +572,25 @@ fn clearcoat_sheen_and_second_uv_sets_load() {
         .fold(0.0f32, f32::max);
     assert!((uv1_max - 0.25).abs() < 1e-6, "{uv1_max}");
 }
+
+/// KHR_materials_ior: the dielectric F0 ((n − 1)/(n + 1))² is himal's
+/// reflectance (1/9 at ior 2; 0.04 at the default 1.5); an ior below 1 is
+/// an error naming the material.
+#[test]
+fn ior_sets_the_dielectric_reflectance() {
+    let material = r#"{"name":"glass","pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_ior":{"ior":2.0}}}"#;
+    let path = common::cube_gltf("ior2", "", material);
+    let a = gltf::load(&path).expect("loads");
+    let r = a.meshes[0].vertices[0].surface[1];
+    assert!((r - 1.0 / 9.0).abs() < 1e-6, "{r}");
+    let default = common::cube_gltf("ior_default", "", r#"{"pbrMetallicRoughness":{}}"#);
+    let a = gltf::load(&default).expect("loads");
+    assert_eq!(a.meshes[0].vertices[0].surface[1], gltf::GLTF_DIELECTRIC_F0);
+    let bad = common::cube_gltf(
+        "ior_low",
+        "",
+        r#"{"name":"odd","extensions":{"KHR_materials_ior":{"ior":0.5}}}"#,
+    );
+    let e = gltf::load(&bad).expect_err("ior 0.5").to_string();
+    assert!(e.contains("odd") && e.contains("ior 0.5"), "{e}");
+}

@@ -230,6 +230,8 @@ pub struct PbrMaterial {
     /// KHR_materials_unlit: the base colour is shown as it is, not lit
     /// (`forward.unlit`); the other properties are ignored.
     pub unlit: bool,
+    /// KHR_materials_ior: the dielectric's index of refraction (1.5).
+    pub ior: f32,
 }
 
 impl Default for PbrMaterial {
@@ -264,6 +266,7 @@ impl Default for PbrMaterial {
             sheen_color_texture: None,
             sheen_roughness_texture: None,
             unlit: false,
+            ior: 1.5,
         }
     }
 }
@@ -279,11 +282,22 @@ impl PbrMaterial {
         [self.base_color.x, self.base_color.y, self.base_color.z, 1.0]
     }
 
+    /// Dielectric reflectance F0 = ((ior − 1) / (ior + 1))² (0.04 at the
+    /// default 1.5): himal's M1 reflectance *is* F0, so this is exact.
+    pub fn reflectance(&self) -> f32 {
+        if self.ior == 1.5 {
+            // The same bits as before the extension for every default material.
+            return GLTF_DIELECTRIC_F0;
+        }
+        let n = self.ior.max(1.0);
+        ((n - 1.0) / (n + 1.0)).powi(2)
+    }
+
     /// `Vertex::surface`: glossiness, reflectance, metallic, anisotropy strength.
     pub fn vertex_surface(&self) -> [f32; 4] {
         [
             self.glossiness(),
-            GLTF_DIELECTRIC_F0,
+            self.reflectance(),
             self.metallic,
             self.anisotropy_strength,
         ]
@@ -570,6 +584,17 @@ pub(super) fn material(
         }
     }
     out.unlit = m.extension_value("KHR_materials_unlit").is_some();
+    const IOR: &str = "KHR_materials_ior";
+    if let Some(i) = m.extension_value(IOR) {
+        let ior = json_f32(cx, IOR, i, "ior", 1.5)?;
+        if ior < 1.0 {
+            return Err(cx.invalid(format!(
+                "material \"{}\": {IOR} ior {ior} is below 1",
+                out.name
+            )));
+        }
+        out.ior = ior;
+    }
     const SHEEN: &str = "KHR_materials_sheen";
     if let Some(sh) = m.extension_value(SHEEN) {
         let colour = match sh.get("sheenColorFactor") {

@@ -590,12 +590,13 @@ fn skinned(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 10] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 11] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
     "KHR_materials_sheen",
     "KHR_materials_unlit",
     "KHR_materials_variants",
