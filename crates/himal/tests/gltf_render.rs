@@ -256,16 +256,7 @@ fn vertex_colours_make_the_test_row_match_the_sample_row() {
 fn emissive_strength_doubles_from_cube_to_cube() {
     let mut scene = Scene::from_gltf(&common::gltf_sample("EmissiveStrengthTest")).expect("model");
     let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 0.0, 0.0, None, 40.0);
-    let mut settings = FrameSettings::new(256, 256, scene.sun.clone());
-    settings.view = "lighting".parse().expect("view");
-    settings.raw = true;
-    let hdr = |scene: &Scene| {
-        let img = common::renderer(scene)
-            .render(&camera, &settings)
-            .expect("frame")
-            .image;
-        img.to_rgba_f32().expect("rgba")
-    };
+    let hdr = |scene: &Scene| common::raw_views(scene, &camera, 256, &["lighting"]).remove(0);
     let lit = hdr(&scene);
     for m in &mut scene.pbr.materials {
         m.emissive = glam::Vec3::ZERO;
@@ -329,15 +320,7 @@ fn the_second_uv_set_maps_the_emissive_texture() {
     let mut scene = Scene::from_gltf(&path).expect("model");
     let size = 160u32;
     let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 35.0, 20.0, None, 40.0);
-    let mut settings = FrameSettings::new(size, size, scene.sun.clone());
-    settings.view = "lighting".parse().expect("view");
-    settings.raw = true;
-    let hdr = |scene: &Scene| {
-        let img = (common::renderer(scene).render(&camera, &settings))
-            .expect("frame")
-            .image;
-        img.to_rgba_f32().expect("rgba")
-    };
+    let hdr = |scene: &Scene| common::raw_views(scene, &camera, size, &["lighting"]).remove(0);
     let lit = hdr(&scene);
     for m in &mut scene.pbr.materials {
         m.emissive = glam::Vec3::ZERO;

@@ -84,3 +84,26 @@ fn gltf_world_tangent(o: Object, world_tangent: vec3f, w: f32) -> vec4f {
     let det = determinant(mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz));
     return vec4f(world_tangent, w * sign(det));
 }
+
+// The interpolated normal and tangent as the visible side sees them:
+// double-sided back faces flip the normal (glTF) and the tangent frame
+// mirrors with it.
+struct GltfFacing {
+    n: vec3f,
+    tangent: vec4f,
+}
+
+fn gltf_facing(normal: vec3f, tangent: vec4f, front: bool) -> GltfFacing {
+    var f = GltfFacing(normalize(normal), tangent);
+    if (!front) {
+        f.n = -f.n;
+        f.tangent.w = -f.tangent.w;
+    }
+    return f;
+}
+
+// A normal texture's tangent-space sample (in [-1, 1]) with its `scale`
+// on x and y, renormalised (z kept positive).
+fn gltf_scaled_normal(ts: vec3f, scale: f32) -> vec3f {
+    return normalize(vec3f(ts.xy * scale, max(ts.z, 1e-4)));
+}

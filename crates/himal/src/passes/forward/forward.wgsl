@@ -52,14 +52,9 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
         let a = saturate(alpha);
         return vec4f(c * a, a);
     }
-    var n = normalize(in.normal);
-    var tangent = in.tangent;
-    if (!front) {
-        n = -n;
-        tangent.w = -tangent.w;
-    }
-    let scaled = normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4)));
-    let n_mapped = apply_normal_map(n, tangent, scaled);
+    let facing = gltf_facing(in.normal, in.tangent, front);
+    let tangent = facing.tangent;
+    let n_mapped = apply_normal_map(facing.n, tangent, gltf_scaled_normal(ts, material.params.x));
     let c = cos(material.params.w);
     let s = sin(material.params.w);
     let d0 = at.xy * 2.0 - 1.0;

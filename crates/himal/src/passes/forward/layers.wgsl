@@ -54,16 +54,11 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {
         discard;
     }
-    var n = normalize(in.normal);
-    var tangent = in.tangent;
-    if (!front) {
-        n = -n;
-        tangent.w = -tangent.w;
-    }
+    let f = gltf_facing(in.normal, in.tangent, front);
     // The base's normal map for the sheen; the coat's own (flat by default:
     // the geometric normal) for the coat.
-    let n_base = apply_normal_map(n, tangent, normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4))));
-    let n_coat = apply_normal_map(n, tangent, normalize(vec3f(ccn.xy * material.clearcoat.z, max(ccn.z, 1e-4))));
+    let n_base = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ts, material.params.x));
+    let n_coat = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ccn, material.clearcoat.z));
     let m = Layers(material.sheen.rgb * sc, saturate(material.sheen.a * sr),
         saturate(material.clearcoat.x * cc), saturate(material.clearcoat.y * ccr));
 

@@ -159,65 +159,56 @@ impl ForwardPass {
         ctx: &GpuContext,
         key: ForwardKey,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        use wgpu::{BlendComponent as C, BlendFactor as F, BlendOperation as Op};
-        // The HDR alpha is kept by the draws over opaque surfaces.
-        let keep = C {
-            src_factor: F::Zero,
-            dst_factor: F::One,
-            operation: Op::Add,
+        use wgpu::{BlendFactor as F, CompareFunction as Z};
+        // Colour src_factor * src + dst_factor * dst; the HDR alpha kept.
+        let keep_alpha = |src_factor, dst_factor| wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor,
+                dst_factor,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: F::Zero,
+                dst_factor: F::One,
+                operation: wgpu::BlendOperation::Add,
+            },
         };
         let (program, blend, compare, entry, label) = match key.kind {
             ForwardKind::Emissive => {
-                let add = C {
-                    src_factor: F::One,
-                    dst_factor: F::One,
-                    operation: Op::Add,
-                };
-                let state = wgpu::BlendState {
-                    color: add,
-                    alpha: keep,
-                };
-                let equal = wgpu::CompareFunction::Equal;
+                let add = keep_alpha(F::One, F::One);
                 (
                     &self.program,
-                    state,
-                    equal,
+                    add,
+                    Z::Equal,
                     "fs_emissive",
                     "forward.emissive",
                 )
             }
             ForwardKind::Unlit => {
-                let replace = C {
-                    src_factor: F::One,
-                    dst_factor: F::Zero,
-                    operation: Op::Add,
-                };
-                let state = wgpu::BlendState {
-                    color: replace,
-                    alpha: keep,
-                };
-                let equal = wgpu::CompareFunction::Equal;
-                (&self.program, state, equal, "fs_unlit", "forward.unlit")
+                let replace = keep_alpha(F::One, F::Zero);
+                (
+                    &self.program,
+                    replace,
+                    Z::Equal,
+                    "fs_unlit",
+                    "forward.unlit",
+                )
             }
             ForwardKind::Layers => {
                 // out = layers + base (1 - a)
-                let over = C {
-                    src_factor: F::One,
-                    dst_factor: F::OneMinusSrcAlpha,
-                    operation: Op::Add,
-                };
-                let state = wgpu::BlendState {
-                    color: over,
-                    alpha: keep,
-                };
-                let equal = wgpu::CompareFunction::Equal;
-                (&self.layers, state, equal, "fs_layers", "forward.layers")
+                let over = keep_alpha(F::One, F::OneMinusSrcAlpha);
+                (&self.layers, over, Z::Equal, "fs_layers", "forward.layers")
             }
             ForwardKind::Blend => {
                 let state = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
                 // reverse-Z: nearer is larger
-                let nearer = wgpu::CompareFunction::Greater;
-                (&self.program, state, nearer, "fs_blend", "forward.blend")
+                (
+                    &self.program,
+                    state,
+                    Z::Greater,
+                    "fs_blend",
+                    "forward.blend",
+                )
             }
         };
         let targets = [Some(wgpu::ColorTargetState {

@@ -65,16 +65,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
         discard;
     }
-    var n = normalize(in.normal);
-    var tangent = in.tangent;
-    if (!front) {
-        // Double-sided back faces: the glTF rule flips the normal; the
-        // tangent frame mirrors with it.
-        n = -n;
-        tangent.w = -tangent.w;
-    }
-    let scaled = normalize(vec3f(ts.xy * material.params.x, max(ts.z, 1e-4)));
-    let n_mapped = apply_normal_map(n, tangent, scaled);
+    let facing = gltf_facing(in.normal, in.tangent, front);
+    let tangent = facing.tangent;
+    let n_mapped = apply_normal_map(facing.n, tangent, gltf_scaled_normal(ts, material.params.x));
     // Anisotropy direction in the tangent plane: texture rg (default +t),
     // rotated by anisotropyRotation, bitangent = cross(n, t) * w (glTF).
     let c = cos(material.params.w);
