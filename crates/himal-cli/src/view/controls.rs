@@ -86,12 +86,10 @@ impl Viewer {
                 };
             }
             KeyCode::Digit9 => {
-                s.tonemapper = s.tonemapper.next();
-                // The white point is Reinhard's: kept for it, dropped for the others.
-                s.white_point = (s.tonemapper == himal::passes::post::Tonemapper::Reinhard)
-                    .then_some(self.args.post.white_point)
-                    .flatten();
+                let next = s.tonemapper.next();
+                self.set_tonemapper(next);
             }
+            KeyCode::Tab => self.panel_shown = !self.panel_shown,
             KeyCode::Space => self.playing = !self.playing,
             KeyCode::BracketLeft | KeyCode::BracketRight => {
                 let step = if key == KeyCode::BracketLeft {
@@ -104,15 +102,11 @@ impl Viewer {
             }
             KeyCode::KeyN if !self.animations.is_empty() => {
                 // The clips in order, then the rest pose, then round again.
-                self.clip = match self.clip {
+                self.set_clip(match self.clip {
                     Some(c) if c + 1 < self.animations.len() => Some(c + 1),
                     Some(_) => None,
                     None => Some(0),
-                };
-                let name = self.clip.map(|c| self.animations[c].clone());
-                // Known names: the scene's own list.
-                self.scene.set_animation(name.as_deref()).ok();
-                self.renderer.set_animation(name.as_deref());
+                })
             }
             KeyCode::KeyP | KeyCode::F12 => self.screenshot = true,
             KeyCode::KeyH => self.hud = !self.hud,
@@ -129,6 +123,25 @@ impl Viewer {
             }
             _ => {}
         }
+    }
+
+    /// Tone mapper `t` (key 9, the panel's combo).
+    pub(super) fn set_tonemapper(&mut self, t: himal::passes::post::Tonemapper) {
+        let s = &mut self.settings;
+        s.tonemapper = t;
+        // The white point is Reinhard's: kept for it, dropped for the others.
+        s.white_point = (t == himal::passes::post::Tonemapper::Reinhard)
+            .then_some(self.args.post.white_point)
+            .flatten();
+    }
+
+    /// Plays clip `clip` of `self.animations` (`None`: the rest pose).
+    pub(super) fn set_clip(&mut self, clip: Option<usize>) {
+        self.clip = clip.filter(|&c| c < self.animations.len());
+        let name = self.clip.map(|c| self.animations[c].clone());
+        // Known names: the scene's own list.
+        self.scene.set_animation(name.as_deref()).ok();
+        self.renderer.set_animation(name.as_deref());
     }
 
     pub(super) fn step_camera(&mut self, dt: f32) {
@@ -165,7 +178,7 @@ impl Viewer {
 pub(super) const STEP_S: f32 = 1.0 / 30.0;
 
 /// The keys a script may press ($HIMAL_VIEW_KEYS), by winit's names.
-const SCRIPT_KEYS: [(&str, KeyCode); 22] = [
+const SCRIPT_KEYS: [(&str, KeyCode); 23] = [
     ("Space", KeyCode::Space),
     ("BracketLeft", KeyCode::BracketLeft),
     ("BracketRight", KeyCode::BracketRight),
@@ -188,28 +201,62 @@ const SCRIPT_KEYS: [(&str, KeyCode); 22] = [
     ("Digit7", KeyCode::Digit7),
     ("Digit8", KeyCode::Digit8),
     ("Digit9", KeyCode::Digit9),
+    ("Tab", KeyCode::Tab),
 ];
 
-/// `FRAME:KEY[,FRAME:KEY...]` (e.g. `0:Space,1:BracketRight`): keys pressed
-/// before those frames.
-pub(super) fn parse_script(text: &str) -> anyhow::Result<Vec<(u32, KeyCode)>> {
+/// One scripted input ($HIMAL_VIEW_KEYS).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Scripted {
+    /// A key press, through the keys' path (`Viewer::toggle`).
+    Key(KeyCode),
+    /// The pointer moved to (x, y) (window pixels) and the left button went
+    /// down; it goes up before the next frame's `Release`.
+    Press(f64, f64),
+    /// The left button went up.
+    Release,
+    /// The pointer moved to (x, y).
+    Move(f64, f64),
+}
+
+/// `FRAME:KEY`, `FRAME:click:X:Y` or `FRAME:move:X:Y`, comma-separated
+/// (e.g. `0:Tab,2:click:400:30`): inputs before those frames. A click
+/// presses the left button at window pixel (X, Y) before FRAME and releases
+/// it before FRAME + 1, as winit would report a real one.
+pub(super) fn parse_script(text: &str) -> anyhow::Result<Vec<(u32, Scripted)>> {
     let names = || SCRIPT_KEYS.map(|(n, _)| n).join(", ");
-    (text.split(',').map(str::trim).filter(|e| !e.is_empty()))
-        .map(|entry| {
-            let (frame, key) = entry
-                .split_once(':')
-                .ok_or_else(|| anyhow::anyhow!("HIMAL_VIEW_KEYS: \"{entry}\" is not FRAME:KEY"))?;
-            let frame = frame.parse::<u32>().map_err(|_| {
-                anyhow::anyhow!("HIMAL_VIEW_KEYS: \"{entry}\": {frame} is not a frame number")
+    let mut script = Vec::new();
+    for entry in text.split(',').map(str::trim).filter(|e| !e.is_empty()) {
+        let bad = |why: String| anyhow::anyhow!("HIMAL_VIEW_KEYS: \"{entry}\": {why}");
+        let (frame, what) = entry
+            .split_once(':')
+            .ok_or_else(|| bad("not FRAME:KEY or FRAME:click:X:Y".into()))?;
+        let frame = frame
+            .parse::<u32>()
+            .map_err(|_| bad(format!("{frame} is not a frame number")))?;
+        let pointer = (what.strip_prefix("click:").map(|at| (at, true)))
+            .or_else(|| what.strip_prefix("move:").map(|at| (at, false)));
+        if let Some((at, click)) = pointer {
+            let xy = at.split_once(':').and_then(|(x, y)| {
+                let (x, y) = (x.parse::<f64>().ok()?, y.parse::<f64>().ok()?);
+                (x.is_finite() && y.is_finite()).then_some((x, y))
+            });
+            let (x, y) = xy.ok_or_else(|| bad(format!("\"{at}\" is not X:Y (pixels)")))?;
+            if click {
+                script.push((frame, Scripted::Press(x, y)));
+                script.push((frame + 1, Scripted::Release));
+            } else {
+                script.push((frame, Scripted::Move(x, y)));
+            }
+            continue;
+        }
+        let key = (SCRIPT_KEYS.iter().find(|(n, _)| *n == what))
+            .map(|(_, k)| *k)
+            .ok_or_else(|| {
+                anyhow::anyhow!("HIMAL_VIEW_KEYS: no key \"{what}\" (keys: {})", names())
             })?;
-            let key = (SCRIPT_KEYS.iter().find(|(n, _)| *n == key))
-                .map(|(_, k)| *k)
-                .ok_or_else(|| {
-                    anyhow::anyhow!("HIMAL_VIEW_KEYS: no key \"{key}\" (keys: {})", names())
-                })?;
-            Ok((frame, key))
-        })
-        .collect()
+        script.push((frame, Scripted::Key(key)));
+    }
+    Ok(script)
 }
 
 #[cfg(test)]
@@ -217,18 +264,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn key_scripts_name_frames_and_keys() {
-        let keys = parse_script("0:Space, 2:BracketRight,2:KeyN").unwrap();
+    fn key_scripts_name_frames_keys_and_clicks() {
+        let keys = parse_script("0:Space, 2:BracketRight,2:KeyN,3:Tab").unwrap();
         assert_eq!(
             keys,
             [
-                (0, KeyCode::Space),
-                (2, KeyCode::BracketRight),
-                (2, KeyCode::KeyN)
+                (0, Scripted::Key(KeyCode::Space)),
+                (2, Scripted::Key(KeyCode::BracketRight)),
+                (2, Scripted::Key(KeyCode::KeyN)),
+                (3, Scripted::Key(KeyCode::Tab)),
             ]
         );
-        let e = parse_script("1:Tab").unwrap_err().to_string();
-        assert!(e.contains("no key \"Tab\"") && e.contains("Space"), "{e}");
+        let clicks = parse_script("1:click:400:30.5,3:move:2:3").unwrap();
+        assert_eq!(
+            clicks,
+            [
+                (1, Scripted::Press(400.0, 30.5)),
+                (2, Scripted::Release),
+                (3, Scripted::Move(2.0, 3.0))
+            ]
+        );
+        let e = parse_script("1:KeyZ").unwrap_err().to_string();
+        assert!(e.contains("no key \"KeyZ\"") && e.contains("Space"), "{e}");
+        let e = parse_script("1:click:4").unwrap_err().to_string();
+        assert!(e.contains("\"1:click:4\"") && e.contains("X:Y"), "{e}");
         assert!(parse_script("x:Space").is_err() && parse_script("Space").is_err());
+        assert!(parse_script("1:click:nan:2").is_err());
     }
 }

@@ -119,25 +119,37 @@ impl Viewer {
         if timings.is_empty() {
             lines.push("no GPU timestamps on this adapter".into());
         }
-        // One row per pass group (the id before the first '.'), in frame order:
-        // a full list of steps does not fit a small window.
-        let mut groups: Vec<(String, f64)> = Vec::new();
-        for t in timings {
-            let group = t.id.split('.').next().unwrap_or(&t.id);
-            match groups.iter_mut().find(|(g, _)| g == group) {
-                Some((_, ms)) => *ms += t.gpu_ms,
-                None => groups.push((group.to_string(), t.gpu_ms)),
-            }
+        if let Some(notice) = &self.notice {
+            // The HUD is one bitmap line: the start of the message.
+            lines.push(notice.chars().take(NOTICE_CHARS).collect());
         }
         Hud {
             lines,
-            timings: groups,
+            timings: timing_groups(timings),
         }
     }
 }
 
+/// The GPU time of each pass group (the id before the first '.'), in frame
+/// order: a full list of steps does not fit a small window. The HUD and the
+/// panel show these.
+pub(super) fn timing_groups(timings: &[himal::graph::PassTiming]) -> Vec<(String, f64)> {
+    let mut groups: Vec<(String, f64)> = Vec::new();
+    for t in timings {
+        let group = t.id.split('.').next().unwrap_or(&t.id);
+        match groups.iter_mut().find(|(g, _)| g == group) {
+            Some((_, ms)) => *ms += t.gpu_ms,
+            None => groups.push((group.to_string(), t.gpu_ms)),
+        }
+    }
+    groups
+}
+
+/// The longest notice (an error) the HUD shows; the panel shows it whole.
+const NOTICE_CHARS: usize = 72;
+
 /// The `--view` name of `v`.
-fn view_name(v: ViewBuffer) -> &'static str {
+pub(super) fn view_name(v: ViewBuffer) -> &'static str {
     ViewBuffer::NAMES
         .iter()
         .find(|n| n.parse::<ViewBuffer>().ok() == Some(v))

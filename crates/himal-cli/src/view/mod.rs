@@ -2,8 +2,9 @@
 //! rendered by the same `Renderer` as `himal render` and presented through a
 //! wgpu swapchain (`himal::present`: no read-back), or through the CPU
 //! (softbuffer) where the adapter cannot present to the window. A HUD with
-//! the state and per-pass GPU times is blended over the frame. Keys are
-//! listed in [`HELP`].
+//! the state and per-pass GPU times is blended over the frame; Tab opens a
+//! settings panel (egui, `panel.rs`) in its place. Keys are listed in
+//! [`HELP`].
 
 use std::num::NonZeroU32;
 use std::sync::Arc;
@@ -25,17 +26,21 @@ use crate::render::RenderArgs;
 
 mod controls;
 mod hud;
+mod panel;
 mod x11;
 
-use controls::Held;
+use controls::{Held, Scripted};
 use hud::{FrameRate, sim_step};
+use panel::Panel;
 use x11::check_x11_libraries;
 
 pub const HELP: &str = "Orbit (models): left drag turn, middle drag pan, wheel zoom, F frame, O fly; \
 fly: WASD move, Q/E down/up, Shift fast, right mouse drag look, O orbit; \
 T/G time +-30 min, V next view, 1 AO, 2 bloom, 3 shadows, 4 AA mode, 5 env specular, 6 sky occlusion, \
 7 TAA on AO and motion, 8 sky model, 9 tone mapper, -/= exposure, B studio/sky light, \
-Space play/pause, [ ] step 1/30 s, N next animation, F fly the world's path (worlds), H HUD, P screenshot, Esc quit";
+Space play/pause, [ ] step 1/30 s, N next animation, F fly the world's path (worlds), H HUD, \
+Tab settings panel (in place of the HUD; the camera ignores input the panel takes), \
+drop a .gltf/.glb on the window to open it, P screenshot, Esc quit";
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -90,9 +95,10 @@ struct Viewer {
     /// Test hook ($HIMAL_VIEW_OPEN_AT=FRAME:FILE): open FILE before that
     /// frame as a dropped file would be.
     open_at: Option<(u32, std::path::PathBuf)>,
-    /// Test hook ($HIMAL_VIEW_KEYS=FRAME:KEY,...): keys pressed before
-    /// those frames, through the same path as the keyboard's.
-    scripted_keys: Vec<(u32, KeyCode)>,
+    /// Test hook ($HIMAL_VIEW_KEYS=FRAME:KEY,FRAME:click:X:Y,...): keys
+    /// pressed before those frames, through the same path as the
+    /// keyboard's, and clicks, as winit's window events.
+    script: Vec<(u32, Scripted)>,
     /// The animation clock runs (Space pauses; [ and ] step it).
     playing: bool,
     /// The scene's glTF animations and the one playing (`None`: rest pose).
@@ -109,6 +115,14 @@ struct Viewer {
     window_out: Option<std::path::PathBuf>,
     window: Option<(Arc<Window>, Presentation)>,
     hud: bool,
+    /// The settings panel (on the window's device), and whether Tab showed it.
+    panel: Option<Panel>,
+    panel_shown: bool,
+    /// The last frame's GPU pass times (the panel's table).
+    timings: Vec<himal::graph::PassTiming>,
+    /// The last problem the user should see (a dropped file that did not
+    /// open), in the HUD and the panel.
+    notice: Option<String>,
     held: Held,
     last: Instant,
     frames: u32,
@@ -165,6 +179,8 @@ impl Viewer {
         self.renderer = renderer;
         if let Some(window) = window {
             let presentation = self.presentation(&window)?;
+            // egui's textures lived on the old device: a new panel uploads them again.
+            self.panel = Some(Panel::new(self.renderer.context(), &window));
             self.window = Some((window, presentation));
         }
         Ok(())
@@ -177,10 +193,13 @@ impl Viewer {
         let mut scene = match himal::scene::Scene::from_gltf(path) {
             Ok(s) => s,
             Err(e) => {
-                eprintln!("error: {e} (keeping the current scene)");
+                let message = format!("cannot open {}: {e}", path.display());
+                eprintln!("error: {message} (keeping the current scene)");
+                self.notice = Some(message);
                 return Ok(());
             }
         };
+        self.notice = None;
         crate::render::apply_environment(&self.args, &mut scene, true);
         // --gltf's field of view, not the previous scene camera's.
         self.camera.fov_y_deg = self.args.fov.unwrap_or(40.0);
@@ -210,13 +229,13 @@ impl Viewer {
             self.open_model(&path)?;
         }
         let frame = self.frames;
-        let pressed: Vec<KeyCode> = (self.scripted_keys.iter())
+        let inputs: Vec<Scripted> = (self.script.iter())
             .filter(|(at, _)| *at == frame)
             .map(|(_, k)| *k)
             .collect();
-        if !pressed.is_empty() {
-            for key in pressed {
-                self.toggle(key);
+        if !inputs.is_empty() {
+            for input in inputs {
+                self.scripted(event_loop, input);
             }
             // This frame's camera follows the keys, as after a real press.
             self.step_camera(0.0);
@@ -224,6 +243,8 @@ impl Viewer {
         if std::mem::take(&mut self.rebuild_pending) {
             self.rebuild()?;
         }
+        // After the rebuild: the panel it makes holds this frame's UI.
+        self.run_panel();
         let Some((window, _)) = &self.window else {
             return Ok(());
         };
@@ -254,14 +275,21 @@ impl Viewer {
             self.camera = path.camera_at(self.path_t, self.camera.fov_y_deg);
         }
         let drawn = self.renderer.draw(&self.camera, &settings)?;
-        let overlay = self
-            .hud
+        // The panel holds the HUD's numbers: one of the two at a time.
+        let overlay = (self.hud && !self.panel_shown)
             .then(|| Overlay::hud(&self.hud_text(&settings, &drawn.timings, drawn.world.as_ref())));
         let overlay = overlay.as_ref().map(|o| (o, [8, 8]));
+        self.timings = drawn.timings;
         let frame = self
             .renderer
             .output(&settings)
             .context("the renderer wrote no output")?;
+        // What the window shows: the frame, with the panel drawn into a copy.
+        let shown = match (&mut self.panel, self.panel_shown) {
+            (Some(panel), true) => panel.paint(self.renderer.context(), frame)?,
+            _ => None,
+        }
+        .unwrap_or(frame);
         let last = self.args.frames > 1 && self.frames + 1 >= self.args.frames;
         let window_out = self.window_out.as_ref().filter(|_| last);
         let Some((window, presentation)) = &mut self.window else {
@@ -292,7 +320,7 @@ impl Viewer {
                     }
                 };
                 let view = texture.texture.create_view(&Default::default());
-                presenter.present(ctx, frame, overlay, &view, config.format)?;
+                presenter.present(ctx, shown, overlay, &view, config.format)?;
                 if let Some(path) = window_out {
                     let shown = himal::gpu::read_texture(ctx, &texture.texture, 0, 0)?;
                     himal::image_io::save(path, &shown)?;
@@ -301,7 +329,7 @@ impl Viewer {
                 ctx.queue.present(texture);
             }
             Presentation::Cpu(surface) => {
-                let image = himal::gpu::read_texture(self.renderer.context(), frame, 0, 0)?;
+                let image = himal::gpu::read_texture(self.renderer.context(), shown, 0, 0)?;
                 let mut rgba: Vec<[u8; 4]> = bytemuck_rgba(&image.bytes);
                 if let Some((o, origin)) = overlay {
                     rgba = himal::present::reference::compose(&rgba, w, o, origin);
@@ -350,6 +378,35 @@ impl Viewer {
             event_loop.exit();
         }
         Ok(())
+    }
+
+    /// One scripted input: a key through the keys' path, a click as the
+    /// window events winit reports for one.
+    fn scripted(&mut self, event_loop: &ActiveEventLoop, input: Scripted) {
+        let Some(id) = self.window.as_ref().map(|(w, _)| w.id()) else {
+            return;
+        };
+        let device_id = winit::event::DeviceId::dummy();
+        let button = |state| WindowEvent::MouseInput {
+            device_id,
+            state,
+            button: MouseButton::Left,
+        };
+        match input {
+            Scripted::Key(key) => self.toggle(key),
+            Scripted::Press(x, y) | Scripted::Move(x, y) => {
+                let position = winit::dpi::PhysicalPosition::new(x, y);
+                let moved = WindowEvent::CursorMoved {
+                    device_id,
+                    position,
+                };
+                self.window_event(event_loop, id, moved);
+                if matches!(input, Scripted::Press(..)) {
+                    self.window_event(event_loop, id, button(ElementState::Pressed));
+                }
+            }
+            Scripted::Release => self.window_event(event_loop, id, button(ElementState::Released)),
+        }
     }
 
     /// The swapchain for `window` when the adapter can present to it.
@@ -462,6 +519,7 @@ impl ApplicationHandler for Viewer {
         match made {
             Ok(window) => {
                 window.0.request_redraw();
+                self.panel = Some(Panel::new(self.renderer.context(), &window.0));
                 self.window = Some(window);
             }
             Err(e) => {
@@ -472,6 +530,20 @@ impl ApplicationHandler for Viewer {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        // The panel sees the window's input first; what it takes the camera does not.
+        let taken = match (&mut self.panel, &self.window) {
+            (Some(panel), Some((window, _))) if self.panel_shown => {
+                let consumed = panel.on_window_event(window, &event);
+                match &event {
+                    WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. } => {
+                        consumed || panel.wants_pointer()
+                    }
+                    WindowEvent::KeyboardInput { .. } => panel.wants_keyboard(),
+                    _ => false,
+                }
+            }
+            _ => false,
+        };
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::DroppedFile(path) => {
@@ -489,6 +561,10 @@ impl ApplicationHandler for Viewer {
             }
             WindowEvent::MouseInput { state, button, .. } => {
                 let down = state == ElementState::Pressed;
+                // A release always lets go, wherever the press went.
+                if down && taken {
+                    return;
+                }
                 match button {
                     MouseButton::Right => self.held.looking = down,
                     MouseButton::Left => self.held.orbiting = down,
@@ -496,6 +572,7 @@ impl ApplicationHandler for Viewer {
                     _ => {}
                 }
             }
+            WindowEvent::MouseWheel { .. } if taken => {}
             WindowEvent::MouseWheel { delta, .. } => {
                 let steps = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y,
@@ -510,6 +587,10 @@ impl ApplicationHandler for Viewer {
                     return;
                 };
                 let down = event.state == ElementState::Pressed;
+                // Tab is the panel's own key; other presses go to a focused widget.
+                if down && taken && code != KeyCode::Tab {
+                    return;
+                }
                 let v = if down { 1.0 } else { 0.0 };
                 match code {
                     KeyCode::Escape if down => event_loop.exit(),
@@ -610,7 +691,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         }
         Err(_) => None,
     };
-    let scripted_keys = match std::env::var("HIMAL_VIEW_KEYS") {
+    let script = match std::env::var("HIMAL_VIEW_KEYS") {
         Ok(v) => controls::parse_script(&v)?,
         Err(_) => Vec::new(),
     };
@@ -621,7 +702,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         None => (!animations.is_empty()).then_some(0),
     };
     let mut viewer = Viewer {
-        scripted_keys,
+        script,
         playing: true,
         animations,
         clip,
@@ -639,6 +720,10 @@ pub fn run(view: &ViewArgs) -> Result<()> {
         window_out: view.window_out.clone(),
         window: None,
         hud: !view.no_hud,
+        panel: None,
+        panel_shown: false,
+        timings: Vec::new(),
+        notice: None,
         held: Held::default(),
         last: Instant::now(),
         frames: 0,
