@@ -170,7 +170,7 @@ fn geometry(t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) -> Option<Geometry> {
     })
 }
 
-fn specular_of(s: &Surface, g: &Geometry) -> Vec3 {
+fn specular_of(s: &Surface, f90: f32, g: &Geometry) -> Vec3 {
     // Back-facing microfacets (only when v is below the horizon) carry no D.
     if g.n_o_h <= 0.0 {
         return Vec3::ZERO;
@@ -179,29 +179,48 @@ fn specular_of(s: &Surface, g: &Geometry) -> Vec3 {
     let vis = v_smith_ggx_correlated_aniso(
         g.n_o_v, g.n_o_l, g.t_o_v, g.b_o_v, g.t_o_l, g.b_o_l, s.alpha.x, s.alpha.y,
     );
-    f_schlick(s.f0, 1.0, g.v_o_h) * (d * vis)
+    f_schlick(s.f0, f90, g.v_o_h) * (d * vis)
 }
 
 /// The BRDF f(v, l) (no cosine): Lambert + D V F. Zero for l below the horizon.
 pub fn brdf(s: &Surface, t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
     match geometry(t, b, n, v, l) {
-        Some(g) => diffuse_lambert(s.diffuse_albedo) + specular_of(s, &g),
+        Some(g) => diffuse_lambert(s.diffuse_albedo) + specular_of(s, 1.0, &g),
         None => Vec3::ZERO,
     }
 }
 
 /// f(v, l) max(n.l, 0): what a light of unit irradiance reflects to the eye.
 pub fn brdf_cos(s: &Surface, t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+    brdf_cos_f90(s, 1.0, t, b, n, v, l)
+}
+
+/// [`brdf_cos`] with Schlick's F90 = `f90` (KHR_materials_specular's
+/// dielectric; 1 elsewhere).
+pub fn brdf_cos_f90(s: &Surface, f90: f32, t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
     match geometry(t, b, n, v, l) {
-        Some(g) => (diffuse_lambert(s.diffuse_albedo) + specular_of(s, &g)) * g.n_o_l,
+        Some(g) => (diffuse_lambert(s.diffuse_albedo) + specular_of(s, f90, &g)) * g.n_o_l,
         None => Vec3::ZERO,
     }
 }
 
 /// Specular lobe only, times max(n.l, 0).
 pub fn specular_cos(s: &Surface, t: Vec3, b: Vec3, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+    specular_cos_f90(s, 1.0, t, b, n, v, l)
+}
+
+/// [`specular_cos`] with Schlick's F90 = `f90`.
+pub fn specular_cos_f90(
+    s: &Surface,
+    f90: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    l: Vec3,
+) -> Vec3 {
     match geometry(t, b, n, v, l) {
-        Some(g) => specular_of(s, &g) * g.n_o_l,
+        Some(g) => specular_of(s, f90, &g) * g.n_o_l,
         None => Vec3::ZERO,
     }
 }

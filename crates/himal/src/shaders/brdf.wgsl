@@ -77,8 +77,9 @@ fn diffuse_lambert(diffuse_albedo: vec3f) -> vec3f {
     return diffuse_albedo * (1.0 / PI);
 }
 
-// D V F n.l with the same robustness rules as the CPU twin.
-fn specular_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+// D V F n.l with Schlick's F90 = `f90` (KHR_materials_specular; 1
+// elsewhere), the same robustness rules as the CPU twin.
+fn specular_cos_f90(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
     let n_o_l = dot(n, l);
     if !(n_o_l > 0.0) {
         return vec3f(0.0);
@@ -94,16 +95,26 @@ fn specular_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) ->
     let n_o_v = max(dot(n, v), BRDF_MIN_N_O_V);
     let d = d_ggx_aniso(n_o_h, dot(t, h), dot(b, h), s.alpha.x, s.alpha.y);
     let vis = v_smith_ggx_correlated_aniso(n_o_v, n_o_l, dot(t, v), dot(b, v), dot(t, l), dot(b, l), s.alpha.x, s.alpha.y);
-    return f_schlick(s.f0, 1.0, saturate(dot(v, h))) * (d * vis * n_o_l);
+    return f_schlick(s.f0, f90, saturate(dot(v, h))) * (d * vis * n_o_l);
 }
 
-// (Lambert + D V F) max(n.l, 0).
-fn brdf_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+// D V F n.l (F90 = 1).
+fn specular_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+    return specular_cos_f90(s, 1.0, t, b, n, v, l);
+}
+
+// (Lambert + D V F) max(n.l, 0), Schlick's F90 = `f90`.
+fn brdf_cos_f90(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
     let n_o_l = dot(n, l);
     if !(n_o_l > 0.0) {
         return vec3f(0.0);
     }
-    return diffuse_lambert(s.diffuse_albedo) * n_o_l + specular_cos(s, t, b, n, v, l);
+    return diffuse_lambert(s.diffuse_albedo) * n_o_l + specular_cos_f90(s, f90, t, b, n, v, l);
+}
+
+// (Lambert + D V F) max(n.l, 0).
+fn brdf_cos(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+    return brdf_cos_f90(s, 1.0, t, b, n, v, l);
 }
 
 // Split-sum DFG fit f0 A + B (rational in roughness and n.v; coefficients
