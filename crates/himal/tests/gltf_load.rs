@@ -594,3 +594,50 @@ fn ior_sets_the_dielectric_reflectance() {
     let e = gltf::load(&bad).expect_err("ior 0.5").to_string();
     assert!(e.contains("odd") && e.contains("ior 0.5"), "{e}");
 }
+
+/// KHR_materials_specular (SpecularTest): factors and textures are read,
+/// the colour factor unbounded above (row 7 reaches 25); materials whose
+/// dielectric Fresnel the G-buffer cannot hold are layered, the default
+/// (factor 1, colour 1) is not; a colour that is not three numbers is an
+/// error naming the material.
+#[test]
+fn specular_factors_and_textures_load() {
+    let a = gltf::load(&common::gltf_sample("SpecularTest")).expect("loads");
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    let m = |name: &str| {
+        (a.pbr.materials.iter().find(|m| m.name == name))
+            .unwrap_or_else(|| panic!("material {name}"))
+    };
+    assert_eq!(m("M1.1_specFac").specular, 0.0);
+    assert_eq!(m("M1.4_specFac").specular, 0.520996);
+    assert!(m("M1.1_specFac").layered() && !m("M1.5_specFac").layered());
+    assert!(!m("LabelMat").layered());
+    let tex = m("M2_SpecTex");
+    assert!(tex.specular_texture.is_some() && tex.specular_color_texture.is_none());
+    assert_eq!(
+        m("M5.4_yellowFac").specular_color,
+        Vec3::new(0.520996, 0.520996, 0.0)
+    );
+    assert!(m("M6_yellowTex").specular_color_texture.is_some());
+    let hdr = m("M7.5_HDR");
+    assert_eq!(hdr.specular_color, Vec3::splat(25.0));
+    // F0 = min(0.04 x 25, 1) x 1, F90 = 1.
+    let (f0, f90) = hdr.dielectric_fresnel(1.0, Vec3::ONE);
+    assert!(f0.abs_diff_eq(Vec3::ONE, 1e-6) && f90 == 1.0, "{f0} {f90}");
+    let (f0, f90) = m("M1.1_specFac").dielectric_fresnel(1.0, Vec3::ONE);
+    assert_eq!((f0, f90), (Vec3::ZERO, 0.0));
+    // A fully metallic surface has no dielectric to correct.
+    let metal = r#"{"pbrMetallicRoughness":{"metallicFactor":1},"extensions":{"KHR_materials_specular":{"specularFactor":0.2}}}"#;
+    let a = gltf::load(&common::cube_gltf("specular_metal", "", metal)).expect("loads");
+    assert!(!a.pbr.materials[0].layered());
+    let bad = common::cube_gltf(
+        "specular_bad",
+        "",
+        r#"{"name":"odd","extensions":{"KHR_materials_specular":{"specularColorFactor":[1,1]}}}"#,
+    );
+    let e = gltf::load(&bad).expect_err("two numbers").to_string();
+    assert!(
+        e.contains("odd") && e.contains("specularColorFactor"),
+        "{e}"
+    );
+}

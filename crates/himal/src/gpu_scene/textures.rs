@@ -34,6 +34,8 @@ pub struct MaterialGpu {
     pub clearcoat: [f32; 4],
     /// KHR_materials_sheen: rgb colour (linear), a roughness.
     pub sheen: [f32; 4],
+    /// KHR_materials_specular: rgb colour factor (linear), a specular factor.
+    pub specular: [f32; 4],
     /// KHR_texture_transform per slot (SLOTS order): the 2x3 matrix's two
     /// rows (xyz), identity where the slot has none; the first row's w is
     /// the slot's UV set (0: `Vertex::uv`, 1: `Vertex::uv1`).
@@ -64,6 +66,7 @@ impl MaterialGpu {
                 0.0,
             ],
             sheen: m.sheen_color.extend(m.sheen_roughness).to_array(),
+            specular: m.specular_color.extend(m.specular).to_array(),
             uv: uv_rows(m),
         }
     }
@@ -99,6 +102,8 @@ pub const SLOTS: [&str; TEXTURE_SLOTS] = [
     "clearcoat_normal",
     "sheen_color",
     "sheen_roughness",
+    "specular",
+    "specular_color",
 ];
 
 /// One material's GPU resources: (view, sampler) per slot and its uniform.
@@ -262,10 +267,11 @@ impl MaterialTextures {
             let (srgb, fallback) = (
                 [
                     true, false, false, false, true, false, false, false, false, true, false,
+                    false, true,
                 ],
                 [
                     white_srgb, white, flat, white, white_srgb, along_t, white, white, flat,
-                    white_srgb, white,
+                    white_srgb, white, white, white_srgb,
                 ],
             );
             let refs = (m.texture_refs().into_iter().zip(srgb)).zip(fallback);

@@ -1,10 +1,11 @@
 // A glTF material as the textured G-buffer (passes/gbuffer/textured.wgsl)
 // and the forward passes (passes/forward/forward.wgsl) bind it: the factors
-// and the eleven texture/sampler pairs of group 1 (renderer/textures.rs
+// and the thirteen texture/sampler pairs of group 1 (gpu_scene/textures.rs
 // `MaterialTextures::bind_groups`), and what both derive from them.
 #import scene
+#import color
 
-// The factors (group 1 binding 0); twin of renderer/textures.rs `MaterialGpu`.
+// The factors (group 1 binding 0); twin of gpu_scene/textures.rs `MaterialGpu`.
 struct MaterialGpu {
     base_color: vec4f,
     emissive: vec4f,
@@ -16,9 +17,11 @@ struct MaterialGpu {
     clearcoat: vec4f,
     // KHR_materials_sheen: rgb colour (linear), a roughness
     sheen: vec4f,
+    // KHR_materials_specular: rgb colour factor (linear), a specular factor
+    specular: vec4f,
     // KHR_texture_transform per slot (SLOT_*): rows 2k, 2k+1 of the 2x3
     // matrix in xyz; row 2k's w is the slot's UV set (0 or 1)
-    uv: array<vec4f, 22>,
+    uv: array<vec4f, 26>,
 }
 
 const SLOT_BASE_COLOR: u32 = 0u;
@@ -32,6 +35,8 @@ const SLOT_CLEARCOAT_ROUGHNESS: u32 = 7u;
 const SLOT_CLEARCOAT_NORMAL: u32 = 8u;
 const SLOT_SHEEN_COLOR: u32 = 9u;
 const SLOT_SHEEN_ROUGHNESS: u32 = 10u;
+const SLOT_SPECULAR: u32 = 11u;
+const SLOT_SPECULAR_COLOR: u32 = 12u;
 
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
@@ -58,6 +63,26 @@ const SLOT_SHEEN_ROUGHNESS: u32 = 10u;
 @group(1) @binding(20) var sheen_color_sampler: sampler;
 @group(1) @binding(21) var sheen_roughness_texture: texture_2d<f32>;
 @group(1) @binding(22) var sheen_roughness_sampler: sampler;
+// KHR_materials_specular: specular A, specular colour RGB (sRGB).
+@group(1) @binding(23) var specular_texture: texture_2d<f32>;
+@group(1) @binding(24) var specular_sampler: sampler;
+@group(1) @binding(25) var specular_color_texture: texture_2d<f32>;
+@group(1) @binding(26) var specular_color_sampler: sampler;
+
+// KHR_materials_specular: the dielectric's (F0 rgb, F90) from the material's
+// F0 by its ior (`f0_ior`, Vertex::surface.y) and the two textures' samples:
+// (min(f0_ior colour, 1) specular, specular). CPU twin:
+// scene::gltf::PbrMaterial::dielectric_fresnel.
+fn gltf_dielectric_fresnel(f0_ior: f32, specular_a: f32, color_rgb: vec3f) -> vec4f {
+    let s = material.specular.a * specular_a;
+    return vec4f(min(vec3f(f0_ior) * material.specular.rgb * color_rgb, vec3f(1.0)) * s, s);
+}
+
+// The grey F0 the G-buffer holds for a dielectric F0 (Rec. 709 luminance,
+// as bright as the coloured one under white light).
+fn gltf_grey_reflectance(dielectric_f0: vec3f) -> f32 {
+    return luminance(dielectric_f0);
+}
 
 // The UV a slot samples at: its set of `uvs` (TEXCOORD_0 in xy, _1 in zw)
 // with its KHR_texture_transform applied (CPU twin:

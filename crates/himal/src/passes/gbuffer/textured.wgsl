@@ -62,6 +62,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let mr = textureSampleBias(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv), MIP_BIAS);
     let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv), MIP_BIAS).r;
     let emissive = textureSampleBias(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv), MIP_BIAS).rgb;
+    let spec_a = textureSampleBias(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv), MIP_BIAS).a;
+    let spec_rgb = textureSampleBias(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv), MIP_BIAS).rgb;
     if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
         discard;
     }
@@ -86,7 +88,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var out: GBufferOut;
     out.albedo = vec4f(in.color.rgb * base.rgb, ao);
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
-    out.material = vec4f(1.0 - roughness, in.surface.y, metallic, anisotropy_from_khr(strength, roughness * roughness));
+    // KHR_materials_specular: the grey part of the dielectric's F0 (forward.layers
+    // adds the colour and F90 where they differ: PbrMaterial::specular_differs).
+    let reflectance = gltf_grey_reflectance(gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb).rgb);
+    out.material = vec4f(1.0 - roughness, reflectance, metallic, anisotropy_from_khr(strength, roughness * roughness));
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     // Emissive is sampled so its binding stays in the reflected layout (the
     // material bind group is shared with passes/forward, which draws it).

@@ -14,7 +14,7 @@ use super::{GltfContext, MAX_TEXTURE_SIZE};
 use crate::scene::SceneError;
 
 /// Texture slots of a material (`PbrMaterial::texture_refs`).
-pub const TEXTURE_SLOTS: usize = 11;
+pub const TEXTURE_SLOTS: usize = 13;
 
 /// Reflectance (F0) of glTF dielectrics: ior 1.5.
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
@@ -232,6 +232,16 @@ pub struct PbrMaterial {
     pub unlit: bool,
     /// KHR_materials_ior: the dielectric's index of refraction (1.5).
     pub ior: f32,
+    /// KHR_materials_specular `specularFactor`: scales the dielectric's F0
+    /// and sets its F90 (1: glTF's default dielectric).
+    pub specular: f32,
+    /// `specularColorFactor`, linear: tints the dielectric's F0 (not F90);
+    /// may exceed 1 (F0 is clamped to 1 after the ior's F0 scales it).
+    pub specular_color: Vec3,
+    /// A × `specular`.
+    pub specular_texture: Option<TextureRef>,
+    /// RGB (sRGB) × `specular_color`.
+    pub specular_color_texture: Option<TextureRef>,
 }
 
 impl Default for PbrMaterial {
@@ -267,6 +277,10 @@ impl Default for PbrMaterial {
             sheen_roughness_texture: None,
             unlit: false,
             ior: 1.5,
+            specular: 1.0,
+            specular_color: Vec3::ONE,
+            specular_texture: None,
+            specular_color_texture: None,
         }
     }
 }
@@ -317,6 +331,8 @@ impl PbrMaterial {
             self.clearcoat_normal_texture,
             self.sheen_color_texture,
             self.sheen_roughness_texture,
+            self.specular_texture,
+            self.specular_color_texture,
         ]
     }
 
@@ -334,13 +350,43 @@ impl PbrMaterial {
             &mut self.clearcoat_normal_texture,
             &mut self.sheen_color_texture,
             &mut self.sheen_roughness_texture,
+            &mut self.specular_texture,
+            &mut self.specular_color_texture,
         ]
     }
 
-    /// Whether the material has a clearcoat or sheen layer over its base
-    /// (drawn by `forward.layers`, passes/forward).
-    pub fn layered(&self) -> bool {
+    /// Whether the material has a clearcoat or sheen layer over its base.
+    pub fn coated(&self) -> bool {
         !self.unlit && (self.clearcoat > 0.0 || self.sheen_color.max_element() > 0.0)
+    }
+
+    /// Whether KHR_materials_specular makes the dielectric's Fresnel other
+    /// than the G-buffer's grey F0 with F90 = 1 can hold (a coloured F0 or
+    /// F90 < 1; docs/gltf.md "Specular").
+    pub fn specular_differs(&self) -> bool {
+        !self.unlit
+            && (self.metallic < 1.0 || self.metallic_roughness_texture.is_some())
+            && (self.specular != 1.0
+                || self.specular_color != Vec3::ONE
+                || self.specular_texture.is_some()
+                || self.specular_color_texture.is_some())
+    }
+
+    /// Whether `forward.layers` (passes/forward) draws over this material's
+    /// deferred base: a coat or sheen, or the specular the G-buffer cannot hold.
+    pub fn layered(&self) -> bool {
+        self.coated() || self.specular_differs()
+    }
+
+    /// The dielectric's F0 and F90 of KHR_materials_specular from the
+    /// factors and the textures' samples (`specular_a`: the specular
+    /// texture's A, `color_rgb`: the colour texture's linear RGB):
+    /// (min(F0(ior) × colour, 1) × specular, specular). Twin of
+    /// `gltf_dielectric_fresnel` in shaders/gltf_material.wgsl.
+    pub fn dielectric_fresnel(&self, specular_a: f32, color_rgb: Vec3) -> (Vec3, f32) {
+        let s = self.specular * specular_a;
+        let f0 = (self.reflectance() * self.specular_color * color_rgb).min(Vec3::ONE) * s;
+        (f0, s)
     }
 
     /// Whether the material emits light (`forward.emissive`; unlit ones do not).
@@ -457,6 +503,26 @@ fn json_texture_ref(
     }
 }
 
+/// `key` of extension object `v` as three finite numbers (`default` when absent).
+fn json_vec3(
+    cx: &GltfContext,
+    ext: &str,
+    v: &gltf::json::Value,
+    key: &str,
+    default: Vec3,
+) -> Result<Vec3, SceneError> {
+    let Some(x) = v.get(key) else {
+        return Ok(default);
+    };
+    let c: Vec<f32> = (x.as_array().into_iter().flatten())
+        .filter_map(|x| x.as_f64().map(|x| x as f32))
+        .collect();
+    if c.len() != 3 || !c.iter().all(|x| x.is_finite()) {
+        return Err(cx.invalid(format!("{ext} {key} {x}: expected three finite numbers")));
+    }
+    Ok(Vec3::from_slice(&c))
+}
+
 /// Finite number from extension `ext`'s JSON, `default` when absent.
 fn json_f32(
     cx: &GltfContext,
@@ -571,22 +637,25 @@ pub(super) fn material(
     }
     // Layers over the base (passes/forward `forward.layers`), read from the JSON.
     const CLEARCOAT: &str = "KHR_materials_clearcoat";
+    // Errors name the material and the extension.
+    let at = |ext: &str| format!("material \"{}\": {ext}", out.name);
     if let Some(c) = m.extension_value(CLEARCOAT) {
-        let f = |key, default| json_f32(cx, CLEARCOAT, c, key, default);
-        let t = |key| json_texture_ref(cx, CLEARCOAT, c.get(key), textures);
+        let ext = &at(CLEARCOAT);
+        let f = |key, default| json_f32(cx, ext, c, key, default);
+        let t = |key| json_texture_ref(cx, ext, c.get(key), textures);
         out.clearcoat = f("clearcoatFactor", 0.0)?.clamp(0.0, 1.0);
         out.clearcoat_roughness = f("clearcoatRoughnessFactor", 0.0)?.clamp(0.0, 1.0);
         out.clearcoat_texture = t("clearcoatTexture")?;
         out.clearcoat_roughness_texture = t("clearcoatRoughnessTexture")?;
         out.clearcoat_normal_texture = t("clearcoatNormalTexture")?;
         if let Some(n) = c.get("clearcoatNormalTexture") {
-            out.clearcoat_normal_scale = json_f32(cx, CLEARCOAT, n, "scale", 1.0)?;
+            out.clearcoat_normal_scale = json_f32(cx, ext, n, "scale", 1.0)?;
         }
     }
     out.unlit = m.extension_value("KHR_materials_unlit").is_some();
     const IOR: &str = "KHR_materials_ior";
     if let Some(i) = m.extension_value(IOR) {
-        let ior = json_f32(cx, IOR, i, "ior", 1.5)?;
+        let ior = json_f32(cx, &at(IOR), i, "ior", 1.5)?;
         if ior < 1.0 {
             return Err(cx.invalid(format!(
                 "material \"{}\": {IOR} ior {ior} is below 1",
@@ -597,26 +666,24 @@ pub(super) fn material(
     }
     const SHEEN: &str = "KHR_materials_sheen";
     if let Some(sh) = m.extension_value(SHEEN) {
-        let colour = match sh.get("sheenColorFactor") {
-            None => Vec3::ZERO,
-            Some(v) => {
-                let c: Vec<f32> = (v.as_array().into_iter().flatten())
-                    .filter_map(|x| x.as_f64().map(|x| x as f32))
-                    .collect();
-                if c.len() != 3 || !c.iter().all(|x| x.is_finite()) {
-                    return Err(cx.invalid(format!(
-                        "{SHEEN} sheenColorFactor {v}: expected three finite numbers"
-                    )));
-                }
-                Vec3::from_slice(&c).clamp(Vec3::ZERO, Vec3::ONE)
-            }
-        };
-        out.sheen_color = colour;
-        out.sheen_roughness = json_f32(cx, SHEEN, sh, "sheenRoughnessFactor", 0.0)?.clamp(0.0, 1.0);
-        out.sheen_color_texture =
-            json_texture_ref(cx, SHEEN, sh.get("sheenColorTexture"), textures)?;
+        let ext = &at(SHEEN);
+        out.sheen_color =
+            json_vec3(cx, ext, sh, "sheenColorFactor", Vec3::ZERO)?.clamp(Vec3::ZERO, Vec3::ONE);
+        out.sheen_roughness = json_f32(cx, ext, sh, "sheenRoughnessFactor", 0.0)?.clamp(0.0, 1.0);
+        out.sheen_color_texture = json_texture_ref(cx, ext, sh.get("sheenColorTexture"), textures)?;
         out.sheen_roughness_texture =
-            json_texture_ref(cx, SHEEN, sh.get("sheenRoughnessTexture"), textures)?;
+            json_texture_ref(cx, ext, sh.get("sheenRoughnessTexture"), textures)?;
+    }
+    const SPECULAR: &str = "KHR_materials_specular";
+    if let Some(sp) = m.extension_value(SPECULAR) {
+        let ext = &at(SPECULAR);
+        out.specular = json_f32(cx, ext, sp, "specularFactor", 1.0)?.clamp(0.0, 1.0);
+        // Unbounded above by the extension (F0 is clamped after the ior scales it).
+        out.specular_color =
+            json_vec3(cx, ext, sp, "specularColorFactor", Vec3::ONE)?.max(Vec3::ZERO);
+        out.specular_texture = json_texture_ref(cx, ext, sp.get("specularTexture"), textures)?;
+        out.specular_color_texture =
+            json_texture_ref(cx, ext, sp.get("specularColorTexture"), textures)?;
     }
     Ok(out)
 }

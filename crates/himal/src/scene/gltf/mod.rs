@@ -382,7 +382,7 @@ pub fn load_from_bytes_with(
         }
     }
     let blended_layers: Vec<String> = (pbr.materials.iter())
-        .filter(|m| m.layered() && m.alpha_mode == AlphaMode::Blend)
+        .filter(|m| m.coated() && m.alpha_mode == AlphaMode::Blend)
         .map(|m| m.name.clone())
         .collect();
     if !blended_layers.is_empty() {
@@ -590,7 +590,7 @@ fn skinned(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 11] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 12] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
@@ -598,6 +598,7 @@ pub const IMPLEMENTED_EXTENSIONS: [&str; 11] = [
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_sheen",
+    "KHR_materials_specular",
     "KHR_materials_unlit",
     "KHR_materials_variants",
     "KHR_mesh_quantization",
