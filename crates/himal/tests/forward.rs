@@ -19,7 +19,8 @@ use himal::scene::Scene;
 
 /// Input: 9 vec4 of SH, then per case 11 vec4: albedo|glossiness,
 /// reflectance|metallic|anisotropy|ao, t, b, n, v, sun direction, sun
-/// illuminance, prefiltered|alpha, dfg.xy, emissive. Output: one vec4 per case.
+/// illuminance, prefiltered|alpha, dfg.xy|F90|F0 green tint, emissive.
+/// Output: one vec4 per case.
 const KERNEL: &str = r#"#import forward
 @group(0) @binding(0) var<storage, read> input: array<vec4f>;
 @group(0) @binding(1) var<storage, read_write> output: array<vec4f>;
@@ -33,10 +34,12 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     for (var k = 0u; k < 9u; k = k + 1u) { sh.c[k] = input[k]; }
     let m = input[base];
     let p = input[base + 1u];
-    let s = surface_from_material(m.xyz, m.w, p.x, p.y, p.z);
+    var s = surface_from_material(m.xyz, m.w, p.x, p.y, p.z);
     let pa = input[base + 8u];
     let e = input[base + 10u];
-    output[i] = forward_shade_premultiplied(s, input[base + 2u].xyz, input[base + 3u].xyz,
+    let f = input[base + 9u];
+    s.f0.g *= f.w;
+    output[i] = forward_shade_premultiplied(s, f.z, input[base + 2u].xyz, input[base + 3u].xyz,
         input[base + 4u].xyz, input[base + 5u].xyz, input[base + 6u].xyz, input[base + 7u].xyz,
         sh, pa.xyz, input[base + 9u].xy, p.w, e.xyz, pa.w);
 }
@@ -79,6 +82,8 @@ fn forward_shading_matches_its_cpu_twin() {
         let emissive = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 5.0;
         // Alpha beyond [0, 1] checks the clamp.
         let alpha = rng.next_f32() * 1.4 - 0.2;
+        // KHR_materials_specular: F90 below 1 and a coloured F0.
+        let (f90, tint) = (rng.next_f32(), 0.5 + rng.next_f32());
         input.extend([
             m.albedo.extend(m.glossiness).to_array(),
             [m.reflectance, m.metallic, m.anisotropy, ao],
@@ -89,12 +94,13 @@ fn forward_shading_matches_its_cpu_twin() {
             l.extend(0.0).to_array(),
             light.sun_illuminance.extend(0.0).to_array(),
             light.prefiltered.extend(alpha).to_array(),
-            [light.dfg.x, light.dfg.y, 0.0, 0.0],
+            [light.dfg.x, light.dfg.y, f90, tint],
             emissive.extend(0.0).to_array(),
         ]);
-        let s = surface_from_material(&m);
+        let mut s = surface_from_material(&m);
+        s.f0.y *= tint;
         cases.push(forward_shade_premultiplied(
-            &s, t, b, n, v, &light, ao, emissive, alpha,
+            &s, f90, t, b, n, v, &light, ao, emissive, alpha,
         ));
     }
     let out = run_compute(
@@ -294,9 +300,10 @@ fn blend_is_premultiplied_over_in_back_to_front_order() {
     }
 }
 
-/// Input per case, 8 vec4: sheen colour|sheen roughness, clearcoat|coat
+/// Input per case, 12 vec4: sheen colour|sheen roughness, clearcoat|coat
 /// roughness|sheen albedo|ao, n, n_c, v, sun direction, sun, sheen env|coat
-/// dfg.x, coat env|coat dfg.y. Output: one vec4 per case.
+/// dfg.x, coat env|coat dfg.y, base F0 delta|F90 delta, base env|base
+/// roughness, base dfg. Output: one vec4 per case.
 const LAYERS_KERNEL: &str = r#"#import layers
 @group(0) @binding(0) var<storage, read> input: array<vec4f>;
 @group(0) @binding(1) var<storage, read_write> output: array<vec4f>;
@@ -304,11 +311,13 @@ const LAYERS_KERNEL: &str = r#"#import layers
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let i = id.x;
-    let base = i * 9u;
-    if base + 8u >= arrayLength(&input) { return; }
+    let base = i * 12u;
+    if base + 11u >= arrayLength(&input) { return; }
     let a = input[base];
     let b = input[base + 1u];
-    let m = Layers(a.xyz, a.w, b.x, b.y);
+    let d = input[base + 9u];
+    let e = input[base + 10u];
+    let m = Layers(a.xyz, a.w, b.x, b.y, d.xyz, d.w, e.w);
     var light: LayerLight;
     light.sun_direction = input[base + 5u].xyz;
     light.sun = input[base + 6u].xyz;
@@ -317,6 +326,8 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     light.coat_dfg = vec2f(input[base + 7u].w, input[base + 8u].w);
     light.sheen_albedo = b.z;
     light.ao = b.w;
+    light.base_env = e.xyz;
+    light.base_dfg = input[base + 11u].xy;
     output[i] = layers_shade(m, input[base + 2u].xyz, input[base + 3u].xyz, input[base + 4u].xyz, light);
 }
 "#;
@@ -336,7 +347,9 @@ fn clearcoat_and_sheen_match_their_cpu_twin() {
             v = -v;
         }
         let l = uniform_sample_sphere(rng.next_vec2());
-        // A quarter of the cases without a sheen, a quarter without a coat.
+        // A quarter of the cases without a sheen, a quarter without a coat,
+        // half with KHR_materials_specular's correction of the base.
+        let specular = k % 2 == 0;
         let m = Layers {
             sheen_color: if k % 4 == 0 {
                 Vec3::ZERO
@@ -346,6 +359,13 @@ fn clearcoat_and_sheen_match_their_cpu_twin() {
             sheen_roughness: rng.next_f32(),
             clearcoat: if k % 4 == 1 { 0.0 } else { rng.next_f32() },
             clearcoat_roughness: rng.next_f32(),
+            base_f0_delta: if specular {
+                Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.1 - 0.04
+            } else {
+                Vec3::ZERO
+            },
+            base_f90_delta: if specular { -rng.next_f32() } else { 0.0 },
+            base_roughness: rng.next_f32(),
         };
         let light = LayerLight {
             sun_direction: l,
@@ -354,6 +374,8 @@ fn clearcoat_and_sheen_match_their_cpu_twin() {
             coat_env: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 20.0,
             coat_dfg: Vec2::new(rng.next_f32(), rng.next_f32() * 0.2),
             sheen_albedo: rng.next_f32() * 0.5,
+            base_env: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 20.0,
+            base_dfg: Vec2::new(rng.next_f32(), rng.next_f32() * 0.2),
             ao: rng.next_f32(),
         };
         input.extend([
@@ -371,6 +393,9 @@ fn clearcoat_and_sheen_match_their_cpu_twin() {
             light.sun.extend(0.0).to_array(),
             light.sheen_env.extend(light.coat_dfg.x).to_array(),
             light.coat_env.extend(light.coat_dfg.y).to_array(),
+            m.base_f0_delta.extend(m.base_f90_delta).to_array(),
+            light.base_env.extend(m.base_roughness).to_array(),
+            [light.base_dfg.x, light.base_dfg.y, 0.0, 0.0],
         ]);
         cases.push(layers_shade(&m, n, n_c, v, &light));
     }

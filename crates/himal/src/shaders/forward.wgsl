@@ -1,6 +1,7 @@
 // Forward shading of one fragment (passes/forward, issue #8): the deferred
 // pass's sun, SH sky and environment-specular terms for one surface point,
-// plus emission, premultiplied by alpha. The caller samples the filtered
+// plus emission, premultiplied by alpha. `f90`: Schlick's F90 (below 1 for
+// a KHR_materials_specular dielectric). The caller samples the filtered
 // cube (`prefiltered`) and the DFG table (`dfg` = (A, B)). The sun is
 // unshadowed: the shadow mask holds the opaque surface behind. CPU twin:
 // passes/forward/reference.rs `forward_shade_premultiplied`.
@@ -18,12 +19,12 @@ struct Lighting {
     fog: vec4f,
 }
 
-fn forward_shade_premultiplied(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
+fn forward_shade_premultiplied(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
         sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9,
         prefiltered: vec3f, dfg: vec2f, ao: f32, emissive: vec3f, alpha: f32) -> vec4f {
-    var c = brdf_cos(s, t, b, n, v, sun_direction) * sun_illuminance;
+    var c = brdf_cos_f90(s, f90, t, b, n, v, sun_direction) * sun_illuminance;
     // Radiance (kcd/m^2): no 1/pi, unlike the irradiance term below.
-    c += prefiltered * (s.f0 * dfg.x + dfg.y) * ao;
+    c += prefiltered * (s.f0 * dfg.x + f90 * dfg.y) * ao;
     let e_n = max(sh9_eval(sky_irradiance, n), vec3f(0.0));
     c += s.diffuse_albedo * e_n * (ao / PI);
     c += emissive;

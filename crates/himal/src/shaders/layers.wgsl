@@ -68,11 +68,17 @@ struct Layers {
     sheen_roughness: f32,
     clearcoat: f32,
     clearcoat_roughness: f32,
+    // KHR_materials_specular's correction of the deferred base: (1 - metallic)
+    // (true F0 - the G-buffer's grey F0), (1 - metallic) (true F90 - 1)
+    base_f0_delta: vec3f,
+    base_f90_delta: f32,
+    base_roughness: f32,
 }
 
 // What the layers see: the sun (illuminance times its shadow), the filtered
-// environment along each layer's reflection vector, the coat's DFG (A, B),
-// the sheen's directional albedo E(n.v) and the ambient occlusion.
+// environment along each layer's (and the base's) reflection vector, the
+// coat's and the base's DFG (A, B), the sheen's directional albedo E(n.v)
+// and the ambient occlusion.
 struct LayerLight {
     sun_direction: vec3f,
     sun: vec3f,
@@ -80,7 +86,16 @@ struct LayerLight {
     coat_env: vec3f,
     coat_dfg: vec2f,
     sheen_albedo: f32,
+    base_env: vec3f,
+    base_dfg: vec2f,
     ao: f32,
+}
+
+// An isotropic lobe's D V F n.l: any tangent frame around n will do.
+fn specular_cos_iso(s: Surface, f90: f32, n: vec3f, v: vec3f, l: vec3f) -> vec3f {
+    let up = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(n.x) > 0.9);
+    let b = normalize(cross(n, up));
+    return specular_cos_f90(s, f90, cross(b, n), b, n, v, l);
 }
 
 // n: the base's shading normal (sheen), n_c: the coat's.
@@ -88,18 +103,20 @@ fn layers_shade(m: Layers, n: vec3f, n_c: vec3f, v: vec3f, light: LayerLight) ->
     // The coat: a dielectric GGX lobe (F0 0.04, ior 1.5) on its own normal.
     let alpha_c = alpha_from_glossiness(1.0 - m.clearcoat_roughness);
     let coat_surface = Surface(vec3f(0.0), vec3f(0.04), vec2f(alpha_c));
-    let up = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(n_c.x) > 0.9);
-    let b_c = normalize(cross(n_c, up));
-    let t_c = cross(b_c, n_c);
     let n_o_v_c = max(dot(n_c, v), BRDF_MIN_N_O_V);
-    let coat = m.clearcoat * (specular_cos(coat_surface, t_c, b_c, n_c, v, light.sun_direction) * light.sun
+    let coat = m.clearcoat * (specular_cos_iso(coat_surface, 1.0, n_c, v, light.sun_direction) * light.sun
         + light.coat_env * (0.04 * light.coat_dfg.x + light.coat_dfg.y) * light.ao);
     let s_coat = 1.0 - m.clearcoat * f_schlick(vec3f(0.04), 1.0, n_o_v_c).x;
     // The sheen: Charlie lobe under the sun, E(n.v) of the environment.
     let sheen = m.sheen_color * (sheen_cos(m.sheen_roughness, n, v, light.sun_direction) * light.sun
         + light.sheen_env * (light.sheen_albedo * light.ao));
     let s_sheen = 1.0 - max(m.sheen_color.r, max(m.sheen_color.g, m.sheen_color.b)) * light.sheen_albedo;
-    return vec4f(sheen * s_coat + coat, 1.0 - s_sheen * s_coat);
+    // KHR_materials_specular: the base's specular minus what the deferred
+    // pass gave it (Schlick is linear in F0 and F90).
+    let delta_surface = Surface(vec3f(0.0), m.base_f0_delta, vec2f(alpha_from_glossiness(1.0 - m.base_roughness)));
+    let base_delta = specular_cos_iso(delta_surface, m.base_f90_delta, n, v, light.sun_direction) * light.sun
+        + light.base_env * (m.base_f0_delta * light.base_dfg.x + m.base_f90_delta * light.base_dfg.y) * light.ao;
+    return vec4f(sheen * s_coat + coat + base_delta * (s_sheen * s_coat), 1.0 - s_sheen * s_coat);
 }
 
 // The sheen's directional albedo E(n.v, roughness) from its table (rows:

@@ -46,6 +46,8 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
     let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
     let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
     let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
+    let spec_a = textureSample(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv)).a;
+    let spec_rgb = textureSample(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv)).rgb;
     if (material.alpha.z > 0.5) {
         let c = unlit_radiance(in.color.rgb * base.rgb, lighting.sun_direction.xyz,
             lighting.sun_illuminance.rgb, lighting.sky_irradiance);
@@ -67,14 +69,19 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
     let metallic = saturate(in.surface.z * mr.b);
     let ao = 1.0 + material.params.y * (occlusion - 1.0);
     let anisotropy = anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
-    let surf = surface_from_material(in.color.rgb * base.rgb, 1.0 - roughness, in.surface.y, metallic, anisotropy);
+    let albedo = in.color.rgb * base.rgb;
+    var surf = surface_from_material(albedo, 1.0 - roughness, 0.0, metallic, anisotropy);
+    // KHR_materials_specular: the dielectric's coloured F0 and its F90.
+    let fresnel = gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb);
+    surf.f0 = mix(fresnel.rgb, albedo, metallic);
+    let f90 = mix(fresnel.w, 1.0, metallic);
     let v = to_eye(view, in.world);
     let n_o_v = max(dot(tbn[2], v), 1e-4);
     let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, anisotropy));
     let lod = roughness * f32(textureNumLevels(env_specular) - 1u);
     let prefiltered = textureSampleLevel(env_specular, env_sampler, r, lod).rgb;
     let ab = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v, roughness), 0.0).xy;
-    return forward_shade_premultiplied(surf, tbn[0], tbn[1], tbn[2], v,
+    return forward_shade_premultiplied(surf, f90, tbn[0], tbn[1], tbn[2], v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
         prefiltered, ab, ao, emissive, alpha);
 }

@@ -1,6 +1,6 @@
 // forward.layers: KHR_materials_sheen and KHR_materials_clearcoat over the
-// deferred base of opaque and mask glTF surfaces (docs/gltf.md "Clearcoat
-// and sheen"). Drawn where the G-buffer kept this surface (depth Equal, the
+// deferred base of opaque and mask glTF surfaces, and the KHR_materials_specular
+// correction of that base (docs/gltf.md "Clearcoat and sheen", "Specular"). Drawn where the G-buffer kept this surface (depth Equal, the
 // clip position @invariant as in textured.wgsl), blended One,
 // OneMinusSrcAlpha: out = layers + base * s_sheen * s_coat
 // (shaders/layers.wgsl, CPU twin passes/forward/reference.rs `layers_shade`).
@@ -50,6 +50,9 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     let ccn = textureSample(clearcoat_normal_texture, clearcoat_normal_sampler, material_uv(SLOT_CLEARCOAT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
     let sc = textureSample(sheen_color_texture, sheen_color_sampler, material_uv(SLOT_SHEEN_COLOR, in.uv)).rgb;
     let sr = textureSample(sheen_roughness_texture, sheen_roughness_sampler, material_uv(SLOT_SHEEN_ROUGHNESS, in.uv)).a;
+    let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
+    let spec_a = textureSample(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv)).a;
+    let spec_rgb = textureSample(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv)).rgb;
     // MASK: the G-buffer discarded these texels (as fs_emissive).
     if (material.alpha.x > 0.5 && material.base_color.a * base.a < material.alpha.y) {
         discard;
@@ -59,8 +62,15 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     // the geometric normal) for the coat.
     let n_base = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ts, material.params.x));
     let n_coat = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ccn, material.clearcoat.z));
+    let roughness = saturate((1.0 - in.surface.x) * mr.g);
+    let metallic = saturate(in.surface.z * mr.b);
+    // The G-buffer's unorm8 grey F0 and the deferred pass's F90 = 1 against
+    // the dielectric's true Fresnel (textured.wgsl writes the same grey).
+    let fresnel = gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb);
+    let grey = round(saturate(gltf_grey_reflectance(fresnel.rgb)) * 255.0) / 255.0;
     let m = Layers(material.sheen.rgb * sc, saturate(material.sheen.a * sr),
-        saturate(material.clearcoat.x * cc), saturate(material.clearcoat.y * ccr));
+        saturate(material.clearcoat.x * cc), saturate(material.clearcoat.y * ccr),
+        (1.0 - metallic) * (fresnel.rgb - grey), (1.0 - metallic) * (fresnel.w - 1.0), roughness);
 
     let px = vec2i(in.clip.xy);
     let v = to_eye(view, in.world);
@@ -75,6 +85,8 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     let n_o_v_coat = max(dot(n_coat, v), 1e-4);
     light.coat_dfg = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v_coat, m.clearcoat_roughness), 0.0).xy;
     light.sheen_albedo = sheen_albedo_lookup(sheen_albedo_load, dot(n_base, v), m.sheen_roughness);
+    light.base_env = textureSampleLevel(env_specular, env_sampler, r_sheen, roughness * levels).rgb;
+    light.base_dfg = textureSampleLevel(dfg_lut, env_sampler, vec2f(max(dot(n_base, v), 1e-4), roughness), 0.0).xy;
     light.ao = (1.0 + material.params.y * (occlusion - 1.0)) * load_clamped(ao, px).x;
     return layers_shade(m, n_base, n_coat, v, light);
 }

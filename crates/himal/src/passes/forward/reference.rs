@@ -7,7 +7,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::math::brdf::{
-    MIN_N_O_V, Surface, alpha_from_glossiness, brdf_cos, f_schlick, specular_cos,
+    MIN_N_O_V, Surface, alpha_from_glossiness, brdf_cos_f90, f_schlick, specular_cos_f90,
 };
 use crate::math::sh::Sh9Rgb;
 
@@ -25,12 +25,14 @@ pub struct ForwardLight {
     pub dfg: Vec2,
 }
 
-/// Premultiplied (radiance × alpha, alpha) of a fragment with surface `s`,
+/// Premultiplied (radiance × alpha, alpha) of a fragment with surface `s`
+/// and Schlick F90 `f90` (below 1 for a KHR_materials_specular dielectric),
 /// right-handed frame (t, b, n), view vector `v`, ambient occlusion `ao`,
 /// emission `emissive` (radiance) and coverage `alpha` (clamped to [0, 1]).
 #[allow(clippy::too_many_arguments)]
 pub fn forward_shade_premultiplied(
     s: &Surface,
+    f90: f32,
     t: Vec3,
     b: Vec3,
     n: Vec3,
@@ -40,8 +42,8 @@ pub fn forward_shade_premultiplied(
     emissive: Vec3,
     alpha: f32,
 ) -> Vec4 {
-    let mut c = brdf_cos(s, t, b, n, v, light.sun_direction) * light.sun_illuminance;
-    c += light.prefiltered * (s.f0 * light.dfg.x + Vec3::splat(light.dfg.y)) * ao;
+    let mut c = brdf_cos_f90(s, f90, t, b, n, v, light.sun_direction) * light.sun_illuminance;
+    c += light.prefiltered * (s.f0 * light.dfg.x + Vec3::splat(f90 * light.dfg.y)) * ao;
     let e_n = light.sky_irradiance.eval(n).max(Vec3::ZERO);
     c += s.diffuse_albedo * e_n * (ao / PI);
     c += emissive;
@@ -181,6 +183,13 @@ pub struct Layers {
     /// Coat intensity in [0, 1] (0: no coat).
     pub clearcoat: f32,
     pub clearcoat_roughness: f32,
+    /// KHR_materials_specular's correction of the deferred base: the true
+    /// F0 minus the G-buffer's grey one, times 1 − metallic.
+    pub base_f0_delta: Vec3,
+    /// The true F90 minus the deferred pass's 1, times 1 − metallic.
+    pub base_f90_delta: f32,
+    /// The base's perceptual roughness.
+    pub base_roughness: f32,
 }
 
 /// What the layers see (twin of `LayerLight` in shaders/layers.wgsl).
@@ -197,6 +206,10 @@ pub struct LayerLight {
     pub coat_dfg: Vec2,
     /// E(n.v) of the sheen.
     pub sheen_albedo: f32,
+    /// Filtered environment along the base normal's reflection vector at the base roughness.
+    pub base_env: Vec3,
+    /// DFG table (A, B) at the base's (n.v, roughness).
+    pub base_dfg: Vec2,
     pub ao: f32,
 }
 
@@ -205,7 +218,10 @@ pub struct LayerLight {
 /// OneMinusSrcAlpha over the deferred base, out = layers + base s_sheen
 /// s_coat, with s_coat = 1 − c F_schlick(0.04, n_c·v) and s_sheen = 1 −
 /// max(sheen colour) E(n·v) (KHR_materials_sheen's albedo scaling, view
-/// term only: the base is one shaded value).
+/// term only: the base is one shaded value). The base itself gains Δ, the
+/// specular of a lobe with F0 = `base_f0_delta`, F90 = `base_f90_delta`
+/// (Schlick is linear in both) under the sun and the environment
+/// (KHR_materials_specular, docs/gltf.md "Specular").
 pub fn layers_shade(m: &Layers, n: Vec3, n_c: Vec3, v: Vec3, light: &LayerLight) -> Vec4 {
     let alpha_c = alpha_from_glossiness(1.0 - m.clearcoat_roughness);
     let coat_surface = Surface {
@@ -216,14 +232,33 @@ pub fn layers_shade(m: &Layers, n: Vec3, n_c: Vec3, v: Vec3, light: &LayerLight)
     let (t_c, b_c) = n_c.any_orthonormal_pair();
     let n_o_v_c = n_c.dot(v).max(MIN_N_O_V);
     let coat = m.clearcoat
-        * (specular_cos(&coat_surface, t_c, b_c, n_c, v, light.sun_direction) * light.sun
+        * (specular_cos_f90(&coat_surface, 1.0, t_c, b_c, n_c, v, light.sun_direction) * light.sun
             + light.coat_env * (0.04 * light.coat_dfg.x + light.coat_dfg.y) * light.ao);
     let s_coat = 1.0 - m.clearcoat * f_schlick(Vec3::splat(0.04), 1.0, n_o_v_c).x;
     let sheen = m.sheen_color
         * (sheen_cos(m.sheen_roughness, n, v, light.sun_direction) * light.sun
             + light.sheen_env * (light.sheen_albedo * light.ao));
     let s_sheen = 1.0 - m.sheen_color.max_element() * light.sheen_albedo;
-    (sheen * s_coat + coat).extend(1.0 - s_sheen * s_coat)
+    let delta_surface = Surface {
+        diffuse_albedo: Vec3::ZERO,
+        f0: m.base_f0_delta,
+        alpha: Vec2::splat(alpha_from_glossiness(1.0 - m.base_roughness)),
+    };
+    let (t, b) = n.any_orthonormal_pair();
+    let base_delta = specular_cos_f90(
+        &delta_surface,
+        m.base_f90_delta,
+        t,
+        b,
+        n,
+        v,
+        light.sun_direction,
+    ) * light.sun
+        + light.base_env
+            * (m.base_f0_delta * light.base_dfg.x
+                + Vec3::splat(m.base_f90_delta * light.base_dfg.y))
+            * light.ao;
+    (sheen * s_coat + coat + base_delta * (s_sheen * s_coat)).extend(1.0 - s_sheen * s_coat)
 }
 
 /// KHR_materials_unlit radiance of base colour `base` (linear): as bright
