@@ -641,3 +641,48 @@ fn specular_factors_and_textures_load() {
         "{e}"
     );
 }
+
+/// KHR_materials_transmission (TransmissionTest) and _volume: factors and
+/// textures are read; transmissive materials leave the G-buffer's layered
+/// path; a volume's thickness, attenuation distance (absent: infinite)
+/// and colour are read, and a negative thickness or a zero distance is an
+/// error naming the material.
+#[test]
+fn transmission_and_volume_load() {
+    let a = gltf::load(&common::gltf_sample("TransmissionTest")).expect("loads");
+    let m = |name: &str| {
+        (a.pbr.materials.iter().find(|m| m.name == name))
+            .unwrap_or_else(|| panic!("material {name}"))
+    };
+    let yellow = m("YellowTrans");
+    assert_eq!(yellow.transmission, 1.0);
+    assert!(yellow.transmits() && yellow.transmission_texture.is_none());
+    assert!(m("RedTransTexture").transmission_texture.is_some());
+    assert!(!m("Cloth Backdrop").transmits() && !m("LabelMaterial").transmits());
+    assert_eq!(yellow.thickness, 0.0);
+    assert!(yellow.attenuation_distance.is_infinite());
+    assert!(
+        !(a.warnings.iter()).any(|w| w.contains("KHR_materials_transmission")),
+        "{:?}",
+        a.warnings
+    );
+    let glass = r#"{"name":"glass","extensions":{"KHR_materials_transmission":{"transmissionFactor":0.75},"KHR_materials_volume":{"thicknessFactor":0.5,"attenuationDistance":2,"attenuationColor":[0.9,0.5,0.25]}}}"#;
+    let a = gltf::load(&common::cube_gltf("volume", "", glass)).expect("loads");
+    let g = &a.pbr.materials[0];
+    assert_eq!(
+        (g.transmission, g.thickness, g.attenuation_distance),
+        (0.75, 0.5, 2.0)
+    );
+    assert_eq!(g.attenuation_color, Vec3::new(0.9, 0.5, 0.25));
+    assert!(g.transmits() && !g.layered());
+    for (bad, key) in [
+        (r#""thicknessFactor":-1"#, "thicknessFactor"),
+        (r#""attenuationDistance":0"#, "attenuationDistance"),
+    ] {
+        let json = format!(r#"{{"name":"odd","extensions":{{"KHR_materials_volume":{{{bad}}}}}}}"#);
+        let e = gltf::load(&common::cube_gltf("volume_bad", "", &json))
+            .expect_err(bad)
+            .to_string();
+        assert!(e.contains("odd") && e.contains(key), "{e}");
+    }
+}

@@ -36,6 +36,11 @@ pub struct MaterialGpu {
     pub sheen: [f32; 4],
     /// KHR_materials_specular: rgb colour factor (linear), a specular factor.
     pub specular: [f32; 4],
+    /// KHR_materials_transmission / _volume: x transmission factor, y
+    /// thickness factor, z 1 / attenuation distance (0: none), w ior.
+    pub transmission: [f32; 4],
+    /// KHR_materials_volume: rgb attenuation colour (linear).
+    pub attenuation: [f32; 4],
     /// KHR_texture_transform per slot (SLOTS order): the 2x3 matrix's two
     /// rows (xyz), identity where the slot has none; the first row's w is
     /// the slot's UV set (0: `Vertex::uv`, 1: `Vertex::uv1`).
@@ -67,6 +72,13 @@ impl MaterialGpu {
             ],
             sheen: m.sheen_color.extend(m.sheen_roughness).to_array(),
             specular: m.specular_color.extend(m.specular).to_array(),
+            transmission: [
+                m.transmission,
+                m.thickness,
+                1.0 / m.attenuation_distance,
+                m.ior,
+            ],
+            attenuation: m.attenuation_color.extend(0.0).to_array(),
             uv: uv_rows(m),
         }
     }
@@ -104,6 +116,8 @@ pub const SLOTS: [&str; TEXTURE_SLOTS] = [
     "sheen_roughness",
     "specular",
     "specular_color",
+    "transmission",
+    "thickness",
 ];
 
 /// One material's GPU resources: (view, sampler) per slot and its uniform.
@@ -267,11 +281,11 @@ impl MaterialTextures {
             let (srgb, fallback) = (
                 [
                     true, false, false, false, true, false, false, false, false, true, false,
-                    false, true,
+                    false, true, false, false,
                 ],
                 [
                     white_srgb, white, flat, white, white_srgb, along_t, white, white, flat,
-                    white_srgb, white, white, white_srgb,
+                    white_srgb, white, white, white_srgb, white, white,
                 ],
             );
             let refs = (m.texture_refs().into_iter().zip(srgb)).zip(fallback);

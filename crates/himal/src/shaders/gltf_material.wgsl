@@ -1,6 +1,6 @@
 // A glTF material as the textured G-buffer (passes/gbuffer/textured.wgsl)
 // and the forward passes (passes/forward/forward.wgsl) bind it: the factors
-// and the thirteen texture/sampler pairs of group 1 (gpu_scene/textures.rs
+// and the fifteen texture/sampler pairs of group 1 (gpu_scene/textures.rs
 // `MaterialTextures::bind_groups`), and what both derive from them.
 #import scene
 #import color
@@ -19,9 +19,14 @@ struct MaterialGpu {
     sheen: vec4f,
     // KHR_materials_specular: rgb colour factor (linear), a specular factor
     specular: vec4f,
+    // KHR_materials_transmission / _volume: x transmission, y thickness,
+    // z 1 / attenuation distance (0: none), w ior
+    transmission: vec4f,
+    // KHR_materials_volume: rgb attenuation colour (linear)
+    attenuation: vec4f,
     // KHR_texture_transform per slot (SLOT_*): rows 2k, 2k+1 of the 2x3
     // matrix in xyz; row 2k's w is the slot's UV set (0 or 1)
-    uv: array<vec4f, 26>,
+    uv: array<vec4f, 30>,
 }
 
 const SLOT_BASE_COLOR: u32 = 0u;
@@ -37,6 +42,8 @@ const SLOT_SHEEN_COLOR: u32 = 9u;
 const SLOT_SHEEN_ROUGHNESS: u32 = 10u;
 const SLOT_SPECULAR: u32 = 11u;
 const SLOT_SPECULAR_COLOR: u32 = 12u;
+const SLOT_TRANSMISSION: u32 = 13u;
+const SLOT_THICKNESS: u32 = 14u;
 
 @group(1) @binding(0) var<uniform> material: MaterialGpu;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
@@ -68,6 +75,11 @@ const SLOT_SPECULAR_COLOR: u32 = 12u;
 @group(1) @binding(24) var specular_sampler: sampler;
 @group(1) @binding(25) var specular_color_texture: texture_2d<f32>;
 @group(1) @binding(26) var specular_color_sampler: sampler;
+// KHR_materials_transmission R, KHR_materials_volume thickness G.
+@group(1) @binding(27) var transmission_texture: texture_2d<f32>;
+@group(1) @binding(28) var transmission_sampler: sampler;
+@group(1) @binding(29) var thickness_texture: texture_2d<f32>;
+@group(1) @binding(30) var thickness_sampler: sampler;
 
 // KHR_materials_specular: the dielectric's (F0 rgb, F90) from the material's
 // F0 by its ior (`f0_ior`, Vertex::surface.y) and the two textures' samples:

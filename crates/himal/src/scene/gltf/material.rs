@@ -14,7 +14,7 @@ use super::{GltfContext, MAX_TEXTURE_SIZE};
 use crate::scene::SceneError;
 
 /// Texture slots of a material (`PbrMaterial::texture_refs`).
-pub const TEXTURE_SLOTS: usize = 13;
+pub const TEXTURE_SLOTS: usize = 15;
 
 /// Reflectance (F0) of glTF dielectrics: ior 1.5.
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
@@ -242,6 +242,22 @@ pub struct PbrMaterial {
     pub specular_texture: Option<TextureRef>,
     /// RGB (sRGB) × `specular_color`.
     pub specular_color_texture: Option<TextureRef>,
+    /// KHR_materials_transmission `transmissionFactor` in [0, 1] (0: opaque
+    /// dielectric): the share of the diffuse base that is transmitted
+    /// instead (`forward.transmission`, passes/forward).
+    pub transmission: f32,
+    /// R × `transmission`.
+    pub transmission_texture: Option<TextureRef>,
+    /// KHR_materials_volume `thicknessFactor`, in the mesh's units (0:
+    /// thin-walled, no refraction offset or attenuation).
+    pub thickness: f32,
+    /// G × `thickness`.
+    pub thickness_texture: Option<TextureRef>,
+    /// `attenuationDistance` (m, world units): the distance at which light
+    /// keeps `attenuation_color`; infinite: no absorption.
+    pub attenuation_distance: f32,
+    /// `attenuationColor`, linear.
+    pub attenuation_color: Vec3,
 }
 
 impl Default for PbrMaterial {
@@ -281,6 +297,12 @@ impl Default for PbrMaterial {
             specular_color: Vec3::ONE,
             specular_texture: None,
             specular_color_texture: None,
+            transmission: 0.0,
+            transmission_texture: None,
+            thickness: 0.0,
+            thickness_texture: None,
+            attenuation_distance: f32::INFINITY,
+            attenuation_color: Vec3::ONE,
         }
     }
 }
@@ -333,6 +355,8 @@ impl PbrMaterial {
             self.sheen_roughness_texture,
             self.specular_texture,
             self.specular_color_texture,
+            self.transmission_texture,
+            self.thickness_texture,
         ]
     }
 
@@ -352,6 +376,8 @@ impl PbrMaterial {
             &mut self.sheen_roughness_texture,
             &mut self.specular_texture,
             &mut self.specular_color_texture,
+            &mut self.transmission_texture,
+            &mut self.thickness_texture,
         ]
     }
 
@@ -374,8 +400,16 @@ impl PbrMaterial {
 
     /// Whether `forward.layers` (passes/forward) draws over this material's
     /// deferred base: a coat or sheen, or the specular the G-buffer cannot hold.
+    /// Transmissive materials have no deferred base.
     pub fn layered(&self) -> bool {
-        self.coated() || self.specular_differs()
+        !self.transmits() && (self.coated() || self.specular_differs())
+    }
+
+    /// Whether KHR_materials_transmission lets light through: such surfaces
+    /// are not in the G-buffer but drawn by `forward.transmission` over the
+    /// opaque scene they refract (passes/forward).
+    pub fn transmits(&self) -> bool {
+        !self.unlit && self.transmission > 0.0
     }
 
     /// The dielectric's F0 and F90 of KHR_materials_specular from the
@@ -389,7 +423,8 @@ impl PbrMaterial {
         (f0, s)
     }
 
-    /// Whether the material emits light (`forward.emissive`; unlit ones do not).
+    /// Whether the material emits light (`forward.emissive`; unlit ones do
+    /// not, transmissive ones add their emission in `forward.transmission`).
     pub fn emits(&self) -> bool {
         !self.unlit && self.emissive.max_element() > 0.0
     }
@@ -684,6 +719,35 @@ pub(super) fn material(
         out.specular_texture = json_texture_ref(cx, ext, sp.get("specularTexture"), textures)?;
         out.specular_color_texture =
             json_texture_ref(cx, ext, sp.get("specularColorTexture"), textures)?;
+    }
+    const TRANSMISSION: &str = "KHR_materials_transmission";
+    if let Some(t) = m.extension_value(TRANSMISSION) {
+        let ext = &at(TRANSMISSION);
+        out.transmission = json_f32(cx, ext, t, "transmissionFactor", 0.0)?.clamp(0.0, 1.0);
+        out.transmission_texture =
+            json_texture_ref(cx, ext, t.get("transmissionTexture"), textures)?;
+    }
+    const VOLUME: &str = "KHR_materials_volume";
+    if let Some(v) = m.extension_value(VOLUME) {
+        let ext = &at(VOLUME);
+        out.thickness = json_f32(cx, ext, v, "thicknessFactor", 0.0)?;
+        if out.thickness < 0.0 {
+            return Err(cx.invalid(format!(
+                "{ext} thicknessFactor {} is negative",
+                out.thickness
+            )));
+        }
+        out.thickness_texture = json_texture_ref(cx, ext, v.get("thicknessTexture"), textures)?;
+        // Absent: infinite (no absorption); the JSON cannot spell infinity.
+        out.attenuation_distance = json_f32(cx, ext, v, "attenuationDistance", f32::INFINITY)?;
+        if out.attenuation_distance <= 0.0 {
+            return Err(cx.invalid(format!(
+                "{ext} attenuationDistance {} is not positive",
+                out.attenuation_distance
+            )));
+        }
+        out.attenuation_color =
+            json_vec3(cx, ext, v, "attenuationColor", Vec3::ONE)?.clamp(Vec3::ZERO, Vec3::ONE);
     }
     Ok(out)
 }

@@ -382,12 +382,12 @@ pub fn load_from_bytes_with(
         }
     }
     let blended_layers: Vec<String> = (pbr.materials.iter())
-        .filter(|m| m.coated() && m.alpha_mode == AlphaMode::Blend)
+        .filter(|m| m.coated() && (m.alpha_mode == AlphaMode::Blend || m.transmits()))
         .map(|m| m.name.clone())
         .collect();
     if !blended_layers.is_empty() {
         warnings.push(format!(
-            "alpha BLEND materials are drawn without their clearcoat or sheen: {}",
+            "alpha BLEND and transmissive materials are drawn without their clearcoat or sheen: {}",
             names(blended_layers)
         ));
     }
@@ -590,7 +590,7 @@ fn skinned(
 
 /// The extensions the loader reads (the gltf crate's typed ones and
 /// those read from the JSON).
-pub const IMPLEMENTED_EXTENSIONS: [&str; 12] = [
+pub const IMPLEMENTED_EXTENSIONS: [&str; 14] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
@@ -599,8 +599,10 @@ pub const IMPLEMENTED_EXTENSIONS: [&str; 12] = [
     "KHR_materials_ior",
     "KHR_materials_sheen",
     "KHR_materials_specular",
+    "KHR_materials_transmission",
     "KHR_materials_unlit",
     "KHR_materials_variants",
+    "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
