@@ -8,7 +8,7 @@
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
-//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.unlit ─> forward.layers ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
+//!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.unlit ─> forward.layers ─> forward.scene_color(.mipN) ─> forward.transmission ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
 //!          │                                                                 └──────────────────────> post.tonemap <───────┘─> output
 //!          │        (--aa: post.tonemap ─> [aa.smaa.edges ─> .weights ─> .blend] ─> [aa.resolve ─> aa.taa ─> aa.unsharp] ─> output,
@@ -509,7 +509,7 @@ pub fn build<'a>(
         .lighting
         .add(ctx, &mut g, size, gbuffer, lighting_inputs);
     let hdr = passes.sky.add(&mut g, hdr, gbuffer.depth, None);
-    // glTF emission and alpha BLEND surfaces (passes/forward).
+    // glTF emission, layers, transmission and alpha BLEND surfaces (passes/forward).
     let forward = ForwardInputs {
         scene,
         envmap: &passes.envmap,
@@ -517,7 +517,13 @@ pub fn build<'a>(
         shadow_mask,
         ao: ao_targets.map(|t| t.ao),
     };
-    let hdr = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
+    let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
+    let hdr = forward.hdr;
+    // Transmissive surfaces wrote their depth: later readers see them.
+    let gbuffer = GBuffer {
+        depth: forward.depth,
+        ..gbuffer
+    };
     let measured = passes.luminance.add(&mut g, hdr, size, luminance);
     let exposure = if post.adaptation {
         passes

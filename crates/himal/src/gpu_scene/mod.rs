@@ -326,6 +326,10 @@ pub struct SceneGpu {
     /// glTF alpha BLEND objects with their material and world bounds'
     /// centre (drawn by `forward.blend`, back to front; not in the G-buffer).
     pub draws_blend: Vec<(Draw, usize, glam::Vec3)>,
+    /// glTF objects with a KHR_materials_transmission material (any alpha
+    /// mode), drawn by `forward.transmission` over a copy of the opaque
+    /// scene they refract; not in the G-buffer, not shadow casters.
+    pub draws_transmissive: Vec<(Draw, usize)>,
     /// Opaque / mask glTF objects whose material emits (`forward.emissive`);
     /// each is in `draws_textured` too.
     pub draws_emissive: Vec<(Draw, usize)>,
@@ -493,6 +497,7 @@ impl SceneGpu {
         let (mut draws_textured, mut draws_blend, mut draws_emissive) =
             (Vec::new(), Vec::new(), Vec::new());
         let (mut draws_layered, mut draws_unlit) = (Vec::new(), Vec::new());
+        let mut draws_transmissive = Vec::new();
         let mut animated = Vec::new();
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
@@ -544,7 +549,11 @@ impl SceneGpu {
             match (scene.pbr.material_of(object.mesh), object.foliage) {
                 (Some(material), _) => {
                     let m = scene.pbr.materials.get(material);
-                    if m.is_some_and(|m| m.alpha_mode == crate::scene::gltf::AlphaMode::Blend) {
+                    if m.is_some_and(|m| m.transmits()) {
+                        draws_transmissive.push((draw, material));
+                    } else if m
+                        .is_some_and(|m| m.alpha_mode == crate::scene::gltf::AlphaMode::Blend)
+                    {
                         let bounds = scene.meshes[object.mesh]
                             .bounds
                             .transform(&object.transform);
@@ -647,6 +656,7 @@ impl SceneGpu {
                 draws_vegetation,
                 draws_textured,
                 draws_blend,
+                draws_transmissive,
                 draws_emissive,
                 draws_layered,
                 draws_unlit,

@@ -39,51 +39,18 @@ fn vs_main(in: GBufferVertexIn) -> ForwardVertexOut {
 
 @fragment
 fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
-    let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
-    let alpha = material.base_color.a * base.a;
-    let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
-    let at = textureSample(anisotropy_texture, anisotropy_sampler, material_uv(SLOT_ANISOTROPY, in.uv)).xyz;
-    let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
-    let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
-    let emissive = material.emissive.rgb * textureSample(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv)).rgb;
-    let spec_a = textureSample(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv)).a;
-    let spec_rgb = textureSample(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv)).rgb;
+    let f = forward_surface(in, front);
     if (material.alpha.z > 0.5) {
-        let c = unlit_radiance(in.color.rgb * base.rgb, lighting.sun_direction.xyz,
+        let c = unlit_radiance(f.albedo, lighting.sun_direction.xyz,
             lighting.sun_illuminance.rgb, lighting.sky_irradiance);
-        let a = saturate(alpha);
+        let a = saturate(f.alpha);
         return vec4f(c * a, a);
     }
-    let facing = gltf_facing(in.normal, in.tangent, front);
-    let tangent = facing.tangent;
-    let n_mapped = apply_normal_map(facing.n, tangent, gltf_scaled_normal(ts, material.params.x));
-    let c = cos(material.params.w);
-    let s = sin(material.params.w);
-    let d0 = at.xy * 2.0 - 1.0;
-    let d = vec2f(c * d0.x - s * d0.y, s * d0.x + c * d0.y);
-    let f = shading_frame(n_mapped, tangent);
-    let w = select(1.0, -1.0, tangent.w < 0.0);
-    let tbn = shading_frame(n_mapped, vec4f(f[0] * d.x + f[1] * (w * d.y), 1.0));
-
-    let roughness = saturate((1.0 - in.surface.x) * mr.g);
-    let metallic = saturate(in.surface.z * mr.b);
-    let ao = 1.0 + material.params.y * (occlusion - 1.0);
-    let anisotropy = anisotropy_from_khr(material.params.z * at.z, roughness * roughness);
-    let albedo = in.color.rgb * base.rgb;
-    var surf = surface_from_material(albedo, 1.0 - roughness, 0.0, metallic, anisotropy);
-    // KHR_materials_specular: the dielectric's coloured F0 and its F90.
-    let fresnel = gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb);
-    surf.f0 = mix(fresnel.rgb, albedo, metallic);
-    let f90 = mix(fresnel.w, 1.0, metallic);
     let v = to_eye(view, in.world);
-    let n_o_v = max(dot(tbn[2], v), 1e-4);
-    let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, anisotropy));
-    let lod = roughness * f32(textureNumLevels(env_specular) - 1u);
-    let prefiltered = textureSampleLevel(env_specular, env_sampler, r, lod).rgb;
-    let ab = textureSampleLevel(dfg_lut, env_sampler, vec2f(n_o_v, roughness), 0.0).xy;
-    return forward_shade_premultiplied(surf, f90, tbn[0], tbn[1], tbn[2], v,
+    let env = forward_env(f, v, env_specular, env_sampler, dfg_lut);
+    return forward_shade_premultiplied(f.s, f.f90, f.tbn[0], f.tbn[1], f.tbn[2], v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
-        prefiltered, ab, ao, emissive, alpha);
+        env.prefiltered, env.dfg, f.ao, f.emissive, f.alpha);
 }
 
 @fragment

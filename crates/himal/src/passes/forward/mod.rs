@@ -5,6 +5,11 @@
 //! surfaces' base colour ([`reference::unlit_radiance`]), `forward.layers` puts their clearcoat and sheen over the deferred base
 //! (depth Equal, One / OneMinusSrcAlpha: `layers.wgsl`, shading in
 //! `shaders/layers.wgsl`, CPU twin [`reference::layers_shade`]), and
+//! `forward.transmission` draws KHR_materials_transmission surfaces over
+//! `forward.scene_color` (a copy of the opaque scene and its mip chain,
+//! `scene_color.wgsl`), refracted through their KHR_materials_volume and
+//! writing depth (`transmission.wgsl`, CPU twin
+//! [`reference::transmitted_radiance`]), and
 //! `forward.blend` draws alpha BLEND materials back to front (per object,
 //! by the distance of its bounds' centre) with premultiplied alpha into the
 //! HDR target, lit by the unshadowed sun, the sky SH and the filtered
@@ -32,6 +37,8 @@ pub enum ForwardKind {
     Unlit,
     /// `forward.layers`: clearcoat and sheen over the deferred base.
     Layers,
+    /// `forward.transmission`: transmissive surfaces over the opaque scene.
+    Transmission,
     /// `forward.blend`: alpha BLEND surfaces, premultiplied over.
     Blend,
 }
@@ -63,6 +70,7 @@ impl ForwardKey {
         let all = (of(ForwardKind::Emissive, &scene.draws_emissive).into_iter())
             .chain(of(ForwardKind::Unlit, &scene.draws_unlit))
             .chain(of(ForwardKind::Layers, &scene.draws_layered))
+            .chain(of(ForwardKind::Transmission, &scene.draws_transmissive))
             .chain(blend);
         for (kind, mat) in all {
             if let Some(binding) = m.materials.get(mat) {
@@ -93,6 +101,14 @@ pub struct ForwardInputs<'a> {
     pub ao: Option<TextureHandle>,
 }
 
+/// What the forward passes leave: the HDR target and the depth, written by
+/// the transmissive surfaces (later readers must use this version).
+#[derive(Clone, Copy, Debug)]
+pub struct ForwardOut {
+    pub hdr: TextureHandle,
+    pub depth: TextureHandle,
+}
+
 /// Indices of `centres` ordered far to near from `camera` (ties keep their order).
 pub fn back_to_front(centres: &[Vec3], camera: Vec3) -> Vec<usize> {
     let mut order: Vec<usize> = (0..centres.len()).collect();
@@ -110,12 +126,19 @@ pub fn back_to_front(centres: &[Vec3], camera: Vec3) -> Vec<usize> {
 pub struct ForwardPass {
     program: Program,
     layers: Program,
+    transmission: Program,
+    /// `forward.scene_color`: the copy and the box mips (`scene_color.wgsl`).
+    scene_color: Program,
+    copy: wgpu::ComputePipeline,
+    downsample: wgpu::ComputePipeline,
     /// `SceneGpu::draws_blend` indices, far to near (see [`ForwardPass::sort`]).
     order: Vec<usize>,
     /// The materials' bind groups of `forward.wgsl`, made once per scene.
     pub material_groups: crate::gpu_scene::textures::MaterialGroups,
     /// The same for `layers.wgsl`.
     pub layer_groups: crate::gpu_scene::textures::MaterialGroups,
+    /// The same for `transmission.wgsl`.
+    pub transmission_groups: crate::gpu_scene::textures::MaterialGroups,
     /// E(n.v, roughness) of the sheen lobe ([`reference::sheen_albedo_table`]), R32Float.
     sheen_albedo: wgpu::TextureView,
 }
@@ -143,12 +166,18 @@ impl ForwardPass {
             wgpu::util::TextureDataOrder::LayerMajor,
             bytemuck::cast_slice(reference::sheen_albedo_table()),
         );
+        let scene_color = Program::new(ctx, "passes/forward/scene_color.wgsl")?;
         Ok(Self {
             program: Program::new(ctx, "passes/forward/forward.wgsl")?,
             layers: Program::new(ctx, "passes/forward/layers.wgsl")?,
+            transmission: Program::new(ctx, "passes/forward/transmission.wgsl")?,
+            copy: scene_color.compute_pipeline(ctx, "cs_copy", &[])?,
+            downsample: scene_color.compute_pipeline(ctx, "cs_downsample", &[])?,
+            scene_color,
             order: Vec::new(),
             material_groups: Default::default(),
             layer_groups: Default::default(),
+            transmission_groups: Default::default(),
             sheen_albedo: table.create_view(&Default::default()),
         })
     }
@@ -199,6 +228,16 @@ impl ForwardPass {
                 let over = keep_alpha(F::One, F::OneMinusSrcAlpha);
                 (&self.layers, over, Z::Equal, "fs_layers", "forward.layers")
             }
+            ForwardKind::Transmission => {
+                let state = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
+                (
+                    &self.transmission,
+                    state,
+                    Z::Greater,
+                    "fs_transmission",
+                    "forward.transmission",
+                )
+            }
             ForwardKind::Blend => {
                 let state = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
                 // reverse-Z: nearer is larger
@@ -225,7 +264,9 @@ impl ForwardPass {
             targets: &targets,
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
+                // Transmissive surfaces are the nearest opaque-like ones
+                // later passes (blend, TAA, views) must see.
+                depth_write_enabled: Some(key.kind == ForwardKind::Transmission),
                 depth_compare: Some(compare),
                 stencil: Default::default(),
                 bias: Default::default(),
@@ -249,10 +290,10 @@ impl ForwardPass {
         self.order = back_to_front(&centres, camera);
     }
 
-    /// Adds `forward.emissive`, `forward.unlit`, `forward.layers` and
-    /// `forward.blend` (each
-    /// only when the scene has such draws) on top of `hdr`; returns the new
-    /// HDR version.
+    /// Adds `forward.emissive`, `forward.unlit`, `forward.layers`,
+    /// `forward.scene_color` and `forward.transmission`, and `forward.blend`
+    /// (each only when the scene has such draws) on top of `hdr`; returns
+    /// the new HDR and depth versions.
     pub fn add<'a>(
         &'a self,
         ctx: &GpuContext,
@@ -260,18 +301,18 @@ impl ForwardPass {
         hdr: TextureHandle,
         depth: TextureHandle,
         inputs: ForwardInputs<'a>,
-    ) -> TextureHandle {
+    ) -> ForwardOut {
         let scene = inputs.scene;
-        let mut hdr = hdr;
+        let mut out = ForwardOut { hdr, depth };
         if !scene.draws_emissive.is_empty() {
             let draws: &'a [(Draw, usize)] = &scene.draws_emissive;
             let node = graph.raster("forward.emissive", &self.program);
-            hdr = self.add_pass(ctx, node, ForwardKind::Emissive, hdr, depth, draws, inputs);
+            out = self.add_pass(ctx, node, ForwardKind::Emissive, out, draws, inputs);
         }
         if !scene.draws_unlit.is_empty() {
             let draws: &'a [(Draw, usize)] = &scene.draws_unlit;
             let node = graph.raster("forward.unlit", &self.program);
-            hdr = self.add_pass(ctx, node, ForwardKind::Unlit, hdr, depth, draws, inputs);
+            out = self.add_pass(ctx, node, ForwardKind::Unlit, out, draws, inputs);
         }
         if !scene.draws_layered.is_empty() {
             let draws: &'a [(Draw, usize)] = &scene.draws_layered;
@@ -279,7 +320,14 @@ impl ForwardPass {
                 .optional("shadow_mask", inputs.shadow_mask, Fallback::White)
                 .optional("ao", inputs.ao, Fallback::White)
                 .external("sheen_albedo_load", &self.sheen_albedo);
-            hdr = self.add_pass(ctx, node, ForwardKind::Layers, hdr, depth, draws, inputs);
+            out = self.add_pass(ctx, node, ForwardKind::Layers, out, draws, inputs);
+        }
+        if !scene.draws_transmissive.is_empty() {
+            let behind = self.add_scene_color(graph, out.hdr);
+            let draws: &'a [(Draw, usize)] = &scene.draws_transmissive;
+            let node = (graph.raster("forward.transmission", &self.transmission))
+                .read("scene_color", behind);
+            out = self.add_pass(ctx, node, ForwardKind::Transmission, out, draws, inputs);
         }
         if !scene.draws_blend.is_empty() {
             let mut draws: Vec<(Draw, usize)> = self
@@ -297,9 +345,55 @@ impl ForwardPass {
                     .collect();
             }
             let node = graph.raster("forward.blend", &self.program);
-            hdr = self.add_pass(ctx, node, ForwardKind::Blend, hdr, depth, draws, inputs);
+            out = self.add_pass(ctx, node, ForwardKind::Blend, out, draws, inputs);
         }
-        hdr
+        out
+    }
+
+    /// `forward.scene_color` (a copy of `hdr`, the opaque scene, into mip 0)
+    /// and `forward.scene_color.mipN` (its box mips, each from its parent);
+    /// returns the chain.
+    fn add_scene_color<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        hdr: TextureHandle,
+    ) -> TextureHandle {
+        let size = graph
+            .texture_desc(hdr)
+            .map_or((1, 1), |d| (d.width, d.height));
+        let levels = 32 - size.0.max(size.1).max(1).leading_zeros();
+        let desc = crate::graph::TextureDesc {
+            mip_levels: levels,
+            ..crate::graph::TextureDesc::new_2d(size.0, size.1, HDR_FORMAT)
+        };
+        let chain = graph.create_texture("forward.scene_color", desc);
+        let mip = |level| wgpu::TextureViewDescriptor {
+            base_mip_level: level,
+            mip_level_count: Some(1),
+            ..Default::default()
+        };
+        let groups = |level: u32| {
+            let (w, h) = ((size.0 >> level).max(1), (size.1 >> level).max(1));
+            [w.div_ceil(8), h.div_ceil(8), 1]
+        };
+        let written = (graph.compute("forward.scene_color", &self.scene_color))
+            .compute_pipeline(Ok(self.copy.clone()))
+            .read("parent", hdr)
+            .storage_view("child", chain, mip(0))
+            .dispatch(groups(0));
+        let mut chain = written.storage.first().copied().unwrap_or(chain);
+        for level in 1..levels {
+            let written = (graph.compute(
+                &format!("forward.scene_color.mip{level}"),
+                &self.scene_color,
+            ))
+            .compute_pipeline(Ok(self.downsample.clone()))
+            .read_view("parent", chain, mip(level - 1))
+            .storage_view("child", chain, mip(level))
+            .dispatch(groups(level));
+            chain = written.storage.first().copied().unwrap_or(chain);
+        }
+        chain
     }
 
     /// Completes forward node `node` over `draws` (view and lighting are
@@ -310,14 +404,14 @@ impl ForwardPass {
         ctx: &GpuContext,
         node: crate::graph::Node<'_, 'a>,
         kind: ForwardKind,
-        hdr: TextureHandle,
-        depth: TextureHandle,
+        targets: ForwardOut,
         draws: impl AsRef<[(Draw, usize)]> + 'a,
         inputs: ForwardInputs<'a>,
-    ) -> TextureHandle {
+    ) -> ForwardOut {
         let scene = inputs.scene;
         let (program, groups) = match kind {
             ForwardKind::Layers => (&self.layers, &self.layer_groups),
+            ForwardKind::Transmission => (&self.transmission, &self.transmission_groups),
             _ => (&self.program, &self.material_groups),
         };
         // The permutations these draws use, from the shared cache.
@@ -335,48 +429,57 @@ impl ForwardPass {
                 }
             }
         }
-        node.uniform("objects", &scene.objects)
+        let node = node
+            .uniform("objects", &scene.objects)
             .uniform("instances", &scene.instances)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &inputs.envmap.sampler)
             .external("dfg_lut", &inputs.envmap.dfg_view)
             .external_group(1)
-            .color(hdr, wgpu::LoadOp::Load)
-            .depth_test(depth)
-            .record(move |ctx, rp| {
-                let Some(m) = &scene.materials else {
-                    return Ok(());
+            .color(targets.hdr, wgpu::LoadOp::Load);
+        let node = if kind == ForwardKind::Transmission {
+            let ops = wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            };
+            node.depth(targets.depth, None, ops)
+        } else {
+            node.depth_test(targets.depth)
+        };
+        let written = node.record(move |ctx, rp| {
+            let Some(m) = &scene.materials else {
+                return Ok(());
+            };
+            let groups = groups.get(scene.id, m, program, ctx.device)?;
+            scene.bind_geometry(rp);
+            for (draw, material) in draws.as_ref() {
+                let Some((group, binding)) = groups.get(*material).zip(m.materials.get(*material))
+                else {
+                    continue;
                 };
-                let groups = groups.get(scene.id, m, program, ctx.device)?;
-                scene.bind_geometry(rp);
-                for (draw, material) in draws.as_ref() {
-                    let Some((group, binding)) =
-                        groups.get(*material).zip(m.materials.get(*material))
-                    else {
-                        continue;
-                    };
-                    let key = ForwardKey {
-                        kind,
-                        double_sided: binding.double_sided,
-                    };
-                    match pipelines.iter().find(|(k, _)| *k == key) {
-                        Some((_, Ok(p))) => rp.set_pipeline(p),
-                        Some((_, Err(e))) => {
-                            return Err(GpuError::Other(format!(
-                                "forward permutation {key:?}: {e}"
-                            )));
-                        }
-                        None => {
-                            return Err(GpuError::Other(format!(
-                                "forward permutation {key:?} was not fetched"
-                            )));
-                        }
+                let key = ForwardKey {
+                    kind,
+                    double_sided: binding.double_sided,
+                };
+                match pipelines.iter().find(|(k, _)| *k == key) {
+                    Some((_, Ok(p))) => rp.set_pipeline(p),
+                    Some((_, Err(e))) => {
+                        return Err(GpuError::Other(format!("forward permutation {key:?}: {e}")));
                     }
-                    rp.set_bind_group(1, group, &[]);
-                    scene.draw_list(rp, std::slice::from_ref(draw));
+                    None => {
+                        return Err(GpuError::Other(format!(
+                            "forward permutation {key:?} was not fetched"
+                        )));
+                    }
                 }
-                Ok(())
-            })
-            .colors[0]
+                rp.set_bind_group(1, group, &[]);
+                scene.draw_list(rp, std::slice::from_ref(draw));
+            }
+            Ok(())
+        });
+        ForwardOut {
+            hdr: written.colors[0],
+            depth: written.depth.unwrap_or(targets.depth),
+        }
     }
 }

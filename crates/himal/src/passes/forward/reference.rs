@@ -7,7 +7,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::math::brdf::{
-    MIN_N_O_V, Surface, alpha_from_glossiness, brdf_cos_f90, f_schlick, specular_cos_f90,
+    MIN_ALPHA, MIN_N_O_V, Surface, alpha_from_glossiness, brdf_cos_f90, d_ggx_aniso, f_schlick,
+    specular_cos_f90, v_smith_ggx_correlated_aniso,
 };
 use crate::math::sh::Sh9Rgb;
 
@@ -49,6 +50,106 @@ pub fn forward_shade_premultiplied(
     c += emissive;
     let a = alpha.clamp(0.0, 1.0);
     (c * a).extend(a)
+}
+
+/// KHR_materials_transmission's BTDF roughness: `roughness` (perceptual
+/// or alpha) × clamp(2 ior − 2, 0, 1). Twin of `transmission_roughness`
+/// in shaders/forward.wgsl.
+pub fn transmission_roughness(roughness: f32, ior: f32) -> f32 {
+    roughness * (2.0 * ior - 2.0).clamp(0.0, 1.0)
+}
+
+/// The mip of the opaque scene's chain sampled behind a transmissive
+/// surface on a `width`-pixel screen: log2(width) × the BTDF's roughness.
+pub fn transmission_lod(roughness: f32, ior: f32, width: f32) -> f32 {
+    width.log2() * transmission_roughness(roughness, ior)
+}
+
+/// KHR_materials_volume's Beer–Lambert transmittance over `distance`:
+/// colour^(distance / attenuation distance); `inv_distance` = 1 / the
+/// attenuation distance, 0 for none.
+pub fn volume_attenuation(distance: f32, inv_distance: f32, colour: Vec3) -> Vec3 {
+    if inv_distance <= 0.0 {
+        return Vec3::ONE;
+    }
+    let ln = colour.max(Vec3::splat(1e-6)).to_array().map(f32::ln);
+    (Vec3::from_array(ln) * (distance * inv_distance)).exp()
+}
+
+/// The sun through a transmissive surface: (1 − F) D V n.l′ toward the sun
+/// direction `l` mirrored through the surface's plane.
+#[allow(clippy::too_many_arguments)]
+pub fn transmission_sun_cos(
+    f0: Vec3,
+    f90: f32,
+    alpha_t: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    l: Vec3,
+) -> Vec3 {
+    let l_m = l - 2.0 * n.dot(l) * n;
+    let n_o_l = n.dot(l_m);
+    if n_o_l.is_nan() || n_o_l <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let hv = v + l_m;
+    let h = if hv.length_squared() > 1e-30 {
+        hv.normalize()
+    } else {
+        n
+    };
+    let n_o_h = n.dot(h);
+    if n_o_h <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let n_o_v = n.dot(v).max(MIN_N_O_V);
+    let a = alpha_t.max(MIN_ALPHA);
+    let d = d_ggx_aniso(n_o_h, t.dot(h), b.dot(h), a, a);
+    let vis = v_smith_ggx_correlated_aniso(
+        n_o_v,
+        n_o_l,
+        t.dot(v),
+        b.dot(v),
+        t.dot(l_m),
+        b.dot(l_m),
+        a,
+        a,
+    );
+    (Vec3::ONE - f_schlick(f0, f90, v.dot(h))) * (d * vis * n_o_l)
+}
+
+/// What light reaches a transmissive fragment from behind.
+#[derive(Clone, Debug)]
+pub struct TransmittedLight {
+    /// The opaque scene's radiance at the refracted exit point (the mip chain's sample).
+    pub behind: Vec3,
+    /// The volume's transmittance along the refracted path.
+    pub transmittance: Vec3,
+}
+
+/// Radiance transmitted toward the eye by a surface with Fresnel (`f0`,
+/// `f90`), split-sum table sample `dfg`, transmitted albedo `t_albedo`
+/// (transmission × the dielectric's base colour) and BTDF alpha `alpha_t`:
+/// t_albedo × transmittance × (behind × (1 − f0 A − f90 B) + sun lobe).
+/// Twin of `transmitted_radiance` in shaders/forward.wgsl.
+#[allow(clippy::too_many_arguments)]
+pub fn transmitted_radiance(
+    f0: Vec3,
+    f90: f32,
+    dfg: Vec2,
+    t_albedo: Vec3,
+    light: &TransmittedLight,
+    alpha_t: f32,
+    (t, b, n): (Vec3, Vec3, Vec3),
+    v: Vec3,
+    sun_direction: Vec3,
+    sun_illuminance: Vec3,
+) -> Vec3 {
+    let through = light.behind * (Vec3::ONE - (f0 * dfg.x + Vec3::splat(f90 * dfg.y)));
+    let sun = transmission_sun_cos(f0, f90, alpha_t, t, b, n, v, sun_direction) * sun_illuminance;
+    t_albedo * light.transmittance * (through + sun)
 }
 
 /// Premultiplied `src` over `dst` (blend One, OneMinusSrcAlpha).
