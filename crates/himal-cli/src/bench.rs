@@ -85,11 +85,19 @@ pub fn group(pass: &str) -> &'static str {
     if pass.starts_with("terrain.shadow") || pass.starts_with("terrain.static") {
         return "shadows";
     }
+    // See-through surfaces are the talk's blended passes; the forward
+    // additions to opaque surfaces (emission, unlit, layers) are lighting.
+    if ["forward.blend", "forward.transmission", "forward.scene_color"]
+        .iter()
+        .any(|p| pass.starts_with(p))
+    {
+        return "blended";
+    }
     match pass.split('.').next().unwrap_or("") {
         "shadows" => "shadows",
         "terrain" => "G-buffer",
         "gbuffer" => "G-buffer",
-        "lighting" | "sky" | "skyocc" | "ao" | "envmap" => "lighting",
+        "lighting" | "sky" | "skyocc" | "ao" | "envmap" | "forward" => "lighting",
         "blended" => "blended",
         "post" => "post",
         "aa" => "anti-aliasing",
@@ -444,6 +452,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// E5's groups: see-through surfaces are "blended", forward additions
+    /// to opaque surfaces are lighting (both read "misc" before).
+    #[test]
+    fn forward_passes_fall_in_their_budget_groups() {
+        for pass in [
+            "forward.blend",
+            "forward.transmission",
+            "forward.scene_color",
+            "forward.scene_color.mip3",
+        ] {
+            assert_eq!(group(pass), "blended", "{pass}");
+        }
+        for pass in ["forward.emissive", "forward.unlit", "forward.layers"] {
+            assert_eq!(group(pass), "lighting", "{pass}");
+        }
+        assert_eq!(group("shadows.mask"), "shadows");
+    }
 
     /// A pass that runs one frame in eight used to add its median to the
     /// total: 1 ms every frame + 8 ms one frame in eight read 9 ms, where
