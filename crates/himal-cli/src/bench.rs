@@ -87,9 +87,13 @@ pub fn group(pass: &str) -> &'static str {
     }
     // See-through surfaces are the talk's blended passes; the forward
     // additions to opaque surfaces (emission, unlit, layers) are lighting.
-    if ["forward.blend", "forward.transmission", "forward.scene_color"]
-        .iter()
-        .any(|p| pass.starts_with(p))
+    if [
+        "forward.blend",
+        "forward.transmission",
+        "forward.scene_color",
+    ]
+    .iter()
+    .any(|p| pass.starts_with(p))
     {
         return "blended";
     }
