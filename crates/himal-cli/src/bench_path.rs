@@ -23,8 +23,18 @@ pub struct PathFrame {
     pub stream_ms: f64,
     /// The streamer's own update (inside `stream_ms`; the rest writes the pools).
     pub update_ms: f64,
+    /// Streaming's other phases (inside `stream_ms`): terrain tiles,
+    /// pool records, L2 and S2 told of new sectors.
+    pub tiles_ms: f64,
+    pub records_ms: f64,
+    pub follow_ms: f64,
     pub record_ms: f64,
     pub submit_ms: f64,
+    /// The render thread's own CPU time over plan, record and submit, and
+    /// over its streaming ([`himal::clock`]: without the time the
+    /// scheduler gave its core to other threads).
+    pub thread_ms: f64,
+    pub stream_thread_ms: f64,
     pub gpu_ms: f64,
     pub gbuffer_draws: u32,
     pub shadow_draws: u32,
@@ -53,20 +63,34 @@ impl PathFrame {
     pub fn cpu_ms(&self) -> f64 {
         self.plan_ms + self.record_ms + self.submit_ms
     }
+
+    /// `cpu_ms` less streaming, and `thread_ms` less streaming.
+    fn cpu_without_streaming(&self, thread: bool) -> f64 {
+        if thread {
+            self.thread_ms - self.stream_thread_ms
+        } else {
+            self.cpu_ms() - self.stream_ms
+        }
+    }
 }
 
-const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,record_ms,submit_ms,cpu_ms,gpu_ms,gbuffer_draws,shadow_draws,static_tiles,static_texels,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
+const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,tiles_ms,records_ms,follow_ms,record_ms,submit_ms,cpu_ms,thread_ms,stream_thread_ms,gpu_ms,gbuffer_draws,shadow_draws,static_tiles,static_texels,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
 
 fn csv_row(i: usize, f: &PathFrame) -> String {
     format!(
-        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         f.t,
         f.plan_ms,
         f.stream_ms,
         f.update_ms,
+        f.tiles_ms,
+        f.records_ms,
+        f.follow_ms,
         f.record_ms,
         f.submit_ms,
         f.cpu_ms(),
+        f.thread_ms,
+        f.stream_thread_ms,
         f.gpu_ms,
         f.gbuffer_draws,
         f.shadow_draws,
@@ -224,16 +248,23 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
         let world = frame.world.clone().unwrap_or_else(|| himal::WorldFrame {
             stream: Default::default(),
             stream_ms: 0.0,
+            stream_times: Default::default(),
             terrain: None,
         });
+        let st = world.stream_times;
         let s = world.stream;
         let f = PathFrame {
             t,
             plan_ms: frame.cpu.plan_ms,
             stream_ms: world.stream_ms,
             update_ms: s.cpu_s * 1e3,
+            tiles_ms: st.tiles.wall_ms,
+            records_ms: st.records.wall_ms,
+            follow_ms: st.follow.wall_ms,
             record_ms: frame.cpu.record_ms,
             submit_ms: frame.cpu.submit_ms,
+            thread_ms: frame.cpu.thread_ms,
+            stream_thread_ms: st.total.cpu_ms,
             gpu_ms: frame.timings.iter().map(|t| t.gpu_ms).sum(),
             gbuffer_draws: frame.gbuffer_draws,
             shadow_draws: frame.shadows.draws,
@@ -373,9 +404,14 @@ pub struct Report {
     pub plan: Stat,
     pub stream: Stat,
     pub update: Stat,
+    pub tiles_ms: Stat,
+    pub records: Stat,
+    pub follow: Stat,
     pub record: Stat,
     pub submit: Stat,
     pub cpu: Stat,
+    pub thread: Stat,
+    pub stream_thread: Stat,
     pub gpu: Stat,
     pub gbuffer_draws: Stat,
     pub shadow_draws: Stat,
@@ -396,23 +432,45 @@ pub struct Report {
     pub upload_total: u64,
     pub evicted: u64,
     /// Frames whose CPU time exceeds twice the median, and how many of
-    /// them only because of streaming (under twice the median without it).
+    /// them only because of streaming (under twice the median without it) ...
     pub slow: usize,
     pub slow_streaming: usize,
+    /// ... and the same on the render thread's CPU clock.
+    pub slow_thread: usize,
+    pub slow_thread_streaming: usize,
+}
+
+/// Frames over twice the median of `total`, and how many of them are
+/// under it without their streaming.
+fn slow_frames(f: &[PathFrame], thread: bool) -> (usize, usize) {
+    let total = |x: &PathFrame| if thread { x.thread_ms } else { x.cpu_ms() };
+    let bar = 2.0 * Stat::of(f, total).median;
+    let slow: Vec<&PathFrame> = f.iter().filter(|x| total(x) > bar).collect();
+    let streaming = slow
+        .iter()
+        .filter(|x| x.cpu_without_streaming(thread) <= bar)
+        .count();
+    (slow.len(), streaming)
 }
 
 impl Report {
     pub fn new(f: &[PathFrame]) -> Report {
         let cpu = Stat::of(f, PathFrame::cpu_ms);
-        let slow: Vec<&PathFrame> = f.iter().filter(|x| x.cpu_ms() > 2.0 * cpu.median).collect();
+        let (slow, slow_streaming) = slow_frames(f, false);
+        let (slow_thread, slow_thread_streaming) = slow_frames(f, true);
         Report {
             frames: f.len(),
             plan: Stat::of(f, |x| x.plan_ms),
             stream: Stat::of(f, |x| x.stream_ms),
             update: Stat::of(f, |x| x.update_ms),
+            tiles_ms: Stat::of(f, |x| x.tiles_ms),
+            records: Stat::of(f, |x| x.records_ms),
+            follow: Stat::of(f, |x| x.follow_ms),
             record: Stat::of(f, |x| x.record_ms),
             submit: Stat::of(f, |x| x.submit_ms),
             cpu,
+            thread: Stat::of(f, |x| x.thread_ms),
+            stream_thread: Stat::of(f, |x| x.stream_thread_ms),
             gpu: Stat::of(f, |x| x.gpu_ms),
             gbuffer_draws: Stat::of(f, |x| x.gbuffer_draws.into()),
             shadow_draws: Stat::of(f, |x| x.shadow_draws.into()),
@@ -432,11 +490,10 @@ impl Report {
             uploaded: f.iter().map(|x| u64::from(x.uploaded)).sum(),
             upload_total: f.iter().map(|x| x.upload_bytes).sum(),
             evicted: f.iter().map(|x| u64::from(x.evicted)).sum(),
-            slow: slow.len(),
-            slow_streaming: slow
-                .iter()
-                .filter(|x| x.cpu_ms() - x.stream_ms <= 2.0 * cpu.median)
-                .count(),
+            slow,
+            slow_streaming,
+            slow_thread,
+            slow_thread_streaming,
         }
     }
 
@@ -473,10 +530,15 @@ impl Report {
         };
         row("CPU plan + culling (ms)", &self.plan, 1.0);
         row("  of which streaming (ms)", &self.stream, 1.0);
-        row("    of which streamer update (ms)", &self.update, 1.0);
+        row("    streamer update (ms)", &self.update, 1.0);
+        row("    terrain tiles (ms)", &self.tiles_ms, 1.0);
+        row("    pool records (ms)", &self.records, 1.0);
+        row("    L2/S2 follow (ms)", &self.follow, 1.0);
         row("CPU record (ms)", &self.record, 1.0);
         row("CPU submit (ms)", &self.submit, 1.0);
         row("CPU total (ms)", &self.cpu, 1.0);
+        row("render thread's CPU clock (ms)", &self.thread, 1.0);
+        row("  of which streaming (ms)", &self.stream_thread, 1.0);
         row("GPU total (ms)", &self.gpu, 1.0);
         row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
         row("shadow draw calls", &self.shadow_draws, 1.0);
@@ -509,15 +571,24 @@ impl Report {
             self.evicted,
             self.memory.spread()
         );
-        println!(
-            "CPU frame time max/median {:.2}; frames over 2x the median: {} ({} of them because of streaming)",
-            if self.cpu.median > 0.0 {
-                self.cpu.max / self.cpu.median
+        let ratio = |s: &Stat| {
+            if s.median > 0.0 {
+                s.max / s.median
             } else {
                 0.0
-            },
+            }
+        };
+        println!(
+            "CPU frame time (wall) max/median {:.2}; frames over 2x the median: {} ({} of them because of streaming)",
+            ratio(&self.cpu),
             self.slow,
             self.slow_streaming
+        );
+        println!(
+            "CPU frame time (thread clock) max/median {:.2}; frames over 2x the median: {} ({} of them because of streaming)",
+            ratio(&self.thread),
+            self.slow_thread,
+            self.slow_thread_streaming
         );
         if self.gpu.max == 0.0 {
             println!("(this adapter has no timestamp queries: no GPU times)");
@@ -529,9 +600,14 @@ impl Report {
             ("plan_ms", &self.plan),
             ("stream_ms", &self.stream),
             ("update_ms", &self.update),
+            ("tiles_ms", &self.tiles_ms),
+            ("records_ms", &self.records),
+            ("follow_ms", &self.follow),
             ("record_ms", &self.record),
             ("submit_ms", &self.submit),
             ("cpu_ms", &self.cpu),
+            ("thread_ms", &self.thread),
+            ("stream_thread_ms", &self.stream_thread),
             ("gpu_ms", &self.gpu),
             ("gbuffer_draws", &self.gbuffer_draws),
             ("shadow_draws", &self.shadow_draws),
@@ -552,7 +628,7 @@ impl Report {
             .map(|(k, s)| format!("\"{k}\":{}", s.json()))
             .collect();
         format!(
-            "{{\"adapter\":{adapter:?},\"path\":{name:?},\"frames\":{},\"dt_s\":{dt},\"flown_m\":{flown:.1},\"tiles_total\":{},\"instances_total\":{},\"uploaded\":{},\"upload_total_bytes\":{},\"evicted\":{},\"slow_frames\":{},\"slow_frames_streaming\":{},{}}}",
+            "{{\"adapter\":{adapter:?},\"path\":{name:?},\"frames\":{},\"dt_s\":{dt},\"flown_m\":{flown:.1},\"tiles_total\":{},\"instances_total\":{},\"uploaded\":{},\"upload_total_bytes\":{},\"evicted\":{},\"slow_frames\":{},\"slow_frames_streaming\":{},\"slow_frames_thread\":{},\"slow_frames_thread_streaming\":{},{}}}",
             self.frames,
             self.tiles_total,
             self.instances_total,
@@ -561,7 +637,40 @@ impl Report {
             self.evicted,
             self.slow,
             self.slow_streaming,
+            self.slow_thread,
+            self.slow_thread_streaming,
             body.join(",")
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(wall: f64, stream_wall: f64, thread: f64, stream_thread: f64) -> PathFrame {
+        PathFrame {
+            plan_ms: wall,
+            stream_ms: stream_wall,
+            thread_ms: thread,
+            stream_thread_ms: stream_thread,
+            ..PathFrame::default()
+        }
+    }
+
+    #[test]
+    fn slow_frames_are_counted_on_each_clock_and_blamed_on_streaming_only_when_it_is_the_cause() {
+        let mut f: Vec<PathFrame> = (0..9).map(|_| frame(2.0, 1.0, 2.0, 1.0)).collect();
+        // Descheduled inside its streaming: slow on the wall clock alone.
+        f.push(frame(9.0, 8.0, 2.2, 1.2));
+        // Slow on both clocks, and still slow without its streaming.
+        f.push(frame(12.0, 1.0, 11.0, 1.0));
+        // Slow on both clocks because of its streaming.
+        f.push(frame(7.0, 6.0, 6.5, 5.5));
+        assert_eq!(slow_frames(&f, false), (3, 2));
+        assert_eq!(slow_frames(&f, true), (2, 1));
+        let r = Report::new(&f);
+        assert_eq!((r.slow, r.slow_streaming), (3, 2));
+        assert_eq!((r.slow_thread, r.slow_thread_streaming), (2, 1));
     }
 }

@@ -73,6 +73,15 @@ fn bench_flies_the_path_and_reports_streaming_per_frame() {
         let sum = r["plan_ms"] + r["record_ms"] + r["submit_ms"];
         assert!((r["cpu_ms"] - sum).abs() < 1e-3, "{r:?}");
         assert!(r["stream_ms"] <= r["plan_ms"] + 1e-3, "{r:?}");
+        // The phases are inside the streaming, the thread clock inside the wall
+        // (it counts only the render thread's own CPU time).
+        let phases = r["update_ms"] + r["tiles_ms"] + r["records_ms"] + r["follow_ms"];
+        assert!(phases <= r["stream_ms"] + 1e-3, "{r:?}");
+        assert!(
+            r["thread_ms"] > 0.0 && r["thread_ms"] <= r["cpu_ms"] + 0.05,
+            "{r:?}"
+        );
+        assert!(r["stream_thread_ms"] <= r["thread_ms"] + 1e-3, "{r:?}");
     }
     // Objects near the start are drawn (rocks, houses, trees at some level).
     assert!(first["object_triangles"] > 0.0, "{first:?}");

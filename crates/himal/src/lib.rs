@@ -15,6 +15,7 @@
 //! ```
 
 pub mod budget;
+pub mod clock;
 pub mod frame;
 pub mod gpu;
 pub mod gpu_scene;

@@ -37,6 +37,9 @@ pub struct CpuTimes {
     pub record_ms: f64,
     /// `Queue::submit`.
     pub submit_ms: f64,
+    /// The render thread's own CPU time over the three ([`crate::clock`]):
+    /// the wall times less what the scheduler gave to other threads.
+    pub thread_ms: f64,
 }
 
 impl CpuTimes {
@@ -357,6 +360,7 @@ impl Renderer {
         self.validate(settings)?;
         let size = (settings.width, settings.height);
         let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
+        let thread = crate::clock::Stopwatch::start();
         let t_plan = std::time::Instant::now();
         let FramePlan {
             format,
@@ -395,6 +399,7 @@ impl Renderer {
         let t_submit = std::time::Instant::now();
         ctx.queue.submit([commands]);
         let submit_ms = ms(t_submit);
+        let thread_ms = thread.span().cpu_ms;
         res.history.swap();
         ctx.check("frame")?;
         let mut timings = std::mem::take(sky_timings);
@@ -420,6 +425,7 @@ impl Renderer {
                 plan_ms,
                 record_ms,
                 submit_ms,
+                thread_ms,
             },
             gbuffer_draws: (self.res.passes.gbuffer.visible).draw_calls(&self.res.scene),
             culling: match settings.culling {
@@ -432,6 +438,7 @@ impl Renderer {
             world: self.world.as_ref().map(|w| world::WorldFrame {
                 stream: w.stats,
                 stream_ms: w.stream_ms,
+                stream_times: w.stream_times,
                 terrain,
             }),
         })

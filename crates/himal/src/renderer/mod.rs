@@ -5,7 +5,7 @@ mod draw;
 pub mod environment;
 pub mod post_state;
 mod world;
-pub use world::{WorldFrame, WorldState, world_pools};
+pub use world::{StreamTimes, WorldFrame, WorldState, world_pools};
 
 use std::collections::HashMap;
 

@@ -10,6 +10,7 @@ use std::time::Duration;
 use glam::{Vec2, Vec3};
 
 use super::*;
+use crate::clock::{Span, Stopwatch};
 use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
 use crate::passes::cull::CullPass;
 use crate::passes::terrain::{DetailKind, TerrainDesc, TerrainLayerDesc, TerrainPass};
@@ -28,8 +29,25 @@ pub struct WorldFrame {
     pub stream: StreamStats,
     /// Render-thread milliseconds of streaming (inside `CpuTimes::plan_ms`).
     pub stream_ms: f64,
+    /// The same by phase, on the wall clock and the thread's CPU clock.
+    pub stream_times: StreamTimes,
     /// The terrain's CDLOD selection for the camera and the cascades.
     pub terrain: Option<crate::passes::terrain::TerrainStats>,
+}
+
+/// The render thread's streaming in one frame, by phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StreamTimes {
+    /// The streamer's update: releases, placement, requests.
+    pub update: Span,
+    /// Terrain tiles freed and written.
+    pub tiles: Span,
+    /// Object records and culling bounds of the changed pool slots.
+    pub records: Span,
+    /// L2 and S2 told which areas the new sectors cover.
+    pub follow: Span,
+    /// All of it (`WorldFrame::stream_ms` is its wall time).
+    pub total: Span,
 }
 
 /// The world's streaming state between frames: the streamer and what the
@@ -38,8 +56,10 @@ pub struct WorldState {
     pub streamer: Streamer,
     /// The last applied update's figures ...
     pub stats: StreamStats,
-    /// ... and the render thread's time for it (update and pool writes, ms).
+    /// ... and the render thread's time for it (update and pool writes, ms) ...
     pub stream_ms: f64,
+    /// ... by phase.
+    pub stream_times: StreamTimes,
     /// Per kind: its mesh's bounds and geometric-mean triangle area (E2).
     meshes: Vec<(Aabb, f32)>,
 }
@@ -55,6 +75,7 @@ impl WorldState {
             streamer: Streamer::new(world),
             stats: StreamStats::default(),
             stream_ms: 0.0,
+            stream_times: StreamTimes::default(),
             meshes,
         }
     }
@@ -83,6 +104,7 @@ impl WorldState {
         terrain: Option<&TerrainPass>,
         queue: &wgpu::Queue,
     ) -> Result<(), GpuError> {
+        let tiles = Stopwatch::start();
         // Freed tiles first: an upload this frame may reuse the slot.
         if let Some(t) = terrain {
             for e in &u.evictions {
@@ -93,6 +115,8 @@ impl WorldState {
                 t.upload_tile(queue, up.tile, c.x.into(), c.z.into(), &up.data.heights)?;
             }
         }
+        self.stream_times.tiles = tiles.span();
+        let records = Stopwatch::start();
         for (k, dirty) in u.dirty.iter().enumerate() {
             let (Some(&kind), Some(region)) = (InstanceKind::ALL.get(k), scene.pool.get(k)) else {
                 continue;
@@ -127,6 +151,7 @@ impl WorldState {
             flush(start, &mut run, cull);
             cull.set_live(queue, k, live.min(region.capacity));
         }
+        self.stream_times.records = records.span();
         self.stats = u.stats;
         Ok(())
     }
@@ -229,14 +254,16 @@ impl Renderer {
         let Some(w) = self.world.as_mut() else {
             return Ok(None);
         };
-        let t = std::time::Instant::now();
+        let total = Stopwatch::start();
         let u = step(&mut w.streamer);
+        w.stream_times.update = total.span();
         let p = &mut self.res.passes;
         let terrain = p.terrain.as_ref();
         w.apply(&u, &self.res.scene, &mut p.cull, terrain, &self.ctx.queue)?;
         // L2 follows the streaming: sky-occlusion sectors rendered before a
         // neighbouring world sector arrived are rendered again.
         let world = w.streamer.world();
+        let follow = Stopwatch::start();
         // So does S2: the static-map tiles under a sector's ground and what
         // stands on it.
         for up in &u.uploads {
@@ -250,7 +277,9 @@ impl Renderer {
                 Vec3::new(max.x, top, max.y),
             ));
         }
-        w.stream_ms = t.elapsed().as_secs_f64() * 1e3;
+        w.stream_times.follow = follow.span();
+        w.stream_times.total = total.span();
+        w.stream_ms = w.stream_times.total.wall_ms;
         Ok(Some(w.stats))
     }
 
