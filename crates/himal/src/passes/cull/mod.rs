@@ -198,6 +198,37 @@ pub struct CullLayout {
     pub pool_batches: Vec<u32>,
     /// The scene mesh each batch draws.
     pub batch_mesh: Vec<u32>,
+    /// Per chunk: the box around its objects' boxes, `None` until
+    /// [`CullLayout::refresh_chunk_boxes`] after they changed (the CPU
+    /// path's early-out: a chunk whose box a view culls has every object culled).
+    pub chunk_boxes: Vec<Option<ChunkBox>>,
+}
+
+/// The box around a chunk's objects' boxes, grown by [`ChunkBox::SLACK`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChunkBox {
+    pub center: glam::Vec3,
+    pub half_extent: glam::Vec3,
+}
+
+impl ChunkBox {
+    /// Metres added to the half extent, so rounding in the plane and
+    /// distance tests never makes the box culled where one of its objects is kept.
+    pub const SLACK: f32 = 0.01;
+
+    /// Around `bounds` (objects with an empty box, such as
+    /// `ObjectBounds::NONE`, add nothing); `None` when none has a box.
+    pub fn around(bounds: &[ObjectBounds]) -> Option<Self> {
+        let (lo, hi) = bounds
+            .iter()
+            .filter(|b| b.half_extent().min_element() >= 0.0)
+            .map(|b| (b.center() - b.half_extent(), b.center() + b.half_extent()))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
+        Some(Self {
+            center: (lo + hi) * 0.5,
+            half_extent: (hi - lo) * 0.5 + Self::SLACK,
+        })
+    }
 }
 
 impl CullLayout {
@@ -234,7 +265,37 @@ impl CullLayout {
             layout.opaque_batches += 1;
         }
         layout.vegetation_batches = layout.push_runs(scene, &scene.draws_vegetation);
+        layout.chunk_boxes = vec![None; layout.chunks.len()];
+        layout.refresh_chunk_boxes();
         layout
+    }
+
+    /// Recomputes the boxes of chunks whose objects changed.
+    pub fn refresh_chunk_boxes(&mut self) {
+        for (c, slot) in self.chunks.iter().zip(&mut self.chunk_boxes) {
+            if slot.is_none() {
+                let at = c.first_object as usize;
+                *slot = (self.bounds.get(at..at + c.count as usize)).and_then(ChunkBox::around);
+            }
+        }
+    }
+
+    /// Forgets the boxes of the chunks of objects `first..first + n` (batches
+    /// are consecutive objects, so their chunks are sorted by first object).
+    pub fn invalidate_chunk_boxes(&mut self, first: u32, n: u32) {
+        let end = first + n;
+        let from = self
+            .chunks
+            .partition_point(|c| c.first_object + CHUNK <= first);
+        for (c, slot) in self.chunks[from..]
+            .iter()
+            .zip(&mut self.chunk_boxes[from..])
+        {
+            if c.first_object >= end {
+                break;
+            }
+            *slot = None;
+        }
     }
 
     fn push_runs(&mut self, scene: &SceneGpu, draws: &[Draw]) -> u32 {
@@ -449,6 +510,7 @@ impl CullPass {
             return;
         };
         dst.copy_from_slice(bounds);
+        (self.layout).invalidate_chunk_boxes(first_object, bounds.len() as u32);
         let offset = at as u64 * std::mem::size_of::<ObjectBounds>() as u64;
         queue.write_buffer(&self.bounds, offset, bytemuck::cast_slice(bounds));
     }
@@ -463,10 +525,14 @@ impl CullPass {
         let batch = self.layout.batches[b as usize];
         let first = batch.first_chunk as usize;
         let chunks = &mut self.layout.chunks[first..first + batch.chunks as usize];
+        let boxes = &mut self.layout.chunk_boxes[first..first + batch.chunks as usize];
         let mut changed = false;
-        for (i, c) in chunks.iter_mut().enumerate() {
+        for (i, (c, b)) in chunks.iter_mut().zip(boxes).enumerate() {
             let count = live.saturating_sub(i as u32 * CHUNK).min(CHUNK);
-            changed |= c.count != count;
+            if c.count != count {
+                changed = true;
+                *b = None;
+            }
             c.count = count;
         }
         if changed {
@@ -543,6 +609,8 @@ impl CullPass {
         if l.pool_batches.is_empty() || l.objects >= MAX_OBJECTS || views.is_empty() {
             return;
         }
+        self.layout.refresh_chunk_boxes();
+        let l = &self.layout;
         let cpu = &mut self.cpu;
         cpu.views = views.len() as u32;
         cpu.instanced = instanced;

@@ -87,10 +87,17 @@ pub fn cull_batch(
     lists: &mut [Vec<u32>; LISTS],
 ) -> [[u32; 5]; LISTS] {
     lists.iter_mut().for_each(Vec::clear);
-    let chunks = &layout.chunks[batch.first_chunk as usize..][..batch.chunks as usize];
-    for o in chunks
-        .iter()
-        .flat_map(|c| c.first_object..c.first_object + c.count)
+    let first = batch.first_chunk as usize;
+    let chunks = &layout.chunks[first..][..batch.chunks as usize];
+    let boxes = layout.chunk_boxes.get(first..).unwrap_or_default();
+    let kept = |i: usize| match boxes.get(i).copied().flatten() {
+        Some(b) => !chunk_culled(&b, view, batch, lod),
+        // Not computed, or no object with a box: test each object.
+        None => true,
+    };
+    for o in (chunks.iter().enumerate())
+        .filter(|&(i, _)| kept(i))
+        .flat_map(|(_, c)| c.first_object..c.first_object + c.count)
     {
         let Some(b) = layout.bounds.get(o as usize) else {
             continue;
@@ -124,8 +131,152 @@ pub fn cull_batch(
     })
 }
 
+/// Whether `view` or `batch`'s draw distance culls every object inside
+/// `b` (the box around a chunk's boxes): the plane test and the distance
+/// test of a box bound those of every box inside it.
+pub fn chunk_culled(
+    b: &super::ChunkBox,
+    view: &CullView,
+    batch: &super::BatchGpu,
+    lod: &LodView,
+) -> bool {
+    let outside = view.planes.iter().any(|p| {
+        let n = glam::Vec3::from_slice(&p[..3]);
+        n.dot(b.center) + p[3] + n.abs().dot(b.half_extent) < 0.0
+    });
+    outside
+        || (batch.max_distance > 0.0
+            && distance_to_box(lod.eye, b.center, b.half_extent) > batch.max_distance)
+}
+
 /// First entry of `batch`'s instances in view `v`'s lists (`cull.wgsl`:
 /// the identity's `objects` entries, then two per object and view).
 pub fn region(layout: &CullLayout, v: usize, batch: &super::BatchGpu) -> u32 {
     layout.objects + 2 * (v as u32 * layout.objects + batch.first_object)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{BatchGpu, CHUNK, ChunkBox, ChunkGpu, CullLayout, CullView};
+    use super::*;
+    use glam::Vec3;
+
+    /// One batch of `n` objects: half in spatially coherent chunks (a grid
+    /// walked in order), half scattered at random over 2 km, as a streamed
+    /// region's swap-removes leave it.
+    fn layout(n: u32) -> CullLayout {
+        let mut seed = 7u32;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        let bounds: Vec<BoundsGpu> = (0..n)
+            .map(|i| {
+                let c = if i < n / 2 {
+                    Vec3::new(
+                        (i % 40) as f32 * 25.0 - 500.0,
+                        0.0,
+                        (i / 40) as f32 * 25.0 - 500.0,
+                    )
+                } else {
+                    Vec3::new(
+                        rnd() * 2000.0 - 1000.0,
+                        rnd() * 50.0,
+                        rnd() * 2000.0 - 1000.0,
+                    )
+                };
+                BoundsGpu {
+                    center: c.extend(0.5).to_array(),
+                    half_extent: [1.0 + rnd() * 3.0, 2.0, 1.0 + rnd(), 1.0],
+                }
+            })
+            .collect();
+        let chunks: Vec<ChunkGpu> = (0..n.div_ceil(CHUNK))
+            .map(|c| ChunkGpu {
+                batch: 0,
+                first_object: c * CHUNK,
+                count: (n - c * CHUNK).min(CHUNK),
+                _pad: 0,
+            })
+            .collect();
+        let batch = BatchGpu {
+            first_chunk: 0,
+            chunks: chunks.len() as u32,
+            first_object: 0,
+            lods: 1,
+            base_vertex: 0,
+            max_distance: 600.0,
+            _pad: [0; 2],
+            lod: [[0, 36], [0; 2], [0; 2], [0; 2]],
+            error: [0.0; 4],
+        };
+        let mut l = CullLayout {
+            batches: vec![batch],
+            chunk_boxes: vec![None; chunks.len()],
+            chunks,
+            bounds,
+            opaque_batches: 1,
+            objects: n,
+            pool_batches: vec![0],
+            batch_mesh: vec![0],
+            ..CullLayout::default()
+        };
+        l.refresh_chunk_boxes();
+        l
+    }
+
+    #[test]
+    fn chunk_boxes_skip_whole_chunks_and_keep_the_lists_exact() {
+        let mut l = layout(5000);
+        let eye = Vec3::new(-200.0, 30.0, -150.0);
+        let camera = crate::scene::Camera::look_at(eye, Vec3::new(300.0, 0.0, 200.0), 60.0);
+        let views = [
+            CullView::clip(camera.view_projection(16.0 / 9.0)),
+            CullView::prism(
+                glam::Vec2::new(-300.0, -300.0),
+                glam::Vec2::new(-100.0, -100.0),
+            ),
+            CullView::ALL,
+        ];
+        let lod = LodView {
+            eye,
+            selection: Default::default(),
+        };
+        let batch = l.batches[0];
+        let run = |l: &CullLayout, v: usize| {
+            let mut lists: [Vec<u32>; LISTS] = Default::default();
+            let args = cull_batch(l, v, &views[v], &batch, &lod, &mut lists);
+            (args, lists)
+        };
+        let mut plain = l.clone();
+        plain.chunk_boxes.iter_mut().for_each(|b| *b = None);
+        for v in 0..views.len() {
+            let (with, without) = (run(&l, v), run(&plain, v));
+            assert_eq!(with, without, "view {v}");
+            // Every object of a skipped chunk is culled on its own too.
+            let skipped = (l.chunk_boxes.iter().flatten())
+                .filter(|b| chunk_culled(b, &views[v], &batch, &lod))
+                .count();
+            let kept: usize = with.1.iter().map(Vec::len).sum();
+            // The camera and the prism skip coherent chunks, keep_all only
+            // what the draw distance (600 m) drops.
+            assert!(kept > 0, "view {v}");
+            if v < 2 {
+                assert!(
+                    skipped >= 10,
+                    "view {v}: {skipped} of {} chunks skipped",
+                    l.chunks.len()
+                );
+            }
+        }
+        // Moved objects forget their chunk's box until it is recomputed.
+        l.bounds[70].center[0] += 900.0;
+        l.invalidate_chunk_boxes(70, 1);
+        assert!(
+            l.chunk_boxes[1].is_none() && l.chunk_boxes[0].is_some() && l.chunk_boxes[2].is_some()
+        );
+        l.refresh_chunk_boxes();
+        let fresh = ChunkBox::around(&l.bounds[64..128]);
+        assert_eq!(l.chunk_boxes[1], fresh);
+    }
 }
