@@ -243,19 +243,19 @@ mod tests {
             selection: Default::default(),
         };
         let batch = l.batches[0];
-        let run = |l: &CullLayout, v: usize| {
+        let run = |l: &CullLayout, v: usize, view: &CullView| {
             let mut lists: [Vec<u32>; LISTS] = Default::default();
-            let args = cull_batch(l, v, &views[v], &batch, &lod, &mut lists);
+            let args = cull_batch(l, v, view, &batch, &lod, &mut lists);
             (args, lists)
         };
         let mut plain = l.clone();
         plain.chunk_boxes.iter_mut().for_each(|b| *b = None);
-        for v in 0..views.len() {
-            let (with, without) = (run(&l, v), run(&plain, v));
+        for (v, view) in views.iter().enumerate() {
+            let (with, without) = (run(&l, v, view), run(&plain, v, view));
             assert_eq!(with, without, "view {v}");
             // Every object of a skipped chunk is culled on its own too.
             let skipped = (l.chunk_boxes.iter().flatten())
-                .filter(|b| chunk_culled(b, &views[v], &batch, &lod))
+                .filter(|b| chunk_culled(b, view, &batch, &lod))
                 .count();
             let kept: usize = with.1.iter().map(Vec::len).sum();
             // The camera and the prism skip coherent chunks, keep_all only
