@@ -18,24 +18,13 @@ pub mod skin;
 pub mod textures;
 pub mod uniforms;
 
-/// Bounds culling, the one CPU selection of draws by their object's box:
-/// the draws of `draws` whose object has a box in `bounds` that `keep`
-/// (object index, box) accepts. Used by the shadow cascades, the local
-/// lights' projectors and atlas, and the sky-occlusion sectors.
-pub fn cull<'d, I>(
-    draws: I,
-    bounds: &'d [crate::scene::Aabb],
-    keep: impl Fn(usize, &crate::scene::Aabb) -> bool + 'd,
-) -> impl Iterator<Item = Draw> + 'd
-where
-    I: IntoIterator<Item = &'d Draw>,
-    I::IntoIter: 'd,
-{
-    draws.into_iter().filter_map(move |d| {
-        let i = d.object as usize;
-        bounds.get(i).filter(|b| keep(i, b)).map(|_| d.clone())
-    })
-}
+mod draws;
+mod lod;
+mod pool;
+
+pub use draws::{Draw, VisibleLists, cull, draw_calls, draws_of, entries_of, material_runs, runs};
+pub use lod::{LodRange, LodView};
+pub use pool::{PoolRegion, PoolSpec};
 
 /// The GPU order of `scene`'s objects (GPU index -> scene index). Moving
 /// objects come first, in scene order (the first is the default hero);
@@ -68,97 +57,6 @@ pub fn gpu_order(scene: &Scene) -> Vec<usize> {
         }
     });
     order
-}
-
-/// What a G-buffer pass draws ([`SceneGpu::visible`]).
-#[derive(Clone, Debug, Default)]
-pub struct VisibleLists {
-    /// Opaque objects inside the view (early-Z pipeline, no discard).
-    pub opaque: Vec<Draw>,
-    /// Alpha-tested, swaying vegetation inside the view.
-    pub vegetation: Vec<Draw>,
-    /// glTF draws with their material.
-    pub textured: Vec<(Draw, usize)>,
-    /// `Some((view, calls))`: opaque and vegetation objects come from view
-    /// `view` of the GPU-culled lists instead, `calls` multi-draws (V6).
-    pub gpu_view: Option<(u32, u32)>,
-    /// Draws of the streamed pool from the CPU twin's lists (where the
-    /// GPU path is off; `passes::cull::CullPath::Cpu`).
-    pub pool_calls: u32,
-}
-
-impl VisibleLists {
-    /// Draw calls these lists record in `scene` (its instancing and LOD
-    /// settings); textured draws are merged within runs of one material.
-    pub fn draw_calls(&self, scene: &SceneGpu) -> u32 {
-        scene.draw_calls(&self.opaque)
-            + scene.draw_calls(&self.vegetation)
-            + material_runs(&self.textured)
-                .map(|(_, draws)| scene.draw_calls(&draws))
-                .sum::<u32>()
-            + self.gpu_view.map_or(0, |(_, calls)| calls)
-            + self.pool_calls
-    }
-}
-
-/// Consecutive textured draws of one material (one bind group), as
-/// (material, draws): each run is drawn as an ordinary list, so its objects
-/// of one mesh are instanced (glTF instancing, repeated nodes).
-pub fn material_runs(textured: &[(Draw, usize)]) -> impl Iterator<Item = (usize, Vec<Draw>)> + '_ {
-    let mut i = 0;
-    std::iter::from_fn(move || {
-        let material = textured.get(i)?.1;
-        let end = (i..textured.len())
-            .find(|&k| textured[k].1 != material)
-            .unwrap_or(textured.len());
-        let draws = textured[i..end].iter().map(|(d, _)| d.clone()).collect();
-        i = end;
-        Some((material, draws))
-    })
-}
-
-/// Consecutive draws of one mesh with consecutive objects, as one
-/// instanced draw: (the first draw, instance count).
-pub fn runs(draws: &[Draw]) -> impl Iterator<Item = (&Draw, u32)> {
-    let mut i = 0;
-    std::iter::from_fn(move || {
-        let first = draws.get(i)?;
-        let mut n = 1;
-        while let Some(d) = draws.get(i + n as usize) {
-            let same_mesh = (d.first_index, d.index_count, d.base_vertex)
-                == (first.first_index, first.index_count, first.base_vertex);
-            if !(same_mesh && d.object == first.object + n) {
-                break;
-            }
-            n += 1;
-        }
-        i += n as usize;
-        Some((first, n))
-    })
-}
-
-/// The draws of `object` in `draws` (a list in object order, as every
-/// list of [`SceneGpu`] is): a binary search, not a scan.
-pub fn draws_of(draws: &[Draw], object: u32) -> &[Draw] {
-    entries_of(draws, object, |d| d)
-}
-
-/// The entries of `object` in `list` (object order), `draw` naming each
-/// entry's draw (e.g. `(Draw, material)` of the textured list).
-pub fn entries_of<T>(list: &[T], object: u32, draw: impl Fn(&T) -> &Draw) -> &[T] {
-    let start = list.partition_point(|e| draw(e).object < object);
-    let end = list.partition_point(|e| draw(e).object <= object);
-    &list[start..end.max(start)]
-}
-
-/// Draw calls `draws` records: with instancing, one per run of
-/// consecutive objects of one mesh; without, one per draw.
-pub fn draw_calls(draws: &[Draw], instancing: bool) -> u32 {
-    if instancing {
-        runs(draws).count() as u32
-    } else {
-        draws.len() as u32
-    }
 }
 
 /// Twin of `Object` in `shaders/scene.wgsl`.
@@ -232,45 +130,6 @@ impl ObjectBounds {
     }
 }
 
-/// E2 LOD selection of one frame: the eye and how levels are chosen
-/// (`scale` 0: every object at LOD0; the band dithers on the GPU path
-/// only, the CPU path pops).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LodView {
-    /// Camera position (distances to boxes).
-    pub eye: glam::Vec3,
-    /// Thresholds, band and scale of the selection.
-    pub selection: crate::scene::lod::Selection,
-}
-
-/// A streamed region of the objects buffer (the open world, V6): objects
-/// `first_object..first_object + capacity` draw mesh `mesh`; streaming
-/// writes their records ([`SceneGpu::write_objects`]) and bounds, packed
-/// from the front; `passes::cull` culls them per view (on the GPU, or its
-/// CPU twin where that path is off).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PoolRegion {
-    /// The scene mesh every object of the region draws.
-    pub mesh: u32,
-    /// First object record of the region.
-    pub first_object: u32,
-    /// Object records reserved.
-    pub capacity: u32,
-    /// Culled beyond this distance from the camera (m; 0: no limit).
-    pub max_distance: f32,
-}
-
-/// A streamed region to reserve ([`SceneGpu::upload_with_pool`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PoolSpec {
-    /// The scene mesh every object of the region draws.
-    pub mesh: usize,
-    /// Object records to reserve.
-    pub capacity: u32,
-    /// Per-class distance culling (m; 0: no limit).
-    pub max_distance: f32,
-}
-
 /// `Object.params.x` of an opaque object whose albedo is multiplied by
 /// `params.yzw` (`OBJECT_TINTED` in `shaders/scene.wgsl`).
 pub const OBJECT_TINTED: f32 = 3.0;
@@ -280,30 +139,6 @@ const _: () = assert!(
     std::mem::size_of::<ObjectGpu>() + std::mem::size_of::<ObjectBounds>()
         == crate::scene::world::GPU_INSTANCE_BYTES
 );
-
-/// One level of a mesh in the index buffer (E2).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LodRange {
-    /// First index of the level in the index buffer.
-    pub first_index: u32,
-    /// Indices of the level.
-    pub index_count: u32,
-    /// Geometric error (mesh units; 0 for LOD0).
-    pub error: f32,
-}
-
-/// One indexed draw of one object.
-#[derive(Clone, Debug)]
-pub struct Draw {
-    /// First index in the index buffer.
-    pub first_index: u32,
-    /// Indices drawn.
-    pub index_count: u32,
-    /// Offset added to each index (the mesh's first vertex).
-    pub base_vertex: i32,
-    /// The object record (GPU order) the draw is placed by.
-    pub object: u32,
-}
 
 /// The scene uploaded: geometry, object records, draw lists, LODs, materials, skins.
 pub struct SceneGpu {
@@ -447,27 +282,8 @@ impl SceneGpu {
                 mesh.indices.len() as u32,
                 vertices.len() as i32,
             );
-            let mut levels = vec![LodRange {
-                first_index: indices.len() as u32,
-                index_count: mesh.indices.len() as u32,
-                error: 0.0,
-            }];
-            let area = |i: &[u32]| crate::scene::lod::AreaHistogram::new(&mesh.vertices, i);
-            let mut histograms = vec![area(&mesh.indices)];
             vertices.extend_from_slice(&mesh.vertices);
-            indices.extend_from_slice(&mesh.indices);
-            // E2: terrain-sized meshes are always near somewhere; no chain.
-            if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
-                for lod in crate::scene::lod::lod_chain(mesh) {
-                    histograms.push(area(&lod.indices));
-                    levels.push(LodRange {
-                        first_index: indices.len() as u32,
-                        index_count: lod.indices.len() as u32,
-                        error: lod.error,
-                    });
-                    indices.extend_from_slice(&lod.indices);
-                }
-            }
+            let (levels, histograms) = lod::append_levels(mesh, &mut indices);
             lods[mi] = levels;
             area_histograms[mi] = histograms;
             mean_area[mi] = crate::scene::lod::geometric_mean_area(&mesh.vertices, &mesh.indices);
@@ -493,11 +309,7 @@ impl SceneGpu {
             skin::SkinGpu::new(&ctx.device, jobs, &sources, &vertices[..sources.len()], 0)
         });
         let mut objects = Vec::with_capacity(scene.objects.len());
-        let (mut draws_opaque, mut draws_vegetation) = (Vec::new(), Vec::new());
-        let (mut draws_textured, mut draws_blend, mut draws_emissive) =
-            (Vec::new(), Vec::new(), Vec::new());
-        let (mut draws_layered, mut draws_unlit) = (Vec::new(), Vec::new());
-        let mut draws_transmissive = Vec::new();
+        let mut lists = draws::DrawLists::default();
         let mut animated = Vec::new();
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
@@ -546,61 +358,17 @@ impl SceneGpu {
                 base_vertex,
                 object: i as u32,
             };
-            match (scene.pbr.material_of(object.mesh), object.foliage) {
-                (Some(material), _) => {
-                    let m = scene.pbr.materials.get(material);
-                    if m.is_some_and(|m| m.transmits()) {
-                        draws_transmissive.push((draw, material));
-                    } else if m
-                        .is_some_and(|m| m.alpha_mode == crate::scene::gltf::AlphaMode::Blend)
-                    {
-                        let bounds = scene.meshes[object.mesh]
-                            .bounds
-                            .transform(&object.transform);
-                        draws_blend.push((draw, material, bounds.center()));
-                    } else {
-                        if m.is_some_and(|m| m.emits()) {
-                            draws_emissive.push((draw.clone(), material));
-                        }
-                        if m.is_some_and(|m| m.unlit) {
-                            draws_unlit.push((draw.clone(), material));
-                        }
-                        if m.is_some_and(|m| m.layered()) {
-                            draws_layered.push((draw.clone(), material));
-                        }
-                        draws_textured.push((draw, material));
-                    }
-                }
-                (None, Some(_)) => draws_vegetation.push(draw),
-                (None, None) => draws_opaque.push(draw),
-            }
+            lists.push(scene, object, draw);
             triangles += index_count as u64 / 3;
         }
-        let mut regions = Vec::with_capacity(pool.len());
-        for &PoolSpec {
-            mesh,
-            capacity,
-            max_distance,
-        } in pool
-        {
-            if mesh >= scene.meshes.len() {
-                return Err(GpuError::Other(format!(
-                    "pool region names mesh {mesh} of {}",
-                    scene.meshes.len()
-                )));
-            }
-            regions.push(PoolRegion {
-                mesh: mesh as u32,
-                first_object: objects.len() as u32,
-                capacity,
-                max_distance,
-            });
-            let n = capacity as usize;
-            objects.resize(objects.len() + n, ObjectGpu::zeroed());
-            cull_bounds.resize(cull_bounds.len() + n, ObjectBounds::NONE);
-            bounds.resize(bounds.len() + n, crate::scene::Aabb::EMPTY);
-            object_mesh.resize(object_mesh.len() + n, mesh as u32);
-        }
+        let regions = pool::reserve(
+            pool,
+            scene.meshes.len(),
+            &mut objects,
+            &mut cull_bounds,
+            &mut bounds,
+            &mut object_mesh,
+        )?;
         if objects.is_empty() {
             objects.push(ObjectGpu::zeroed());
         }
@@ -652,14 +420,14 @@ impl SceneGpu {
                     bytemuck::cast_slice(&identity),
                     wgpu::BufferUsages::STORAGE,
                 ),
-                draws_opaque,
-                draws_vegetation,
-                draws_textured,
-                draws_blend,
-                draws_transmissive,
-                draws_emissive,
-                draws_layered,
-                draws_unlit,
+                draws_opaque: lists.opaque,
+                draws_vegetation: lists.vegetation,
+                draws_textured: lists.textured,
+                draws_blend: lists.blend,
+                draws_transmissive: lists.transmissive,
+                draws_emissive: lists.emissive,
+                draws_layered: lists.layered,
+                draws_unlit: lists.unlit,
                 materials,
                 animated,
                 bounds,
@@ -711,221 +479,9 @@ impl SceneGpu {
             job.animated.play(name);
         }
     }
-
-    /// Writes object records from `first_object` on (streamed regions).
-    pub fn write_objects(&self, queue: &wgpu::Queue, first_object: u32, objects: &[ObjectGpu]) {
-        let offset = first_object as u64 * std::mem::size_of::<ObjectGpu>() as u64;
-        queue.write_buffer(&self.objects, offset, bytemuck::cast_slice(objects));
-    }
-
-    /// Binds the shared vertex and index buffers.
-    pub fn bind_geometry(&self, rp: &mut wgpu::RenderPass<'_>) {
-        rp.set_vertex_buffer(0, self.vertices.slice(..));
-        rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-    }
-
-    /// The level `object` draws at under `lod` (E2; 0 without a chain).
-    pub fn lod_level(&self, object: u32, lod: &LodView) -> u32 {
-        let (Some(b), Some(&mesh)) = (
-            self.cull_bounds.get(object as usize),
-            self.object_mesh.get(object as usize),
-        ) else {
-            return 0;
-        };
-        let Some(levels) = self.lods.get(mesh as usize) else {
-            return 0;
-        };
-        let mut errors = [0.0; crate::scene::lod::MAX_LODS];
-        let n = levels.len().min(errors.len());
-        for (e, l) in errors.iter_mut().zip(levels) {
-            *e = l.error;
-        }
-        let d = crate::scene::lod::distance_to_box(lod.eye, b.center(), b.half_extent());
-        // The CPU path pops: no band.
-        let selection = crate::scene::lod::Selection {
-            band: 0.0,
-            ..lod.selection
-        };
-        let radius = b.half_extent().length();
-        crate::scene::lod::choice_for(
-            d,
-            b.center[3],
-            radius,
-            b.half_extent[3],
-            &errors[..n],
-            &selection,
-        )
-        .0
-    }
-
-    /// `draws` at this frame's LOD (E2): each draw's index range replaced
-    /// by its object's level; borrowed unchanged when LOD is off or no
-    /// mesh has a chain.
-    pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
-        let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        if !lod.selection.enabled() || !self.has_lods {
-            return std::borrow::Cow::Borrowed(draws);
-        }
-        let at = |d: &Draw| {
-            let level = self.lod_level(d.object, &lod) as usize;
-            let range = (self.object_mesh.get(d.object as usize))
-                .and_then(|&m| self.lods.get(m as usize)?.get(level));
-            match range {
-                Some(r) if level > 0 => Draw {
-                    first_index: r.first_index,
-                    index_count: r.index_count,
-                    ..d.clone()
-                },
-                _ => d.clone(),
-            }
-        };
-        std::borrow::Cow::Owned(draws.iter().map(at).collect())
-    }
-
-    /// `draws` by the level [`Self::draw_list`] draws each at this frame
-    /// (`--view lod`); all at 0 when LOD is off.
-    pub fn split_levels(&self, draws: &[Draw]) -> [Vec<Draw>; crate::scene::lod::MAX_LODS] {
-        let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        let mut out: [Vec<Draw>; crate::scene::lod::MAX_LODS] = Default::default();
-        for d in draws {
-            let level = if lod.selection.enabled() && self.has_lods {
-                self.lod_level(d.object, &lod) as usize
-            } else {
-                0
-            };
-            out[level.min(out.len() - 1)].push(d.clone());
-        }
-        out
-    }
-
-    /// Draw calls [`Self::draw_list`] records for `draws`.
-    pub fn draw_calls(&self, draws: &[Draw]) -> u32 {
-        draw_calls(&self.at_lod(draws), self.instancing())
-    }
-
-    /// Records `draws` (geometry bound) at this frame's LOD: with
-    /// instancing one draw per run of consecutive objects of one mesh and
-    /// level (V6), else one draw per object.
-    pub fn draw_list(&self, rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
-        let draws = self.at_lod(draws);
-        let draws = &draws[..];
-        if self.instancing.load(Ordering::Relaxed) {
-            for (d, n) in runs(draws) {
-                let indices = d.first_index..d.first_index + d.index_count;
-                rp.draw_indexed(indices, d.base_vertex, d.object..d.object + n);
-            }
-        } else {
-            for d in draws {
-                let indices = d.first_index..d.first_index + d.index_count;
-                rp.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
-            }
-        }
-    }
-
-    /// Whether draws merge into instanced ones (V6).
-    pub fn instancing(&self) -> bool {
-        self.instancing.load(Ordering::Relaxed)
-    }
-
-    /// The G-buffer's lists: every object (`view` None: probe cubes) or
-    /// those whose bounds may be inside the frustum `view` (the camera).
-    /// `gpu_view`: opaque and vegetation objects are culled on the GPU
-    /// (V6, `passes::cull`; view, calls), only glTF draws here.
-    pub fn visible(&self, view: Option<glam::Mat4>, gpu_view: Option<(u32, u32)>) -> VisibleLists {
-        let Some(vp) = view else {
-            return VisibleLists {
-                opaque: self.draws_opaque.clone(),
-                vegetation: self.draws_vegetation.clone(),
-                textured: self.draws_textured.clone(),
-                gpu_view: None,
-                pool_calls: 0,
-            };
-        };
-        let inside = |i: usize| self.bounds.get(i).is_some_and(|b| !b.outside_clip(vp));
-        let keep = |d: &&Draw| inside(d.object as usize);
-        let cpu = |draws: &[Draw]| match gpu_view {
-            Some(_) => Vec::new(),
-            None => draws.iter().filter(keep).cloned().collect(),
-        };
-        VisibleLists {
-            opaque: cpu(&self.draws_opaque),
-            vegetation: cpu(&self.draws_vegetation),
-            textured: (self.draws_textured.iter())
-                .filter(|(d, _)| inside(d.object as usize))
-                .cloned()
-                .collect(),
-            gpu_view,
-            pool_calls: 0,
-        }
-    }
-
-    /// Binds the geometry and records the opaque objects, glTF ones
-    /// included (shadow casters; their alpha is not tested there).
-    pub fn draw_opaque(&self, rp: &mut wgpu::RenderPass<'_>) {
-        self.bind_geometry(rp);
-        self.draw_list(rp, &self.draws_opaque);
-        for (d, _) in &self.draws_textured {
-            self.draw_list(rp, std::slice::from_ref(d));
-        }
-    }
-
-    /// Binds the geometry and records the vegetation (set a `VEGETATION` pipeline first).
-    pub fn draw_vegetation(&self, rp: &mut wgpu::RenderPass<'_>) {
-        self.bind_geometry(rp);
-        self.draw_list(rp, &self.draws_vegetation);
-    }
-
-    /// Records every draw, vegetation as plain cards (no alpha test, no
-    /// sway); passes that need the true vegetation shape draw the two lists.
-    pub fn draw_all(&self, rp: &mut wgpu::RenderPass<'_>) {
-        self.bind_geometry(rp);
-        self.draw_list(rp, &self.draws_opaque);
-        self.draw_list(rp, &self.draws_vegetation);
-    }
 }
 
 /// `ObjectGpu::params` of an object: its foliage, zero for opaque objects.
 fn params(object: &Object) -> [f32; 4] {
     object.foliage.map_or([0.0; 4], |f| f.params())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn draw(mesh: u32, object: u32) -> Draw {
-        Draw {
-            first_index: mesh * 36,
-            index_count: 36,
-            base_vertex: 0,
-            object,
-        }
-    }
-
-    #[test]
-    fn runs_merge_consecutive_objects_of_one_mesh_only() {
-        // Objects 0-2 of mesh 0, a gap (4), mesh 1 at 5, then 6 of mesh 0.
-        let draws = [
-            draw(0, 0),
-            draw(0, 1),
-            draw(0, 2),
-            draw(0, 4),
-            draw(1, 5),
-            draw(0, 6),
-        ];
-        let got: Vec<(u32, u32)> = runs(&draws).map(|(d, n)| (d.object, n)).collect();
-        assert_eq!(got, vec![(0, 3), (4, 1), (5, 1), (6, 1)]);
-        assert_eq!(draw_calls(&draws, true), 4);
-        assert_eq!(draw_calls(&draws, false), 6);
-        assert_eq!(draw_calls(&[], true), 0);
-        let objects = |o| {
-            draws_of(&draws, o)
-                .iter()
-                .map(|d| d.object)
-                .collect::<Vec<_>>()
-        };
-        assert_eq!(objects(4), vec![4]);
-        assert_eq!(objects(3), Vec::<u32>::new());
-        assert_eq!(objects(7), Vec::<u32>::new());
-    }
 }
