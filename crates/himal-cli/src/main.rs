@@ -8,6 +8,7 @@ mod bench;
 mod bench_ao;
 mod bench_envmap;
 mod bench_path;
+mod camera;
 mod orbit;
 mod prewarm;
 mod render;
