@@ -26,6 +26,9 @@ pub struct PathFrame {
     pub record_ms: f64,
     pub submit_ms: f64,
     pub gpu_ms: f64,
+    /// GPU time of the `cull` node and of the Hi-Z pyramid (`cull.hiz*`).
+    pub cull_ms: f64,
+    pub hiz_ms: f64,
     pub gbuffer_draws: u32,
     pub shadow_draws: u32,
     /// S2 static-map tiles rendered (`--shadows csm+static`).
@@ -103,6 +106,8 @@ pub struct PathRun<'a> {
     /// E2: also count every frame under all-LOD0, triangle-size and
     /// object-size selection, and FLIP sampled frames against LOD0.
     pub compare_lod: bool,
+    /// Each frame's image written here as `frame_NNNN.png`.
+    pub images: Option<&'a Path>,
 }
 
 /// The E2 comparison's selections: all LOD0, by triangle size (the run's
@@ -235,6 +240,8 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
             record_ms: frame.cpu.record_ms,
             submit_ms: frame.cpu.submit_ms,
             gpu_ms: frame.timings.iter().map(|t| t.gpu_ms).sum(),
+            cull_ms: pass_ms(&frame.timings, |id| id == "cull"),
+            hiz_ms: pass_ms(&frame.timings, |id| id.starts_with("cull.hiz")),
             gbuffer_draws: frame.gbuffer_draws,
             shadow_draws: frame.shadows.draws,
             static_tiles: frame.shadows.static_tiles.len() as u32,
@@ -278,6 +285,15 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
                 }
                 renderer.reset_history();
             }
+        }
+        if let Some(dir) = run.images {
+            let output = renderer
+                .output(settings)
+                .ok_or_else(|| anyhow::anyhow!("no output image"))?;
+            let image = himal::gpu::read_texture(renderer.context(), output, 0, 0)?;
+            let file = dir.join(format!("frame_{i:04}.png"));
+            himal::image_io::save(&file, &image)
+                .with_context(|| format!("--images: cannot write {}", file.display()))?;
         }
         if let Some((p, file)) = csv.as_mut() {
             writeln!(file, "{}", csv_row(i as usize, &f))
@@ -326,6 +342,15 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
         }
     }
     Ok(())
+}
+
+/// GPU milliseconds of the passes whose id `wanted` accepts.
+fn pass_ms(timings: &[himal::graph::PassTiming], wanted: impl Fn(&str) -> bool) -> f64 {
+    timings
+        .iter()
+        .filter(|t| wanted(&t.id))
+        .map(|t| t.gpu_ms)
+        .sum()
 }
 
 /// Median, max and min of one column.
@@ -377,6 +402,8 @@ pub struct Report {
     pub submit: Stat,
     pub cpu: Stat,
     pub gpu: Stat,
+    pub cull: Stat,
+    pub hiz: Stat,
     pub gbuffer_draws: Stat,
     pub shadow_draws: Stat,
     pub static_tiles: Stat,
@@ -414,6 +441,8 @@ impl Report {
             submit: Stat::of(f, |x| x.submit_ms),
             cpu,
             gpu: Stat::of(f, |x| x.gpu_ms),
+            cull: Stat::of(f, |x| x.cull_ms),
+            hiz: Stat::of(f, |x| x.hiz_ms),
             gbuffer_draws: Stat::of(f, |x| x.gbuffer_draws.into()),
             shadow_draws: Stat::of(f, |x| x.shadow_draws.into()),
             static_tiles: Stat::of(f, |x| x.static_tiles.into()),
@@ -478,6 +507,8 @@ impl Report {
         row("CPU submit (ms)", &self.submit, 1.0);
         row("CPU total (ms)", &self.cpu, 1.0);
         row("GPU total (ms)", &self.gpu, 1.0);
+        row("  of which cull (ms)", &self.cull, 1.0);
+        row("  of which cull.hiz (ms)", &self.hiz, 1.0);
         row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
         row("shadow draw calls", &self.shadow_draws, 1.0);
         row("static shadow-map updates", &self.static_tiles, 1.0);
@@ -533,6 +564,8 @@ impl Report {
             ("submit_ms", &self.submit),
             ("cpu_ms", &self.cpu),
             ("gpu_ms", &self.gpu),
+            ("cull_ms", &self.cull),
+            ("hiz_ms", &self.hiz),
             ("gbuffer_draws", &self.gbuffer_draws),
             ("shadow_draws", &self.shadow_draws),
             ("static_tiles", &self.static_tiles),

@@ -388,6 +388,7 @@ impl Renderer {
             Ok(c) => c,
             Err(e) => {
                 res.history.discard();
+                res.passes.cull.hiz.reset();
                 return Err(e);
             }
         };
@@ -396,12 +397,16 @@ impl Renderer {
         ctx.queue.submit([commands]);
         let submit_ms = ms(t_submit);
         res.history.swap();
-        ctx.check("frame")?;
+        // A failed frame leaves no Hi-Z pyramid to trust.
+        ctx.check("frame")
+            .inspect_err(|_| res.passes.cull.hiz.reset())?;
         let mut timings = std::mem::take(sky_timings);
         if let Some(t) = timer.as_mut() {
             timings.extend(t.read_timings(&ctx.device)?);
         }
         self.prev_view_proj = Some(view_proj);
+        // V6 Hi-Z: the pyramid now holds this frame's depth.
+        self.res.passes.cull.hiz.frame_done(view_proj);
         self.prev_jitter = jitter;
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
