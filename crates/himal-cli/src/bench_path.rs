@@ -508,7 +508,9 @@ impl Report {
         row("CPU total (ms)", &self.cpu, 1.0);
         row("GPU total (ms)", &self.gpu, 1.0);
         row("  of which cull (ms)", &self.cull, 1.0);
-        row("  of which cull.hiz (ms)", &self.hiz, 1.0);
+        if self.hiz.max > 0.0 {
+            row("  of which cull.hiz (ms)", &self.hiz, 1.0);
+        }
         row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
         row("shadow draw calls", &self.shadow_draws, 1.0);
         row("static shadow-map updates", &self.static_tiles, 1.0);
