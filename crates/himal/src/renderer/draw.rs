@@ -487,7 +487,9 @@ impl DrawnCounts {
 impl Renderer {
     /// Runs the camera's culling alone and counts what its G-buffer lists
     /// draw (the GPU's lists read back; the CPU twin's where the GPU path
-    /// cannot run). Statistics only: it stalls for the read-back.
+    /// cannot run). With Hi-Z occlusion on, against the pyramid the last
+    /// frame culled with, so after a frame it counts what that frame drew.
+    /// Statistics only: it stalls for the read-back.
     pub fn count_drawn(
         &mut self,
         camera: &Camera,

@@ -142,11 +142,6 @@ impl HizPyramid {
         }
     }
 
-    /// The pyramid the last frame wrote (tests).
-    pub fn texture(&self) -> Option<&wgpu::Texture> {
-        self.textures.get(self.latest)
-    }
-
     /// Bytes of both pyramids (all mips).
     pub fn bytes(&self) -> u64 {
         let texel = |t: &wgpu::Texture| {

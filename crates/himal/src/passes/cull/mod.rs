@@ -700,7 +700,9 @@ impl CullPass {
 
     /// Runs the node for `views` alone and reads back each view's draw
     /// arguments and instance lists, per (view, batch, kind, level) as
-    /// [`reference::cull`] orders them (tests, statistics).
+    /// [`reference::cull`] orders them (tests, statistics). With Hi-Z on,
+    /// view 0 is also tested against the pyramid the last frame culled
+    /// against (occlusion is not in the twin's lists).
     pub fn read_back(
         &mut self,
         ctx: &GpuContext,
@@ -730,8 +732,8 @@ impl CullPass {
         );
         {
             let mut graph = FrameGraph::new();
-            // The pyramid as the last frame left it (view 0 occlusion-culled
-            // where `plan` found it valid).
+            // The pyramid the last frame culled against (view 0
+            // occlusion-culled where `plan` found it valid).
             let hiz = self.hiz.import_read(&mut graph);
             let Some((culled, CulledArgs::Gpu(culled_args))) =
                 self.add(&mut graph, hiz).map(|c| (c, c.args))
