@@ -72,6 +72,10 @@ pub struct BenchArgs {
     /// FLIP six frames of each against LOD0.
     #[arg(long)]
     pub compare_lod: bool,
+    /// With --path: write each frame's image to DIR/frame_NNNN.png (e.g.
+    /// to compare two runs, `--occlusion hiz` against `off`).
+    #[arg(long, value_name = "DIR", allow_hyphen_values = true)]
+    pub images: Option<std::path::PathBuf>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -204,8 +208,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     settings.envmap_every_frame = args.envmap_every_frame;
     settings.sky_occlusion_every_frame = args.skyocc_every_frame;
     settings.ao = args.ao.settings()?;
-    if args.path.is_none() && (args.dt.is_some() || args.csv.is_some() || args.compare_lod) {
-        bail!("--dt, --csv and --compare-lod need --path NAME (a world's flight path)");
+    let path_only = args.dt.is_some() || args.csv.is_some() || args.compare_lod;
+    if args.path.is_none() && (path_only || args.images.is_some()) {
+        bail!("--dt, --csv, --compare-lod and --images need --path NAME (a world's flight path)");
     }
     if args.compare_lod && args.json {
         bail!("--compare-lod prints a table: leave out --json");
@@ -228,6 +233,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             csv: args.csv.as_deref(),
             json: args.json,
             compare_lod: args.compare_lod,
+            images: args.images.as_deref(),
         };
         return crate::bench_path::run(&mut renderer, &settings, &run);
     }

@@ -36,6 +36,9 @@ pub struct PathFrame {
     pub thread_ms: f64,
     pub stream_thread_ms: f64,
     pub gpu_ms: f64,
+    /// GPU time of the `cull` node and of the Hi-Z pyramid (`cull.hiz*`).
+    pub cull_ms: f64,
+    pub hiz_ms: f64,
     pub gbuffer_draws: u32,
     pub shadow_draws: u32,
     /// S2 static-map tiles rendered (`--shadows csm+static`).
@@ -127,6 +130,8 @@ pub struct PathRun<'a> {
     /// E2: also count every frame under all-LOD0, triangle-size and
     /// object-size selection, and FLIP sampled frames against LOD0.
     pub compare_lod: bool,
+    /// Each frame's image written here as `frame_NNNN.png`.
+    pub images: Option<&'a Path>,
 }
 
 /// The E2 comparison's selections: all LOD0, by triangle size (the run's
@@ -266,6 +271,8 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
             thread_ms: frame.cpu.thread_ms,
             stream_thread_ms: st.total.cpu_ms,
             gpu_ms: frame.timings.iter().map(|t| t.gpu_ms).sum(),
+            cull_ms: pass_ms(&frame.timings, |id| id == "cull"),
+            hiz_ms: pass_ms(&frame.timings, |id| id.starts_with("cull.hiz")),
             gbuffer_draws: frame.gbuffer_draws,
             shadow_draws: frame.shadows.draws,
             static_tiles: frame.shadows.static_tiles.len() as u32,
@@ -309,6 +316,15 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
                 }
                 renderer.reset_history();
             }
+        }
+        if let Some(dir) = run.images {
+            let output = renderer
+                .output(settings)
+                .ok_or_else(|| anyhow::anyhow!("no output image"))?;
+            let image = himal::gpu::read_texture(renderer.context(), output, 0, 0)?;
+            let file = dir.join(format!("frame_{i:04}.png"));
+            himal::image_io::save(&file, &image)
+                .with_context(|| format!("--images: cannot write {}", file.display()))?;
         }
         if let Some((p, file)) = csv.as_mut() {
             writeln!(file, "{}", csv_row(i as usize, &f))
@@ -357,6 +373,15 @@ pub fn run(renderer: &mut Renderer, settings: &FrameSettings, run: &PathRun<'_>)
         }
     }
     Ok(())
+}
+
+/// GPU milliseconds of the passes whose id `wanted` accepts.
+fn pass_ms(timings: &[himal::graph::PassTiming], wanted: impl Fn(&str) -> bool) -> f64 {
+    timings
+        .iter()
+        .filter(|t| wanted(&t.id))
+        .map(|t| t.gpu_ms)
+        .sum()
 }
 
 /// Median, max and min of one column.
@@ -413,6 +438,8 @@ pub struct Report {
     pub thread: Stat,
     pub stream_thread: Stat,
     pub gpu: Stat,
+    pub cull: Stat,
+    pub hiz: Stat,
     pub gbuffer_draws: Stat,
     pub shadow_draws: Stat,
     pub static_tiles: Stat,
@@ -472,6 +499,8 @@ impl Report {
             thread: Stat::of(f, |x| x.thread_ms),
             stream_thread: Stat::of(f, |x| x.stream_thread_ms),
             gpu: Stat::of(f, |x| x.gpu_ms),
+            cull: Stat::of(f, |x| x.cull_ms),
+            hiz: Stat::of(f, |x| x.hiz_ms),
             gbuffer_draws: Stat::of(f, |x| x.gbuffer_draws.into()),
             shadow_draws: Stat::of(f, |x| x.shadow_draws.into()),
             static_tiles: Stat::of(f, |x| x.static_tiles.into()),
@@ -540,6 +569,10 @@ impl Report {
         row("render thread's CPU clock (ms)", &self.thread, 1.0);
         row("  of which streaming (ms)", &self.stream_thread, 1.0);
         row("GPU total (ms)", &self.gpu, 1.0);
+        row("  of which cull (ms)", &self.cull, 1.0);
+        if self.hiz.max > 0.0 {
+            row("  of which cull.hiz (ms)", &self.hiz, 1.0);
+        }
         row("G-buffer draw calls", &self.gbuffer_draws, 1.0);
         row("shadow draw calls", &self.shadow_draws, 1.0);
         row("static shadow-map updates", &self.static_tiles, 1.0);
@@ -609,6 +642,8 @@ impl Report {
             ("thread_ms", &self.thread),
             ("stream_thread_ms", &self.stream_thread),
             ("gpu_ms", &self.gpu),
+            ("cull_ms", &self.cull),
+            ("hiz_ms", &self.hiz),
             ("gbuffer_draws", &self.gbuffer_draws),
             ("shadow_draws", &self.shadow_draws),
             ("static_tiles", &self.static_tiles),

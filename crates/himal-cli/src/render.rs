@@ -229,6 +229,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub culling: String,
+    /// V6 Hi-Z occlusion culling of the camera's objects against the
+    /// previous frame's depth (GPU culling only): hiz or off. Objects that
+    /// come out from behind an occluder appear one frame late.
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "hiz|off",
+        allow_hyphen_values = true
+    )]
+    pub occlusion: String,
     /// E2 LOD by triangle size: an object switches to its next level where
     /// its mean triangle covers fewer than PX pixels (later levels at
     /// multiples of that distance); off: every object at full detail.
@@ -383,6 +393,11 @@ impl PostArgs {
             "cpu" => himal::Culling::Cpu,
             "off" => himal::Culling::Off,
             other => bail!("--culling {other}: expected gpu, cpu or off"),
+        };
+        settings.occlusion = match self.occlusion.as_str() {
+            "hiz" => himal::Occlusion::Hiz,
+            "off" => himal::Occlusion::Off,
+            other => bail!("--occlusion {other}: expected hiz or off"),
         };
         Ok(())
     }

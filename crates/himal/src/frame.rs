@@ -4,6 +4,7 @@
 //! ```text
 //! [skin ─> skin.copy] (skinned meshes posed into the scene's vertex buffer)
 //! cull (V6: camera, cascades, static tiles, L2 sectors) ─> instance lists, indirect arguments ─> gbuffer, shadows.cascade0..3
+//!   (--occlusion hiz: cull also reads last frame's Hi-Z pyramid; gbuffer, terrain ─> cull.hiz ─> cull.hiz.mipK ─> next frame's cull)
 //! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
@@ -46,7 +47,7 @@ use crate::passes::sky::SkyPass;
 use crate::passes::skyocc::{SkyOccPass, SkyOccStats};
 use crate::passes::terrain::{TerrainPass, TerrainStats, TerrainView};
 use crate::scene::Camera;
-use crate::settings::{Culling, FrameSettings, ViewBuffer};
+use crate::settings::{Culling, FrameSettings, Occlusion, ViewBuffer};
 
 /// Every pass's pipelines, created once.
 pub struct Passes {
@@ -273,6 +274,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
             instanced: settings.instancing,
         },
     };
+    // V6 Hi-Z: the camera's view against last frame's depth, on the GPU
+    // path alone (the CPU path has no previous depth on the CPU).
+    let hiz = settings.occlusion == Occlusion::Hiz && gpu_cull;
+    passes.cull.hiz.prepare(&ctx.device, size, hiz);
     passes.cull.plan(ctx, &views, lod, path);
     // The pool's own draws: the sun maps' pool views, and the camera's
     // where the CPU twin's lists are drawn directly (on the GPU path they
@@ -384,7 +389,9 @@ pub fn build<'a>(
     // Skinned meshes posed into the scene's vertex buffer first.
     passes.skin.add(&mut g, scene);
     // V6: the camera's and the cascades' objects, culled on the GPU.
-    let culled = passes.cull.add(&mut g);
+    // `cull` reads last frame's Hi-Z pyramid (`cull.hiz` writes the other).
+    let hiz = passes.cull.hiz.import_read(&mut g);
+    let culled = passes.cull.add(&mut g, hiz);
     let visible = Some(&passes.gbuffer.visible);
     // The camera's view: GPU lists, or the CPU twin's pool lists alone.
     let camera_list = culled.filter(|c| {
@@ -405,6 +412,8 @@ pub fn build<'a>(
         Some(t) => t.add(ctx, &mut g, gbuffer, view),
         None => gbuffer,
     };
+    // V6 Hi-Z: the pyramid of this depth, for the next frame's `cull`.
+    passes.cull.hiz.add(&mut g, gbuffer.depth);
     let terrain = passes
         .terrain
         .as_ref()

@@ -33,7 +33,7 @@ pub mod soak;
 pub use renderer::{
     DrawnCounts, DrawnFrame, FrameSettings, RenderedFrame, Renderer, ViewBuffer, WorldFrame,
 };
-pub use settings::Culling;
+pub use settings::{Culling, Occlusion};
 
 /// Every error the library returns; each names what failed and where.
 #[derive(thiserror::Error, Debug)]

@@ -149,6 +149,9 @@ pub struct FrameSettings {
     /// or the CPU, or every object (`Off`: the G-buffer; cascades still
     /// cull on the CPU).
     pub culling: Culling,
+    /// V6 Hi-Z occlusion culling of the camera's objects against the
+    /// previous frame's depth (GPU culling path only; off by default).
+    pub occlusion: Occlusion,
     /// E2 LOD by triangle size: an object draws its next level once its
     /// mean triangle would cover fewer than this many pixels; 0 = LOD0
     /// everywhere (the library's default, so references stay exact; the
@@ -202,6 +205,20 @@ pub enum Culling {
     Gpu,
 }
 
+/// Occlusion culling of the camera's view (V6, issue #17 item 5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Occlusion {
+    /// Frustum and distance culling only.
+    #[default]
+    Off,
+    /// Each object's box reprojected with the previous frame's
+    /// view-projection and tested against a min-depth pyramid of that
+    /// frame's depth (`cull.hiz`); objects hidden last frame that this
+    /// camera sees appear one frame late. Needs the GPU culling path (the
+    /// CPU path has no previous depth) and `--culling gpu`.
+    Hiz,
+}
+
 impl FrameSettings {
     pub fn new(width: u32, height: u32, sun: SunDesc) -> Self {
         Self {
@@ -228,6 +245,7 @@ impl FrameSettings {
             bent_normals: true,
             instancing: true,
             culling: Culling::Gpu,
+            occlusion: Occlusion::Off,
             lod_threshold_px: 0.0,
             lod_band: 0.2,
             lod_error_px: 1.0,

@@ -600,3 +600,42 @@ fn static_shadow_map_holds_terrain_and_instances_and_follows_streaming() {
         "{standing} of {houses} houses in the map"
     );
 }
+
+/// V6 Hi-Z in the world: from the village camera held still, the houses
+/// and the terrain (drawn into the same depth before `cull.hiz`) hide pool
+/// instances behind them; with `Occlusion::Hiz` the G-buffer lists fewer
+/// instances from the second frame on and every frame is byte-identical to
+/// occlusion off.
+#[test]
+fn hiz_occlusion_in_the_village_keeps_the_image() {
+    let world = small_world();
+    let camera = named_camera(&world, "village");
+    let mut settings = FrameSettings::new(160, 90, world.scene().sun);
+    let frames = |r: &mut Renderer, s: &FrameSettings| -> Vec<Vec<u8>> {
+        (0..3)
+            .map(|_| r.render(&camera, s).expect("frame").image.bytes)
+            .collect()
+    };
+    let mut off = settled(&world, &camera);
+    let reference = frames(&mut off, &settings);
+    let all = off.count_drawn(&camera, &settings).expect("counts");
+    settings.occlusion = himal::Occlusion::Hiz;
+    let mut on = settled(&world, &camera);
+    let images = frames(&mut on, &settings);
+    let kept = on.count_drawn(&camera, &settings).expect("counts");
+    eprintln!(
+        "village, 160x90: camera instances {} without occlusion, {} with; triangles {} / {}",
+        all.total_instances(),
+        kept.total_instances(),
+        all.total_triangles(),
+        kept.total_triangles()
+    );
+    for (i, (a, b)) in reference.iter().zip(&images).enumerate() {
+        let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+        assert_eq!(
+            differ, 0,
+            "frame {i}: {differ} bytes differ from occlusion off"
+        );
+    }
+    assert!(kept.total_instances() < all.total_instances());
+}

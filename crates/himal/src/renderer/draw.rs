@@ -392,6 +392,7 @@ impl Renderer {
             Ok(c) => c,
             Err(e) => {
                 res.history.discard();
+                res.passes.cull.hiz.reset();
                 return Err(e);
             }
         };
@@ -401,12 +402,16 @@ impl Renderer {
         let submit_ms = ms(t_submit);
         let thread_ms = thread.span().cpu_ms;
         res.history.swap();
-        ctx.check("frame")?;
+        // A failed frame leaves no Hi-Z pyramid to trust.
+        ctx.check("frame")
+            .inspect_err(|_| res.passes.cull.hiz.reset())?;
         let mut timings = std::mem::take(sky_timings);
         if let Some(t) = timer.as_mut() {
             timings.extend(t.read_timings(&ctx.device)?);
         }
         self.prev_view_proj = Some(view_proj);
+        // V6 Hi-Z: the pyramid now holds this frame's depth.
+        self.res.passes.cull.hiz.frame_done(view_proj);
         self.prev_jitter = jitter;
         self.prev_time = Some(settings.time_s);
         self.res.post.frame_done(settings);
@@ -489,7 +494,9 @@ impl DrawnCounts {
 impl Renderer {
     /// Runs the camera's culling alone and counts what its G-buffer lists
     /// draw (the GPU's lists read back; the CPU twin's where the GPU path
-    /// cannot run). Statistics only: it stalls for the read-back.
+    /// cannot run). With Hi-Z occlusion on, against the pyramid the last
+    /// frame culled with, so after a frame it counts what that frame drew.
+    /// Statistics only: it stalls for the read-back.
     pub fn count_drawn(
         &mut self,
         camera: &Camera,

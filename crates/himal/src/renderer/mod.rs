@@ -253,6 +253,10 @@ impl Renderer {
             ),
         ];
         rows.extend(self.res.history.memory());
+        let hiz = self.res.passes.cull.hiz.bytes();
+        if hiz > 0 {
+            rows.push(("cull.hiz (2 pyramids)".to_string(), hiz));
+        }
         rows
     }
 
@@ -270,6 +274,7 @@ impl Renderer {
         self.prev_time = None;
         self.res.post.reset = true;
         self.res.history.reset();
+        self.res.passes.cull.hiz.reset();
     }
 
     /// E1 pre-warm: fetches every pipeline permutation a frame of this

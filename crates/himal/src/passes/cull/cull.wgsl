@@ -17,7 +17,11 @@
 // materials); view v's lists of batch b start at objects + v * 2 objects +
 // 2 b.first_object (an object is in at most two). An entry is the object
 // (bits 0-23) and its fade code (bits 24-31, 0 steady).
+// With Hi-Z occlusion (params.occlusion) view 0, the camera, also drops
+// boxes hidden behind the previous frame's depth pyramid (shaders/hiz.wgsl).
 // Twin: reference.rs; the test: docs/techniques/V6.md.
+
+#import hiz
 
 struct CullParams {
     views: u32,
@@ -25,7 +29,8 @@ struct CullParams {
     batches: u32,
     objects: u32,
     opaque_batches: u32,
-    _pad0: u32,
+    // 1: Hi-Z occlusion of view 0 against hiz_load
+    occlusion: u32,
     _pad1: u32,
     _pad2: u32,
     // xyz: the camera (LOD distances for every view), w: E2 distance scale
@@ -35,6 +40,8 @@ struct CullParams {
     // (px); z: largest geometric error a level may show (px; 0: no guard);
     // w: object-size metric f / R (E2 comparison; 0: triangle size)
     lod: vec4f,
+    // the view-projection the pyramid's depth was rendered with
+    hiz_view_proj: mat4x4f,
 }
 
 // Six planes (xyz . p + w >= 0 inside); a disabled plane is (0, 0, 0, 1).
@@ -104,6 +111,15 @@ struct DrawArgs {
 @group(0) @binding(5) var<storage, read_write> masks: array<ChunkMask>;
 @group(0) @binding(6) var<storage, read_write> args: array<DrawArgs>;
 @group(0) @binding(7) var<storage, read_write> instances: array<u32>;
+// The previous frame's min-depth pyramid (a 1x1 fallback when occlusion is off).
+@group(0) @binding(8) var hiz_load: texture_2d<f32>;
+
+// Hi-Z occlusion: the camera's view only (cascades cast from what the
+// camera cannot see; static tiles and sky occlusion are other views).
+fn occluded(b: Bounds, view: u32) -> bool {
+    return view == 0u && params.occlusion != 0u
+        && hiz_occluded(hiz_load, params.hiz_view_proj, b.center.xyz, b.half_extent.xyz);
+}
 
 // The box is wholly outside a plane when even its farthest corner along the
 // plane's normal is: dot(n, c) + w + dot(|n|, e) < 0 (exactly the eight-corner test).
@@ -194,7 +210,7 @@ fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i:
     if (i < chunk.count) {
         let b = bounds[chunk.first_object + i];
         let batch = batches[chunk.batch];
-        if (!outside(b, views[view]) && !too_far(b, batch)) {
+        if (!outside(b, views[view]) && !too_far(b, batch) && !occluded(b, view)) {
             let c = lod_choice(b, batch);
             let l = u32(c.x);
             let bit = 1u << (i % 32u);

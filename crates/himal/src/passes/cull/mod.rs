@@ -15,8 +15,15 @@
 //! instance use the CPU path (`gpu_scene::SceneGpu::visible`, casters);
 //! the streamed pool, which has no per-object lists, is then culled by the
 //! twin and drawn directly ([`CullPath::Cpu`]).
+//!
+//! Optional Hi-Z occlusion ([`crate::settings::Occlusion::Hiz`], GPU path
+//! only): the camera's view (view 0) also drops boxes hidden behind the
+//! previous frame's depth pyramid ([`hiz`], built by `cull.hiz` after the
+//! G-buffer and the terrain). Cascades, static tiles and the sky-occlusion
+//! view are never occlusion-culled.
 
 pub mod culled;
+pub mod hiz;
 pub mod reference;
 
 pub use culled::{ALL, Culled, CulledArgs, FADING, SHADOW, STEADY, bind_instances};
@@ -28,7 +35,7 @@ use wgpu::util::DeviceExt;
 use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, LodView, ObjectBounds, SceneGpu};
-use crate::graph::{BufferDesc, FrameGraph};
+use crate::graph::{BufferDesc, Fallback, FrameGraph, TextureHandle};
 use crate::scene::lod::MAX_LODS;
 
 /// Views culled per frame at most: the camera and four cascades, and room
@@ -66,12 +73,16 @@ struct ParamsGpu {
     batches: u32,
     objects: u32,
     opaque_batches: u32,
-    _pad: [u32; 3],
+    /// 1: Hi-Z occlusion of view 0 against the bound pyramid.
+    occlusion: u32,
+    _pad: [u32; 2],
     /// xyz the eye, w the E2 distance scale (0: LOD0).
     eye: [f32; 4],
     /// E2: x the transition band (a fraction of d1; 0: levels pop), y the
     /// focal length (px), z the largest geometric error (px; 0: no guard).
     lod: [f32; 4],
+    /// The view-projection the Hi-Z pyramid's depth was rendered with.
+    hiz_view_proj: [[f32; 4]; 4],
 }
 
 /// One culling view: six planes `n . p + w >= 0` (twin of `CullView`).
@@ -421,6 +432,10 @@ pub struct CullPass {
     /// they draw instanced, and the lists' scratch (reused, never shrunk
     /// below the largest frame's).
     cpu: CpuLists,
+    /// V6 Hi-Z: the previous frame's depth pyramid.
+    pub hiz: hiz::HizPyramid,
+    /// Whether view 0 is occlusion-culled this frame (the pyramid valid).
+    occlusion: bool,
 }
 
 #[derive(Default)]
@@ -494,6 +509,8 @@ impl CullPass {
             unsupported,
             planned: 0,
             cpu: CpuLists::default(),
+            hiz: hiz::HizPyramid::new(ctx)?,
+            occlusion: false,
         })
     }
 
@@ -562,6 +579,10 @@ impl CullPass {
         let views = &views[..views.len().min(MAX_VIEWS)];
         let gpu = path == CullPath::Gpu && self.supported().is_ok();
         self.planned = if gpu { views.len() as u32 } else { 0 };
+        // Hi-Z: only against a pyramid this frame's graph binds.
+        let hiz = (gpu && self.hiz.building()).then(|| self.hiz.previous());
+        let hiz = hiz.flatten();
+        self.occlusion = hiz.is_some();
         self.cpu.views = 0;
         if !gpu {
             let instanced = !matches!(path, CullPath::Cpu { instanced: false });
@@ -575,7 +596,8 @@ impl CullPass {
                 batches: l.batches.len() as u32,
                 objects: l.objects,
                 opaque_batches: l.opaque_batches,
-                _pad: [0; 3],
+                occlusion: u32::from(self.occlusion),
+                _pad: [0; 2],
                 eye: lod.eye.extend(lod.selection.scale).to_array(),
                 lod: [
                     lod.selection.band,
@@ -583,6 +605,7 @@ impl CullPass {
                     lod.selection.max_error_px,
                     lod.selection.object_scale,
                 ],
+                hiz_view_proj: hiz.unwrap_or(Mat4::IDENTITY).to_cols_array_2d(),
             };
             ctx.queue
                 .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -677,9 +700,19 @@ impl CullPass {
         calls
     }
 
+    /// Whether the camera's view is occlusion-culled this frame.
+    pub fn occlusion(&self) -> bool {
+        self.occlusion
+    }
+
     /// The `cull` node for the planned views; `None` when none are planned
-    /// or the scene has no opaque or vegetation objects.
-    pub fn add<'a>(&'a self, graph: &mut FrameGraph<'a>) -> Option<Culled<'a>> {
+    /// or the scene has no opaque or vegetation objects. `hiz`: last
+    /// frame's pyramid as imported ([`hiz::HizPyramid::import_read`]).
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        hiz: Option<TextureHandle>,
+    ) -> Option<Culled<'a>> {
         let l = &self.layout;
         if l.batches.is_empty() {
             return None;
@@ -718,6 +751,8 @@ impl CullPass {
             .write_buffer("masks", masks)
             .write_buffer("args", args)
             .write_buffer("instances", instances)
+            // Unread unless `occlusion` is set (then it is the pyramid).
+            .optional("hiz_load", hiz, Fallback::Black)
             .dispatch_with(move |cp| {
                 cp.dispatch_workgroups(chunks, n, 1);
                 cp.set_pipeline(args_pipeline);
@@ -733,7 +768,9 @@ impl CullPass {
 
     /// Runs the node for `views` alone and reads back each view's draw
     /// arguments and instance lists, per (view, batch, kind, level) as
-    /// [`reference::cull`] orders them (tests, statistics).
+    /// [`reference::cull`] orders them (tests, statistics). With Hi-Z on,
+    /// view 0 is also tested against the pyramid the last frame culled
+    /// against (occlusion is not in the twin's lists).
     pub fn read_back(
         &mut self,
         ctx: &GpuContext,
@@ -763,8 +800,11 @@ impl CullPass {
         );
         {
             let mut graph = FrameGraph::new();
+            // The pyramid the last frame culled against (view 0
+            // occlusion-culled where `plan` found it valid).
+            let hiz = self.hiz.import_read(&mut graph);
             let Some((culled, CulledArgs::Gpu(culled_args))) =
-                self.add(&mut graph).map(|c| (c, c.args))
+                self.add(&mut graph, hiz).map(|c| (c, c.args))
             else {
                 return Ok(result);
             };

@@ -155,6 +155,119 @@ pub fn region(layout: &CullLayout, v: usize, batch: &super::BatchGpu) -> u32 {
     layout.objects + 2 * (v as u32 * layout.objects + batch.first_object)
 }
 
+/// One mip of a Hi-Z pyramid: `width` x `height` depths, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HizMip {
+    /// Texels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Reverse-Z depths (0: the far plane).
+    pub depth: Vec<f32>,
+}
+
+impl HizMip {
+    fn at(&self, x: u32, y: u32) -> f32 {
+        self.depth[(y * self.width + x) as usize]
+    }
+}
+
+/// Mip k + 1 from mip k (`cs_reduce` in `hiz.wgsl`): each texel the
+/// minimum (farthest) of its 2 x 2 parents; the last texel of a row or
+/// column reaches the parent's end (three wide where the parent is odd).
+pub fn hiz_reduce(parent: &HizMip) -> HizMip {
+    let (w, h) = ((parent.width >> 1).max(1), (parent.height >> 1).max(1));
+    let span = |i: u32, n: u32, pn: u32| {
+        let p0 = 2 * i;
+        let p1 = if i == n - 1 {
+            pn - 1
+        } else {
+            (p0 + 1).min(pn - 1)
+        };
+        p0..=p1
+    };
+    let mut depth = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let mut z = 3.0e38_f32;
+            for py in span(y, h, parent.height) {
+                for px in span(x, w, parent.width) {
+                    z = z.min(parent.at(px, py));
+                }
+            }
+            depth.push(z);
+        }
+    }
+    HizMip {
+        width: w,
+        height: h,
+        depth,
+    }
+}
+
+/// The whole pyramid of a `width` x `height` depth image (mip 0 is the
+/// depth itself; down to 1 x 1, as `cull.hiz`).
+pub fn hiz_build(depth: &[f32], width: u32, height: u32) -> Vec<HizMip> {
+    let mut mips = vec![HizMip {
+        width,
+        height,
+        depth: depth.to_vec(),
+    }];
+    for _ in 1..super::hiz::mip_count(width, height) {
+        let next = hiz_reduce(mips.last().expect("mip 0"));
+        mips.push(next);
+    }
+    mips
+}
+
+/// Whether the box (centre `c`, half extent `e`) is hidden behind the
+/// pyramid `hiz` rendered with `view_proj` (`hiz_occluded` in
+/// `shaders/hiz.wgsl`, the same steps): every corner in front of the eye
+/// and behind the near plane, the screen rectangle inside the screen, and
+/// the box's nearest depth (max z/w) below the farthest depth of the (at
+/// most 2 x 2) texels of the finest mip that covers the rectangle so.
+pub fn hiz_occluded(hiz: &[HizMip], view_proj: glam::Mat4, c: glam::Vec3, e: glam::Vec3) -> bool {
+    use glam::{UVec2, Vec2, Vec3};
+    let Some(top) = hiz.first() else {
+        return false;
+    };
+    let size = UVec2::new(top.width, top.height);
+    let screen = size.as_vec2();
+    let (mut lo, mut hi, mut z_near) = (Vec2::splat(3.0e38), Vec2::splat(-3.0e38), -3.0e38_f32);
+    for i in 0..8u32 {
+        let sign = |bit: u32| if i & bit != 0 { 1.0 } else { -1.0 };
+        let s = Vec3::new(sign(1), sign(2), sign(4));
+        let p = view_proj * (c + s * e).extend(1.0);
+        if p.w <= 0.0 || p.z > p.w {
+            return false;
+        }
+        let ndc = p.truncate() / p.w;
+        let px = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * screen;
+        lo = lo.min(px);
+        hi = hi.max(px);
+        z_near = z_near.max(ndc.z);
+    }
+    if lo.x < 0.0 || lo.y < 0.0 || hi.x > screen.x || hi.y > screen.y {
+        return false;
+    }
+    let a = lo.as_uvec2();
+    let b = hi.as_uvec2().min(size - 1);
+    let mut level = 0u32;
+    while (level as usize) + 1 < hiz.len() {
+        let span = (b >> level) - (a >> level);
+        if span.x <= 1 && span.y <= 1 {
+            break;
+        }
+        level += 1;
+    }
+    let mip = &hiz[level as usize];
+    let last = UVec2::new(mip.width - 1, mip.height - 1);
+    let (ak, bk) = ((a >> level).min(last), (b >> level).min(last));
+    let farthest = (mip.at(ak.x, ak.y).min(mip.at(bk.x, ak.y)))
+        .min(mip.at(ak.x, bk.y).min(mip.at(bk.x, bk.y)));
+    z_near < farthest
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::{BatchGpu, CHUNK, ChunkBox, ChunkGpu, CullLayout, CullView};
