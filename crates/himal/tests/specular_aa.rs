@@ -530,3 +530,70 @@ fn toksvig_brings_a_minified_bumpy_mirror_closer_to_its_supersampled_self() {
     // that blend in level 1 at a slightly different LOD.
     assert!(close < 1e-3, "close-up on vs off: {close}");
 }
+
+/// The bake's cost at load: a 2048 x 2048 image (DamagedHelmet's normal
+/// map size) uploaded as a normal texture (E3 chain) and as a metal-rough
+/// texture (plain box chain), interleaved, best of three, GPU work waited
+/// for. Printed for E3.md; asserted only to finish.
+#[test]
+fn the_bake_costs_little_at_load() {
+    let n = 2048u32;
+    let mut rng = Pcg32::new(2048);
+    let rgba8: Vec<u8> = (0..n * n * 4)
+        .map(|_| (rng.next_u32() & 255) as u8)
+        .collect();
+    let image = ImageData {
+        name: "2048".into(),
+        width: n,
+        height: n,
+        rgba8,
+    };
+    let ctx = shared_context().expect("GPU");
+    let texture = Some(TextureRef {
+        texture: 0,
+        tex_coord: 0,
+        transform: None,
+    });
+    let upload = |normal: bool| {
+        let material = if normal {
+            PbrMaterial {
+                normal_texture: texture,
+                ..Default::default()
+            }
+        } else {
+            PbrMaterial {
+                metallic_roughness_texture: texture,
+                ..Default::default()
+            }
+        };
+        let pbr = PbrSet {
+            materials: vec![material],
+            textures: vec![TextureSlot {
+                image: 0,
+                sampler: SamplerDesc::default(),
+            }],
+            images: vec![image.clone()],
+            mesh_material: Vec::new(),
+        };
+        let t = std::time::Instant::now();
+        let gpu = MaterialTextures::upload(ctx, &pbr).expect("upload");
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("poll");
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        drop(gpu);
+        ms
+    };
+    upload(true);
+    upload(false);
+    let (mut baked, mut plain) = (f64::MAX, f64::MAX);
+    for _ in 0..3 {
+        baked = baked.min(upload(true));
+        plain = plain.min(upload(false));
+    }
+    eprintln!(
+        "upload of a 2048^2 image with its mips: normal (E3 bake) {baked:.1} ms, plain {plain:.1} ms (+{:.1} ms)",
+        baked - plain
+    );
+    assert!(baked.is_finite() && plain.is_finite());
+}
