@@ -597,3 +597,104 @@ fn the_bake_costs_little_at_load() {
     );
     assert!(baked.is_finite() && plain.is_finite());
 }
+
+#[test]
+fn only_images_used_just_as_normal_maps_are_baked() {
+    let at = |texture| {
+        Some(TextureRef {
+            texture,
+            tex_coord: 0,
+            transform: None,
+        })
+    };
+    // Image 0: normal here, occlusion there; 1: normal only; 2: normal and
+    // clearcoat normal (both normal slots).
+    let pbr = PbrSet {
+        materials: vec![
+            PbrMaterial {
+                normal_texture: at(0),
+                ..Default::default()
+            },
+            PbrMaterial {
+                occlusion_texture: at(0),
+                normal_texture: at(1),
+                ..Default::default()
+            },
+            PbrMaterial {
+                normal_texture: at(2),
+                clearcoat_normal_texture: at(2),
+                ..Default::default()
+            },
+        ],
+        textures: (0..3)
+            .map(|image| TextureSlot {
+                image,
+                sampler: SamplerDesc::default(),
+            })
+            .collect(),
+        images: ["shared", "normal", "coat"]
+            .map(|name| ImageData {
+                name: name.into(),
+                width: 4,
+                height: 4,
+                rgba8: [128u8, 128, 255, 200].repeat(16),
+            })
+            .to_vec(),
+        mesh_material: Vec::new(),
+    };
+    let (baked, shared) = pbr.normal_variance_images();
+    assert_eq!(baked, vec![false, true, true]);
+    assert_eq!(shared, vec!["shared".to_string()]);
+    // On the GPU: the shared image keeps its alpha (another slot's data),
+    // the baked ones start from zero variance.
+    let ctx = shared_context().expect("GPU");
+    let gpu = MaterialTextures::upload(ctx, &pbr).expect("upload");
+    let alpha0 = |material: usize| {
+        let t = &gpu.textures[gpu.materials[material].slots[2].0];
+        read_texture(ctx, t, 0, 0).expect("read back").bytes[3]
+    };
+    assert_eq!((alpha0(0), alpha0(1), alpha0(2)), (200, 0, 0));
+}
+
+#[test]
+fn a_normal_map_shared_with_another_slot_is_named_at_load() {
+    let dir = common::temp_dir("e3-shared");
+    image::save_buffer(
+        dir.join("n.png"),
+        &[128u8, 128, 255, 255].repeat(4),
+        2,
+        2,
+        image::ColorType::Rgba8,
+    )
+    .expect("write PNG");
+    let mut bin: Vec<u8> = Vec::new();
+    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for _ in 0..3 {
+        bin.extend([0.0f32, 0.0, 1.0].iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for uv in [[0.0f32, 0.0], [1.0, 0.0], [0.0, 1.0]] {
+        bin.extend(uv.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}},"material":0}}]}}],
+"materials":[{{"normalTexture":{{"index":0}},"occlusionTexture":{{"index":0}}}}],
+"textures":[{{"source":0}}],"images":[{{"uri":"n.png","name":"bumps"}}],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},{{"buffer":0,"byteOffset":72,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}},{{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}}]}}"#,
+        bin.len(),
+        common::base64(&bin)
+    );
+    let path = dir.join("shared.gltf");
+    std::fs::write(&path, json).expect("write glTF");
+    let asset = himal::scene::gltf::load(&path).expect("load");
+    let named: Vec<&String> = (asset.warnings.iter())
+        .filter(|w| w.contains("normal texture and by another slot"))
+        .collect();
+    assert_eq!(named.len(), 1, "{:?}", asset.warnings);
+    assert!(named[0].contains("bumps"), "{}", named[0]);
+}

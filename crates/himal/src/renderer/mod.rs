@@ -289,9 +289,13 @@ impl Renderer {
         for key in LightingKey::all() {
             passes.lighting.pipeline(ctx, key)?;
         }
+        // E3: `--specular-aa on|off` both ready (the renderer made the on ones).
         for specular_aa in [true, false] {
             for key in GBufferKey::for_scene(&self.res.scene, true, specular_aa) {
                 passes.gbuffer.pipeline(ctx, key)?;
+            }
+            for key in crate::passes::forward::ForwardKey::for_scene(&self.res.scene, specular_aa) {
+                passes.forward.pipeline(ctx, key)?;
             }
         }
         for name in ViewBuffer::NAMES {
