@@ -218,6 +218,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub instancing: String,
+    /// E3 specular anti-aliasing: glTF roughness widened by the normal
+    /// variance baked into normal-map mips (Toksvig); off: plain roughness.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub specular_aa: String,
     /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
     /// instance in a compute pass, drawn indirectly; the CPU path where the
     /// adapter cannot), cpu (per object on the render thread), off (the
@@ -377,6 +386,7 @@ impl PostArgs {
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
+        settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
         let pixels = |flag: &str, v: &str| -> Result<f32> {
             match v {
                 "off" => Ok(0.0),

@@ -47,6 +47,10 @@ fn bad_post_options_are_rejected() {
             &["render", "--white-point", "-1", "--size", "8x8"][..],
             "--white-point -1",
         ),
+        (
+            &["render", "--specular-aa", "maybe", "--size", "8x8"][..],
+            "--specular-aa maybe",
+        ),
         (&["prewarm", "--cache", "off"][..], "cache directory"),
         (&["bake", "--cache", "off"][..], "cache directory"),
         (

@@ -185,6 +185,9 @@ pub struct FrameSettings {
     pub aa_buffers: crate::passes::aa::AaBuffers,
     /// L1 sky: Preetham (default, the goldens' sky) or Bruneton tables.
     pub sky_model: crate::passes::sky::SkyModel,
+    /// E3 specular anti-aliasing: glTF roughness widened by the normal
+    /// variance baked into normal-map mips (Toksvig; on by default).
+    pub specular_aa: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -254,6 +257,7 @@ impl FrameSettings {
             environment_probes: true,
             envmap_every_frame: false,
             sky_model: Default::default(),
+            specular_aa: true,
         }
     }
 }

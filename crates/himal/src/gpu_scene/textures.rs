@@ -4,7 +4,9 @@
 //! sampler per distinct glTF sampler, 1x1 defaults for absent slots, and a
 //! uniform of factors per material (twin of `MaterialGpu` in
 //! `shaders/gltf_material.wgsl`). CPU twin of the mip generation:
-//! [`next_mip_reference`].
+//! [`next_mip_reference`]. Images used only as normal textures get E3's
+//! chain instead (`normal_mipmap.wgsl`, twin [`next_normal_mip_reference`]):
+//! normalised averages with the normal variance in alpha.
 
 use std::collections::HashMap;
 
@@ -14,8 +16,9 @@ use wgpu::util::DeviceExt;
 use crate::gpu::pipeline::target;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
+use crate::math::brdf::{normal_variance_decode, normal_variance_encode};
 use crate::scene::gltf::{
-    AlphaMode, ImageData, PbrMaterial, PbrSet, SamplerDesc, TEXTURE_SLOTS, Wrap,
+    AlphaMode, ImageData, NORMAL_SLOTS, PbrMaterial, PbrSet, SamplerDesc, TEXTURE_SLOTS, Wrap,
 };
 
 /// Twin of `MaterialGpu` in shaders/gltf_material.wgsl.
@@ -28,9 +31,11 @@ pub struct MaterialGpu {
     pub emissive: [f32; 4],
     /// x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad).
     pub params: [f32; 4],
-    /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit.
+    /// x alpha mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit,
+    /// w 1 when the normal texture's alpha holds normal variance (E3).
     pub alpha: [f32; 4],
-    /// KHR_materials_clearcoat: x factor, y roughness, z normal scale.
+    /// KHR_materials_clearcoat: x factor, y roughness, z normal scale, w 1
+    /// when the coat normal texture's alpha holds normal variance (E3).
     pub clearcoat: [f32; 4],
     /// KHR_materials_sheen: rgb colour (linear), a roughness.
     pub sheen: [f32; 4],
@@ -244,6 +249,8 @@ impl MaterialTextures {
 
     pub fn upload(ctx: &GpuContext, pbr: &PbrSet) -> Result<Self, GpuError> {
         let mipmap = Program::new(ctx, "gpu_scene/mipmap.wgsl")?;
+        let normal_mipmap = Program::new(ctx, "gpu_scene/normal_mipmap.wgsl")?;
+        let (baked, _) = pbr.normal_variance_images();
         let mut out = MaterialTextures {
             textures: Vec::new(),
             views: Vec::new(),
@@ -266,16 +273,18 @@ impl MaterialTextures {
         };
         let defaults = [
             one([255, 255, 255, 255], "default.white"),
-            one([128, 128, 255, 255], "default.normal"),
+            // Flat, no variance (E3 alpha).
+            one([128, 128, 255, 0], "default.normal"),
             one([255, 128, 255, 255], "default.anisotropy"),
         ];
         let mut uploaded: HashMap<(usize, bool), usize> = HashMap::new();
         let mut sampler_ids: HashMap<SamplerDesc, usize> = HashMap::new();
         let default_sampler = out.sampler(ctx, &mut sampler_ids, &SamplerDesc::default());
-        let white_srgb = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[0], true)?;
-        let white = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[0], false)?;
-        let flat = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[1], false)?;
-        let along_t = out.add_image(ctx, &mipmap, &linear_sampler, &defaults[2], false)?;
+        let plain = Mips::Plain(&mipmap, &linear_sampler);
+        let white_srgb = out.add_image(ctx, plain, &defaults[0], true)?;
+        let white = out.add_image(ctx, plain, &defaults[0], false)?;
+        let flat = out.add_image(ctx, Mips::Normal(&normal_mipmap), &defaults[1], false)?;
+        let along_t = out.add_image(ctx, plain, &defaults[2], false)?;
         for m in &pbr.materials {
             // Per slot: sRGB or linear, and the default where it is absent.
             let (srgb, fallback) = (
@@ -290,7 +299,9 @@ impl MaterialTextures {
             );
             let refs = (m.texture_refs().into_iter().zip(srgb)).zip(fallback);
             let mut slots = [(0, 0); TEXTURE_SLOTS];
-            for (slot, ((r, srgb), fallback)) in slots.iter_mut().zip(refs) {
+            // E3: whether the normal / coat normal slot's alpha is variance.
+            let mut variance = [false; 2];
+            for (k, (slot, ((r, srgb), fallback))) in slots.iter_mut().zip(refs).enumerate() {
                 *slot = match r.and_then(|r| pbr.textures.get(r.texture)) {
                     Some(t) => {
                         let image = pbr.images.get(t.image).ok_or_else(|| {
@@ -300,11 +311,19 @@ impl MaterialTextures {
                                 pbr.images.len()
                             ))
                         })?;
+                        let bake = !srgb && baked.get(t.image).copied().unwrap_or(false);
+                        if let Some(n) = NORMAL_SLOTS.iter().position(|&n| n == k) {
+                            variance[n] = bake;
+                        }
                         let view = match uploaded.get(&(t.image, srgb)) {
                             Some(&v) => v,
                             None => {
-                                let v =
-                                    out.add_image(ctx, &mipmap, &linear_sampler, image, srgb)?;
+                                let mips = if bake {
+                                    Mips::Normal(&normal_mipmap)
+                                } else {
+                                    plain
+                                };
+                                let v = out.add_image(ctx, mips, image, srgb)?;
                                 uploaded.insert((t.image, srgb), v);
                                 v
                             }
@@ -314,11 +333,14 @@ impl MaterialTextures {
                     None => (fallback, default_sampler),
                 };
             }
+            let mut gpu = MaterialGpu::new(m);
+            gpu.alpha[3] = f32::from(u8::from(variance[0]));
+            gpu.clearcoat[3] = f32::from(u8::from(variance[1]));
             let uniform = ctx
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("gltf.material"),
-                    contents: bytemuck::bytes_of(&MaterialGpu::new(m)),
+                    contents: bytemuck::bytes_of(&gpu),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
             out.materials.push(MaterialBinding {
@@ -348,8 +370,7 @@ impl MaterialTextures {
     fn add_image(
         &mut self,
         ctx: &GpuContext,
-        mipmap: &Program,
-        sampler: &wgpu::Sampler,
+        mips: Mips,
         image: &ImageData,
         srgb: bool,
     ) -> Result<usize, GpuError> {
@@ -386,6 +407,17 @@ impl MaterialTextures {
                 | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
+        // E3: a normal map's level 0 has no variance (glTF ignores its alpha).
+        let zero_alpha;
+        let level0 = match mips {
+            Mips::Normal(_) => {
+                let mut t = image.rgba8.clone();
+                t.chunks_exact_mut(4).for_each(|p| p[3] = 0);
+                zero_alpha = t;
+                &zero_alpha
+            }
+            Mips::Plain(..) => &image.rgba8,
+        };
         ctx.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &texture,
@@ -393,7 +425,7 @@ impl MaterialTextures {
                 origin: wgpu::Origin3d::ZERO,
                 aspect: wgpu::TextureAspect::All,
             },
-            &image.rgba8,
+            level0,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(w * 4),
@@ -402,10 +434,12 @@ impl MaterialTextures {
             size,
         );
         if levels > 1 {
-            let pipeline = mipmap.render_pipeline(
-                ctx,
-                &RenderSpec::fullscreen("renderer.mipmap", &[target(format)]),
-            )?;
+            let (program, label) = match mips {
+                Mips::Plain(p, _) => (p, "renderer.mipmap"),
+                Mips::Normal(p) => (p, "renderer.normal_mipmap"),
+            };
+            let pipeline =
+                program.render_pipeline(ctx, &RenderSpec::fullscreen(label, &[target(format)]))?;
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             for level in 1..levels {
                 let view = |l: u32| {
@@ -416,16 +450,20 @@ impl MaterialTextures {
                     })
                 };
                 let (src, dst) = (view(level - 1), view(level));
-                let bind = mipmap.bind(
-                    &ctx.device,
-                    0,
-                    &[
-                        ("source", wgpu::BindingResource::TextureView(&src)),
-                        ("source_sampler", wgpu::BindingResource::Sampler(sampler)),
-                    ],
-                )?;
+                let source = wgpu::BindingResource::TextureView(&src);
+                let bind = match mips {
+                    Mips::Plain(p, sampler) => p.bind(
+                        &ctx.device,
+                        0,
+                        &[
+                            ("source", source),
+                            ("source_sampler", wgpu::BindingResource::Sampler(sampler)),
+                        ],
+                    )?,
+                    Mips::Normal(p) => p.bind(&ctx.device, 0, &[("source_load", source)])?,
+                };
                 let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("renderer.mipmap"),
+                    label: Some(label),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                         view: &dst,
                         depth_slice: None,
@@ -451,6 +489,15 @@ impl MaterialTextures {
         self.textures.push(texture);
         Ok(self.views.len() - 1)
     }
+}
+
+/// How an image's mip chain is made.
+#[derive(Clone, Copy)]
+enum Mips<'a> {
+    /// 2x2 box (`mipmap.wgsl`, one bilinear tap with this sampler).
+    Plain(&'a Program, &'a wgpu::Sampler),
+    /// E3 normal map: normalised mean, normal variance in alpha (`normal_mipmap.wgsl`).
+    Normal(&'a Program),
 }
 
 fn srgb_decode(c: f32) -> f32 {
@@ -504,6 +551,52 @@ pub fn next_mip_reference(
                 };
                 out.push((v.clamp(0.0, 1.0) * 255.0).round() as u8);
             }
+        }
+    }
+    (w, h, out)
+}
+
+/// CPU twin of `normal_mipmap.wgsl` (E3): the level after a `width` x
+/// `height` normal-map level whose alpha holds encoded normal variance
+/// (level 0: alpha 0). Texel (x, y) reads parents 2x, 2x + 1 by 2y, 2y + 1
+/// (clamped to the edge), normalises each RGB to n_i, and writes RGB =
+/// encode(normalize(m)) with m = mean(n_i), alpha = encode(mean(sigma_i^2)
+/// + (1 - |m|) / |m|). Computed in f32, rounded to 8 bits.
+pub fn next_normal_mip_reference(width: u32, height: u32, rgba8: &[u8]) -> (u32, u32, Vec<u8>) {
+    let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+    let texel = |x: u32, y: u32| {
+        let i = ((y.min(height - 1) * width + x.min(width - 1)) * 4) as usize;
+        let c = |k: usize| rgba8[i + k] as f32 / 255.0;
+        let n = glam::Vec3::new(c(0), c(1), c(2)) * 2.0 - 1.0;
+        let len = n.length();
+        let n = if len > 1e-6 { n / len } else { glam::Vec3::Z };
+        (n, normal_variance_decode(c(3)))
+    };
+    let unorm = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let mut out = Vec::with_capacity((w * h * 4) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let (mut m, mut variance) = (glam::Vec3::ZERO, 0.0);
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (n, v) = texel(2 * x + dx, 2 * y + dy);
+                m += n;
+                variance += v;
+            }
+            m *= 0.25;
+            let len = m.length().max(1e-4);
+            let variance = 0.25 * variance + (1.0 - len) / len;
+            let n = if m.length() > 1e-6 {
+                m / len
+            } else {
+                glam::Vec3::Z
+            };
+            let rgb = n * 0.5 + 0.5;
+            out.extend([
+                unorm(rgb.x),
+                unorm(rgb.y),
+                unorm(rgb.z),
+                unorm(normal_variance_encode(variance)),
+            ]);
         }
     }
     (w, h, out)

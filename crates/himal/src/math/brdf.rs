@@ -263,6 +263,31 @@ pub fn env_brdf_approx_ab(perceptual_roughness: f32, n_o_v: f32) -> (f32, f32) {
     (a / excess, b / excess)
 }
 
+/// E3 (Toksvig 2004): the normal variance sigma^2 = (1 - |n|) / |n| of a
+/// filtered normal of length |n|, stored in a baked normal map's alpha as
+/// A = sqrt(sigma^2 / (1 + sigma^2)): 0 stays exactly 0, the 8-bit steps are
+/// finest near 0, and any sigma^2 fits below 1 (docs/techniques/E3.md).
+pub fn normal_variance_encode(variance: f32) -> f32 {
+    let v = variance.max(0.0);
+    (v / (1.0 + v)).sqrt()
+}
+
+/// Inverse of [`normal_variance_encode`]: sigma^2 = A^2 / (1 - A^2); A = 1
+/// (opposite normals averaged to nothing) decodes to 1e4, rough enough.
+pub fn normal_variance_decode(a: f32) -> f32 {
+    let a2 = a.clamp(0.0, 1.0).powi(2);
+    a2 / (1.0 - a2).max(1e-4)
+}
+
+/// E3: perceptual roughness `r` widened by normal variance `variance`
+/// (Toksvig's 1/s' = 1/s + sigma^2 with Blinn-Phong s ~= 2 / alpha^2,
+/// alpha = r^2): alpha'^2 = alpha^2 + 2 sigma^2, r' = (r^4 + 2 sigma^2)^(1/4),
+/// at most 1.
+pub fn toksvig_roughness(r: f32, variance: f32) -> f32 {
+    let r2 = r * r;
+    (r2 * r2 + 2.0 * variance.max(0.0)).sqrt().sqrt().min(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -330,6 +330,9 @@ impl Renderer {
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
         let sun_direction = light.sun_direction;
+        // E3: the permutations the G-buffer and forward draws pick.
+        self.res.passes.gbuffer.specular_aa = settings.specular_aa;
+        self.res.passes.forward.specular_aa = settings.specular_aa;
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {

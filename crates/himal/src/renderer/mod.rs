@@ -142,10 +142,10 @@ impl Renderer {
     fn from_upload(ctx: GpuContext, scene: &Scene, scene_gpu: SceneGpu) -> Result<Self, Error> {
         let mut passes = Passes::new(&ctx, scene, &scene_gpu)?;
         // Pre-warm the scene's permutations: a bad one fails here, not mid-frame.
-        for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu) {
+        for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu, true) {
             passes.forward.pipeline(&ctx, key)?;
         }
-        for key in GBufferKey::for_scene(&scene_gpu, false) {
+        for key in GBufferKey::for_scene(&scene_gpu, false, true) {
             passes.gbuffer.pipeline(&ctx, key)?;
         }
         if !scene.probes.is_empty() {
@@ -294,8 +294,14 @@ impl Renderer {
         for key in LightingKey::all() {
             passes.lighting.pipeline(ctx, key)?;
         }
-        for key in GBufferKey::for_scene(&self.res.scene, true) {
-            passes.gbuffer.pipeline(ctx, key)?;
+        // E3: `--specular-aa on|off` both ready (the renderer made the on ones).
+        for specular_aa in [true, false] {
+            for key in GBufferKey::for_scene(&self.res.scene, true, specular_aa) {
+                passes.gbuffer.pipeline(ctx, key)?;
+            }
+            for key in crate::passes::forward::ForwardKey::for_scene(&self.res.scene, specular_aa) {
+                passes.forward.pipeline(ctx, key)?;
+            }
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {

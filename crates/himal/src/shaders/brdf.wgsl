@@ -136,3 +136,22 @@ fn env_brdf_approx(f0: vec3f, perceptual_roughness: f32, n_o_v: f32) -> vec3f {
     ab = ab / max(ab.x + ab.y, 1.0);
     return f0 * ab.x + vec3f(ab.y);
 }
+
+// E3 (Toksvig 2004): normal variance sigma^2 from a baked normal map's alpha
+// A = sqrt(sigma^2 / (1 + sigma^2)) (gpu_scene/normal_mipmap.wgsl), and back.
+fn normal_variance_encode(variance: f32) -> f32 {
+    let v = max(variance, 0.0);
+    return sqrt(v / (1.0 + v));
+}
+
+fn normal_variance_decode(a: f32) -> f32 {
+    let a2 = saturate(a) * saturate(a);
+    return a2 / max(1.0 - a2, 1e-4);
+}
+
+// E3: perceptual roughness r widened by normal variance: alpha'^2 = alpha^2
+// + 2 sigma^2 (Toksvig with Blinn-Phong s ~= 2 / alpha^2, alpha = r^2), at most 1.
+fn toksvig_roughness(r: f32, variance: f32) -> f32 {
+    let r2 = r * r;
+    return min(sqrt(sqrt(r2 * r2 + 2.0 * max(variance, 0.0))), 1.0);
+}

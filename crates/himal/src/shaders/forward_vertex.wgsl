@@ -67,7 +67,8 @@ struct ForwardSurface {
 // derivatives) and builds the surface of this fragment.
 fn forward_surface(in: ForwardVertexOut, front: bool) -> ForwardSurface {
     let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
-    let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let normal_sample = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv));
+    let ts = normal_sample.xyz * 2.0 - 1.0;
     let at = textureSample(anisotropy_texture, anisotropy_sampler, material_uv(SLOT_ANISOTROPY, in.uv)).xyz;
     let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
     let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
@@ -88,7 +89,8 @@ fn forward_surface(in: ForwardVertexOut, front: bool) -> ForwardSurface {
     let f = shading_frame(n_mapped, tangent);
     let w = select(1.0, -1.0, tangent.w < 0.0);
     out.tbn = shading_frame(n_mapped, vec4f(f[0] * d.x + f[1] * (w * d.y), 1.0));
-    out.roughness = saturate((1.0 - in.surface.x) * mr.g);
+    // E3: the normal map's variance under this footprint widens the lobe.
+    out.roughness = gltf_specular_aa_roughness(saturate((1.0 - in.surface.x) * mr.g), normal_sample.a, material.alpha.w, material.params.x);
     out.metallic = saturate(in.surface.z * mr.b);
     out.ao = 1.0 + material.params.y * (occlusion - 1.0);
     out.anisotropy = anisotropy_from_khr(material.params.z * at.z, out.roughness * out.roughness);

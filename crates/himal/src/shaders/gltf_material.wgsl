@@ -4,6 +4,7 @@
 // `MaterialTextures::bind_groups`), and what both derive from them.
 #import scene
 #import color
+#import brdf
 
 // The factors (group 1 binding 0); twin of gpu_scene/textures.rs `MaterialGpu`.
 struct MaterialGpu {
@@ -11,9 +12,11 @@ struct MaterialGpu {
     emissive: vec4f,
     // x normal scale, y occlusion strength, z anisotropy strength, w anisotropy rotation (rad)
     params: vec4f,
-    // x mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit
+    // x mode (0 opaque, 1 mask, 2 blend), y cut-off, z 1 when unlit, w 1
+    // when the normal texture's alpha holds normal variance (E3)
     alpha: vec4f,
-    // KHR_materials_clearcoat: x factor, y roughness, z normal scale
+    // KHR_materials_clearcoat: x factor, y roughness, z normal scale, w 1
+    // when the coat normal texture's alpha holds normal variance (E3)
     clearcoat: vec4f,
     // KHR_materials_sheen: rgb colour (linear), a roughness
     sheen: vec4f,
@@ -143,4 +146,21 @@ fn gltf_facing(normal: vec3f, tangent: vec4f, front: bool) -> GltfFacing {
 // on x and y, renormalised (z kept positive).
 fn gltf_scaled_normal(ts: vec3f, scale: f32) -> vec3f {
     return normalize(vec3f(ts.xy * scale, max(ts.z, 1e-4)));
+}
+
+// E3 specular anti-aliasing (`--specular-aa`): permutations of the G-buffer
+// (GBufferKey::specular_aa) and forward (ForwardKey::specular_aa) passes;
+// off reads no variance, so the widening folds away.
+override SPECULAR_AA: bool = true;
+
+// Perceptual roughness `r` widened by the normal variance a baked normal
+// texture's trilinear sample carries in alpha (`baked`: MaterialGpu's flag
+// for the slot; `scale`: the slot's normal scale, which scales the slopes
+// and so, for small slopes, the variance by scale^2). Toksvig: r' = (r^4 +
+// 2 sigma^2)^(1/4) (brdf.wgsl toksvig_roughness, docs/techniques/E3.md).
+fn gltf_specular_aa_roughness(r: f32, normal_alpha: f32, baked: f32, scale: f32) -> f32 {
+    if (!SPECULAR_AA || baked < 0.5) {
+        return r;
+    }
+    return toksvig_roughness(r, normal_variance_decode(normal_alpha) * scale * scale);
 }

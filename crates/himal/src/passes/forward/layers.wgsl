@@ -43,11 +43,13 @@ fn load_clamped(t: texture_2d<f32>, px: vec2i) -> vec4f {
 @fragment
 fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4f {
     let base = textureSample(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv));
-    let ts = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let normal_sample = textureSample(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv));
+    let ts = normal_sample.xyz * 2.0 - 1.0;
     let occlusion = textureSample(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv)).r;
     let cc = textureSample(clearcoat_texture, clearcoat_sampler, material_uv(SLOT_CLEARCOAT, in.uv)).r;
     let ccr = textureSample(clearcoat_roughness_texture, clearcoat_roughness_sampler, material_uv(SLOT_CLEARCOAT_ROUGHNESS, in.uv)).g;
-    let ccn = textureSample(clearcoat_normal_texture, clearcoat_normal_sampler, material_uv(SLOT_CLEARCOAT_NORMAL, in.uv)).xyz * 2.0 - 1.0;
+    let coat_sample = textureSample(clearcoat_normal_texture, clearcoat_normal_sampler, material_uv(SLOT_CLEARCOAT_NORMAL, in.uv));
+    let ccn = coat_sample.xyz * 2.0 - 1.0;
     let sc = textureSample(sheen_color_texture, sheen_color_sampler, material_uv(SLOT_SHEEN_COLOR, in.uv)).rgb;
     let sr = textureSample(sheen_roughness_texture, sheen_roughness_sampler, material_uv(SLOT_SHEEN_ROUGHNESS, in.uv)).a;
     let mr = textureSample(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv));
@@ -62,14 +64,16 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     // the geometric normal) for the coat.
     let n_base = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ts, material.params.x));
     let n_coat = apply_normal_map(f.n, f.tangent, gltf_scaled_normal(ccn, material.clearcoat.z));
-    let roughness = saturate((1.0 - in.surface.x) * mr.g);
+    // E3: each normal map's variance widens its lobe (as textured.wgsl).
+    let roughness = gltf_specular_aa_roughness(saturate((1.0 - in.surface.x) * mr.g), normal_sample.a, material.alpha.w, material.params.x);
     let metallic = saturate(in.surface.z * mr.b);
     // The G-buffer's unorm8 grey F0 and the deferred pass's F90 = 1 against
     // the dielectric's true Fresnel (textured.wgsl writes the same grey).
     let fresnel = gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb);
     let grey = round(saturate(gltf_grey_reflectance(fresnel.rgb)) * 255.0) / 255.0;
     let m = Layers(material.sheen.rgb * sc, saturate(material.sheen.a * sr),
-        saturate(material.clearcoat.x * cc), saturate(material.clearcoat.y * ccr),
+        saturate(material.clearcoat.x * cc),
+        gltf_specular_aa_roughness(saturate(material.clearcoat.y * ccr), coat_sample.a, material.clearcoat.w, material.clearcoat.z),
         (1.0 - metallic) * (fresnel.rgb - grey), (1.0 - metallic) * (fresnel.w - 1.0), roughness);
 
     let px = vec2i(in.clip.xy);

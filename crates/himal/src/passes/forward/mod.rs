@@ -48,11 +48,24 @@ pub enum ForwardKind {
 pub struct ForwardKey {
     pub kind: ForwardKind,
     pub double_sided: bool,
+    /// E3: roughness widened by normal-map variance (`SPECULAR_AA`); only
+    /// for the kinds that shade specular (layers, transmission, blend).
+    pub specular_aa: bool,
 }
 
 impl ForwardKey {
+    /// The key of `kind` (`specular_aa` dropped where the pass shades no specular).
+    pub fn new(kind: ForwardKind, double_sided: bool, specular_aa: bool) -> Self {
+        let shades = !matches!(kind, ForwardKind::Emissive | ForwardKind::Unlit);
+        Self {
+            kind,
+            double_sided,
+            specular_aa: specular_aa && shades,
+        }
+    }
+
     /// The permutations `scene`'s emissive, layered and blend draws use.
-    pub fn for_scene(scene: &SceneGpu) -> Vec<ForwardKey> {
+    pub fn for_scene(scene: &SceneGpu, specular_aa: bool) -> Vec<ForwardKey> {
         let mut keys = Vec::new();
         let Some(m) = &scene.materials else {
             return keys;
@@ -74,10 +87,7 @@ impl ForwardKey {
             .chain(blend);
         for (kind, mat) in all {
             if let Some(binding) = m.materials.get(mat) {
-                let key = ForwardKey {
-                    kind,
-                    double_sided: binding.double_sided,
-                };
+                let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
                 if !keys.contains(&key) {
                     keys.push(key);
                 }
@@ -141,6 +151,9 @@ pub struct ForwardPass {
     pub transmission_groups: crate::gpu_scene::textures::MaterialGroups,
     /// E(n.v, roughness) of the sheen lobe ([`reference::sheen_albedo_table`]), R32Float.
     sheen_albedo: wgpu::TextureView,
+    /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`,
+    /// set by the renderer before planning).
+    pub specular_aa: bool,
 }
 
 impl ForwardPass {
@@ -178,6 +191,7 @@ impl ForwardPass {
             material_groups: Default::default(),
             layer_groups: Default::default(),
             transmission_groups: Default::default(),
+            specular_aa: true,
             sheen_albedo: table.create_view(&Default::default()),
         })
     }
@@ -279,7 +293,7 @@ impl ForwardPass {
                 },
                 ..Default::default()
             },
-            constants: &[],
+            constants: &[("SPECULAR_AA", f64::from(u8::from(key.specular_aa)))],
         };
         program.render_pipeline(ctx, &spec)
     }
@@ -415,14 +429,12 @@ impl ForwardPass {
             _ => (&self.program, &self.material_groups),
         };
         // The permutations these draws use, from the shared cache.
+        let specular_aa = self.specular_aa;
         let mut pipelines: Vec<(ForwardKey, Result<wgpu::RenderPipeline, GpuError>)> = Vec::new();
         if let Some(m) = &scene.materials {
             for (_, material) in draws.as_ref() {
                 if let Some(binding) = m.materials.get(*material) {
-                    let key = ForwardKey {
-                        kind,
-                        double_sided: binding.double_sided,
-                    };
+                    let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
                     if !pipelines.iter().any(|(k, _)| *k == key) {
                         pipelines.push((key, self.pipeline(ctx, key)));
                     }
@@ -457,10 +469,7 @@ impl ForwardPass {
                 else {
                     continue;
                 };
-                let key = ForwardKey {
-                    kind,
-                    double_sided: binding.double_sided,
-                };
+                let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
                 match pipelines.iter().find(|(k, _)| *k == key) {
                     Some((_, Ok(p))) => rp.set_pipeline(p),
                     Some((_, Err(e))) => {

@@ -55,6 +55,9 @@ pub struct GBufferKey {
     pub dither: bool,
     /// `--view lod`: the level these draws are at, shown as the albedo's hue.
     pub lod_view: Option<u8>,
+    /// E3: textured materials widen roughness by their normal maps'
+    /// variance (`SPECULAR_AA`; false for the other material types).
+    pub specular_aa: bool,
 }
 
 /// Mip bias of textured materials under temporal anti-aliasing (A2).
@@ -67,6 +70,7 @@ impl GBufferKey {
         mip_bias: false,
         dither: false,
         lod_view: None,
+        specular_aa: false,
     };
     /// E2 transitions of per-vertex objects.
     pub const VERTEX_DITHER: Self = Self {
@@ -80,15 +84,17 @@ impl GBufferKey {
         mip_bias: false,
         dither: false,
         lod_view: None,
+        specular_aa: false,
     };
 
-    pub const fn textured(double_sided: bool, mip_bias: bool) -> Self {
+    pub const fn textured(double_sided: bool, mip_bias: bool, specular_aa: bool) -> Self {
         Self {
             material: MaterialType::Textured,
             double_sided,
             mip_bias,
             dither: false,
             lod_view: None,
+            specular_aa,
         }
     }
 
@@ -102,15 +108,20 @@ impl GBufferKey {
 
     /// The permutations `scene` draws with (the per-vertex one always: it
     /// also clears the targets when nothing else draws); `mip_bias`: under
-    /// temporal anti-aliasing.
-    pub fn for_scene(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
-        Self::for_view(scene, mip_bias, false)
+    /// temporal anti-aliasing; `specular_aa`: E3 on.
+    pub fn for_scene(scene: &SceneGpu, mip_bias: bool, specular_aa: bool) -> Vec<GBufferKey> {
+        Self::for_view(scene, mip_bias, specular_aa, false)
     }
 
     /// [`Self::for_scene`], with `lod_view`: the per-vertex and textured
     /// permutations at every level instead (`--view lod`).
-    pub fn for_view(scene: &SceneGpu, mip_bias: bool, lod_view: bool) -> Vec<GBufferKey> {
-        let mut keys = Self::base_keys(scene, mip_bias);
+    pub fn for_view(
+        scene: &SceneGpu,
+        mip_bias: bool,
+        specular_aa: bool,
+        lod_view: bool,
+    ) -> Vec<GBufferKey> {
+        let mut keys = Self::base_keys(scene, mip_bias, specular_aa);
         if lod_view {
             let levels = if scene.has_lods { MAX_LODS as u8 } else { 1 };
             keys = keys
@@ -124,7 +135,7 @@ impl GBufferKey {
         keys
     }
 
-    fn base_keys(scene: &SceneGpu, mip_bias: bool) -> Vec<GBufferKey> {
+    fn base_keys(scene: &SceneGpu, mip_bias: bool, specular_aa: bool) -> Vec<GBufferKey> {
         let mut keys = vec![Self::VERTEX];
         if scene.has_lods {
             keys.push(Self::VERTEX_DITHER);
@@ -135,7 +146,7 @@ impl GBufferKey {
         if let Some(m) = &scene.materials {
             for (_, material) in &scene.draws_textured {
                 if let Some(binding) = m.materials.get(*material) {
-                    let key = Self::textured(binding.double_sided, mip_bias);
+                    let key = Self::textured(binding.double_sided, mip_bias, specular_aa);
                     if !keys.contains(&key) {
                         keys.push(key);
                     }
@@ -151,6 +162,9 @@ pub struct GBufferPass {
     pub visible: VisibleLists,
     /// `--view lod` this frame: albedo shows each draw's level (`frame::plan`).
     pub lod_view: bool,
+    /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`,
+    /// set by the renderer before planning).
+    pub specular_aa: bool,
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
@@ -163,6 +177,7 @@ impl GBufferPass {
         let pass = Self {
             visible: VisibleLists::default(),
             lod_view: false,
+            specular_aa: true,
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
             material_groups: Default::default(),
@@ -236,12 +251,13 @@ impl GBufferPass {
                 } else {
                     0.0
                 };
+                let aa = f64::from(u8::from(key.specular_aa));
                 self.textured.render_pipeline(
                     ctx,
                     &spec(
                         "gbuffer.textured",
                         cull,
-                        &with_lod(&[("MIP_BIAS", f64::from(bias))]),
+                        &with_lod(&[("MIP_BIAS", f64::from(bias)), ("SPECULAR_AA", aa)]),
                     ),
                 )
             }
@@ -285,12 +301,12 @@ impl GBufferPass {
         let depth = graph.create_texture("depth", TextureDesc::new_2d(w, h, DEPTH_FORMAT));
         // The permutations this scene draws with, from the shared cache.
         let pipelines: Vec<(GBufferKey, Result<wgpu::RenderPipeline, GpuError>)> =
-            GBufferKey::for_view(scene, mip_bias, self.lod_view)
+            GBufferKey::for_view(scene, mip_bias, self.specular_aa, self.lod_view)
                 .into_iter()
                 .map(|key| (key, self.pipeline(ctx, key)))
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
-        let lod_view = self.lod_view;
+        let (lod_view, specular_aa) = (self.lod_view, self.specular_aa);
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects);
@@ -357,7 +373,7 @@ impl GBufferPass {
                         else {
                             continue;
                         };
-                        let key = GBufferKey::textured(binding.double_sided, mip_bias);
+                        let key = GBufferKey::textured(binding.double_sided, mip_bias, specular_aa);
                         rp.set_bind_group(1, group, &[]);
                         if !lod_view {
                             // Objects of one mesh in the run draw instanced.

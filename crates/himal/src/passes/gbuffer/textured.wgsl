@@ -57,7 +57,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let base = textureSampleBias(base_color_texture, base_color_sampler, material_uv(SLOT_BASE_COLOR, in.uv), MIP_BIAS);
     let alpha = material.base_color.a * base.a;
     // Every sample precedes the discards (uniform control flow for derivatives).
-    let ts = textureSampleBias(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv), MIP_BIAS).xyz * 2.0 - 1.0;
+    let normal_sample = textureSampleBias(normal_texture, normal_sampler, material_uv(SLOT_NORMAL, in.uv), MIP_BIAS);
+    let ts = normal_sample.xyz * 2.0 - 1.0;
     let at = textureSampleBias(anisotropy_texture, anisotropy_sampler, material_uv(SLOT_ANISOTROPY, in.uv), MIP_BIAS).xyz;
     let mr = textureSampleBias(metal_rough_texture, metal_rough_sampler, material_uv(SLOT_METAL_ROUGH, in.uv), MIP_BIAS);
     let occlusion = textureSampleBias(occlusion_texture, occlusion_sampler, material_uv(SLOT_OCCLUSION, in.uv), MIP_BIAS).r;
@@ -81,7 +82,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let aniso_dir = f[0] * d.x + f[1] * (w * d.y);
     let tbn = shading_frame(n_mapped, vec4f(aniso_dir, 1.0));
 
-    let roughness = saturate((1.0 - in.surface.x) * mr.g);
+    // E3: the normal map's variance under this footprint widens the lobe.
+    let roughness = gltf_specular_aa_roughness(saturate((1.0 - in.surface.x) * mr.g), normal_sample.a, material.alpha.w, material.params.x);
     let metallic = saturate(in.surface.z * mr.b);
     let ao = 1.0 + material.params.y * (occlusion - 1.0);
     let strength = material.params.z * at.z;

@@ -16,6 +16,10 @@ use crate::scene::SceneError;
 /// Texture slots of a material (`PbrMaterial::texture_refs`).
 pub const TEXTURE_SLOTS: usize = 15;
 
+/// The normal and clearcoat normal slots in `PbrMaterial::texture_refs`
+/// order: images used only there carry normal variance in their mips (E3).
+pub const NORMAL_SLOTS: [usize; 2] = [2, 8];
+
 /// Reflectance (F0) of glTF dielectrics: ior 1.5.
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
 

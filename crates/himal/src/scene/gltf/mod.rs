@@ -21,9 +21,9 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 pub use material::{
-    AlphaMode, GLTF_DIELECTRIC_F0, ImageData, PbrMaterial, SamplerDesc, TEXTURE_SLOTS, TextureRef,
-    TextureSlot, UvTransform, Wrap, anisotropy_from_khr, glossiness_from_roughness,
-    srgb8_to_linear,
+    AlphaMode, GLTF_DIELECTRIC_F0, ImageData, NORMAL_SLOTS, PbrMaterial, SamplerDesc,
+    TEXTURE_SLOTS, TextureRef, TextureSlot, UvTransform, Wrap, anisotropy_from_khr,
+    glossiness_from_roughness, srgb8_to_linear,
 };
 
 pub use animation::{
@@ -64,6 +64,41 @@ impl PbrSet {
             .iter()
             .find(|(m, _)| *m == mesh)
             .map(|(_, i)| *i)
+    }
+
+    /// E3: per image, whether its mips are baked with normal variance in
+    /// alpha (it is used as a normal or clearcoat normal texture and by no
+    /// other slot); and the names of the images used as a normal texture
+    /// and by another slot too (they keep plain mips: no variance).
+    pub fn normal_variance_images(&self) -> (Vec<bool>, Vec<String>) {
+        let (mut normal, mut other) = (
+            vec![false; self.images.len()],
+            vec![false; self.images.len()],
+        );
+        for m in &self.materials {
+            for (slot, r) in m.texture_refs().iter().enumerate() {
+                let Some(image) = r
+                    .and_then(|r| self.textures.get(r.texture))
+                    .map(|t| t.image)
+                else {
+                    continue;
+                };
+                let uses = if NORMAL_SLOTS.contains(&slot) {
+                    &mut normal
+                } else {
+                    &mut other
+                };
+                if let Some(u) = uses.get_mut(image) {
+                    *u = true;
+                }
+            }
+        }
+        let shared = (normal.iter().zip(&other).enumerate())
+            .filter(|(_, (n, o))| **n && **o)
+            .map(|(i, _)| self.images[i].name.clone())
+            .collect();
+        let baked = normal.iter().zip(&other).map(|(n, o)| *n && !*o).collect();
+        (baked, shared)
     }
 }
 
@@ -389,6 +424,13 @@ pub fn load_from_bytes_with(
         warnings.push(format!(
             "alpha BLEND and transmissive materials are drawn without their clearcoat or sheen: {}",
             names(blended_layers)
+        ));
+    }
+    let (_, shared_normals) = pbr.normal_variance_images();
+    if !shared_normals.is_empty() {
+        warnings.push(format!(
+            "images used as a normal texture and by another slot keep plain mips (no specular anti-aliasing from their normal variance): {}",
+            names(shared_normals)
         ));
     }
     if !past_second.is_empty() {
