@@ -3,11 +3,13 @@
 //! sRGB and a linear upload of the same odd-sized image.
 //! Measured numbers: `cargo test --release -p himal --test gltf_mips -- --nocapture`.
 
+mod common;
+
 use himal::gpu::read_texture;
 use himal::gpu::testing::shared_context;
-use himal::gpu_scene::textures::{MaterialTextures, mip_count, next_mip_reference};
+use himal::gpu_scene::textures::{mip_count, next_mip_reference};
 use himal::math::sampling::Pcg32;
-use himal::scene::gltf::{ImageData, PbrMaterial, PbrSet, SamplerDesc, TextureRef, TextureSlot};
+use himal::scene::gltf::ImageData;
 
 #[test]
 fn gpu_mips_match_the_cpu_twin() {
@@ -32,26 +34,11 @@ fn gpu_mips_match_the_cpu_twin() {
         height: h,
         rgba8,
     };
-    let texture = TextureRef {
-        texture: 0,
-        tex_coord: 0,
-        transform: None,
-    };
-    let pbr = PbrSet {
-        materials: vec![PbrMaterial {
-            base_color_texture: Some(texture),
-            metallic_roughness_texture: Some(texture),
-            ..Default::default()
-        }],
-        textures: vec![TextureSlot {
-            image: 0,
-            sampler: SamplerDesc::default(),
-        }],
-        images: vec![image.clone()],
-        mesh_material: Vec::new(),
-    };
+    let gpu = common::upload_one_image_material(&image, |m, t| {
+        m.base_color_texture = Some(t);
+        m.metallic_roughness_texture = Some(t);
+    });
     let ctx = shared_context().expect("GPU (lavapipe in CI)");
-    let gpu = MaterialTextures::upload(ctx, &pbr).expect("upload");
     let mut report = Vec::new();
     // Slot 0 = base colour (sRGB view), slot 1 = metal-rough (linear).
     for (slot, srgb) in [(0usize, true), (1, false)] {

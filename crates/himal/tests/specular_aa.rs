@@ -26,25 +26,7 @@ fn encode(n: Vec3, a: u8) -> [u8; 4] {
 /// One material with `image` as its normal texture, uploaded; returns the
 /// upload and the texture index of the normal slot.
 fn upload_normal_map(image: &ImageData) -> (MaterialTextures, usize) {
-    let texture = TextureRef {
-        texture: 0,
-        tex_coord: 0,
-        transform: None,
-    };
-    let pbr = PbrSet {
-        materials: vec![PbrMaterial {
-            normal_texture: Some(texture),
-            ..Default::default()
-        }],
-        textures: vec![TextureSlot {
-            image: 0,
-            sampler: SamplerDesc::default(),
-        }],
-        images: vec![image.clone()],
-        mesh_material: Vec::new(),
-    };
-    let ctx = shared_context().expect("GPU (lavapipe in CI)");
-    let gpu = MaterialTextures::upload(ctx, &pbr).expect("upload");
+    let gpu = common::upload_one_image_material(image, |m, t| m.normal_texture = Some(t));
     let index = gpu.materials[0].slots[2].0;
     (gpu, index)
 }

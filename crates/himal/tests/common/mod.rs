@@ -447,3 +447,30 @@ pub fn ray_triangle(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, Vec3)> {
     let t = e2.dot(q) / det;
     (u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > 0.0).then(|| (t, Vec3::new(1.0 - u - w, u, w)))
 }
+
+/// One material reading `image` (texture 0, default sampler, UV set 0)
+/// through the slots `set` fills in, uploaded on the shared context.
+pub fn upload_one_image_material(
+    image: &himal::scene::gltf::ImageData,
+    set: impl FnOnce(&mut himal::scene::gltf::PbrMaterial, himal::scene::gltf::TextureRef),
+) -> himal::gpu_scene::textures::MaterialTextures {
+    use himal::scene::gltf::{PbrMaterial, PbrSet, SamplerDesc, TextureRef, TextureSlot};
+    let mut material = PbrMaterial::default();
+    let texture = TextureRef {
+        texture: 0,
+        tex_coord: 0,
+        transform: None,
+    };
+    set(&mut material, texture);
+    let pbr = PbrSet {
+        materials: vec![material],
+        textures: vec![TextureSlot {
+            image: 0,
+            sampler: SamplerDesc::default(),
+        }],
+        images: vec![image.clone()],
+        mesh_material: Vec::new(),
+    };
+    let ctx = himal::gpu::testing::shared_context().expect("GPU (lavapipe in CI)");
+    himal::gpu_scene::textures::MaterialTextures::upload(ctx, &pbr).expect("upload")
+}
