@@ -11,6 +11,7 @@ use himal::passes::aa::AaMode;
 use himal::passes::ao::AoMode;
 use himal::passes::post::Tonemapper;
 use himal::passes::sky::SkyModel;
+use himal::settings::Occlusion;
 use winit::event::WindowEvent;
 use winit::keyboard::KeyCode;
 use winit::window::Window;
@@ -270,6 +271,14 @@ impl Viewer {
                 }
             });
         self.settings.view = view;
+        // No key of their own (and below the controls the click test
+        // finds by position): E3, a permutation, and V6's Hi-Z, whose
+        // pyramids the next frame makes or frees.
+        ui.checkbox(&mut self.settings.specular_aa, "specular AA (Toksvig)");
+        let mut hiz = self.settings.occlusion == Occlusion::Hiz;
+        if ui.checkbox(&mut hiz, "Hi-Z occlusion").changed() {
+            self.settings.occlusion = if hiz { Occlusion::Hiz } else { Occlusion::Off };
+        }
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {
