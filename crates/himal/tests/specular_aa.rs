@@ -531,34 +531,15 @@ fn the_bake_costs_little_at_load() {
         rgba8,
     };
     let ctx = shared_context().expect("GPU");
-    let texture = Some(TextureRef {
-        texture: 0,
-        tex_coord: 0,
-        transform: None,
-    });
     let upload = |normal: bool| {
-        let material = if normal {
-            PbrMaterial {
-                normal_texture: texture,
-                ..Default::default()
-            }
-        } else {
-            PbrMaterial {
-                metallic_roughness_texture: texture,
-                ..Default::default()
-            }
-        };
-        let pbr = PbrSet {
-            materials: vec![material],
-            textures: vec![TextureSlot {
-                image: 0,
-                sampler: SamplerDesc::default(),
-            }],
-            images: vec![image.clone()],
-            mesh_material: Vec::new(),
-        };
         let t = std::time::Instant::now();
-        let gpu = MaterialTextures::upload(ctx, &pbr).expect("upload");
+        let gpu = common::upload_one_image_material(&image, |m, t| {
+            if normal {
+                m.normal_texture = Some(t);
+            } else {
+                m.metallic_roughness_texture = Some(t);
+            }
+        });
         ctx.device
             .poll(wgpu::PollType::wait_indefinitely())
             .expect("poll");

@@ -192,35 +192,8 @@ impl TerrainPass {
             indices,
             index_count,
         ) = made;
-        let write = |t: &wgpu::Texture,
-                     origin: (u32, u32, u32),
-                     size: (u32, u32),
-                     mip: u32,
-                     texel: u32,
-                     bytes: &[u8]| {
-            ctx.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: t,
-                    mip_level: mip,
-                    origin: wgpu::Origin3d {
-                        x: origin.0,
-                        y: origin.1,
-                        z: origin.2,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(size.0 * texel),
-                    rows_per_image: Some(size.1),
-                },
-                wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-            )
+        let write = |t, origin, size, mip, texel, bytes: &[u8]| {
+            super::stream::write_region(&ctx.queue, t, origin, size, mip, texel, bytes)
         };
         write(
             &coarse,

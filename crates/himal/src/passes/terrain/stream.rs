@@ -5,47 +5,52 @@
 use super::{TerrainCpu, TerrainPass, other};
 use crate::gpu::GpuError;
 
-impl TerrainPass {
-    fn write_texels(
-        &self,
-        queue: &wgpu::Queue,
-        t: &wgpu::Texture,
-        origin: (u32, u32, u32),
-        side: (u32, u32),
-        bytes: &[u8],
-    ) {
-        queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: t,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: origin.0,
-                    y: origin.1,
-                    z: origin.2,
-                },
-                aspect: wgpu::TextureAspect::All,
+/// Writes `bytes` (rows of `size.0` texels of `texel` bytes) into mip
+/// `mip` of `t` at `origin` (x, y, layer): the terrain's one upload path.
+pub(super) fn write_region(
+    queue: &wgpu::Queue,
+    t: &wgpu::Texture,
+    origin: (u32, u32, u32),
+    size: (u32, u32),
+    mip: u32,
+    texel: u32,
+    bytes: &[u8],
+) {
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: t,
+            mip_level: mip,
+            origin: wgpu::Origin3d {
+                x: origin.0,
+                y: origin.1,
+                z: origin.2,
             },
-            bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(side.0 * 4),
-                rows_per_image: Some(side.1),
-            },
-            wgpu::Extent3d {
-                width: side.0,
-                height: side.1,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(size.0 * texel),
+            rows_per_image: Some(size.1),
+        },
+        wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+    );
+}
 
+impl TerrainPass {
     fn write_page(&self, queue: &wgpu::Queue, cpu: &TerrainCpu, (sx, sz): (u32, u32)) {
         let page = cpu.heights.pages[(sz * self.geometry.sectors + sx) as usize];
-        self.write_texels(
+        write_region(
             queue,
             &self.pages,
             (sx, sz, 0),
             (1, 1),
+            0,
+            4,
             bytemuck::bytes_of(&page),
         );
     }
@@ -74,22 +79,26 @@ impl TerrainPass {
             .heights
             .upload(slot, sector_x, sector_z, heights)
             .map_err(other)?;
-        self.write_texels(
+        write_region(
             queue,
             &self.fine,
             (0, 0, slot),
             (g.tile_res, g.tile_res),
+            0,
+            4,
             bytemuck::cast_slice(heights),
         );
         let n = g.coarse_n;
         let block: Vec<f32> = (0..side * side)
             .map(|k| cpu.heights.coarse[((j0 + k / side) * n + i0 + k % side) as usize])
             .collect();
-        self.write_texels(
+        write_region(
             queue,
             &self.coarse,
             (i0, j0, 0),
             (side, side),
+            0,
+            4,
             bytemuck::cast_slice(&block),
         );
         self.write_page(queue, cpu, (sector_x, sector_z));
