@@ -82,8 +82,8 @@ fn gpu_normal_mips_match_the_cpu_twin() {
     let (mut step_rgb, mut step_a, mut chain_rgb, mut chain_a) = (0, 0, 0, 0);
     for level in 1..t.mip_level_count() {
         let got = read_texture(ctx, t, level, 0).expect("read back");
-        let (sw, sh, step) = next_normal_mip_reference(pw, ph, &prev);
-        chain = next_normal_mip_reference(chain.0, chain.1, &chain.2);
+        let (sw, sh, step) = next_normal_mip_reference(pw, ph, &prev, level == 1);
+        chain = next_normal_mip_reference(chain.0, chain.1, &chain.2, level == 1);
         assert_eq!((got.width, got.height), (sw, sh), "level {level}");
         let (r, a) = worst(&step, &got.bytes);
         let (cr, ca) = worst(&chain.2, &got.bytes);
@@ -129,8 +129,13 @@ fn a_flat_map_has_no_variance_and_a_checkerboard_has_toksvigs() {
             &got.bytes[..4]
         );
     }
-    // Checkerboard of (+-sin t, 0, cos t): level 1 averages one of each
-    // twice, |m| = cos t, so sigma^2 = (1 - cos t) / cos t, and RGB is +z.
+    // Checkerboard of (+-sin t, 0, cos t): level 1's RGB averages one of
+    // each twice (+z). Its variance is that of level 0's bilinear field over
+    // the footprint, where the checker's weights leave (1 - 2 tx)(1 - 2 ty)
+    // of the slope: the texels' own spread (1 - cos t) / cos t would count
+    // the alternation the sampler blurs away. Expected: the field's mean
+    // unit normal on a fine 64 x 64 grid over a cell (the footprint holds
+    // whole periods).
     for degrees in [5.0f32, 15.0, 30.0, 45.0] {
         let theta = degrees.to_radians();
         let (s, c) = theta.sin_cos();
@@ -147,27 +152,51 @@ fn a_flat_map_has_no_variance_and_a_checkerboard_has_toksvigs() {
             height: 16,
             rgba8,
         };
-        // The 8-bit texels' own angle (what the GPU sees).
-        let q = encode(Vec3::new(s, 0.0, c), 0);
-        let n = (Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / 255.0 * 2.0 - 1.0).normalize();
-        let expected = (1.0 - n.z) / n.z;
+        // The 8-bit texels as the sampler decodes them (what the GPU sees).
+        let decode =
+            |q: [u8; 4]| Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / 255.0 * 2.0 - 1.0;
+        let (plus, minus) = (
+            decode(encode(Vec3::new(s, 0.0, c), 0)),
+            decode(encode(Vec3::new(-s, 0.0, c), 0)),
+        );
+        let grid = |i: u32| (i as f32 + 0.5) / 64.0;
+        let m = (0..64 * 64)
+            .map(|i| {
+                let (tx, ty) = (grid(i % 64), grid(i / 64));
+                let w = (1.0 - tx) * (1.0 - ty) + tx * ty;
+                (plus * w + minus * (1.0 - w)).normalize()
+            })
+            .sum::<Vec3>()
+            / 4096.0;
+        let expected = (1.0 - m.length()) / m.length();
+        let texels = (1.0 - plus.normalize().dot(Vec3::Z)) / plus.normalize().dot(Vec3::Z);
         let (gpu, index) = upload_normal_map(&image);
         let got = read_texture(ctx, &gpu.textures[index], 1, 0).expect("read back");
-        let a = got.bytes[3];
-        assert!(
-            got.bytes.chunks_exact(4).all(|p| p[3] == a),
-            "uniform level"
-        );
+        // Level 1 is 8 x 8; its edge texels read clamped neighbours, so
+        // the interior 6 x 6 is the checker's.
+        let interior: Vec<&[u8]> = (got.bytes.chunks_exact(4).enumerate())
+            .filter(|(i, _)| (1..7).contains(&(i % 8)) && (1..7).contains(&(i / 8)))
+            .map(|(_, p)| p)
+            .collect();
+        let a = interior[0][3];
+        assert!(interior.iter().all(|p| p[3] == a), "uniform interior");
         let sigma2 = normal_variance_decode(a as f32 / 255.0);
         // The encoding's step at this value: sigma^2 of the neighbouring codes.
         let step = (normal_variance_decode((a as f32 + 1.0) / 255.0)
             - normal_variance_decode((a as f32 - 1.0) / 255.0))
             * 0.5;
         eprintln!(
-            "checker +-{degrees} deg: sigma^2 {sigma2:.5} (alpha {a}), (1 - cos t) / cos t = {expected:.5}, 8-bit step {step:.5}"
+            "checker +-{degrees} deg: sigma^2 {sigma2:.5} (alpha {a}), bilinear field {expected:.5} (texels' own {texels:.5}), 8-bit step {step:.5}"
         );
+        // Measured on lavapipe on 2026-12-05 (sigma^2 vs the fine grid):
+        // +-5 deg 0.00055 vs 0.00044 (under one step), +-15 0.00347 vs
+        // 0.00379, +-30 0.0181 vs 0.0172, +-45 0.0526 vs 0.0469: the
+        // bake's Gauss rule is exact for the field's quadratic moments, not
+        // for the normalisation (-8 % to +12 % on this Nyquist checker).
+        // Threshold: the encoding's step or 15 %; the texels' own spread,
+        // 9x, fails it by far.
         assert!(
-            (sigma2 - expected).abs() <= step,
+            (sigma2 - expected).abs() <= step.max(0.15 * expected),
             "+-{degrees} deg: sigma^2 {sigma2} vs {expected} (step {step})"
         );
         assert_eq!(&got.bytes[..3], &[128, 128, 255], "mean normal +z");
@@ -341,7 +370,8 @@ fn relative_error(a: &[f32], b: &[f32]) -> f32 {
 }
 
 /// A camera `height` m above the plane, pitched `pitch` degrees down along
-/// -Z; the sun along the mirror direction of its central ray.
+/// -Z with a 30 degree field of view; the sun along the mirror direction of
+/// its central ray.
 fn camera_and_sun(scene: &mut Scene, height: f32, pitch: f32) -> Camera {
     let (s, c) = pitch.to_radians().sin_cos();
     let forward = Vec3::new(0.0, -s, -c);
@@ -463,9 +493,10 @@ fn toksvig_brings_a_minified_bumpy_mirror_closer_to_its_supersampled_self() {
             );
         }
     }
-    // Measured on lavapipe on 2026-12-05: per pixel off 1.763, on 0.650
-    // (ratio 2.71); over 4x4 blocks off 1.689, on 0.482 (3.50). Against the
-    // brief's mipmapped 4x4 reference, off 1.329, on 1.026: its mips smooth
+    // Measured on lavapipe on 2026-12-05: per pixel off 1.763, on 0.572
+    // (ratio 3.08); over 4x4 blocks off 1.689, on 0.311 (5.43); before
+    // level 1 took the bilinear field's variance, on 0.650 and 0.482.
+    // Against the brief's mipmapped 4x4 reference, off 1.329, on 1.051: its mips smooth
     // the bumps it should average (E3.md). Thresholds: on at most half of
     // off's error per pixel, 40 % over blocks.
     assert!(e_on < e_off * 0.5, "on {e_on} vs off {e_off}");
@@ -491,8 +522,9 @@ fn toksvig_brings_a_minified_bumpy_mirror_closer_to_its_supersampled_self() {
         "frame-to-frame change (5 mm steps): off {t_off:.3}, on {t_on:.3} (ratio {:.1})",
         t_off / t_on
     );
-    // Measured on lavapipe on 2026-12-05: off 0.206, on 0.019 (ratio 10.6);
-    // threshold: a quarter.
+    // Measured on lavapipe on 2026-12-05: off 0.206, on 0.027 (ratio 7.7;
+    // 0.019 with the texels' larger variance, which blurred more); threshold:
+    // a quarter.
     assert!(t_on < t_off * 0.25, "temporal: on {t_on} vs off {t_off}");
 
     // Close up (15 cm, 60 degrees down: 1.5 mm pixels over 5 mm texels):
@@ -511,6 +543,50 @@ fn toksvig_brings_a_minified_bumpy_mirror_closer_to_its_supersampled_self() {
     // 0 and trilinear filtering stays on it); threshold 1e-3 for drivers
     // that blend in level 1 at a slightly different LOD.
     assert!(close < 1e-3, "close-up on vs off: {close}");
+}
+
+#[test]
+fn toksvig_keeps_the_mean_brightness_of_a_highlight_in_view() {
+    // The bumpy mirror of the test above seen with a 90 degree field of
+    // view, so the image holds the whole highlight (half-vectors up to
+    // ~25 degrees from the normal against the bumps' 8.5 degree slopes):
+    // the mean then measures the reflected energy, not the lobe's shape.
+    let (w, h) = (80u32, 60u32);
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    let view = |mipmaps| {
+        let mut scene = Scene::from_gltf(&bumpy_plane(0.1, mipmaps)).expect("plane");
+        let mut camera = camera_and_sun(&mut scene, 1.0, 25.0);
+        camera.fov_y_deg = 90.0;
+        let r = common::renderer(&scene);
+        (scene, camera, r)
+    };
+    let (scene0, camera, mut r0) = view(false);
+    let k = 16;
+    let reference = mean(&luminance(
+        &mut r0,
+        &camera,
+        &settings(&scene0, (w * k, h * k), false),
+    ));
+    drop(r0);
+    let (scene, camera, mut r) = view(true);
+    let off = mean(&luminance(
+        &mut r,
+        &camera,
+        &settings(&scene, (w, h), false),
+    ));
+    let on = mean(&luminance(&mut r, &camera, &settings(&scene, (w, h), true)));
+    let (d_off, d_on) = (off / reference - 1.0, on / reference - 1.0);
+    eprintln!(
+        "90 deg view, mean luminance: reference (level 0, 16x16) {reference:.2}, off {off:.2} ({:+.1} %), on {on:.2} ({:+.1} %)",
+        d_off * 100.0,
+        d_on * 100.0
+    );
+    // Measured on lavapipe on 2026-12-05: reference 19.81, off 16.92
+    // (-14.6 %), on 19.26 (-2.8 %). With level 1 taking the texels'
+    // variance rather than the bilinear field's (9/4 of it for these
+    // white-noise bumps), on was 18.32 (-7.5 %; E3.md). Threshold: the
+    // issue's 5 %.
+    assert!(d_on.abs() < 0.05, "on {on} vs reference {reference}");
 }
 
 /// The bake's cost at load: a 2048 x 2048 image (DamagedHelmet's normal

@@ -283,7 +283,12 @@ impl MaterialTextures {
         let plain = Mips::Plain(&mipmap, &linear_sampler);
         let white_srgb = out.add_image(ctx, plain, &defaults[0], true)?;
         let white = out.add_image(ctx, plain, &defaults[0], false)?;
-        let flat = out.add_image(ctx, Mips::Normal(&normal_mipmap), &defaults[1], false)?;
+        let flat = out.add_image(
+            ctx,
+            Mips::Normal(&normal_mipmap, &linear_sampler),
+            &defaults[1],
+            false,
+        )?;
         let along_t = out.add_image(ctx, plain, &defaults[2], false)?;
         for m in &pbr.materials {
             // Per slot: sRGB or linear, and the default where it is absent.
@@ -319,7 +324,7 @@ impl MaterialTextures {
                             Some(&v) => v,
                             None => {
                                 let mips = if bake {
-                                    Mips::Normal(&normal_mipmap)
+                                    Mips::Normal(&normal_mipmap, &linear_sampler)
                                 } else {
                                     plain
                                 };
@@ -410,7 +415,7 @@ impl MaterialTextures {
         // E3: a normal map's level 0 has no variance (glTF ignores its alpha).
         let zero_alpha;
         let level0 = match mips {
-            Mips::Normal(_) => {
+            Mips::Normal(..) => {
                 let mut t = image.rgba8.clone();
                 t.chunks_exact_mut(4).for_each(|p| p[3] = 0);
                 zero_alpha = t;
@@ -436,10 +441,19 @@ impl MaterialTextures {
         if levels > 1 {
             let (program, label) = match mips {
                 Mips::Plain(p, _) => (p, "renderer.mipmap"),
-                Mips::Normal(p) => (p, "renderer.normal_mipmap"),
+                Mips::Normal(p, _) => (p, "renderer.normal_mipmap"),
             };
-            let pipeline =
-                program.render_pipeline(ctx, &RenderSpec::fullscreen(label, &[target(format)]))?;
+            let targets = [target(format)];
+            let mut spec = RenderSpec::fullscreen(label, &targets);
+            let pipeline = program.render_pipeline(ctx, &spec)?;
+            // E3: level 1 takes the variance of level 0's bilinear field.
+            let first = match mips {
+                Mips::Plain(..) => pipeline.clone(),
+                Mips::Normal(..) => {
+                    spec.constants = &[("FROM_LEVEL0", 1.0)];
+                    program.render_pipeline(ctx, &spec)?
+                }
+            };
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             for level in 1..levels {
                 let view = |l: u32| {
@@ -460,7 +474,14 @@ impl MaterialTextures {
                             ("source_sampler", wgpu::BindingResource::Sampler(sampler)),
                         ],
                     )?,
-                    Mips::Normal(p) => p.bind(&ctx.device, 0, &[("source_load", source)])?,
+                    Mips::Normal(p, sampler) => p.bind(
+                        &ctx.device,
+                        0,
+                        &[
+                            ("source", source),
+                            ("source_sampler", wgpu::BindingResource::Sampler(sampler)),
+                        ],
+                    )?,
                 };
                 let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some(label),
@@ -478,7 +499,7 @@ impl MaterialTextures {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                rp.set_pipeline(&pipeline);
+                rp.set_pipeline(if level == 1 { &first } else { &pipeline });
                 rp.set_bind_group(0, &bind, &[]);
                 rp.draw(0..3, 0..1);
             }
@@ -497,7 +518,7 @@ enum Mips<'a> {
     /// 2x2 box (`mipmap.wgsl`, one bilinear tap with this sampler).
     Plain(&'a Program, &'a wgpu::Sampler),
     /// E3 normal map: normalised mean, normal variance in alpha (`normal_mipmap.wgsl`).
-    Normal(&'a Program),
+    Normal(&'a Program, &'a wgpu::Sampler),
 }
 
 fn srgb_decode(c: f32) -> f32 {
@@ -560,33 +581,73 @@ pub fn next_mip_reference(
 /// `height` normal-map level whose alpha holds encoded normal variance
 /// (level 0: alpha 0). Texel (x, y) reads parents 2x, 2x + 1 by 2y, 2y + 1
 /// (clamped to the edge), normalises each RGB to n_i, and writes RGB =
-/// encode(normalize(m)) with m = mean(n_i), alpha = encode(mean(sigma_i^2)
-/// + (1 - |m|) / |m|). Computed in f32, rounded to 8 bits.
-pub fn next_normal_mip_reference(width: u32, height: u32, rgba8: &[u8]) -> (u32, u32, Vec<u8>) {
+/// encode(normalize(m)) with m = mean(n_i) and alpha = encode(sigma^2),
+/// sigma^2 = mean(sigma_i^2) plus (1 - |m|) / |m|. `from_level0` (the source
+/// is level 0): sigma^2 is the spread (1 - |m'|) / |m'| of the bilinear
+/// field instead, m' the mean of its unit normals over the footprint by
+/// two-point Gauss-Legendre on the field's linear pieces (6 x 6 nodes).
+/// Computed in f32, rounded to 8 bits.
+pub fn next_normal_mip_reference(
+    width: u32,
+    height: u32,
+    rgba8: &[u8],
+    from_level0: bool,
+) -> (u32, u32, Vec<u8>) {
     let (w, h) = ((width / 2).max(1), (height / 2).max(1));
-    let texel = |x: u32, y: u32| {
-        let i = ((y.min(height - 1) * width + x.min(width - 1)) * 4) as usize;
+    let rgb = |x: i32, y: i32| {
+        let (x, y) = (x.clamp(0, width as i32 - 1), y.clamp(0, height as i32 - 1));
+        let i = ((y as u32 * width + x as u32) * 4) as usize;
         let c = |k: usize| rgba8[i + k] as f32 / 255.0;
-        let n = glam::Vec3::new(c(0), c(1), c(2)) * 2.0 - 1.0;
+        (glam::Vec3::new(c(0), c(1), c(2)), c(3))
+    };
+    let unit = |rgb: glam::Vec3| {
+        let n = rgb * 2.0 - 1.0;
         let len = n.length();
-        let n = if len > 1e-6 { n / len } else { glam::Vec3::Z };
-        (n, normal_variance_decode(c(3)))
+        if len > 1e-6 { n / len } else { glam::Vec3::Z }
+    };
+    let spread = |m: glam::Vec3| {
+        let len = m.length().max(1e-4);
+        (1.0 - len) / len
     };
     let unorm = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
     let mut out = Vec::with_capacity((w * h * 4) as usize);
     for y in 0..h {
         for x in 0..w {
+            let (px, py) = (2 * x as i32, 2 * y as i32);
             let (mut m, mut variance) = (glam::Vec3::ZERO, 0.0);
             for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let (n, v) = texel(2 * x + dx, 2 * y + dy);
-                m += n;
-                variance += v;
+                let (c, a) = rgb(px + dx, py + dy);
+                m += unit(c);
+                variance += normal_variance_decode(a);
             }
             m *= 0.25;
-            let len = m.length().max(1e-4);
-            let variance = 0.25 * variance + (1.0 - len) / len;
-            let n = if m.length() > 1e-6 {
-                m / len
+            let variance = if from_level0 {
+                // Two-point Gauss-Legendre on the field's three linear
+                // pieces per axis of the footprint [p - 1/2, p + 3/2]
+                // (texel-centre coordinates), as the shader's taps.
+                let node = |k: i32| {
+                    let half = if k / 2 == 1 { 0.5 } else { 0.25 };
+                    let side = if k & 1 == 1 { 1.0 } else { -1.0 };
+                    let u = -0.25 + 0.75 * (k / 2) as f32 + side * half * 0.577_350_27;
+                    (u, half * 0.5)
+                };
+                let mut field = glam::Vec3::ZERO;
+                for j in 0..36 {
+                    let ((u, wx), (v, wy)) = (node(j % 6), node(j / 6));
+                    let (fx, fy) = (u.floor(), v.floor());
+                    let (tx, ty) = (u - fx, v - fy);
+                    let (x0, y0) = (px + fx as i32, py + fy as i32);
+                    let top = rgb(x0, y0).0.lerp(rgb(x0 + 1, y0).0, tx);
+                    let bottom = rgb(x0, y0 + 1).0.lerp(rgb(x0 + 1, y0 + 1).0, tx);
+                    field += wx * wy * unit(top.lerp(bottom, ty));
+                }
+                spread(field)
+            } else {
+                0.25 * variance + spread(m)
+            };
+            let len = m.length();
+            let n = if len > 1e-6 {
+                m / len.max(1e-4)
             } else {
                 glam::Vec3::Z
             };
