@@ -8,7 +8,7 @@ use crate::shader::{self, ComposedShader, ReflectedLayout};
 /// A composed WGSL shader compiled into a wgpu module, with the bind-group
 /// and pipeline layouts reflected from its bindings; pipelines are created from it.
 pub struct Program {
-    /// Shader path it was composed from (e.g. `post/tonemap.wgsl`); labels the module and layouts.
+    /// Shader path it was composed from (e.g. `passes/post/tonemap.wgsl`); labels the module and layouts.
     pub name: String,
     /// The compiled module holding every entry point.
     pub module: wgpu::ShaderModule,

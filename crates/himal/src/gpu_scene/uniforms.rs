@@ -35,8 +35,8 @@ pub struct ViewUniform {
 
 impl ViewUniform {
     /// Builds the uniform for camera `view` / `proj` at `position` (world, metres)
-    /// with near plane `near` (metres) and a viewport of `size` pixels; the jitter
-    /// is zero and the clocks are 0 until [`Self::with_jitter`] / [`Self::with_times`].
+    /// with near plane `near` (metres) and a viewport of `size` pixels; the jitter's
+    /// xy and the clocks stay 0 until [`Self::with_jitter`] / [`Self::with_times`].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         view: Mat4,

@@ -25,7 +25,7 @@ pub struct TerrainNoise {
     pub ridged: bool,
     /// Frequency multiplier between octaves (2 doubles the frequency each octave).
     pub lacunarity: f32,
-    /// Amplitude multiplier between octaves, in (0, 1) (0.5 halves each octave).
+    /// Amplitude multiplier between octaves (0.5 halves each octave).
     pub gain: f32,
     /// Domain warp in metres: bends ridges and the valley's outline.
     pub warp: f32,
@@ -130,7 +130,7 @@ pub struct TerrainLayer {
     pub max_height: f32,
     /// Slope angles in degrees from horizontal (0 = flat, 90 = vertical).
     pub min_slope: f32,
-    /// Steepest slope covered, same units (90 = no limit).
+    /// Steepest slope covered, in degrees from horizontal (90 = no limit).
     pub max_slope: f32,
     /// Width in metres of the transition at each height limit.
     pub blend: f32,
@@ -293,7 +293,7 @@ impl HeightGrid {
         )
     }
 
-    /// Height in metres at column `i`, row `j` (panics outside the grid).
+    /// Height in metres at column `i < nx`, row `j < nz`.
     pub fn h(&self, i: usize, j: usize) -> f32 {
         self.heights[j * self.nx + i]
     }

@@ -44,7 +44,7 @@ pub enum ShaderError {
     Parse {
         /// File the failing line came from.
         file: String,
-        /// 1-based line in that file (0 when naga gave no location).
+        /// 1-based line in that file.
         line: usize,
         /// naga's message.
         message: String,
@@ -56,7 +56,7 @@ pub enum ShaderError {
         shader: String,
         /// File the failing line came from.
         file: String,
-        /// 1-based line in that file (0 when naga gave no location).
+        /// 1-based line in that file.
         line: usize,
         /// naga's message.
         message: String,

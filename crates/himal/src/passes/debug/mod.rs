@@ -11,7 +11,7 @@ use crate::passes::post::PostInputs;
 /// Buffers a debug view can show; `id` is the shader's `VIEW` constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DebugView {
-    /// Linear albedo (base colour after the metallic split), black for the sky.
+    /// The G-buffer's linear albedo, black for the sky.
     Albedo = 1,
     /// World-space shading normal: raw in \[-1,1\], displayed as n * 0.5 + 0.5.
     Normal = 2,

@@ -19,7 +19,7 @@ use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureHandle};
 
 /// Tile edge in pixels of `post.luminance` (16x16 threads, 4x4 pixels each).
 pub const TILE: u32 = 64;
-/// Reinhard's key: the display value the log-average luminance is exposed to (middle grey, 0.18).
+/// Reinhard's key: the scaled luminance the log-average luminance is exposed to (middle grey, 0.18).
 pub const KEY: f64 = 0.18;
 
 /// Buffers of the luminance reduction, sized for one frame size.

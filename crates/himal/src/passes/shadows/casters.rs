@@ -64,7 +64,7 @@ pub struct Casters {
 }
 
 impl Casters {
-    /// Bounds, motion and the static flag of every object of `scene`, in GPU order.
+    /// Swept bounds, motion flags and mesh bounds of every object of `scene` (in GPU order), and the scene's bounds.
     pub fn from_scene(scene: &Scene) -> Self {
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut moving = Vec::with_capacity(scene.objects.len());

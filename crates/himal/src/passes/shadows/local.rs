@@ -33,7 +33,7 @@ pub struct ShadowTileGpu {
     pub view_proj: [[f32; 4]; 4],
     /// xy atlas uv of the tile's corner, zw its uv size.
     pub rect: [f32; 4],
-    /// x world texel size per metre of distance (for the filter's bias), yzw unused.
+    /// x world texel size per metre of distance, yzw unused.
     pub info: [f32; 4],
 }
 

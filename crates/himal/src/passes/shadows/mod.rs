@@ -230,7 +230,7 @@ fn layer_view_desc(layer: u32) -> wgpu::TextureViewDescriptor<'static> {
 }
 
 impl ShadowPass {
-    /// Compiles the depth, mask and view pipelines and makes the view uniforms for `scene`'s casters.
+    /// Compiles the depth, mask and view pipelines, makes the sun view uniforms and takes `scene`'s casters.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
         let depth_program = Program::new(ctx, "passes/shadows/depth.wgsl")?;
         let depth32 = DepthPipelines::new(ctx, &depth_program, SHADOW_FORMAT)?;

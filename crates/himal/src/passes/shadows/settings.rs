@@ -6,7 +6,7 @@ use crate::Error;
 /// = 0 also turns shadows off).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ShadowMode {
-    /// No sun shadows: the mask is fully lit.
+    /// No sun shadows: the sun lights everything.
     Off,
     /// S1: four dynamic cascades.
     #[default]

@@ -218,7 +218,7 @@ pub struct WorldMapState {
 }
 
 impl WorldMapState {
-    /// Forgets the shown map, any fill under way and the dirty rectangles (a new world or settings).
+    /// Forgets the shown map, any fill under way and the dirty rectangles.
     pub fn reset(&mut self) {
         *self = Self::default();
     }
