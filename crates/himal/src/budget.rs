@@ -61,6 +61,7 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
 /// How many bytes the scene and frame may plan to hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryBudget {
+    /// The limit in bytes.
     pub bytes: u64,
 }
 

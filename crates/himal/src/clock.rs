@@ -44,6 +44,7 @@ pub struct Span {
 }
 
 impl Stopwatch {
+    /// Starts timing now on both clocks.
     pub fn start() -> Self {
         Self {
             wall: Instant::now(),

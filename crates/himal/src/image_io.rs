@@ -15,11 +15,14 @@ fn image_error(path: &Path, message: impl std::fmt::Display) -> Error {
 /// Output kind chosen by the file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageKind {
+    /// 8-bit sRGB PNG (`.png`).
     Png,
+    /// Float EXR of linear values (`.exr`).
     Exr,
 }
 
 impl ImageKind {
+    /// The kind named by the path's extension (case-insensitive); an error naming the path otherwise.
     pub fn from_path(path: &Path) -> Result<Self, Error> {
         match path
             .extension()

@@ -38,16 +38,27 @@ pub use settings::{Culling, Occlusion};
 /// Every error the library returns; each names what failed and where.
 #[derive(thiserror::Error, Debug)]
 pub enum Error {
+    /// Device, pipeline, validation or read-back failure.
     #[error(transparent)]
     Gpu(#[from] gpu::GpuError),
+    /// The frame graph was misused or failed to record.
     #[error("frame graph: {0}")]
     Graph(#[from] graph::GraphError),
+    /// A scene file, glTF or world description could not be loaded.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
+    /// A shader failed to compose, parse, validate or reflect.
     #[error(transparent)]
     Shader(#[from] shader::ShaderError),
+    /// An output image could not be written.
     #[error("{path}: {message}")]
-    Image { path: String, message: String },
+    Image {
+        /// The output file.
+        path: String,
+        /// What went wrong (unsupported extension, encoder or I/O error).
+        message: String,
+    },
+    /// A [`FrameSettings`] value is out of range or unknown (the text says which).
     #[error("{0}")]
     InvalidSettings(String),
 }

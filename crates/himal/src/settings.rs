@@ -22,8 +22,10 @@ pub const DEFAULT_SHADOW_RESOLUTION: u32 = 2048;
 /// The buffer a frame shows (`--view`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum ViewBuffer {
+    /// The tonemapped, post-processed image.
     #[default]
     Final,
+    /// A G-buffer channel or other debug visualisation (`albedo`, `normal`, `depth`, `motion`, `sectors`, `lod`...).
     Debug(DebugView),
     /// AO buffers (`ao`, `ao-raw`, `stability-mask`).
     Ao(AoView),
@@ -36,6 +38,7 @@ pub enum ViewBuffer {
 }
 
 impl ViewBuffer {
+    /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
     pub const NAMES: [&'static str; 24] = [
         "final",
         "albedo",
@@ -106,11 +109,15 @@ impl std::str::FromStr for ViewBuffer {
 /// Everything one frame needs besides the camera.
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
+    /// Output width in pixels (at least 1).
     pub width: u32,
+    /// Output height in pixels (at least 1).
     pub height: u32,
+    /// The buffer the frame shows (`--view`).
     pub view: ViewBuffer,
     /// Raw float values (for EXR) instead of a displayable image.
     pub raw: bool,
+    /// Sun position and sky inputs: time of day, latitude, day of year, turbidity.
     pub sun: SunDesc,
     /// Exposure bias in EV on top of the auto exposure.
     pub exposure_ev: f32,
@@ -223,6 +230,8 @@ pub enum Occlusion {
 }
 
 impl FrameSettings {
+    /// Defaults for a `width` x `height` frame under `sun`: the final image,
+    /// every technique at its default setting.
     pub fn new(width: u32, height: u32, sun: SunDesc) -> Self {
         Self {
             width,

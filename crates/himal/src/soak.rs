@@ -13,6 +13,7 @@ pub fn resident_bytes() -> Option<u64> {
 /// One sample of a soak: the frame just drawn and the memory then.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SoakSample {
+    /// Number of the frame just drawn (the x axis of the leak slope).
     pub frame: u64,
     /// Process resident memory (bytes); 0 where unknown.
     pub resident: u64,

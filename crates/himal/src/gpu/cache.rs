@@ -65,9 +65,11 @@ impl std::fmt::Display for PipelineKey {
 /// Which level answered, counted since the context was created.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CacheStats {
+    /// Requests answered by a pipeline already created in this process.
     pub memory_hits: u64,
     /// Created from the on-disk cache (key in the index, driver blob loaded).
     pub disk_hits: u64,
+    /// Pipelines compiled from scratch (not in memory nor in the disk index).
     pub compiles: u64,
     /// Milliseconds spent creating pipelines found on disk.
     pub disk_ms: f64,
@@ -105,13 +107,22 @@ pub enum LoadStatus {
     MemoryOnly,
     /// No file yet (first run for this adapter).
     Missing(PathBuf),
+    /// The file was read; its pipelines are created from the driver blob.
     Loaded {
+        /// The cache file.
         path: PathBuf,
+        /// Number of pipeline keys in its index.
         keys: usize,
+        /// Size of the driver's pipeline-cache blob in bytes.
         blob_bytes: usize,
     },
     /// The file was unusable and is ignored; the next save rewrites it.
-    Rejected { path: PathBuf, reason: String },
+    Rejected {
+        /// The cache file.
+        path: PathBuf,
+        /// Why: unreadable, bad magic or checksum, another format version or another adapter/driver.
+        reason: String,
+    },
 }
 
 #[derive(Clone)]
@@ -285,10 +296,12 @@ impl ShaderCache {
         self.inner.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Counts and times of each cache level since the context was created.
     pub fn stats(&self) -> CacheStats {
         self.lock().stats
     }
 
+    /// What opening the on-disk cache found.
     pub fn status(&self) -> LoadStatus {
         self.lock().status.clone()
     }
@@ -298,6 +311,7 @@ impl ShaderCache {
         self.lock().memory.len()
     }
 
+    /// Whether no pipeline is held in memory yet.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -336,6 +350,8 @@ impl ShaderCache {
         Ok(pipeline)
     }
 
+    /// The render pipeline for `key`: from memory, else made by `create` (which
+    /// gets the wgpu cache when one is open). Fails if `key` names a compute pipeline.
     pub fn render(
         &self,
         key: PipelineKey,
@@ -349,6 +365,8 @@ impl ShaderCache {
         }
     }
 
+    /// The compute pipeline for `key`: from memory, else made by `create` (which
+    /// gets the wgpu cache when one is open). Fails if `key` names a render pipeline.
     pub fn compute(
         &self,
         key: PipelineKey,

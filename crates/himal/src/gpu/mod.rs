@@ -15,26 +15,54 @@ pub use readback::{TextureData, read_buffer, read_texture};
 /// Environment variable that chooses the adapter when `--adapter` is absent.
 pub const ADAPTER_ENV: &str = "HIMAL_ADAPTER";
 
+/// Device creation, validation, memory, loss and read-back failures.
 #[derive(thiserror::Error, Debug)]
 pub enum GpuError {
+    /// No adapter of the allowed backends exists (no driver installed).
     #[error(
         "no GPU adapter found (install Mesa's software Vulkan driver: apt-get install mesa-vulkan-drivers)"
     )]
     NoAdapter,
+    /// `--adapter` / [`ADAPTER_ENV`] matched no adapter.
     #[error("no adapter matches \"{wanted}\"; available: {available}")]
-    NoMatchingAdapter { wanted: String, available: String },
+    NoMatchingAdapter {
+        /// The name substring or backend asked for.
+        wanted: String,
+        /// The adapters found, separated by `; ` (`none` if there are none).
+        available: String,
+    },
+    /// The chosen adapter refused to create a device (missing limits or features).
     #[error("could not create a device on {adapter}: {message}")]
-    RequestDevice { adapter: String, message: String },
+    RequestDevice {
+        /// The adapter, as [`AdapterSummary`] prints it.
+        adapter: String,
+        /// wgpu's error text.
+        message: String,
+    },
+    /// wgpu reported a validation error (a bug in how the API was used).
     #[error("GPU validation error in {context}: {message}")]
-    Validation { context: String, message: String },
+    Validation {
+        /// What was being done, named by the caller of [`GpuContext::check`] or [`GpuContext::scoped`].
+        context: String,
+        /// wgpu's error text (several errors joined by newlines).
+        message: String,
+    },
+    /// An allocation failed for lack of GPU memory.
     #[error("GPU out of memory in {context}")]
-    OutOfMemory { context: String },
+    OutOfMemory {
+        /// What was being done, named by the caller.
+        context: String,
+    },
+    /// The device was lost (driver reset, removal); carries the reason. Recreate the context.
     #[error("GPU device lost: {0}")]
     DeviceLost(String),
+    /// Copying or mapping a texture or buffer for the CPU failed; carries the cause.
     #[error("GPU read-back failed: {0}")]
     Readback(String),
+    /// A shader failed to preprocess, parse, validate or reflect.
     #[error("shader: {0}")]
     Shader(#[from] crate::shader::ShaderError),
+    /// Any other failure, described by its text (frame graph errors inside a pass, missing inputs).
     #[error("{0}")]
     Other(String),
 }
@@ -50,9 +78,13 @@ pub struct GpuOptions {
 /// One adapter as `himal info` shows it.
 #[derive(Clone, Debug)]
 pub struct AdapterSummary {
+    /// Adapter (GPU or driver) name as the driver reports it, e.g. `llvmpipe (LLVM 15.0.7, 256 bits)`.
     pub name: String,
+    /// Graphics API it runs on (Vulkan, Metal, DX12, GL).
     pub backend: wgpu::Backend,
+    /// Discrete, integrated, virtual or CPU (software) adapter.
     pub device_type: wgpu::DeviceType,
+    /// Driver name and version info, joined by a space.
     pub driver: String,
 }
 
@@ -77,11 +109,18 @@ impl From<&wgpu::AdapterInfo> for AdapterSummary {
     }
 }
 
+/// The wgpu instance, chosen adapter, device and queue every pass uses, plus
+/// the pipeline cache and the recorded-error log that [`Self::check`] reports.
 pub struct GpuContext {
+    /// The wgpu instance the adapter came from (surfaces are created from it).
     pub instance: wgpu::Instance,
+    /// The chosen adapter.
     pub adapter: wgpu::Adapter,
+    /// The logical device; its uncaptured errors are recorded for [`Self::check`].
     pub device: wgpu::Device,
+    /// The device's only queue: submissions and `write_buffer` / `write_texture` uploads.
     pub queue: wgpu::Queue,
+    /// The chosen adapter as `himal info` prints it.
     pub info: AdapterSummary,
     /// Timestamp queries inside encoders are available (per-pass timings).
     pub timestamps: bool,

@@ -5,11 +5,18 @@ use super::cache::{PipelineKey, fnv1a};
 use super::{GpuContext, GpuError};
 use crate::shader::{self, ComposedShader, ReflectedLayout};
 
+/// A composed WGSL shader compiled into a wgpu module, with the bind-group
+/// and pipeline layouts reflected from its bindings; pipelines are created from it.
 pub struct Program {
+    /// Shader path it was composed from (e.g. `passes/post/tonemap.wgsl`); labels the module and layouts.
     pub name: String,
+    /// The compiled module holding every entry point.
     pub module: wgpu::ShaderModule,
+    /// Bindings reflected from the WGSL, by group, with the stages that use them.
     pub layout: ReflectedLayout,
+    /// One layout per bind group, in group order.
     pub bind_group_layouts: Vec<wgpu::BindGroupLayout>,
+    /// Pipeline layout made of [`Self::bind_group_layouts`].
     pub pipeline_layout: wgpu::PipelineLayout,
     /// FNV-1a of the composed WGSL: part of every pipeline key (E1), so an
     /// edited shader never matches a cached pipeline.
@@ -18,12 +25,19 @@ pub struct Program {
 
 /// Fixed-function state of a render pipeline; shaders and layout come from the program.
 pub struct RenderSpec<'a> {
+    /// Debug label of the pipeline (and part of its cache key).
     pub label: &'a str,
+    /// Vertex entry point name.
     pub vertex_entry: &'a str,
+    /// Fragment entry point name; `None` for a depth-only pipeline.
     pub fragment_entry: Option<&'a str>,
+    /// Vertex buffer layouts, by slot (empty for generated full-screen triangles).
     pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    /// Colour targets: format, blend and write mask for each attachment.
     pub targets: &'a [Option<wgpu::ColorTargetState>],
+    /// Depth test and write state; `None` without a depth attachment.
     pub depth_stencil: Option<wgpu::DepthStencilState>,
+    /// Topology, culling and winding.
     pub primitive: wgpu::PrimitiveState,
     /// WGSL `override` constants.
     pub constants: &'a [(&'a str, f64)],

@@ -5,13 +5,18 @@ use super::{GpuContext, GpuError};
 /// A texture's texels, rows tightly packed (no 256-byte padding).
 #[derive(Clone, Debug)]
 pub struct TextureData {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// Texel format of the copied texture; [`Self::bytes`] is laid out in it.
     pub format: wgpu::TextureFormat,
+    /// Texels row by row, top row first, `width * bytes_per_texel` bytes a row.
     pub bytes: Vec<u8>,
 }
 
 impl TextureData {
+    /// Size of one texel in bytes (4 for a format without a copy size).
     pub fn bytes_per_texel(&self) -> u32 {
         self.format
             .block_copy_size(Some(wgpu::TextureAspect::All))

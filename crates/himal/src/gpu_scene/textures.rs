@@ -53,6 +53,7 @@ pub struct MaterialGpu {
 }
 
 impl MaterialGpu {
+    /// Packs a scene material's factors, alpha mode and texture transforms into the uniform layout.
     pub fn new(m: &PbrMaterial) -> Self {
         let (mode, cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (0.0, 0.0),
@@ -127,17 +128,26 @@ pub const SLOTS: [&str; TEXTURE_SLOTS] = [
 
 /// One material's GPU resources: (view, sampler) per slot and its uniform.
 pub struct MaterialBinding {
+    /// Uniform buffer holding the material's [`MaterialGpu`].
     pub uniform: wgpu::Buffer,
     /// Per slot: index into `MaterialTextures::views` and `samplers`.
     pub slots: [(usize, usize); TEXTURE_SLOTS],
+    /// glTF `doubleSided`: drawn without back-face culling.
     pub double_sided: bool,
 }
 
+/// Every material texture of a scene on the GPU (deduplicated by image and
+/// colour space), their samplers, and per-material bindings into them.
 pub struct MaterialTextures {
+    /// RGBA8 textures with full mip chains (sRGB or linear per use), defaults first.
     pub textures: Vec<wgpu::Texture>,
+    /// One view per texture, same index.
     pub views: Vec<wgpu::TextureView>,
+    /// Distinct samplers (wrap and filter modes), deduplicated.
     pub samplers: Vec<wgpu::Sampler>,
+    /// One binding per scene material, in the scene's material order.
     pub materials: Vec<MaterialBinding>,
+    /// Estimated bytes of all textures: 4 bytes a texel plus a third for the mips.
     pub bytes: u64,
 }
 
@@ -247,6 +257,9 @@ impl MaterialTextures {
             .collect()
     }
 
+    /// Uploads every image a material uses, generating mips (normal maps with
+    /// E3 variance where baked), and makes each material's uniform and slot table.
+    /// Absent slots get 1x1 defaults (white, flat normal, anisotropy along +t).
     pub fn upload(ctx: &GpuContext, pbr: &PbrSet) -> Result<Self, GpuError> {
         let mipmap = Program::new(ctx, "gpu_scene/mipmap.wgsl")?;
         let normal_mipmap = Program::new(ctx, "gpu_scene/normal_mipmap.wgsl")?;

@@ -6,12 +6,19 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::math::sh::Sh9Gpu;
 
+/// Per-view constants (`View` in `shaders/view.wgsl`): matrices, camera,
+/// viewport, jitter and clocks. Matrices are column-major, world space is
+/// Y-up in metres, clip depth is wgpu's \[0,1\].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ViewUniform {
+    /// World to clip, this frame (with the TAA jitter when it is on).
     pub view_proj: [[f32; 4]; 4],
+    /// Clip to world: inverse of [`Self::view_proj`] (world positions from depth).
     pub inv_view_proj: [[f32; 4]; 4],
+    /// The previous frame's world-to-clip matrix (motion vectors, reprojection).
     pub prev_view_proj: [[f32; 4]; 4],
+    /// World to view space (right-handed, camera looking down -Z).
     pub view: [[f32; 4]; 4],
     /// xyz camera position, w near plane
     pub camera_position: [f32; 4],
@@ -27,6 +34,9 @@ pub struct ViewUniform {
 }
 
 impl ViewUniform {
+    /// Builds the uniform for camera `view` / `proj` at `position` (world, metres)
+    /// with near plane `near` (metres) and a viewport of `size` pixels; the jitter's
+    /// xy and the clocks stay 0 until [`Self::with_jitter`] / [`Self::with_times`].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         view: Mat4,
@@ -74,17 +84,23 @@ impl ViewUniform {
     }
 }
 
+/// Constants of the deferred lighting pass (`Lighting` in `passes/lighting/deferred.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct LightingUniform {
+    /// xyz unit vector towards the sun (world space), w unused.
     pub sun_direction: [f32; 4],
+    /// rgb sun illuminance at the ground in klux (zero when the sun is off), w unused.
     pub sun_illuminance: [f32; 4],
+    /// Sky irradiance E(n) as SH9, in klux.
     pub sky_irradiance: Sh9Gpu,
-    /// x extinction per metre, y aerial perspective amount
+    /// x extinction per metre, y aerial perspective amount (0 = off), z 1 = fog
+    /// inscatter from the sky SH (Bruneton sky), w 1 = sky light along the bent normal (L2).
     pub fog: [f32; 4],
 }
 
 impl LightingUniform {
+    /// Packs the sun, sky SH and fog parameters (see the fields) into the GPU layout.
     pub fn new(
         sun_direction: Vec3,
         sun_illuminance: Vec3,

@@ -111,6 +111,7 @@ impl Default for FrameGraph<'_> {
 }
 
 impl<'a> FrameGraph<'a> {
+    /// An empty graph with a fresh id; handles from other graphs are rejected by it.
     pub fn new() -> Self {
         Self {
             id: NEXT_GRAPH_ID.fetch_add(1, Ordering::Relaxed),
@@ -191,6 +192,8 @@ impl<'a> FrameGraph<'a> {
         self.buffer_handle(i)
     }
 
+    /// An external buffer (uniforms, scene data, readback target); its size and
+    /// usages are read from the buffer. Version 0 is its current content.
     pub fn import_buffer(&mut self, name: &str, buffer: &'a wgpu::Buffer) -> BufferHandle {
         let desc = BufferDesc::from_buffer(buffer);
         let backing = Backing::Imported(Some(buffer));
@@ -213,6 +216,7 @@ impl<'a> FrameGraph<'a> {
         }
     }
 
+    /// Buffer counterpart of [`Self::mark_output`]: the final version's writers survive culling.
     pub fn mark_buffer_output(&mut self, h: BufferHandle) {
         match self.check(h.graph, h.index, h.version, false) {
             Ok(i) => self.resources[i].output = true,
@@ -229,6 +233,7 @@ impl<'a> FrameGraph<'a> {
         }
     }
 
+    /// The description of a buffer handle of this graph (`None` for a texture or foreign handle).
     pub fn buffer_desc(&self, h: BufferHandle) -> Option<&BufferDesc> {
         let i = self.check(h.graph, h.index, h.version, false).ok()?;
         match &self.resources[i].kind {
@@ -378,11 +383,14 @@ impl<'a> PassBuilder<'_, 'a> {
         TextureHandle { version, ..h }
     }
 
+    /// Declares a read of this buffer version; returns the same handle.
     pub fn read_buffer(&mut self, h: BufferHandle, access: BufferAccess) -> BufferHandle {
         self.record_read(h.graph, h.index, h.version, ResourceAccess::Buffer(access));
         h
     }
 
+    /// Declares a write of the newest buffer version; returns the new version
+    /// (the previous content counts as consumed, as for [`Self::write`]).
     pub fn write_buffer(&mut self, h: BufferHandle, access: BufferAccess) -> BufferHandle {
         let access = ResourceAccess::Buffer(access);
         let version = self.record_write(h.graph, h.index, h.version, access);

@@ -10,22 +10,32 @@ use super::resource::{ResourceAccess, ResourceUse, Usages};
 /// A live pass in execution order.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CompiledPass {
+    /// Pass id as declared (with any view prefix), e.g. `ao.hbao`.
     pub id: String,
+    /// Resource versions the pass reads.
     pub reads: Vec<ResourceUse>,
     /// Each write lists the new version it produces.
     pub writes: Vec<ResourceUse>,
+    /// Whether the pass was declared with a side effect (never culled, e.g. readbacks).
     pub side_effect: bool,
 }
 
 /// Pool key of a transient texture: everything but the label.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct TextureKey {
+    /// Width in texels of mip 0.
     pub width: u32,
+    /// Height in texels of mip 0.
     pub height: u32,
+    /// Depth (3D) or array layers (2D); 1 for a plain 2D texture.
     pub depth_or_layers: u32,
+    /// Number of mip levels, at least 1.
     pub mip_levels: u32,
+    /// Texel format.
     pub format: wgpu::TextureFormat,
+    /// 1D, 2D or 3D.
     pub dimension: wgpu::TextureDimension,
+    /// Union of the usages of every live access to the resource.
     pub usages: wgpu::TextureUsages,
 }
 
@@ -43,9 +53,12 @@ impl TextureKey {
     }
 }
 
+/// Pool key of a transient buffer: its size and derived usages.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct BufferKey {
+    /// Size in bytes.
     pub size: u64,
+    /// Union of the usages of every live access to the resource.
     pub usages: wgpu::BufferUsages,
 }
 
@@ -53,9 +66,13 @@ pub struct BufferKey {
 /// inclusive). Resources sharing a slot share one pooled object in a frame.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PoolAssignment {
+    /// Name of the transient resource.
     pub resource: String,
+    /// Index into [`PoolPlan::texture_slots`] or [`PoolPlan::buffer_slots`].
     pub slot: usize,
+    /// Execution position of the first live pass that uses it.
     pub first_pass: usize,
+    /// Execution position of the last live pass that uses it; the slot is free after it.
     pub last_pass: usize,
 }
 
@@ -64,13 +81,18 @@ pub struct PoolAssignment {
 /// transient with the identical key (lifetime reuse, no memory aliasing).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PoolPlan {
+    /// Key of each pooled texture slot, indexed by slot.
     pub texture_slots: Vec<TextureKey>,
+    /// Key of each pooled buffer slot, indexed by slot.
     pub buffer_slots: Vec<BufferKey>,
+    /// Slot and lifetime of each live transient texture.
     pub textures: Vec<PoolAssignment>,
+    /// Slot and lifetime of each live transient buffer.
     pub buffers: Vec<PoolAssignment>,
 }
 
 impl PoolPlan {
+    /// Pool slot of the named transient texture; `None` if it is imported, culled or unknown.
     pub fn texture_slot(&self, name: &str) -> Option<usize> {
         self.textures
             .iter()
@@ -78,6 +100,7 @@ impl PoolPlan {
             .map(|a| a.slot)
     }
 
+    /// Pool slot of the named transient buffer; `None` if it is imported, culled or unknown.
     pub fn buffer_slot(&self, name: &str) -> Option<usize> {
         self.buffers
             .iter()
@@ -497,6 +520,7 @@ impl CompiledGraph<'_> {
         &self.culled
     }
 
+    /// How the live transients map onto pool slots this frame.
     pub fn pool_plan(&self) -> &PoolPlan {
         &self.plan
     }
@@ -515,6 +539,8 @@ impl CompiledGraph<'_> {
         }
     }
 
+    /// Union of the live accesses to the named buffer (empty if only
+    /// culled passes use it); `None` for an unknown name or a texture.
     pub fn buffer_usages(&self, name: &str) -> Option<wgpu::BufferUsages> {
         match self.usages_of(name)? {
             Usages::Buffer(u) => Some(u),

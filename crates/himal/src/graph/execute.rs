@@ -12,7 +12,9 @@ use super::timer::PassTimer;
 /// What a pass closure records with. Resources are looked up by handle;
 /// any version of a resource the pass declared is accepted.
 pub struct PassContext<'e> {
+    /// The frame's command encoder; the pass records into it inside its debug group.
     pub encoder: &'e mut wgpu::CommandEncoder,
+    /// The device, for bind groups and views the pass makes while recording.
     pub device: &'e wgpu::Device,
     pass_id: &'e str,
     declared: &'e [u32],
@@ -28,6 +30,7 @@ pub struct PassContext<'e> {
 impl<'e> PassContext<'e> {
     // Returned references live for the whole pass ('e), not the borrow of
     // `self`, so they can be used while `self.encoder` is borrowed mutably.
+    /// The id of the running pass (with any view prefix).
     pub fn pass_id(&self) -> &'e str {
         self.pass_id
     }
@@ -72,6 +75,7 @@ impl<'e> PassContext<'e> {
         }))
     }
 
+    /// The buffer behind `h`, or an error if this pass did not declare it.
     pub fn try_buffer(&self, h: BufferHandle) -> Result<&'e wgpu::Buffer, GraphError> {
         let i = self.resolve(h.graph, h.index)?;
         self.buffers[i].ok_or_else(|| GraphError::UnknownHandle {

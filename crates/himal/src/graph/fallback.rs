@@ -17,6 +17,7 @@ pub enum Fallback {
 }
 
 impl Fallback {
+    /// Every fallback, in the order of their pool slots.
     pub const ALL: [Fallback; 4] = [
         Fallback::White,
         Fallback::Black,

@@ -58,6 +58,7 @@ pub struct History {
 }
 
 impl History {
+    /// No rings; [`Self::declare`] adds them.
     pub fn new() -> Self {
         Self::default()
     }

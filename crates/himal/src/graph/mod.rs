@@ -53,52 +53,106 @@ pub use timer::{PassTimer, PassTiming};
 /// Frame graph misuse and device failures.
 #[derive(thiserror::Error, Debug, Clone, PartialEq, Eq)]
 pub enum GraphError {
+    /// A pass reads a resource that no earlier pass wrote and that was not imported.
     #[error("pass '{pass}' reads '{resource}' before any pass wrote it")]
-    ReadBeforeWrite { pass: String, resource: String },
+    ReadBeforeWrite {
+        /// Id of the reading pass.
+        pass: String,
+        /// Name of the resource it reads.
+        resource: String,
+    },
+    /// A pass writes a handle whose version was already overwritten by another pass.
     #[error(
         "pass '{pass}' writes '{resource}'@{used} but the newest version is @{latest} (two writers of one version)"
     )]
     StaleVersion {
+        /// Id of the writing pass.
         pass: String,
+        /// Name of the resource written.
         resource: String,
+        /// Version of the handle the pass wrote through.
         used: u32,
+        /// Newest version of the resource at that point of the declaration.
         latest: u32,
     },
+    /// Two passes were declared with the same id.
     #[error("pass id '{0}' is used twice")]
     DuplicatePass(String),
+    /// Two resources (created or imported) share a name.
     #[error("resource name '{0}' is used twice")]
     DuplicateResource(String),
+    /// A pass (named by its id) was declared but never given a body.
     #[error("pass '{0}' was declared without execute()")]
     MissingExecute(String),
+    /// A handle does not belong to this graph or names a resource of the other kind.
     #[error("{context}: handle of another graph, unknown resource or wrong kind")]
-    UnknownHandle { context: String },
+    UnknownHandle {
+        /// Where the handle was used: a pass id or a builder call.
+        context: String,
+    },
+    /// A pass declared an access that does not fit the declaring call (a write access through `read()`, say).
     #[error("pass '{pass}' declares {access} on '{resource}' with {declared_with}()")]
     InvalidAccess {
+        /// Id of the declaring pass.
         pass: String,
+        /// Name of the resource.
         resource: String,
+        /// The access as text (e.g. `StorageWrite`).
         access: String,
+        /// Name of the builder method used (`read`, `write`, ...).
         declared_with: &'static str,
     },
+    /// A pass body touched a resource it did not declare.
     #[error("pass '{pass}' uses '{resource}' without declaring it")]
-    UndeclaredResource { pass: String, resource: String },
+    UndeclaredResource {
+        /// Id of the pass.
+        pass: String,
+        /// Name of the undeclared resource.
+        resource: String,
+    },
+    /// The listed pass ids depend on each other in a loop, so no order exists.
     #[error("passes {0:?} form a cycle (a pass reads a version that one of its inputs overwrote)")]
     Cycle(Vec<String>),
+    /// An imported texture or buffer lacks usage flags that its live accesses need.
     #[error("imported '{resource}' needs usages {needed} but was created with {available}")]
     ImportedUsage {
+        /// Name of the imported resource.
         resource: String,
+        /// Usage flags the live passes need.
         needed: String,
+        /// Usage flags the resource was created with.
         available: String,
     },
+    /// A live pass uses a placeholder import (`import_*_desc`, named here), which has nothing to bind.
     #[error("'{0}' was imported as a placeholder (import_*_desc) and cannot execute")]
     UnboundImport(String),
+    /// The graph has more live passes than the [`PassTimer`] has timestamp pairs.
     #[error("{passes} passes but the pass timer holds {capacity}")]
-    TimerCapacity { passes: usize, capacity: u32 },
+    TimerCapacity {
+        /// Number of live passes.
+        passes: usize,
+        /// Passes the timer can time (its query set holds twice this many timestamps).
+        capacity: u32,
+    },
+    /// A wgpu error while recording or reading back that could not be pinned on one pass.
     #[error("device: {0}")]
     Device(String),
+    /// A [`Node`] binding could not be resolved (missing or mistyped shader binding).
     #[error("pass '{pass}': {message}")]
-    Binding { pass: String, message: String },
+    Binding {
+        /// Id of the pass.
+        pass: String,
+        /// What was wrong with the binding.
+        message: String,
+    },
+    /// A pass body returned an error, or wgpu validation named the pass.
     #[error("pass '{pass}': {message}")]
-    Pass { pass: String, message: String },
+    Pass {
+        /// Id of the pass.
+        pass: String,
+        /// The error's text.
+        message: String,
+    },
 }
 
 impl GraphError {

@@ -202,6 +202,7 @@ impl<'g, 'a> Node<'g, 'a> {
         self
     }
 
+    /// The pipeline a compute node dispatches with.
     pub fn compute_pipeline(mut self, pipeline: Result<wgpu::ComputePipeline, GpuError>) -> Self {
         self.compute = Some(pipeline);
         self
@@ -313,6 +314,7 @@ impl<'g, 'a> Node<'g, 'a> {
         self.bind(name, Source::External(buffer.as_entire_binding()))
     }
 
+    /// A sampler owned outside the graph, bound as `name`.
     pub fn sampler(self, name: &str, sampler: &'a wgpu::Sampler) -> Self {
         self.bind(
             name,
@@ -678,10 +680,14 @@ impl<'g, 'a> Node<'g, 'a> {
 
 /// The versions a finished node wrote, in declaration order.
 pub struct Written {
+    /// New versions of the colour attachments, in declaration order.
     pub colors: Vec<TextureHandle>,
     /// The written depth attachment's new version.
     pub depth: Option<TextureHandle>,
+    /// New versions of the storage textures written, in declaration order.
     pub storage: Vec<TextureHandle>,
+    /// Graph buffers the node binds, in declaration order: the new version
+    /// of those it writes, the read version of the others.
     pub buffers: Vec<BufferHandle>,
 }
 

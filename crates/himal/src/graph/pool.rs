@@ -31,6 +31,7 @@ pub struct TexturePool {
 }
 
 impl TexturePool {
+    /// An empty pool; textures and buffers are created on first use.
     pub fn new() -> Self {
         Self::default()
     }
@@ -43,10 +44,12 @@ impl TexturePool {
         t + b
     }
 
+    /// Number of pooled textures (all keys, free or in use).
     pub fn texture_count(&self) -> usize {
         self.textures.values().map(Vec::len).sum()
     }
 
+    /// Number of pooled buffers (all keys, free or in use).
     pub fn buffer_count(&self) -> usize {
         self.buffers.values().map(Vec::len).sum()
     }

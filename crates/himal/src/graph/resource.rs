@@ -7,12 +7,17 @@ use std::fmt;
 pub struct TextureDesc {
     /// wgpu label; the resource name is used when `None`.
     pub label: Option<String>,
+    /// Width in texels of mip 0.
     pub width: u32,
+    /// Height in texels of mip 0.
     pub height: u32,
     /// Depth (3D) or array layers (2D); 1 for a plain 2D texture.
     pub depth_or_layers: u32,
+    /// Number of mip levels, at least 1.
     pub mip_levels: u32,
+    /// Texel format.
     pub format: wgpu::TextureFormat,
+    /// 1D, 2D or 3D.
     pub dimension: wgpu::TextureDimension,
 }
 
@@ -43,6 +48,7 @@ impl TextureDesc {
         }
     }
 
+    /// Width, height and depth/layers as a wgpu extent (mip 0).
     pub fn size(&self) -> wgpu::Extent3d {
         wgpu::Extent3d {
             width: self.width,
@@ -79,6 +85,7 @@ impl TextureDesc {
 pub struct BufferDesc {
     /// wgpu label; the resource name is used when `None`.
     pub label: Option<String>,
+    /// Size in bytes.
     pub size: u64,
     /// Usages added to the derived ones (e.g. `COPY_SRC` for a debug dump
     /// performed outside the graph).
@@ -86,6 +93,7 @@ pub struct BufferDesc {
 }
 
 impl BufferDesc {
+    /// A buffer of `size` bytes, no label and no extra usages.
     pub fn new(size: u64) -> Self {
         Self {
             label: None,
@@ -129,6 +137,7 @@ impl TextureHandle {
 }
 
 impl BufferHandle {
+    /// 0 = not yet written (imported resources: the external content).
     pub fn version(&self) -> u32 {
         self.version
     }
@@ -137,18 +146,26 @@ impl BufferHandle {
 /// How a pass uses a texture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TextureAccess {
+    /// Read through a sampled texture binding.
     Sampled,
+    /// Read through a read-only storage texture binding.
     StorageRead,
+    /// Written through a storage texture binding (compute).
     StorageWrite,
+    /// Rendered to as a colour attachment.
     ColorAttachment,
+    /// Depth-tested and written as the depth attachment.
     DepthAttachment,
     /// Read-only depth attachment (depth test without depth write).
     DepthRead,
+    /// Source of a copy.
     CopySrc,
+    /// Destination of a copy (upload or texture-to-texture).
     CopyDst,
 }
 
 impl TextureAccess {
+    /// The wgpu usage flag this access needs.
     pub fn usage(self) -> wgpu::TextureUsages {
         use wgpu::TextureUsages as U;
         match self {
@@ -172,17 +189,26 @@ impl TextureAccess {
 /// How a pass uses a buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BufferAccess {
+    /// Bound as a uniform buffer.
     Uniform,
+    /// Bound as a read-only storage buffer.
     StorageRead,
+    /// Bound as a read-write storage buffer.
     StorageWrite,
+    /// Source of a copy (e.g. a readback).
     CopySrc,
+    /// Destination of a copy or `write_buffer`.
     CopyDst,
+    /// Bound as a vertex buffer.
     Vertex,
+    /// Bound as an index buffer.
     Index,
+    /// Holds indirect draw or dispatch arguments.
     Indirect,
 }
 
 impl BufferAccess {
+    /// The wgpu usage flag this access needs.
     pub fn usage(self) -> wgpu::BufferUsages {
         use wgpu::BufferUsages as U;
         match self {
@@ -205,7 +231,9 @@ impl BufferAccess {
 /// A texture or buffer access, as listed by [`super::CompiledPass`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ResourceAccess {
+    /// An access to a texture.
     Texture(TextureAccess),
+    /// An access to a buffer.
     Buffer(BufferAccess),
 }
 
@@ -230,9 +258,11 @@ impl fmt::Display for ResourceAccess {
 /// One declared use of a resource version by a pass.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ResourceUse {
+    /// Name of the resource.
     pub resource: String,
     /// Version read, or for writes the new version produced.
     pub version: u32,
+    /// How the pass uses it.
     pub access: ResourceAccess,
 }
 

@@ -7,7 +7,9 @@ use super::GraphError;
 /// GPU time of one pass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
+    /// Id of the pass.
     pub id: String,
+    /// Time between the timestamps around the pass, in milliseconds.
     pub gpu_ms: f64,
 }
 

@@ -48,19 +48,25 @@ pub fn alpha_xy(glossiness: f32, anisotropy: f32) -> Vec2 {
 /// The talk's material parameters, each in \[0,1\] (albedo per channel).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
+    /// Base colour, linear RGB in \[0,1\]: diffuse albedo of the dielectric part, F0 of the metallic part.
     pub albedo: Vec3,
+    /// Smoothness in \[0,1\]; perceptual roughness = 1 - glossiness.
     pub glossiness: f32,
     /// Specular reflectance at normal incidence of the dielectric part:
     /// F0 = reflectance literally (glTF's dielectric F0 = 0.04 is 0.04 here).
     pub reflectance: f32,
+    /// Metalness in \[0,1\]: blends the dielectric and metallic responses (M2).
     pub metallic: f32,
+    /// Stretch of the highlight along the tangent in \[0,1\] (0 = isotropic), see [`alpha_xy`].
     pub anisotropy: f32,
 }
 
 /// What the BRDF consumes, after M2's metallic blend.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
+    /// Lambertian albedo, linear RGB: `albedo * (1 - metallic)`.
     pub diffuse_albedo: Vec3,
+    /// Fresnel reflectance at normal incidence, linear RGB.
     pub f0: Vec3,
     /// (alpha_x, alpha_y) along (tangent, binormal).
     pub alpha: Vec2,

@@ -31,6 +31,7 @@ impl Pcg32 {
     const MULTIPLIER: u64 = 6_364_136_223_846_793_005;
     const INCREMENT: u64 = 1_442_695_040_888_963_407;
 
+    /// A generator seeded with `seed` (PCG's standard seeding on the default stream).
     pub fn new(seed: u64) -> Self {
         let mut rng = Self { state: 0 };
         rng.next_u32();
@@ -39,6 +40,7 @@ impl Pcg32 {
         rng
     }
 
+    /// The next uniformly distributed 32-bit value.
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old

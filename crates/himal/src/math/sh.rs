@@ -44,6 +44,7 @@ pub fn sh9_basis(d: Vec3) -> [f32; SH9_COUNT] {
 /// Nine RGB coefficients (rgb in a `Vec3` per coefficient).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sh9Rgb {
+    /// Coefficients in the order L00, L1-1, L10, L11, L2-2, L2-1, L20, L21, L22; each holds r, g, b.
     pub c: [Vec3; SH9_COUNT],
 }
 
@@ -54,18 +55,21 @@ impl Default for Sh9Rgb {
 }
 
 impl Sh9Rgb {
+    /// All coefficients zero.
     pub fn zero() -> Self {
         Self {
             c: [Vec3::ZERO; SH9_COUNT],
         }
     }
 
+    /// Coefficient-wise sum (the SH of the summed signals).
     pub fn add(&self, other: &Sh9Rgb) -> Sh9Rgb {
         Sh9Rgb {
             c: std::array::from_fn(|i| self.c[i] + other.c[i]),
         }
     }
 
+    /// Every coefficient multiplied by `s`.
     pub fn scale(&self, s: f32) -> Sh9Rgb {
         Sh9Rgb {
             c: std::array::from_fn(|i| self.c[i] * s),
@@ -197,6 +201,7 @@ pub fn irradiance_rh2001(l: &[Vec3; 9], n: Vec3) -> Vec3 {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Sh9Gpu {
+    /// Coefficients in [`Sh9Rgb`]'s order, rgb in xyz and w = 0.
     pub c: [[f32; 4]; SH9_COUNT],
 }
 

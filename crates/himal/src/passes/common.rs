@@ -8,7 +8,9 @@ pub use crate::gpu::pipeline::target;
 
 /// A full-screen program with its one pipeline (a pass step without permutations).
 pub struct Step {
+    /// The composed shader, for bind groups by name.
     pub program: Program,
+    /// Its full-screen pipeline into the step's format.
     pub pipeline: wgpu::RenderPipeline,
 }
 

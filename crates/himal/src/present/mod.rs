@@ -24,6 +24,8 @@ struct PresentParams {
     pad: [u32; 3],
 }
 
+/// Copies a rendered frame into a window's swapchain image and blends the
+/// HUD overlay over it; keeps one pipeline per swapchain format.
 pub struct Presenter {
     program: Program,
     pipelines: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
@@ -44,6 +46,7 @@ fn overlay_texture(ctx: &GpuContext, size: [u32; 2]) -> wgpu::Texture {
 }
 
 impl Presenter {
+    /// Compiles the present shader; pipelines are made per target format on first use.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let params = PresentParams {
             overlay_origin: [0; 2],

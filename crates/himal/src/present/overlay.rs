@@ -15,14 +15,18 @@ const BAR_WIDTH: u32 = 80;
 /// A straight-alpha RGBA8 image, display-encoded (sRGB) colour.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Overlay {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// Pixels row by row, top row first, `width * height` of them.
     pub rgba: Vec<[u8; 4]>,
 }
 
 /// What the heads-up display shows: free text lines, then one bar per pass.
 #[derive(Clone, Debug, Default)]
 pub struct Hud {
+    /// Text lines drawn from the top, one per [`LINE`] pixels (characters outside the basic font draw as `?`).
     pub lines: Vec<String>,
     /// (pass id, GPU milliseconds), drawn in the given order.
     pub timings: Vec<(String, f64)>,
@@ -33,6 +37,7 @@ const TEXT: [u8; 4] = [236, 236, 228, 255];
 const BAR: [u8; 4] = [232, 160, 48, 255];
 
 impl Overlay {
+    /// An image of `width` x `height` pixels, every one `fill`.
     pub fn new(width: u32, height: u32, fill: [u8; 4]) -> Self {
         Self {
             width,

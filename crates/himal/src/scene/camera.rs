@@ -16,6 +16,7 @@ pub struct Orthographic {
 /// A perspective (or orthographic) camera in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
+    /// Eye position in world space (metres, Y up).
     pub position: Vec3,
     /// Unit view direction.
     pub forward: Vec3,
@@ -109,6 +110,7 @@ impl Camera {
         }
     }
 
+    /// World to clip: [`Self::projection`] times [`Self::view`] for an image of `aspect` = width / height.
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
         self.projection(aspect) * self.view()
     }

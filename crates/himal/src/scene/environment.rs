@@ -14,6 +14,8 @@ use crate::math::sh::Sh9Rgb;
 /// An environment as the scene file or the CLI names it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvironmentDesc {
+    /// The `.hdr` or `.exr` file, or [`STUDIO`] for the generated studio
+    /// (a scene file's relative path is joined to the scene's folder).
     pub path: PathBuf,
     /// Radiance scale (the file's values are relative).
     pub intensity: f32,
@@ -25,6 +27,7 @@ pub struct EnvironmentDesc {
 }
 
 impl EnvironmentDesc {
+    /// The environment in `path` at intensity 1, unrotated, without the analytic sun.
     pub fn new(path: impl Into<PathBuf>) -> Self {
         Self {
             path: path.into(),
@@ -38,8 +41,11 @@ impl EnvironmentDesc {
 /// A loaded equirectangular image: linear RGB, rows top (+Y) to bottom.
 #[derive(Clone, Debug)]
 pub struct EnvironmentImage {
+    /// Width in texels: twice the height.
     pub width: usize,
+    /// Height in texels (at least 2).
     pub height: usize,
+    /// Radiance, row by row from the top, already scaled by the intensity and clamped to >= 0.
     pub texels: Vec<Vec3>,
     /// Rotation about +Y in radians.
     pub rotation: f32,
@@ -55,6 +61,7 @@ const MAX_ENVIRONMENT_FILE_BYTES: u64 = 2 << 30;
 pub enum EnvironmentFormat {
     /// Radiance RGBE.
     Hdr,
+    /// OpenEXR (float or half).
     Exr,
 }
 

@@ -10,26 +10,40 @@ pub enum SceneError {
     /// The scene file (or a file it references without a location) could not be read.
     #[error("{}: cannot read file: {source}", path.display())]
     Io {
+        /// The file that could not be read.
         path: PathBuf,
+        /// The I/O error.
         #[source]
         source: std::io::Error,
     },
     /// TOML syntax error, wrong type, unknown key, or a semantic problem at a known place.
     #[error("{file}:{line}:{column}: {message}")]
     At {
+        /// The file the text came from.
         file: String,
+        /// 1-based line of the problem.
         line: usize,
+        /// 1-based column of the problem.
         column: usize,
+        /// What is wrong.
         message: String,
     },
     /// A problem without a place in the text.
     #[error("{file}: {message}")]
-    Invalid { file: String, message: String },
+    Invalid {
+        /// The file at fault, or what stands in for it (e.g. the memory-budget variable).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// `Scene::camera` was asked for a name the scene does not have.
     #[error("{file}: unknown camera \"{name}\" (known: {known})")]
     UnknownCamera {
+        /// The file (or `<scene>` for a scene not read from a file).
         file: String,
+        /// The camera name asked for.
         name: String,
+        /// The scene's camera names, comma separated.
         known: String,
     },
 }

@@ -13,7 +13,9 @@ use super::{MaterialDesc, Mesh};
 /// Seeded mountain-valley generator. All lengths in metres.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainNoise {
+    /// Seed of the noise (same seed, same terrain).
     pub seed: u32,
+    /// Number of noise octaves summed (more = finer detail).
     pub octaves: u32,
     /// Base frequency in cycles per metre (1/200 gives features about 200 m wide).
     pub frequency: f32,
@@ -21,7 +23,9 @@ pub struct TerrainNoise {
     pub amplitude: f32,
     /// Ridged multifractal (sharp crests, [`noise::ridged`]) instead of eroded fBm (rounded hills).
     pub ridged: bool,
+    /// Frequency multiplier between octaves (2 doubles the frequency each octave).
     pub lacunarity: f32,
+    /// Amplitude multiplier between octaves (0.5 halves each octave).
     pub gain: f32,
     /// Domain warp in metres: bends ridges and the valley's outline.
     pub warp: f32,
@@ -118,11 +122,15 @@ impl TerrainNoise {
 /// A material painted over the terrain where height and slope fall in its ranges.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainLayer {
+    /// The material painted where the layer covers.
     pub material: MaterialDesc,
+    /// Lowest height in metres the layer covers (`-inf`: no limit).
     pub min_height: f32,
+    /// Highest height in metres the layer covers (`inf`: no limit).
     pub max_height: f32,
     /// Slope angles in degrees from horizontal (0 = flat, 90 = vertical).
     pub min_slope: f32,
+    /// Steepest slope covered, in degrees from horizontal (90 = no limit).
     pub max_slope: f32,
     /// Width in metres of the transition at each height limit.
     pub blend: f32,
@@ -134,6 +142,7 @@ pub struct TerrainLayer {
 }
 
 impl TerrainLayer {
+    /// A layer of `material` covering every height and slope, with hard edges and no jitter.
     pub fn new(material: MaterialDesc) -> Self {
         TerrainLayer {
             material,
@@ -185,13 +194,18 @@ fn band(x: f32, lo: f32, hi: f32, width: f32) -> f32 {
 /// the local origin; row-major with z (rows) outer, x (columns) inner.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeightGrid {
+    /// Grid columns along x (at least 2).
     pub nx: usize,
+    /// Grid rows along z (at least 2).
     pub nz: usize,
+    /// Extent along x and z in metres; vertices span -size/2..size/2.
     pub size: [f32; 2],
+    /// `nx * nz` heights in metres, row-major (row j = z index, outer).
     pub heights: Vec<f32>,
 }
 
 impl HeightGrid {
+    /// Samples `f(x, z)` (local metres) at every grid vertex.
     pub fn from_fn(size: [f32; 2], nx: usize, nz: usize, f: impl Fn(f32, f32) -> f32) -> Self {
         let mut g = HeightGrid {
             nx,
@@ -208,6 +222,7 @@ impl HeightGrid {
         g
     }
 
+    /// A `resolution` x `resolution` grid of [`TerrainNoise::height`].
     pub fn from_noise(size: [f32; 2], resolution: usize, noise: &TerrainNoise) -> Self {
         Self::from_fn(size, resolution, resolution, |x, z| noise.height(x, z))
     }
@@ -278,6 +293,7 @@ impl HeightGrid {
         )
     }
 
+    /// Height in metres at column `i < nx`, row `j < nz`.
     pub fn h(&self, i: usize, j: usize) -> f32 {
         self.heights[j * self.nx + i]
     }

@@ -97,6 +97,7 @@ const AREA_BINS: usize = 160;
 const AREA_LOG2_MIN: f32 = -32.0;
 
 impl AreaHistogram {
+    /// Bins the triangles of a mesh by area (mesh units²) on a log2 scale, four bins per doubling.
     pub fn new(vertices: &[Vertex], indices: &[u32]) -> Self {
         let mut counts = vec![0u32; AREA_BINS];
         let p = |i: u32| {
@@ -115,6 +116,7 @@ impl AreaHistogram {
         Self { counts }
     }
 
+    /// Number of triangles binned.
     pub fn triangles(&self) -> u64 {
         self.counts.iter().map(|&c| u64::from(c)).sum()
     }
@@ -208,7 +210,9 @@ pub fn linear_scale(transform: &glam::Mat4) -> f32 {
 /// accumulated over the chain).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Level {
+    /// Triangle list into the base mesh's vertices.
     pub indices: Vec<u32>,
+    /// Geometric error of this level against the base mesh, in mesh units (accumulated over the chain).
     pub error: f32,
 }
 

@@ -102,6 +102,7 @@ pub fn gradient_noise(seed: u32, x: f32, z: f32) -> f32 {
 /// Octave parameters shared by the fractal sums.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fractal {
+    /// Number of noise octaves summed (0 counts as 1).
     pub octaves: u32,
     /// Frequency multiplier between octaves.
     pub lacunarity: f32,

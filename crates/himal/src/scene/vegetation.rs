@@ -51,6 +51,7 @@ impl Rng {
     }
 }
 
+/// Parameters of a procedural grass field: clumps of crossed alpha-tested cards on a jittered grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GrassParams {
     /// Field extent [x, z] in metres, centred on the origin.
@@ -63,6 +64,7 @@ pub struct GrassParams {
     pub width: f32,
     /// Crossed cards per clump (2 or 3).
     pub cards: u32,
+    /// Seed of the placement and size variation (same seed, same field).
     pub seed: u32,
 }
 
@@ -74,6 +76,7 @@ impl GrassParams {
         (n(self.size[0]), n(self.size[1]), cell)
     }
 
+    /// Grid cells over `size`: the most clumps the field holds (its ragged border drops some).
     pub fn clump_count(&self) -> u64 {
         let (nx, nz, _) = self.grid();
         nx as u64 * nz as u64
@@ -141,13 +144,16 @@ fn card(b: &mut MeshBuilder, root: Vec3, across: Vec3, width: f32, height: f32, 
     b.triangle(i[0], i[2], i[3]);
 }
 
+/// Parameters of a procedural bush: leaf cards scattered in an ellipsoid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BushParams {
     /// Ellipsoid semi-axes (metres).
     pub radii: [f32; 3],
+    /// Number of leaf cards.
     pub cards: u32,
     /// Leaf card edge (metres).
     pub card_size: f32,
+    /// Seed of the card positions and orientations.
     pub seed: u32,
 }
 
@@ -262,8 +268,9 @@ pub fn alpha(pattern: super::AlphaPattern, uv: [f32; 2]) -> f32 {
     }
 }
 
-/// Sway frequencies (rad/s) and weights of `foliage_sway`.
+/// Angular frequencies (rad/s) of the two components of `foliage_sway`: 0.4 Hz and 1.1 Hz.
 pub const SWAY_OMEGA: [f32; 2] = [std::f32::consts::TAU * 0.4, std::f32::consts::TAU * 1.1];
+/// Amplitude weights of the two sway components (they sum to 1).
 pub const SWAY_WEIGHTS: [f32; 2] = [0.7, 0.3];
 
 /// `foliage_sway`: horizontal displacement of a vertex resting at world

@@ -14,33 +14,61 @@ mod embedded {
     include!(concat!(env!("OUT_DIR"), "/wgsl_sources.rs"));
 }
 
+/// Composition, parse, validation and reflection failures, located in the
+/// file and line that was written (not the composed text).
 #[derive(thiserror::Error, Debug)]
 pub enum ShaderError {
+    /// No embedded shader has this path.
     #[error("unknown shader \"{0}\"")]
     Unknown(String),
+    /// An `#import` names a module that is not in `src/shaders/`.
     #[error("{file}:{line}: unknown module \"{module}\" in #import")]
     UnknownImport {
+        /// File holding the `#import` line.
         file: String,
+        /// 1-based line of the `#import` in that file.
         line: usize,
+        /// The module name imported.
         module: String,
     },
+    /// A module imports itself through a chain of imports.
     #[error("{file}: import cycle through \"{module}\"")]
-    Cycle { file: String, module: String },
+    Cycle {
+        /// File whose import closes the cycle.
+        file: String,
+        /// The module imported again.
+        module: String,
+    },
+    /// naga could not parse the composed WGSL.
     #[error("{file}:{line}: {message}")]
     Parse {
+        /// File the failing line came from.
         file: String,
+        /// 1-based line in that file.
         line: usize,
+        /// naga's message.
         message: String,
     },
+    /// naga parsed the shader but validation (types, uniformity, limits) failed.
     #[error("{shader}: validation failed at {file}:{line}: {message}")]
     Validation {
+        /// Name of the composed shader.
         shader: String,
+        /// File the failing line came from.
         file: String,
+        /// 1-based line in that file.
         line: usize,
+        /// naga's message.
         message: String,
     },
+    /// A global binding has a type the layout reflection does not map to wgpu.
     #[error("{shader}: {message}")]
-    Reflection { shader: String, message: String },
+    Reflection {
+        /// Name of the composed shader.
+        shader: String,
+        /// What could not be reflected.
+        message: String,
+    },
 }
 
 /// Every embedded WGSL file as (path relative to `src/`, text).
@@ -58,11 +86,15 @@ pub fn source(path: &str) -> Option<&'static str> {
 
 /// A composed, parsed and validated shader.
 pub struct ComposedShader {
+    /// Name it was composed under: the embedded path or the name given to [`compose_str`].
     pub name: String,
+    /// The composed WGSL text, imported modules first.
     pub source: String,
     /// For each line of `source`: (file, 1-based line in that file).
     pub line_map: Vec<(String, usize)>,
+    /// The parsed module.
     pub module: naga::Module,
+    /// naga's validation results for [`Self::module`].
     pub info: naga::valid::ModuleInfo,
 }
 

@@ -7,22 +7,30 @@
 
 use super::{ComposedShader, ShaderError};
 
+/// One global resource binding declared in the WGSL.
 #[derive(Clone, Debug)]
 pub struct BindingInfo {
+    /// The WGSL variable name; bind groups are built by this name.
     pub name: String,
+    /// `@group` index.
     pub group: u32,
+    /// `@binding` index within the group.
     pub binding: u32,
+    /// The wgpu binding type derived from the WGSL type (see the module docs for the conventions).
     pub ty: wgpu::BindingType,
 }
 
+/// The bind-group layouts of a composed shader, reflected from its global bindings.
 #[derive(Clone, Debug)]
 pub struct ReflectedLayout {
     /// Bindings per group index, sorted by binding number.
     pub groups: Vec<Vec<BindingInfo>>,
+    /// Stages of the module's entry points; every binding is made visible to all of them.
     pub visibility: wgpu::ShaderStages,
 }
 
 impl ReflectedLayout {
+    /// Layout entries of group `group` (empty for a group the shader does not use).
     pub fn entries(&self, group: usize) -> Vec<wgpu::BindGroupLayoutEntry> {
         self.groups
             .get(group)
@@ -39,6 +47,7 @@ impl ReflectedLayout {
             .unwrap_or_default()
     }
 
+    /// The binding named `name` in any group.
     pub fn find(&self, name: &str) -> Option<&BindingInfo> {
         self.groups.iter().flatten().find(|b| b.name == name)
     }

@@ -218,7 +218,9 @@ pub struct CullLayout {
 /// The box around a chunk's objects' boxes, grown by [`ChunkBox::SLACK`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChunkBox {
+    /// Centre in world space (metres).
     pub center: glam::Vec3,
+    /// Half size per axis in metres, slack included.
     pub half_extent: glam::Vec3,
 }
 

@@ -11,15 +11,25 @@ use crate::passes::post::PostInputs;
 /// Buffers a debug view can show; `id` is the shader's `VIEW` constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DebugView {
+    /// The G-buffer's linear albedo, black for the sky.
     Albedo = 1,
+    /// World-space shading normal: raw in \[-1,1\], displayed as n * 0.5 + 0.5.
     Normal = 2,
+    /// World-space tangent (the anisotropy direction), mapped like the normal.
     Tangent = 3,
+    /// Glossiness in \[0,1\] as grey.
     Glossiness = 4,
+    /// Dielectric reflectance (F0) in \[0,1\] as grey.
     Reflectance = 5,
+    /// Metalness in \[0,1\] as grey.
     Metallic = 6,
+    /// Anisotropy in \[0,1\] as grey.
     Anisotropy = 7,
+    /// Depth: raw as stored (reverse-Z, 0 = far); displayed as log distance, white at 1 m to black at 4 km.
     Depth = 8,
+    /// Screen motion in pixels (raw); displayed with grey 0.5 as still, ±8 px to 0 and 1.
     Motion = 9,
+    /// The HDR lighting buffer: raw values, or exposure-scaled and clamped without a tone curve.
     Lighting = 10,
     /// Per-pixel luminance around the exposure (H3), log scale.
     Luminance = 11,
@@ -32,11 +42,13 @@ pub enum DebugView {
     Lod = 14,
 }
 
+/// The full-screen pass that draws a [`DebugView`] of the frame's buffers.
 pub struct DebugPass {
     program: Program,
 }
 
 impl DebugPass {
+    /// Compiles the debug view shader; pipelines are made per view and format.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         Ok(Self {
             program: Program::new(ctx, "passes/debug/view.wgsl")?,

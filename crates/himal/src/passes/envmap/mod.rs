@@ -17,6 +17,7 @@ use crate::gpu::pipeline::Program;
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{FrameGraph, TextureHandle};
 
+/// Texel format of the source and filtered cubes and of the DFG table (HDR radiance in half floats).
 pub const ENVMAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Face size of the captured and filtered cubes (the talk: 128x128x6).
 pub const ENVMAP_SIZE: u32 = 128;
@@ -40,6 +41,7 @@ struct FilterParams {
 
 /// Pipelines, the cubes and the DFG table.
 pub struct EnvMapPass {
+    /// Face size in texels of the source and filtered cubes (mip 0).
     pub size: u32,
     capture_program: Program,
     capture: wgpu::ComputePipeline,
@@ -53,7 +55,9 @@ pub struct EnvMapPass {
     filtered: wgpu::Texture,
     /// Filtered cube, all mips (what lighting samples).
     pub filtered_cube: wgpu::TextureView,
+    /// The split-sum DFG table ([`DFG_SIZE`]², x = n.v, y = perceptual roughness; r = scale A, g = bias B), computed once.
     pub dfg: wgpu::Texture,
+    /// View of [`Self::dfg`].
     pub dfg_view: wgpu::TextureView,
     /// Trilinear, clamped: for the cubes and the DFG table.
     pub sampler: wgpu::Sampler,

@@ -72,15 +72,23 @@ pub fn select_probe(
 
 /// One face's persistent G-buffer and its view uniform.
 pub struct ProbeFace {
+    /// G-buffer albedo of the face ([`ALBEDO_FORMAT`]).
     pub albedo: wgpu::Texture,
+    /// G-buffer tangent frame of the face ([`FRAME_FORMAT`]).
     pub frame: wgpu::Texture,
+    /// G-buffer material parameters of the face ([`MATERIAL_FORMAT`]).
     pub material: wgpu::Texture,
+    /// Depth of the face ([`DEPTH_FORMAT`], reverse-Z).
     pub depth: wgpu::Texture,
+    /// The face camera's [`ViewUniform`] (90° field of view, near plane [`PROBE_NEAR`]).
     pub view: wgpu::Buffer,
 }
 
+/// One environment probe: a G-buffer cube captured at a fixed point.
 pub struct Probe {
+    /// Capture point in world space (metres).
     pub position: Vec3,
+    /// The six faces in [`FACE_AXES`] order.
     pub faces: Vec<ProbeFace>,
     /// The G-buffer cube holds the scene (set after the capturing frame).
     pub captured: bool,
@@ -88,7 +96,9 @@ pub struct Probe {
 
 /// Probes of a scene and the mirror pipelines (one per face).
 pub struct ProbeSet {
+    /// One probe per position given to [`Self::new`], in that order.
     pub probes: Vec<Probe>,
+    /// Face size in texels.
     pub size: u32,
     program: Program,
     mirror: Vec<wgpu::ComputePipeline>,
@@ -121,6 +131,7 @@ fn face_texture(
 }
 
 impl ProbeSet {
+    /// Creates a probe at each of `positions` with `size`² faces (not yet captured) and the mirror pipelines.
     pub fn new(ctx: &GpuContext, positions: &[Vec3], size: u32) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/envmap/face.wgsl")?;
         let mirror = (0..6)

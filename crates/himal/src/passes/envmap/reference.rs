@@ -47,11 +47,14 @@ pub fn cube_face_uv(d: Vec3) -> (usize, Vec2) {
 /// One mip of a cube: `size`² texels per face, row-major, rows top down.
 #[derive(Clone, Debug)]
 pub struct CubeMip {
+    /// Face edge in texels.
     pub size: usize,
+    /// Linear RGB texels of the faces +X, -X, +Y, -Y, +Z, -Z.
     pub faces: [Vec<Vec3>; 6],
 }
 
 impl CubeMip {
+    /// A mip whose texel centres hold `f(direction)` (direction: unit vector through the texel centre).
     pub fn from_fn(size: usize, f: impl Fn(Vec3) -> Vec3) -> Self {
         let faces = std::array::from_fn(|face| {
             (0..size * size)

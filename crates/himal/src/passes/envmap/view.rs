@@ -17,11 +17,13 @@ pub enum EnvView {
     Mirror = 2,
 }
 
+/// The full-screen pass that draws an [`EnvView`].
 pub struct EnvViewPass {
     program: Program,
 }
 
 impl EnvViewPass {
+    /// Compiles the environment view shader; pipelines are made per view and format.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         Ok(Self {
             program: Program::new(ctx, "passes/envmap/view.wgsl")?,

@@ -15,19 +15,29 @@ use crate::passes::common::target;
 use crate::passes::cull::{ALL, Culled, FADING, List, STEADY, bind_instances};
 use crate::scene::lod::MAX_LODS;
 
+/// Albedo target: rgb linear albedo (stored sRGB-encoded), a material AO.
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Tangent-frame target: the frame's quaternion packed as its smallest three components plus the index of the largest (M3).
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
+/// Material target: glossiness, reflectance, metallic, anisotropy, each in \[0,1\] (M1).
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Motion target: previous minus current screen uv (y down), in uv units.
 pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// Depth target: reverse-Z, 1 at the near plane and 0 at the far one (infinity for a perspective camera).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// Handles of the G-buffer targets after the pass.
 #[derive(Clone, Copy, Debug)]
 pub struct GBuffer {
+    /// Albedo and material AO ([`ALBEDO_FORMAT`]).
     pub albedo: TextureHandle,
+    /// Packed tangent frame ([`FRAME_FORMAT`]).
     pub frame: TextureHandle,
+    /// Material parameters ([`MATERIAL_FORMAT`]).
     pub material: TextureHandle,
+    /// Screen motion ([`MOTION_FORMAT`]).
     pub motion: TextureHandle,
+    /// Depth ([`DEPTH_FORMAT`]).
     pub depth: TextureHandle,
 }
 
@@ -46,7 +56,9 @@ pub enum MaterialType {
 /// environment (texture mip bias under temporal anti-aliasing, A2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct GBufferKey {
+    /// Which shader and specialisation draws.
     pub material: MaterialType,
+    /// No back-face culling (glTF `doubleSided`, vegetation cards).
     pub double_sided: bool,
     /// Textured materials sample with mip bias -0.5.
     pub mip_bias: bool,
@@ -64,6 +76,7 @@ pub struct GBufferKey {
 pub const TEMPORAL_AA_MIP_BIAS: f32 = -0.5;
 
 impl GBufferKey {
+    /// Opaque per-vertex materials: back faces culled, no discard.
     pub const VERTEX: Self = Self {
         material: MaterialType::Vertex,
         double_sided: false,
@@ -87,6 +100,7 @@ impl GBufferKey {
         specular_aa: false,
     };
 
+    /// A glTF material's permutation: `double_sided` as the material says, `mip_bias` under TAA, `specular_aa` for E3.
     pub const fn textured(double_sided: bool, mip_bias: bool, specular_aa: bool) -> Self {
         Self {
             material: MaterialType::Textured,
@@ -157,6 +171,7 @@ impl GBufferKey {
     }
 }
 
+/// Rasterises the visible scene into the G-buffer targets, one pipeline per [`GBufferKey`].
 pub struct GBufferPass {
     /// The camera's visible objects this frame (`frame::plan`).
     pub visible: VisibleLists,
@@ -173,6 +188,7 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
+    /// Compiles the per-vertex and textured G-buffer shaders; pipelines are made per key as the scene needs them.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let pass = Self {
             visible: VisibleLists::default(),

@@ -23,6 +23,7 @@ pub struct BloomInputs<'a> {
     pub exposure: BufferHandle,
 }
 
+/// H2 bloom: a bright pass and a chain of Kawase blur passes at quarter resolution, added back in the tonemap pass.
 pub struct BloomPass {
     program: Program,
     bright: wgpu::RenderPipeline,
@@ -31,6 +32,8 @@ pub struct BloomPass {
 }
 
 impl BloomPass {
+    /// Compiles the bright-pass pipeline and makes the sampler; blur pipelines
+    /// come from [`Self::blur_pipeline`], one per offset.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/post/bloom.wgsl")?;
         let targets = [target(HDR_FORMAT)];

@@ -19,16 +19,19 @@ use crate::graph::{BufferAccess, BufferHandle, FrameGraph, TextureHandle};
 
 /// Tile edge in pixels of `post.luminance` (16x16 threads, 4x4 pixels each).
 pub const TILE: u32 = 64;
+/// Reinhard's key: the scaled luminance the log-average luminance is exposed to (middle grey, 0.18).
 pub const KEY: f64 = 0.18;
 
 /// Buffers of the luminance reduction, sized for one frame size.
 pub struct LuminanceBuffers {
+    /// Per 64x64 tile: (sum of log luminance, pixel count), two f32 each.
     pub partials: wgpu::Buffer,
     /// (log average, average, tiles, pixels)
     pub result: wgpu::Buffer,
 }
 
 impl LuminanceBuffers {
+    /// Buffers for a frame of `size` = (width, height) pixels.
     pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
         let tiles = size.0.div_ceil(TILE) as u64 * size.1.div_ceil(TILE) as u64;
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
@@ -49,6 +52,7 @@ impl LuminanceBuffers {
     }
 }
 
+/// `post.luminance`: reduces the HDR image to its log-average luminance in two compute steps (tiles, then one workgroup).
 pub struct LuminancePass {
     program: Program,
     partial: wgpu::ComputePipeline,
@@ -56,6 +60,7 @@ pub struct LuminancePass {
 }
 
 impl LuminancePass {
+    /// Compiles the reduction's two compute pipelines.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/post/luminance.wgsl")?;
         let partial = program.compute_pipeline(ctx, "cs_partial", &[])?;
@@ -114,6 +119,7 @@ pub fn adapted_buffer(device: &wgpu::Device) -> wgpu::Buffer {
 }
 
 impl AdaptPass {
+    /// Compiles the adaptation compute pipeline.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let program = Program::new(ctx, "passes/post/adapt.wgsl")?;
         let pipeline = program.compute_pipeline(ctx, "cs_main", &[])?;
@@ -150,5 +156,6 @@ pub struct PostFrame<'a> {
     pub bloom_passes: Option<u32>,
     /// Expose for the adapted luminance (else for this frame's log-average).
     pub adaptation: bool,
+    /// The tonemap permutation (curve, bloom composite) this frame draws with.
     pub tonemap: TonemapKey,
 }

@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 /// H2 Kawase bloom.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BloomSettings {
+    /// Bloom on; off skips the chain and the composite (unless `--view bloom` shows it).
     pub enabled: bool,
     /// Bright-pass threshold in scaled luminance (`L = key / L_exposure * L_w`):
     /// 1.0 is the level Reinhard maps to display 0.5.
@@ -17,6 +18,7 @@ pub struct BloomSettings {
 }
 
 impl BloomSettings {
+    /// Most Kawase passes accepted (one pipeline per offset).
     pub const MAX_PASSES: u32 = 8;
 }
 
@@ -53,6 +55,7 @@ pub struct AdaptationSettings {
     pub tau_brighten: f32,
     /// Time constant in seconds when the scene gets darker.
     pub tau_darken: f32,
+    /// The time step adaptation advances by each frame.
     pub delta: FrameDelta,
 }
 
@@ -82,6 +85,9 @@ pub struct PostUniform {
 }
 
 impl PostUniform {
+    /// Packs the frame's post parameters: `key` (display value of the average),
+    /// exposure bias in EV, white point, bloom and adaptation settings, the time
+    /// step in seconds and whether adaptation restarts from this frame's average.
     pub fn new(
         key: f32,
         exposure_ev: f32,

@@ -5,6 +5,7 @@ use glam::Vec3;
 /// Offset inside the logarithm (Reinhard 2002's delta), as in the shader.
 pub const DELTA: f64 = 1e-4;
 
+/// Relative luminance of linear Rec.709 RGB (weights 0.2126, 0.7152, 0.0722), as `color.wgsl`.
 pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
@@ -138,19 +139,27 @@ const AGX_OUTSET: [[f32; 3]; 3] = [
 /// then the 2.4 power back to display-linear.
 #[derive(Clone, Copy, Debug)]
 pub struct AgxCurve {
+    /// Lowest encoded exposure: log2(0.18) - 10 (EV, maps to x = 0).
     pub min_ev: f32,
+    /// EV span of the log2 encoding: 16.5 (x = 1 at log2(0.18) + 6.5).
     pub range_ev: f32,
+    /// Normalised log2 position of middle grey 0.18: 10 / 16.5.
     pub x_pivot: f32,
+    /// Sigmoid output at the pivot: 0.18^(1/2.4), so middle grey stays 0.18 after the 2.4 power.
     pub y_pivot: f32,
-    /// Sigmoid scale below and above the pivot (solved for y(0) = 0, y(1) = 1).
+    /// Sigmoid scale below the pivot (solved for y(0) = 0).
     pub k_bottom: f32,
+    /// Sigmoid scale above the pivot (solved for y(1) = 1).
     pub k_top: f32,
 }
 
 impl AgxCurve {
+    /// Slope of the sigmoid at the pivot.
     pub const SLOPE: f32 = 2.4;
+    /// Power of the sigmoid's shoulder and toe (higher = sharper).
     pub const POWER: f32 = 1.5;
 
+    /// Solves the curve for its defining parameters (see the type's docs).
     pub fn new() -> AgxCurve {
         let (below, above) = (10.0f32, 6.5f32);
         let x_p = below / (below + above);
@@ -222,8 +231,11 @@ pub fn adapt(l_a: f64, l_avg: f64, dt: f64, tau_brighten: f64, tau_darken: f64) 
 /// An RGB image, row-major, for the bloom twins.
 #[derive(Clone, Debug)]
 pub struct Image {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// `width * height` linear RGB values, row by row.
     pub pixels: Vec<Vec3>,
 }
 
@@ -246,6 +258,7 @@ impl Image {
         top.lerp(bottom, ty)
     }
 
+    /// Sum of all pixels (energy checks).
     pub fn sum(&self) -> Vec3 {
         self.pixels.iter().fold(Vec3::ZERO, |a, &b| a + b)
     }

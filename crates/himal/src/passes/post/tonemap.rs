@@ -25,6 +25,7 @@ pub enum Tonemapper {
 }
 
 impl Tonemapper {
+    /// Every curve, in the order the viewer cycles them (and the shader's `TONEMAP` ids).
     pub const ALL: [Tonemapper; 4] = [
         Tonemapper::Reinhard,
         Tonemapper::Neutral,
@@ -32,6 +33,7 @@ impl Tonemapper {
         Tonemapper::Agx,
     ];
 
+    /// The `--tonemap` name (`reinhard`, `neutral`, `aces`, `agx`).
     pub fn name(self) -> &'static str {
         match self {
             Tonemapper::Reinhard => "reinhard",
@@ -68,9 +70,11 @@ impl FromStr for Tonemapper {
 /// The tone-map permutation: which code the shader keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub struct TonemapKey {
+    /// Add the bloom chain's output before the curve.
     pub bloom: bool,
     /// Reinhard's white point (eq. 4); only with [`Tonemapper::Reinhard`].
     pub white_point: bool,
+    /// The tone curve.
     pub mapper: Tonemapper,
 }
 
@@ -108,20 +112,24 @@ impl TonemapKey {
 /// What `post.tonemap` and the debug views read besides the HDR image.
 #[derive(Clone, Copy)]
 pub struct PostInputs<'a> {
+    /// The frame's [`super::PostUniform`] (key, white point, exposure bias, bloom strength).
     pub post: &'a wgpu::Buffer,
     /// Adapted luminance or this frame's log-average.
     pub exposure: BufferHandle,
     /// Bloom chain output; `None`: no bloom (the shader skips it).
     pub bloom: Option<TextureHandle>,
+    /// Linear clamp sampler for upsampling the bloom.
     pub sampler: &'a wgpu::Sampler,
 }
 
+/// `post.tonemap`: exposes the HDR image, adds bloom, applies the tone curve and writes the display target.
 pub struct TonemapPass {
     program: Program,
     format: wgpu::TextureFormat,
 }
 
 impl TonemapPass {
+    /// Compiles the tonemap shader for targets of `output_format` and makes the default permutation.
     pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         let pass = Self {
             program: Program::new(ctx, "passes/post/tonemap.wgsl")?,

@@ -22,14 +22,20 @@ pub struct AtlasRequest {
 /// A square tile of the atlas for one projector, in texels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct AtlasTile {
+    /// The requesting light's id ([`AtlasRequest::light`]).
     pub light: u32,
+    /// Projector of that light: the cube face 0..6 of a point light, 0 for a spot.
     pub face: u32,
+    /// Left edge in atlas texels.
     pub x: u32,
+    /// Top edge in atlas texels.
     pub y: u32,
+    /// Edge in texels (a power of two between the allocator's min and max tile).
     pub size: u32,
 }
 
 impl AtlasTile {
+    /// Whether the two tiles share any texel.
     pub fn overlaps(&self, o: &AtlasTile) -> bool {
         self.x < o.x + o.size
             && o.x < self.x + self.size
@@ -49,7 +55,9 @@ pub fn importance(position: Vec3, range: f32, camera: Vec3) -> f32 {
 pub struct AtlasAllocator {
     /// Atlas edge in texels (a power of two).
     pub size: u32,
+    /// Smallest tile edge in texels (a power of two).
     pub min_tile: u32,
+    /// Largest tile edge in texels (a power of two).
     pub max_tile: u32,
     /// Tile edge each light had last frame (hysteresis).
     previous: HashMap<u32, u32>,

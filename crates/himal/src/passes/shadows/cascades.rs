@@ -19,6 +19,7 @@ pub struct ShadowFit {
     /// Light-view box covered: x, y extents and z from the far plane (min)
     /// to the near plane (max, toward the sun).
     pub min: Vec3,
+    /// Max corner of that box (z at the near plane, toward the sun).
     pub max: Vec3,
     /// World size of one texel (m).
     pub texel_world: f32,

@@ -10,7 +10,9 @@ use super::cascades::ShadowFit;
 /// the GPU-culled view that adds its lists (V6, `passes::cull`).
 #[derive(Clone, Debug, Default)]
 pub struct DrawLists {
+    /// Opaque draws recorded on the CPU.
     pub opaque: Vec<Draw>,
+    /// Alpha-tested vegetation draws (their own pipeline).
     pub vegetation: Vec<Draw>,
     /// `Some((view, calls))`: also draw view `view` of the culled lists,
     /// `calls` multi-draws.
@@ -23,10 +25,12 @@ pub struct DrawLists {
 }
 
 impl DrawLists {
+    /// Number of CPU draws (opaque and vegetation; the GPU and pool views not counted).
     pub fn len(&self) -> usize {
         self.opaque.len() + self.vegetation.len()
     }
 
+    /// Whether there is no CPU draw.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -38,6 +42,7 @@ impl DrawLists {
             + self.gpu_view.map_or(0, |(_, calls)| calls)
     }
 
+    /// Empties both lists and drops the GPU and pool views.
     pub fn clear(&mut self) {
         self.opaque.clear();
         self.vegetation.clear();
@@ -59,6 +64,7 @@ pub struct Casters {
 }
 
 impl Casters {
+    /// Swept bounds, motion flags and mesh bounds of every object of `scene` (in GPU order), and the scene's bounds.
     pub fn from_scene(scene: &Scene) -> Self {
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut moving = Vec::with_capacity(scene.objects.len());

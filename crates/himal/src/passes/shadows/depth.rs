@@ -27,12 +27,14 @@ const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowViewGpu {
+    /// World to the light's clip space (a sun cascade, static or hero map, or a local-light projector; column-major).
     pub light_view_proj: [[f32; 4]; 4],
     /// x animation time (s)
     pub time: [f32; 4],
 }
 
 impl ShadowViewGpu {
+    /// The uniform for one light view at animation time `time_s` (seconds, for swaying vegetation).
     pub fn new(light_view_proj: Mat4, time_s: f32) -> Self {
         Self {
             light_view_proj: light_view_proj.to_cols_array_2d(),
@@ -43,6 +45,7 @@ impl ShadowViewGpu {
 
 /// Opaque and vegetation pipelines writing one depth format.
 pub struct DepthPipelines {
+    /// Opaque casters: position only, no fragment stage, both faces.
     pub opaque: wgpu::RenderPipeline,
     /// Alpha-tested, swaying vegetation: blades cast shadows, not cards.
     pub vegetation: wgpu::RenderPipeline,
@@ -51,6 +54,7 @@ pub struct DepthPipelines {
 }
 
 impl DepthPipelines {
+    /// The three pipelines of `program` writing depth of `format` (32-bit cascades or the 16-bit static map).
     pub fn new(
         ctx: &GpuContext,
         program: &Program,

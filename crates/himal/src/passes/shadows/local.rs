@@ -15,9 +15,13 @@ use crate::scene::{Aabb, LightDesc, LightKind};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LocalLightGpu {
+    /// xyz world position (m), w range (m): the light reaches zero there.
     pub position_range: [f32; 4],
+    /// rgb colour times intensity in klux at 1 m, w 0 for a point light, 1 for a spot.
     pub color_kind: [f32; 4],
+    /// xyz unit spot axis (world), w cosine of the outer half angle.
     pub direction_cos_outer: [f32; 4],
+    /// x cosine of the inner half angle, y shadow-mask channel (0 none, 1..3 = G, B, A), z first atlas tile, w unused.
     pub params: [f32; 4],
 }
 
@@ -25,8 +29,11 @@ pub struct LocalLightGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowTileGpu {
+    /// World to the projector's clip space (perspective, depth 0 at the near plane to 1 at the range).
     pub view_proj: [[f32; 4]; 4],
+    /// xy atlas uv of the tile's corner, zw its uv size.
     pub rect: [f32; 4],
+    /// x world texel size per metre of distance, yzw unused.
     pub info: [f32; 4],
 }
 
@@ -38,8 +45,11 @@ pub const PROJECTOR_NEAR: f32 = 0.05;
 
 /// One projector this frame: its tile, matrix and draws.
 pub struct Projector {
+    /// Its tile of the atlas.
     pub tile: AtlasTile,
+    /// World to the projector's clip space (see [`projector`]).
     pub view_proj: Mat4,
+    /// Casters inside the projector's frustum.
     pub draws: DrawLists,
 }
 
@@ -84,8 +94,11 @@ pub fn projector(light: &LightDesc, face: u32, size: u32) -> (Mat4, f32) {
 
 /// The light list and this frame's projectors.
 pub struct LocalPlan {
+    /// Every local light as the lighting pass reads it, in scene order.
     pub lights: Vec<LocalLightGpu>,
+    /// One atlas tile per projector, in projector order.
     pub tiles: Vec<ShadowTileGpu>,
+    /// This frame's projectors: the cube faces of shadowed point lights, the frusta of shadowed spots.
     pub projectors: Vec<Projector>,
 }
 

@@ -41,6 +41,8 @@ pub use settings::{ShadowMode, ShadowSettings, ShadowView};
 /// (the world's terrain): a node after cascade `layer`'s, drawing with that
 /// cascade's view uniform.
 pub trait CascadeCaster {
+    /// Adds a node after cascade `layer`'s that draws this geometry into
+    /// `cascades` (the cascade array) with that cascade's `view` uniform; returns the new version.
     fn add_cascade<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
@@ -147,6 +149,8 @@ pub struct ShadowStats {
     pub static_texels: u64,
 }
 
+/// Sun and local-light shadows: the S1 cascades (with the world's static and
+/// hero maps), the S3 projector atlas, and the screen-space shadow mask lighting reads.
 pub struct ShadowPass {
     depth_program: Program,
     depth32: DepthPipelines,
@@ -226,6 +230,7 @@ fn layer_view_desc(layer: u32) -> wgpu::TextureViewDescriptor<'static> {
 }
 
 impl ShadowPass {
+    /// Compiles the depth, mask and view pipelines, makes the sun view uniforms and takes `scene`'s casters.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
         let depth_program = Program::new(ctx, "passes/shadows/depth.wgsl")?;
         let depth32 = DepthPipelines::new(ctx, &depth_program, SHADOW_FORMAT)?;

@@ -34,8 +34,11 @@ pub fn rotation_angle(cell: Vec2) -> f32 {
 
 /// A depth map on the CPU (row-major, texel (x, y) at `depth[y * width + x]`).
 pub struct DepthMap<'a> {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// `width * height` depths as the map stores them (0 nearest the light .. 1).
     pub depth: &'a [f32],
 }
 

@@ -6,6 +6,7 @@ use crate::Error;
 /// = 0 also turns shadows off).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ShadowMode {
+    /// No sun shadows: the sun lights everything.
     Off,
     /// S1: four dynamic cascades.
     #[default]
@@ -32,6 +33,7 @@ impl std::str::FromStr for ShadowMode {
 /// Everything the shadow passes need besides the cascade edge.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadowSettings {
+    /// Which sun shadow maps are drawn.
     pub mode: ShadowMode,
     /// Cascades cover view distances [camera near, `max_distance`] (m).
     pub max_distance: f32,
@@ -72,6 +74,7 @@ impl Default for ShadowSettings {
 }
 
 impl ShadowSettings {
+    /// Checks every value is in its range (distance > 1 m, lambda in 0..1, resolutions in range); the error names the value.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: String| Err(Error::InvalidSettings(what));
         if !(self.max_distance > 1.0 && self.max_distance.is_finite()) {

@@ -46,6 +46,7 @@ pub struct StaticUpdate {
     pub clear: bool,
     /// Which of the two maps is written.
     pub target: usize,
+    /// The sun view the slice is rendered with (the fill's fit).
     pub fit: ShadowFit,
 }
 

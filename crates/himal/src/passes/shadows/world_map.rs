@@ -74,13 +74,16 @@ fn enqueue(queue: &mut Vec<Rect>, r: Rect) -> bool {
 /// The world's static map: extent, tiles of a fill, caster heights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldMap {
+    /// Edge of the square the map covers around the camera, in metres ([`WORLD_EXTENT`]).
     pub extent: f32,
+    /// Tiles per side of a fill ([`WORLD_TILES`]); one is rendered per fill step.
     pub tiles: u32,
     /// Lowest and highest caster height (m).
     pub heights: (f32, f32),
 }
 
 impl WorldMap {
+    /// The default map for casters between `heights` (lowest, highest; metres).
     pub fn new(heights: (f32, f32)) -> Self {
         Self {
             extent: WORLD_EXTENT,
@@ -215,6 +218,7 @@ pub struct WorldMapState {
 }
 
 impl WorldMapState {
+    /// Forgets the shown map, any fill under way and the dirty rectangles.
     pub fn reset(&mut self) {
         *self = Self::default();
     }

@@ -48,7 +48,9 @@ pub const POOL_LAYERS: u32 = 32;
 /// The debug views (`--view sky-visibility`, `--view bent-normal`); `id` is `VIEW`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SkyOccView {
+    /// The diffuse sky visibility lighting applies (SH2 along the bent normal), as grey.
     Visibility = 1,
+    /// The bent normal (mean unoccluded direction), world space, as n * 0.5 + 0.5.
     BentNormal = 2,
 }
 
@@ -87,21 +89,28 @@ pub struct SkyOccSources<'a> {
 /// frame's sector updates).
 #[derive(Clone, Copy, Debug)]
 pub struct SkyOccFrame {
+    /// The SH2 visibility pool (one array layer per resident sector).
     pub vis: TextureHandle,
+    /// The (terrain, fade) height pool, same layers.
     pub heights: TextureHandle,
 }
 
 /// The lighting bindings of the pool (views owned by the pass).
 pub struct SkyOccBindings<'a> {
+    /// The 32x32 sector table: per slot (sector x, sector z, pool layer, valid), sectors wrapped modulo 32.
     pub table: &'a wgpu::TextureView,
+    /// SH2 visibility per texel, an array layer per resident sector.
     pub vis: &'a wgpu::TextureView,
+    /// (terrain, fade) heights in metres per texel, same layers.
     pub heights: &'a wgpu::TextureView,
+    /// Bilinear clamp sampler for the visibility.
     pub sampler: &'a wgpu::Sampler,
 }
 
 /// One sector's results read back (tests): row-major [`SECTOR_TEXELS`]².
 #[derive(Clone, Debug)]
 pub struct SectorReadback {
+    /// SH2 visibility per texel (coefficients L00, L1-1, L10, L11).
     pub sh: Vec<Vec4>,
     /// (terrain, fade) heights.
     pub heights: Vec<Vec2>,
@@ -111,6 +120,8 @@ pub struct SectorReadback {
     pub blurred: Vec<f32>,
 }
 
+/// L2 sky occlusion: renders sector height fields top-down, turns them into
+/// SH2 visibility in a pooled texture array, and keeps the sector table lighting reads.
 pub struct SkyOccPass {
     height_program: Program,
     height_pipeline: wgpu::RenderPipeline,
@@ -137,10 +148,12 @@ pub struct SkyOccPass {
     /// The culling view of this frame's sectors (`frame::plan` sets it).
     pub culled_view: Option<u32>,
     jobs: Vec<Job>,
+    /// What the pass did in the last frame planned.
     pub stats: SkyOccStats,
 }
 
 impl SkyOccPass {
+    /// Compiles the height-field, blur, visibility and view pipelines and takes `scene`'s object bounds and flags.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
         let height_program = Program::new(ctx, "passes/skyocc/heightfield.wgsl")?;
         let height_pipeline = resources::height_pipeline(ctx, &height_program)?;

@@ -83,6 +83,7 @@ pub struct SectorPool {
 }
 
 impl SectorPool {
+    /// An empty pool of `capacity` layers (at least 1).
     pub fn new(capacity: usize) -> Self {
         Self {
             capacity: capacity.max(1),
@@ -92,6 +93,7 @@ impl SectorPool {
         }
     }
 
+    /// Number of layers.
     pub fn capacity(&self) -> usize {
         self.capacity
     }

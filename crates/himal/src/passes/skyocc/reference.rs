@@ -29,6 +29,7 @@ pub const SAMPLES: usize = 32;
 pub const MARCH_STEPS: u32 = 8;
 /// Binomial blur half width in texels (kernel 1 4 6 4 1 / 16: sigma = 1 texel = 25 cm).
 pub const BLUR_RADIUS: usize = 2;
+/// The binomial kernel 1 4 6 4 1 / 16 (sums to 1).
 pub const BLUR_WEIGHTS: [f32; 2 * BLUR_RADIUS + 1] =
     [1.0 / 16.0, 4.0 / 16.0, 6.0 / 16.0, 4.0 / 16.0, 1.0 / 16.0];
 /// Apron rendered around a sector so that samples and blur near its edge
@@ -50,6 +51,7 @@ pub const FADE_RADIUS: f32 = 2.0;
 /// L0 = 2π Y00 (1 − cos A) = √π (1 − cos A),
 /// L1 = π Y1 (1 − cos² A) = (π Y1 / 2) (1 − cos 2A).
 pub const SH_CAP_C0: f32 = 1.772_453_9;
+/// (π Y1 / 2): the L1 factor of a cap (see [`SH_CAP_C0`]).
 pub const SH_CAP_C2: f32 = 0.767_495;
 /// Y00 and the Y1 normalisation (`math/sh.rs`).
 const Y0: f32 = 0.282_095;
@@ -59,9 +61,13 @@ const Y1: f32 = 0.488_603;
 /// texel whose corner (min x, min z) is at `origin + (x, y) * texel`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeightImage {
+    /// Texels per edge.
     pub size: usize,
+    /// Texel edge in metres.
     pub texel: f32,
+    /// World (x, z) of texel (0, 0)'s min corner, in metres.
     pub origin: Vec2,
+    /// `size * size` world heights in metres, row-major (rows along z).
     pub h: Vec<f32>,
 }
 
@@ -292,7 +298,9 @@ pub fn sector_lookup(sh: &[Vec4], heights: &[Vec2], local: Vec2, y: f32) -> Vec4
 /// One sector's output texel: SH2 visibility and (terrain, fade) heights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectorTexel {
+    /// SH2 visibility (L00, L1-1, L10, L11).
     pub sh: Vec4,
+    /// (terrain, fade) heights in metres.
     pub heights: Vec2,
 }
 

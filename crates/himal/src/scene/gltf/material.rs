@@ -26,6 +26,7 @@ pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
 /// How a material's alpha is used.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlphaMode {
+    /// Alpha is ignored; the surface is fully opaque.
     Opaque,
     /// Alpha test: fragments with alpha < cutoff are discarded.
     Mask(f32),
@@ -38,6 +39,7 @@ pub enum AlphaMode {
 pub struct TextureRef {
     /// Index into [`super::PbrSet::textures`].
     pub texture: usize,
+    /// UV set read: 0 = `TEXCOORD_0`, 1 = `TEXCOORD_1` (after any `KHR_texture_transform` override).
     pub tex_coord: u32,
     /// `KHR_texture_transform` of this use of the texture.
     pub transform: Option<UvTransform>,
@@ -47,9 +49,11 @@ pub struct TextureRef {
 /// R = [cos sin; -sin cos] as the extension specifies.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UvTransform {
+    /// Translation in UV units, applied last.
     pub offset: glam::Vec2,
     /// Radians.
     pub rotation: f32,
+    /// Scale per UV axis, applied first.
     pub scale: glam::Vec2,
 }
 
@@ -64,6 +68,7 @@ impl UvTransform {
         ]
     }
 
+    /// Transforms a UV coordinate by [`Self::rows`].
     pub fn apply(&self, uv: glam::Vec2) -> glam::Vec2 {
         let [r0, r1] = self.rows();
         glam::Vec2::new(
@@ -134,18 +139,26 @@ fn uv_transform(
 /// glTF texture wrap modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Wrap {
+    /// Tile the texture (glTF `REPEAT`).
     Repeat,
+    /// Tile with every other copy mirrored (glTF `MIRRORED_REPEAT`).
     Mirror,
+    /// Clamp to the edge texels (glTF `CLAMP_TO_EDGE`).
     Clamp,
 }
 
 /// A sampler: wrap per axis, magnification / minification / mip filters (linear = true).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SamplerDesc {
+    /// Wrap mode along u.
     pub wrap_u: Wrap,
+    /// Wrap mode along v.
     pub wrap_v: Wrap,
+    /// Bilinear magnification (false: nearest).
     pub mag_linear: bool,
+    /// Bilinear minification within a level (false: nearest).
     pub min_linear: bool,
+    /// Blend between mip levels (false: nearest level).
     pub mip_linear: bool,
     /// False for NEAREST / LINEAR min filters: only level 0 is sampled.
     pub mipmaps: bool,
@@ -170,43 +183,57 @@ impl Default for SamplerDesc {
 pub struct TextureSlot {
     /// Index into [`super::PbrSet::images`].
     pub image: usize,
+    /// How the image is sampled.
     pub sampler: SamplerDesc,
 }
 
 /// A decoded image, 8-bit RGBA, rows top to bottom (glTF uv (0,0) is the top-left).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageData {
+    /// The glTF image's name, else a label such as `image 3 "wood.png"`.
     pub name: String,
+    /// Width in pixels (1..=the texture size limit).
     pub width: u32,
+    /// Height in pixels (1..=the texture size limit).
     pub height: u32,
+    /// `width * height * 4` bytes, RGBA8, as stored (sRGB or linear depends on the slot using it).
     pub rgba8: Vec<u8>,
 }
 
 /// A glTF metallic-roughness material with its extensions, factors linear.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PbrMaterial {
+    /// The glTF material's name, else `material<index>`.
     pub name: String,
     /// Linear base colour and alpha.
     pub base_color: Vec4,
+    /// Metalness factor in \[0,1\] (multiplies the texture's B channel).
     pub metallic: f32,
     /// Perceptual roughness; himal glossiness = 1 - roughness.
     pub roughness: f32,
     /// Linear emitted colour times KHR_materials_emissive_strength.
     pub emissive: Vec3,
+    /// Scale of the normal map's x and y (glTF `normalTexture.scale`).
     pub normal_scale: f32,
+    /// How much the occlusion texture darkens, in \[0,1\] (glTF `occlusionTexture.strength`).
     pub occlusion_strength: f32,
+    /// How alpha is used (glTF `alphaMode` and `alphaCutoff`).
     pub alpha_mode: AlphaMode,
+    /// glTF `doubleSided`: drawn without back-face culling.
     pub double_sided: bool,
     /// KHR_materials_anisotropy `anisotropyStrength` in [0, 1].
     pub anisotropy_strength: f32,
     /// KHR_materials_anisotropy `anisotropyRotation` (radians, counter-clockwise from +u toward +v... in the tangent frame).
     pub anisotropy_rotation: f32,
+    /// sRGB base colour and linear alpha, multiplied by `base_color`.
     pub base_color_texture: Option<TextureRef>,
     /// G roughness, B metallic.
     pub metallic_roughness_texture: Option<TextureRef>,
+    /// Tangent-space normal map (RGB = xyz * 0.5 + 0.5).
     pub normal_texture: Option<TextureRef>,
     /// R occlusion.
     pub occlusion_texture: Option<TextureRef>,
+    /// sRGB emissive colour, multiplied by `emissive`.
     pub emissive_texture: Option<TextureRef>,
     /// RG direction in [-1, 1] (tangent, bitangent), B strength.
     pub anisotropy_texture: Option<TextureRef>,

@@ -37,6 +37,7 @@ const HEIGHT_LIMIT: f32 = 20_000.0;
 /// What a scene file with a `[world]` table describes.
 #[derive(Clone, Debug)]
 pub struct WorldFile {
+    /// The world: shape or height map, placement rules, streaming and pool sizes.
     pub desc: WorldDesc,
     /// The file's `[[camera]]`s, in file order.
     pub cameras: Vec<NamedCamera>,

@@ -93,11 +93,15 @@ impl Default for StreamSettings {
 pub struct WorldDesc {
     /// Sectors per side (160: 10.24 km).
     pub sectors: u16,
+    /// Parameters of the procedural height function (also the snow and tree lines for an image).
     pub shape: WorldShape,
+    /// Procedural heights or a user's height map.
     pub source: HeightSource,
     /// What sectors place (rocks, trees, village parts).
     pub rules: PlacementRules,
+    /// Streaming radius, workers and upload budget.
     pub stream: StreamSettings,
+    /// Capacities of the fixed GPU pools.
     pub pools: PoolSizes,
     /// Spacing of the whole-world coarse height grid (a multiple of 1 m
     /// dividing the sector size), what terrain beyond the streamed tiles reads.
@@ -121,19 +125,24 @@ impl Default for WorldDesc {
 /// A world ready to generate sectors: its description and height function.
 #[derive(Clone, Debug)]
 pub struct World {
+    /// The description it was made from.
     pub desc: WorldDesc,
+    /// The height function, shared with the streaming workers.
     pub terrain: Arc<WorldTerrain>,
     /// Min corner (x, z); the world is centred on the origin.
     pub origin: Vec2,
     /// Cameras placed from the terrain ([`path::cameras`]), after any the
     /// scene file names ([`World::with_cameras`]).
     pub cameras: Vec<NamedCamera>,
+    /// Camera flight paths; [`World::new`] adds one across the world.
     pub paths: Vec<FlightPath>,
     /// The sun [`World::scene`] gives the frame (the scene file's `[sun]`).
     pub sun: SunDesc,
 }
 
 impl World {
+    /// A world from `desc`, centred on the origin, with terrain-placed cameras,
+    /// the flight path and the default sun.
     pub fn new(desc: WorldDesc) -> World {
         let extent = desc.sectors as f32 * SECTOR_SIZE;
         let origin = Vec2::splat(-extent * 0.5);

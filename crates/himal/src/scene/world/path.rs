@@ -9,7 +9,9 @@ use crate::scene::{Camera, NamedCamera};
 /// A camera path: a Catmull-Rom spline through `points`, flown at `speed`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlightPath {
+    /// Name `himal bench --path` selects it by.
     pub name: String,
+    /// Control points in world metres, flown in order.
     pub points: Vec<Vec3>,
     /// Metres per second.
     pub speed: f32,
@@ -18,6 +20,7 @@ pub struct FlightPath {
 }
 
 impl FlightPath {
+    /// A path through `points` flown at `speed` m/s; precomputes the chord lengths.
     pub fn new(name: impl Into<String>, points: Vec<Vec3>, speed: f32) -> FlightPath {
         let mut lengths = vec![0.0];
         for w in points.windows(2) {

@@ -12,6 +12,7 @@ pub struct SlotPool {
 }
 
 impl SlotPool {
+    /// A pool of `capacity` free slots.
     pub fn new(capacity: u32) -> Self {
         SlotPool {
             capacity,
@@ -19,18 +20,22 @@ impl SlotPool {
         }
     }
 
+    /// Number of slots, fixed at creation.
     pub fn capacity(&self) -> u32 {
         self.capacity
     }
 
+    /// Slots handed out.
     pub fn used(&self) -> u32 {
         self.capacity - self.free.len() as u32
     }
 
+    /// Slots free.
     pub fn available(&self) -> u32 {
         self.free.len() as u32
     }
 
+    /// The lowest free slot, or `None` when the pool is full.
     pub fn alloc(&mut self) -> Option<u32> {
         self.free.pop()
     }
@@ -87,6 +92,7 @@ pub struct DensePool<K: Copy + Eq> {
 }
 
 impl<K: Copy + Eq> DensePool<K> {
+    /// An empty region of `capacity` slots.
     pub fn new(capacity: u32) -> Self {
         DensePool {
             capacity,
@@ -94,14 +100,17 @@ impl<K: Copy + Eq> DensePool<K> {
         }
     }
 
+    /// Number of slots, fixed at creation.
     pub fn capacity(&self) -> u32 {
         self.capacity
     }
 
+    /// Instances held: slots `0..live` are in use.
     pub fn live(&self) -> u32 {
         self.owner.len() as u32
     }
 
+    /// Slots free.
     pub fn available(&self) -> u32 {
         self.capacity - self.live()
     }

@@ -16,7 +16,9 @@ pub const TILE_RES: usize = 65;
 /// A sector's column (x, west to east) and row (z, north to south).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct SectorCoord {
+    /// Column, 0 at the west (min x) edge, below the world's sector count.
     pub x: u16,
+    /// Row, 0 at the north (min z) edge, below the world's sector count.
     pub z: u16,
 }
 
@@ -24,12 +26,19 @@ pub struct SectorCoord {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum InstanceKind {
+    /// A boulder (unit size, noise seed 11); instances scale it.
     Rock0,
+    /// A second boulder shape (noise seed 23).
     Rock1,
+    /// A third boulder shape (noise seed 37).
     Rock2,
+    /// A house's walls: a unit box scaled to the house.
     HouseWalls,
+    /// A house's roof: a unit prism scaled to the house.
     Roof,
+    /// A crop field: a 1 x 1 m patch of crop rows, scaled to the field.
     Field,
+    /// A 4 m fence segment (two posts, two rails).
     Fence,
     /// Where a forest tree stands; the vegetation issue replaces the mesh.
     Tree,
@@ -38,6 +47,7 @@ pub enum InstanceKind {
 }
 
 impl InstanceKind {
+    /// Every kind, in the order of their GPU instance regions and [`super::PoolSizes::instances`].
     pub const ALL: [InstanceKind; 9] = [
         InstanceKind::Rock0,
         InstanceKind::Rock1,
@@ -61,6 +71,7 @@ impl InstanceKind {
         }
     }
 
+    /// Short lower-case name (`rock0`, `house`, `tree`...), as a scene file's pool sizes name the kind.
     pub fn name(self) -> &'static str {
         match self {
             InstanceKind::Rock0 => "rock0",
@@ -80,6 +91,7 @@ impl InstanceKind {
 /// about +Y, size, bending, tint).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Instance {
+    /// Which shared mesh it draws.
     pub kind: InstanceKind,
     /// World position of the mesh's local origin.
     pub position: Vec3,
@@ -107,12 +119,16 @@ impl Instance {
 /// A generated sector: what streaming uploads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SectorData {
+    /// Which sector this is.
     pub coord: SectorCoord,
     /// `TILE_RES`^2 heights, row-major (z rows outer), sample (0, 0) at
     /// the sector's min corner.
     pub heights: Vec<f32>,
+    /// Lowest of [`Self::heights`] in metres (the tile's bounds for culling).
     pub min_height: f32,
+    /// Highest of [`Self::heights`] in metres.
     pub max_height: f32,
+    /// Everything the sector places: rocks, trees, village parts, river stretches.
     pub instances: Vec<Instance>,
 }
 
@@ -135,9 +151,11 @@ pub struct PlacementRules {
     pub tree_density: f32,
     /// Steepest ground a tree stands on (degrees from horizontal).
     pub tree_max_slope: f32,
-    /// Villages' houses (walls and roofs), fields and the fences around the fields.
+    /// Place villages' houses (walls and roofs).
     pub houses: bool,
+    /// Place villages' fields.
     pub fields: bool,
+    /// Place the fences around the fields.
     pub fences: bool,
 }
 

@@ -41,6 +41,7 @@ pub const KINDS: usize = InstanceKind::ALL.len();
 /// Where a resident sector lives in the GPU pools.
 #[derive(Clone, Debug)]
 pub struct Residency {
+    /// The generated sector: heights and instances.
     pub data: Arc<SectorData>,
     /// Layer of the terrain tile array.
     pub tile: u32,
@@ -54,35 +55,48 @@ pub struct Residency {
 /// A sector whose terrain tile to write (its instances are in `dirty`).
 #[derive(Clone, Debug)]
 pub struct Upload {
+    /// The sector to write.
     pub data: Arc<SectorData>,
+    /// Layer of the terrain tile array to write its heights into.
     pub tile: u32,
 }
 
 /// A sector whose tile is free again.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Eviction {
+    /// The sector released.
     pub coord: SectorCoord,
+    /// The tile array layer it held.
     pub tile: u32,
 }
 
 /// This frame's streaming figures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StreamStats {
+    /// Sectors within the streaming radius of the camera.
     pub wanted: u32,
     /// Wanted sectors not yet resident.
     pub missing: u32,
+    /// Sectors in the pools after this update.
     pub resident: u32,
     /// Requested from the workers, not yet applied.
     pub in_flight: u32,
+    /// Terrain tile layers in use.
     pub tiles_used: u32,
+    /// Terrain tile layers in the pool (its capacity).
     pub tiles_total: u32,
-    /// Live instances in all kinds' regions, and their capacity.
+    /// Live instances in all kinds' regions.
     pub instances: u32,
+    /// Instance slots in all kinds' regions (the pools' capacity).
     pub instances_total: u32,
     /// Instance slots rewritten this frame (new, moved or emptied).
     pub instance_writes: u32,
+    /// Sectors placed in the pools this frame.
     pub uploaded: u32,
+    /// Bytes those sectors upload (heights and instance records): at most the
+    /// per-frame budget, except that one sector always passes.
     pub upload_bytes: u64,
+    /// Sectors released this frame.
     pub evicted: u32,
     /// Wanted sectors beyond the pools' capacity (the radius is too large for them).
     pub over_capacity: u32,
@@ -93,13 +107,16 @@ pub struct StreamStats {
 /// The frame's work for the renderer.
 #[derive(Clone, Debug, Default)]
 pub struct StreamUpdate {
+    /// Sectors released this frame; apply them before the uploads, which may reuse their tiles.
     pub evictions: Vec<Eviction>,
+    /// Sectors placed this frame: their terrain tiles to write.
     pub uploads: Vec<Upload>,
     /// Per kind: slots whose content changed, sorted, once each; a slot at
     /// or beyond `live[kind]` is empty now ([`Streamer::instance`]).
     pub dirty: Vec<Vec<u32>>,
     /// Per kind: live instances (packed at the front of the region).
     pub live: Vec<u32>,
+    /// This frame's figures.
     pub stats: StreamStats,
 }
 
@@ -109,7 +126,9 @@ pub struct StreamUpdate {
 /// (releases of an update first). No GPU here: a listener queues its own
 /// work for its pass's planning.
 pub trait SectorListener: Send {
+    /// A sector was placed in the pools (called after this update's evictions).
     fn loaded(&mut self, sector: &Arc<SectorData>);
+    /// A sector was released from the pools.
     fn evicted(&mut self, sector: SectorCoord);
 }
 
@@ -204,6 +223,7 @@ impl Streamer {
         }
     }
 
+    /// The world being streamed.
     pub fn world(&self) -> &World {
         &self.world
     }

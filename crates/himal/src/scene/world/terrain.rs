@@ -13,6 +13,7 @@ use crate::scene::noise::{self, Fractal};
 /// Shape parameters of the procedural world (metres).
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldShape {
+    /// Seed of every noise and village draw (same seed, same world).
     pub seed: u32,
     /// Peak height of the tallest massifs above the river.
     pub mountain_height: f32,
@@ -26,6 +27,7 @@ pub struct WorldShape {
     pub river_rise: f32,
     /// Half width of the river channel.
     pub river_width: f32,
+    /// Depth of the river bed below the water surface at the centre line.
     pub river_depth: f32,
     /// Distance from the river over which the valley floor rises into the land.
     pub valley_width: f32,
@@ -40,6 +42,7 @@ pub struct WorldShape {
     pub village_max_rise: f32,
     /// Level ground radius of a village, and the blend back to the land.
     pub village_radius: f32,
+    /// Width of the bank from a village's level ground back to the natural land.
     pub village_blend: f32,
     /// Height above which snow lies (jittered by the terrain shader).
     pub snow_line: f32,
@@ -84,7 +87,9 @@ pub enum HeightSource {
 /// A village: levelled ground at `height` around `center`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Village {
+    /// Centre (x, z) in world metres.
     pub center: Vec2,
+    /// Height of the levelled ground in metres.
     pub height: f32,
     /// Direction of its main street (radians from +x).
     pub street: f32,
@@ -118,10 +123,13 @@ impl RiverRow {
 /// a few hundred samples).
 #[derive(Clone, Debug)]
 pub struct WorldTerrain {
+    /// Shape parameters of the procedural heights (and the snow and tree lines).
     pub shape: WorldShape,
+    /// Procedural heights or a height map.
     pub source: HeightSource,
     /// World extent: min corner and edge length (metres).
     pub origin: Vec2,
+    /// Edge length of the square world in metres.
     pub extent: f32,
     /// One entry per village cell (row-major, z outer), `None` where none stands.
     villages: Vec<Option<Village>>,
