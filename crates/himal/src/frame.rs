@@ -296,6 +296,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     passes.gbuffer.lod_view = lod_view;
     let terrain = passes.terrain.as_mut().map(|t| {
         t.lod_view = lod_view;
+        t.specular_aa = settings.specular_aa;
         let fits = shadows.fits.iter().map(|f| f.light_view_proj);
         let sun_views: Vec<Mat4> = fits.chain(shadows.static_tiles.iter().copied()).collect();
         t.prepare(

@@ -14,7 +14,9 @@ use himal::gpu_scene::SceneGpu;
 use himal::gpu_scene::uniforms::ViewUniform;
 use himal::graph::{FrameGraph, TextureAccess, TextureHandle};
 use himal::passes::cull::CullView;
-use himal::passes::gbuffer::{ALBEDO_FORMAT, DEPTH_FORMAT, FRAME_FORMAT, GBufferPass};
+use himal::passes::gbuffer::{
+    ALBEDO_FORMAT, DEPTH_FORMAT, FRAME_FORMAT, GBufferPass, MATERIAL_FORMAT,
+};
 use himal::passes::terrain::reference::{self, Heights, PATCH_VERTICES, Patch, Ranges, Selector};
 use himal::passes::terrain::{MAX_PATCHES, TerrainDesc, TerrainPass, TerrainStats, TerrainView};
 use himal::scene::{Camera, Scene, TerrainNoise};
@@ -73,6 +75,8 @@ struct Rig {
 
 struct Frame {
     albedo: Vec<[f32; 4]>,
+    /// G-buffer material: x glossiness.
+    material: Vec<[f32; 4]>,
     depth: Vec<f32>,
     /// Albedo, frame and depth bytes.
     bytes: Vec<u8>,
@@ -177,7 +181,12 @@ impl Rig {
                 view_formats: &[],
             })
         };
-        let outs = [out(ALBEDO_FORMAT), out(FRAME_FORMAT), out(DEPTH_FORMAT)];
+        let outs = [
+            out(ALBEDO_FORMAT),
+            out(FRAME_FORMAT),
+            out(DEPTH_FORMAT),
+            out(MATERIAL_FORMAT),
+        ];
         {
             let mut g = FrameGraph::new();
             g.set_frame_constants(&[("view", &self.view)]);
@@ -185,13 +194,14 @@ impl Rig {
                 .gbuffer
                 .add(ctx, &mut g, SIZE, &self.scene, None, None, false);
             let gb = self.terrain.add(ctx, &mut g, gb, &self.view);
-            let imported: Vec<TextureHandle> = ["out.albedo", "out.frame", "out.depth"]
+            let names = ["out.albedo", "out.frame", "out.depth", "out.material"];
+            let imported: Vec<TextureHandle> = names
                 .iter()
                 .zip(&outs)
                 .map(|(name, t)| g.import_texture(name, t))
                 .collect();
             let mut pass = g.add_pass("readback");
-            let src: Vec<TextureHandle> = [gb.albedo, gb.frame, gb.depth]
+            let src: Vec<TextureHandle> = [gb.albedo, gb.frame, gb.depth, gb.material]
                 .iter()
                 .map(|&h| pass.read(h, TextureAccess::CopySrc))
                 .collect();
@@ -220,9 +230,10 @@ impl Rig {
             .iter()
             .map(|t| read_texture(ctx, t, 0, 0).expect("read back"))
             .collect();
-        let bytes = data.iter().flat_map(|d| d.bytes.clone()).collect();
+        let bytes = data[..3].iter().flat_map(|d| d.bytes.clone()).collect();
         Frame {
             albedo: data[0].to_rgba_f32().expect("albedo"),
+            material: data[3].to_rgba_f32().expect("material"),
             depth: data[2]
                 .to_rgba_f32()
                 .expect("depth")
@@ -561,6 +572,58 @@ fn morphing_removes_popping_on_a_slow_approach() {
         "albedo {on:?} vs {off:?}"
     );
     assert!(on.depth_sq < 0.97 * off.depth_sq, "depth {on:?} vs {off:?}");
+}
+
+#[test]
+fn specular_aa_widens_roughness_where_the_detail_normals_are_minified() {
+    // E3 on the terrain: the detail normal maps' mips carry their normal
+    // variance (textures::normal_mips); the shader widens roughness by it.
+    let _gpu = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let d = desc(SECTORS);
+    let mut rig = Rig::new(&d);
+    rig.upload(&d, (12, 20), (12, 20));
+    // Low over the ground, looking along it, the detail minifies towards
+    // the horizon; 1 m up looking steeply down, its 12 mm texels (3 m over
+    // 256) are mostly magnified (6 mm pixels below the camera) and level 0
+    // carries no variance.
+    let along = over(-300.0, 120.0, 2.0, Vec3::new(200.0, 0.0, -50.0));
+    let down = over(
+        -300.0,
+        120.0,
+        1.0,
+        Vec3::new(-300.0, ground(-300.0, 120.3), 120.3),
+    );
+    let (w, h) = (SIZE.0 as usize, SIZE.1 as usize);
+    let mut glossier = 0;
+    let mut mean_gloss = |cam: &Camera, rows: std::ops::Range<usize>| {
+        rig.terrain.specular_aa = false;
+        let off = rig.draw(cam, None);
+        rig.terrain.specular_aa = true;
+        let on = rig.draw(cam, None);
+        assert!(off.bytes == on.bytes, "E3 changes only the material target");
+        // Never glossier: Toksvig only widens (8-bit rounding aside).
+        glossier += (off.material.iter().zip(&on.material))
+            .filter(|(a, b)| b[0] > a[0] + 1.5 / 255.0)
+            .count();
+        let px: Vec<usize> = (rows.flat_map(|y| (0..w).map(move |x| y * w + x)))
+            .filter(|&i| off.depth[i] > 0.0)
+            .collect();
+        let mean = |f: &Frame| px.iter().map(|&i| f.material[i][0]).sum::<f32>() / px.len() as f32;
+        (mean(&off), mean(&on), px.len())
+    };
+    let (far_off, far_on, far_n) = mean_gloss(&along, 0..h / 2);
+    let (near_off, near_on, near_n) = mean_gloss(&down, 0..h);
+    eprintln!(
+        "terrain glossiness, E3 off -> on: along the ground, upper half {far_off:.4} -> {far_on:.4} ({far_n} px); 1 m above, looking down {near_off:.4} -> {near_on:.4} ({near_n} px); {glossier} px glossier"
+    );
+    // Measured on lavapipe on 2026-12-05: along the ground 0.3151 -> 0.2584
+    // (-0.057), looking down 0.2499 -> 0.2423 (-0.008: its top rows, 3 m
+    // off, reach level 1), no pixel glossier. Thresholds: none glossier, the
+    // far half at least 0.03 rougher, the close view at most 0.015.
+    assert_eq!(glossier, 0);
+    assert!(near_n > 10_000 && far_n > 1000);
+    assert!(far_off - far_on > 0.03, "far: {far_off} -> {far_on}");
+    assert!(near_off - near_on < 0.015, "near: {near_off} -> {near_on}");
 }
 
 #[test]

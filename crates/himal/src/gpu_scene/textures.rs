@@ -16,7 +16,9 @@ use wgpu::util::DeviceExt;
 use crate::gpu::pipeline::target;
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::math::brdf::{normal_variance_decode, normal_variance_encode};
+use crate::math::brdf::{
+    next_normal_variance_level, normal_variance_decode, normal_variance_encode,
+};
 use crate::scene::gltf::{
     AlphaMode, ImageData, NORMAL_SLOTS, PbrMaterial, PbrSet, SamplerDesc, TEXTURE_SLOTS, Wrap,
 };
@@ -606,72 +608,27 @@ pub fn next_normal_mip_reference(
     rgba8: &[u8],
     from_level0: bool,
 ) -> (u32, u32, Vec<u8>) {
-    let (w, h) = ((width / 2).max(1), (height / 2).max(1));
-    let rgb = |x: i32, y: i32| {
+    let texel = |x: i32, y: i32| {
         let (x, y) = (x.clamp(0, width as i32 - 1), y.clamp(0, height as i32 - 1));
         let i = ((y as u32 * width + x as u32) * 4) as usize;
         let c = |k: usize| rgba8[i + k] as f32 / 255.0;
-        (glam::Vec3::new(c(0), c(1), c(2)), c(3))
-    };
-    let unit = |rgb: glam::Vec3| {
-        let n = rgb * 2.0 - 1.0;
-        let len = n.length();
-        if len > 1e-6 { n / len } else { glam::Vec3::Z }
-    };
-    let spread = |m: glam::Vec3| {
-        let len = m.length().max(1e-4);
-        (1.0 - len) / len
+        (
+            glam::Vec3::new(c(0), c(1), c(2)),
+            normal_variance_decode(c(3)),
+        )
     };
     let unorm = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let mut out = Vec::with_capacity((w * h * 4) as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let (px, py) = (2 * x as i32, 2 * y as i32);
-            let (mut m, mut variance) = (glam::Vec3::ZERO, 0.0);
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let (c, a) = rgb(px + dx, py + dy);
-                m += unit(c);
-                variance += normal_variance_decode(a);
-            }
-            m *= 0.25;
-            let variance = if from_level0 {
-                // Two-point Gauss-Legendre on the field's three linear
-                // pieces per axis of the footprint [p - 1/2, p + 3/2]
-                // (texel-centre coordinates), as the shader's taps.
-                let node = |k: i32| {
-                    let half = if k / 2 == 1 { 0.5 } else { 0.25 };
-                    let side = if k & 1 == 1 { 1.0 } else { -1.0 };
-                    let u = -0.25 + 0.75 * (k / 2) as f32 + side * half * 0.577_350_27;
-                    (u, half * 0.5)
-                };
-                let mut field = glam::Vec3::ZERO;
-                for j in 0..36 {
-                    let ((u, wx), (v, wy)) = (node(j % 6), node(j / 6));
-                    let (fx, fy) = (u.floor(), v.floor());
-                    let (tx, ty) = (u - fx, v - fy);
-                    let (x0, y0) = (px + fx as i32, py + fy as i32);
-                    let top = rgb(x0, y0).0.lerp(rgb(x0 + 1, y0).0, tx);
-                    let bottom = rgb(x0, y0 + 1).0.lerp(rgb(x0 + 1, y0 + 1).0, tx);
-                    field += wx * wy * unit(top.lerp(bottom, ty));
-                }
-                spread(field)
-            } else {
-                0.25 * variance + spread(m)
-            };
-            let len = m.length();
-            let n = if len > 1e-6 {
-                m / len.max(1e-4)
-            } else {
-                glam::Vec3::Z
-            };
+    let level = next_normal_variance_level(width, height, texel, from_level0);
+    let out = (level.iter())
+        .flat_map(|&(n, variance)| {
             let rgb = n * 0.5 + 0.5;
-            out.extend([
+            [
                 unorm(rgb.x),
                 unorm(rgb.y),
                 unorm(rgb.z),
                 unorm(normal_variance_encode(variance)),
-            ]);
-        }
-    }
-    (w, h, out)
+            ]
+        })
+        .collect();
+    ((width / 2).max(1), (height / 2).max(1), out)
 }

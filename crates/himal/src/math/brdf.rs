@@ -294,6 +294,80 @@ pub fn toksvig_roughness(r: f32, variance: f32) -> f32 {
     (r2 * r2 + 2.0 * variance.max(0.0)).sqrt().sqrt().min(1.0)
 }
 
+/// E3: one level of a normal map's variance chain (docs/techniques/E3.md
+/// "The chain"), the level after a `width` x `height` level. `texel(x, y)`
+/// gives the source level's RGB (0..1, as sampled: n / 2 + 1/2) and its
+/// sigma^2 at any integer texel, the caller wrapping or clamping the edges.
+/// Per texel: m = the mean of the four parents' unit normals and sigma^2 =
+/// mean(sigma_i^2) plus (1 - |m|) / |m|; `from_level0` (the source is level
+/// 0): sigma^2 is instead the spread of the bilinear field of unit normals
+/// over the footprint, by two-point Gauss-Legendre on its linear pieces (6
+/// x 6 nodes). Returns (m / |m|, or +z where m vanishes; sigma^2) row-major.
+/// The twin of `gpu_scene/normal_mipmap.wgsl` and the terrain's detail
+/// normal chain both use it.
+pub fn next_normal_variance_level(
+    width: u32,
+    height: u32,
+    texel: impl Fn(i32, i32) -> (Vec3, f32),
+    from_level0: bool,
+) -> Vec<(Vec3, f32)> {
+    let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+    let unit = |rgb: Vec3| {
+        let n = rgb * 2.0 - 1.0;
+        let len = n.length();
+        if len > 1e-6 { n / len } else { Vec3::Z }
+    };
+    let spread = |m: Vec3| {
+        let len = m.length().max(1e-4);
+        (1.0 - len) / len
+    };
+    // Node k of 0..6 along an axis, from the texel's centre, and its weight:
+    // piece k / 2 has centre -1/4, 1/2, 5/4 and half-length 1/4, 1/2, 1/4.
+    let node = |k: i32| {
+        let half = if k / 2 == 1 { 0.5 } else { 0.25 };
+        let side = if k & 1 == 1 { 1.0 } else { -1.0 };
+        (
+            -0.25 + 0.75 * (k / 2) as f32 + side * half * 0.577_350_27,
+            half * 0.5,
+        )
+    };
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let (px, py) = (2 * x, 2 * y);
+            let (mut m, mut variance) = (Vec3::ZERO, 0.0);
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (rgb, v) = texel(px + dx, py + dy);
+                m += unit(rgb);
+                variance += v;
+            }
+            m *= 0.25;
+            let variance = if from_level0 {
+                let mut field = Vec3::ZERO;
+                for j in 0..36 {
+                    let ((u, wx), (v, wy)) = (node(j % 6), node(j / 6));
+                    let (fx, fy) = (u.floor(), v.floor());
+                    let (x0, y0) = (px + fx as i32, py + fy as i32);
+                    let top = texel(x0, y0).0.lerp(texel(x0 + 1, y0).0, u - fx);
+                    let bottom = texel(x0, y0 + 1).0.lerp(texel(x0 + 1, y0 + 1).0, u - fx);
+                    field += wx * wy * unit(top.lerp(bottom, v - fy));
+                }
+                spread(field)
+            } else {
+                0.25 * variance + spread(m)
+            };
+            let len = m.length();
+            let n = if len > 1e-6 {
+                m / len.max(1e-4)
+            } else {
+                Vec3::Z
+            };
+            out.push((n, variance));
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -213,8 +213,11 @@ impl TerrainPass {
         );
         for (i, l) in desc.layers.iter().enumerate() {
             let (a, n) = textures::detail_maps(l.detail, i as u32 * 0x9e37 + 17);
-            for (target, level0) in [(&albedo, a), (&normal, n)] {
-                for (mip, data) in textures::mips(level0).iter().enumerate() {
+            for (target, levels) in [
+                (&albedo, textures::mips(a)),
+                (&normal, textures::normal_mips(n)),
+            ] {
+                for (mip, data) in levels.iter().enumerate() {
                     let side = textures::DETAIL_SIZE >> mip;
                     write(
                         target,
@@ -230,6 +233,7 @@ impl TerrainPass {
         ctx.check("terrain")?;
         Ok(Self {
             lod_view: false,
+            specular_aa: true,
             geometry: g,
             settings: TerrainSettings::default(),
             program,

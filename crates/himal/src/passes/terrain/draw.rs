@@ -13,12 +13,16 @@ use crate::passes::gbuffer::{
 
 impl TerrainPass {
     /// The G-buffer pipeline, through the shared cache (`lod_view`: albedo
-    /// shows each patch's level, `--view lod`).
+    /// shows each patch's level, `--view lod`; `specular_aa`: E3, the
+    /// detail normals' variance widens roughness).
     pub fn pipeline(
         &self,
         ctx: &GpuContext,
         lod_view: bool,
+        specular_aa: bool,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
+        let constants = [("LOD_VIEW", b(lod_view)), ("SPECULAR_AA", b(specular_aa))];
         let targets = [
             target(ALBEDO_FORMAT),
             target(FRAME_FORMAT),
@@ -45,7 +49,7 @@ impl TerrainPass {
                     cull_mode: Some(wgpu::Face::Back),
                     ..Default::default()
                 },
-                constants: if lod_view { &[("LOD_VIEW", 1.0)] } else { &[] },
+                constants: &constants,
             },
         )
     }
@@ -76,7 +80,7 @@ impl TerrainPass {
         gbuffer: GBuffer,
         view: &'a wgpu::Buffer,
     ) -> GBuffer {
-        let pipeline = self.pipeline(ctx, self.lod_view);
+        let pipeline = self.pipeline(ctx, self.lod_view, self.specular_aa);
         let load = wgpu::LoadOp::Load;
         let written = graph
             .raster("terrain", &self.program)

@@ -73,6 +73,9 @@ pub struct TerrainCpu {
 pub struct TerrainPass {
     /// `--view lod` this frame (`frame::plan`).
     pub lod_view: bool,
+    /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`):
+    /// the detail normals' variance widens the G-buffer roughness.
+    pub specular_aa: bool,
     /// The world's layout (sectors, spacings, levels).
     pub geometry: Geometry,
     /// LOD knobs the ranges and selection read each frame.

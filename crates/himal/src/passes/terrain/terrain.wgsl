@@ -7,7 +7,9 @@
 // the pixel footprint), layers are weighted by that height and slope with
 // noise on their borders, and each layer's detail (albedo + glossiness,
 // normal) is sampled at two scales, triplanar where the slope is steep.
-// Docs: docs/techniques/terrain.md.
+// E3: the detail normals' variance (their mips' alpha) widens roughness.
+// Docs: docs/techniques/terrain.md, E3.md.
+#import brdf
 #import gbuffer_io
 #import view
 #import tangent_frame
@@ -15,6 +17,8 @@
 
 // `--view lod`: albedo shows the patch's quadtree level.
 override LOD_VIEW: bool = false;
+// E3 (`--specular-aa`): widen roughness by the detail normals' variance.
+override SPECULAR_AA: bool = true;
 
 struct TerrainLayer {
     // rgb linear albedo, a glossiness
@@ -92,6 +96,8 @@ struct Detail {
     albedo: vec4f,
     // world-space normal offset (UDN blend)
     offset: vec3f,
+    // E3: the offset's normal variance at this pixel's mip levels
+    variance: f32,
 }
 
 // One projection: near and far scale of layer `t`, `uv` in metres.
@@ -101,10 +107,13 @@ fn detail_sample(t: i32, uv: vec2f, du: vec2f, dv: vec2f, scales: vec2f) -> vec4
     return 0.5 * (a + b);
 }
 
-fn detail_normal_sample(t: i32, uv: vec2f, du: vec2f, dv: vec2f, scales: vec2f) -> vec2f {
-    let a = textureSampleGrad(detail_normal, detail_sampler, uv / scales.x, t, du / scales.x, dv / scales.x).xy;
-    let b = textureSampleGrad(detail_normal, detail_sampler, uv / scales.y, t, du / scales.y, dv / scales.y).xy;
-    return (a * 2.0 - 1.0) + 0.5 * (b * 2.0 - 1.0);
+// xy: the offset a + b / 2 of the two scales; z: its normal variance (E3,
+// alpha of the mips), the scales' independent variances added: s_a + s_b / 4.
+fn detail_normal_sample(t: i32, uv: vec2f, du: vec2f, dv: vec2f, scales: vec2f) -> vec3f {
+    let a = textureSampleGrad(detail_normal, detail_sampler, uv / scales.x, t, du / scales.x, dv / scales.x);
+    let b = textureSampleGrad(detail_normal, detail_sampler, uv / scales.y, t, du / scales.y, dv / scales.y);
+    let variance = normal_variance_decode(a.a) + 0.25 * normal_variance_decode(b.a);
+    return vec3f((a.xy * 2.0 - 1.0) + 0.5 * (b.xy * 2.0 - 1.0), variance);
 }
 
 // Layer `layer`'s detail at world `w` with normal `n`: planar from above,
@@ -121,22 +130,28 @@ fn layer_detail(layer: TerrainLayer, w: vec3f, dx: vec3f, dy: vec3f, n: vec3f) -
     var d: Detail;
     d.albedo = vec4f(0.0);
     d.offset = vec3f(0.0);
+    d.variance = 0.0;
     if (tw.y > 0.0) {
         d.albedo += tw.y * detail_sample(t, w.xz, dx.xz, dy.xz, scales);
         let o = detail_normal_sample(t, w.xz, dx.xz, dy.xz, scales);
         d.offset += tw.y * vec3f(o.x, 0.0, o.y);
+        d.variance += tw.y * o.z;
     }
     if (tw.x > 0.0) {
         d.albedo += tw.x * detail_sample(t, w.zy, dx.zy, dy.zy, scales);
         let o = detail_normal_sample(t, w.zy, dx.zy, dy.zy, scales);
         d.offset += tw.x * vec3f(0.0, o.y, o.x);
+        d.variance += tw.x * o.z;
     }
     if (tw.z > 0.0) {
         d.albedo += tw.z * detail_sample(t, w.xy, dx.xy, dy.xy, scales);
         let o = detail_normal_sample(t, w.xy, dx.xy, dy.xy, scales);
         d.offset += tw.z * vec3f(o.x, o.y, 0.0);
+        d.variance += tw.z * o.z;
     }
     d.offset *= layer.slope.w;
+    // Strength scales the slopes, so their variance by its square.
+    d.variance *= layer.slope.w * layer.slope.w;
     return d;
 }
 
@@ -179,6 +194,7 @@ fn fs_main(in: VertexOut) -> GBufferOut {
     var albedo = vec3f(0.0);
     var gloss = 0.0;
     var offset = vec3f(0.0);
+    var variance = 0.0;
     for (var i = 0u; i < count; i++) {
         if (weight[i] > 0.004) {
             let l = layers[i];
@@ -186,6 +202,7 @@ fn fs_main(in: VertexOut) -> GBufferOut {
             albedo += weight[i] * l.albedo.rgb * (2.0 * d.albedo.rgb);
             gloss += weight[i] * clamp(l.albedo.a + (d.albedo.a - 0.5) * 0.5, 0.0, 1.0);
             offset += weight[i] * d.offset;
+            variance += weight[i] * d.variance;
         }
     }
     // Large-scale brightness variation against visible repetition.
@@ -199,6 +216,9 @@ fn fs_main(in: VertexOut) -> GBufferOut {
         out.albedo = vec4f(lod_view_albedo(in.level, out.albedo.rgb), 1.0);
     }
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
+    if (SPECULAR_AA) {
+        gloss = 1.0 - toksvig_roughness(perceptual_roughness_from_glossiness(gloss), variance);
+    }
     out.material = vec4f(gloss, 0.5, 0.0, 0.0);
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     return out;

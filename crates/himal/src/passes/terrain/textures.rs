@@ -2,9 +2,13 @@
 //! the pass is created: per layer an albedo + glossiness variation map
 //! (RGBA8, mean 0.5) and a tangent-space normal map (xy * 0.5 + 0.5) from
 //! a height field, both tileable (periodic lattice noise), with box-filtered
-//! mips. A pure function of (kind, seed): the same bytes every run.
+//! mips; the normal maps' alpha holds E3's normal variance of each level
+//! ([`normal_mips`]). A pure function of (kind, seed): the same bytes every run.
+
+use glam::Vec3;
 
 use super::DetailKind;
+use crate::math::brdf::{next_normal_variance_level, normal_variance_encode};
 
 /// Texels per side of a detail map (level 0).
 pub const DETAIL_SIZE: u32 = 256;
@@ -143,7 +147,8 @@ pub fn detail_maps(kind: DetailKind, seed: u32) -> (Vec<[u8; 4]>, Vec<[u8; 4]>) 
                 unorm(-du / len * 0.5 + 0.5),
                 unorm(-dv / len * 0.5 + 0.5),
                 unorm(1.0 / len),
-                255,
+                // E3: level 0 has no variance.
+                0,
             ]
         })
         .collect();
@@ -173,4 +178,92 @@ pub fn mips(level0: Vec<[u8; 4]>) -> Vec<Vec<[u8; 4]>> {
         n = m;
     }
     out
+}
+
+/// The mips of a normal map's `level0` (DETAIL_SIZE^2, alpha 0): RGB
+/// box-filtered as [`mips`] (the shader's UDN offsets average), alpha E3's
+/// normal variance of each level, encoded (`math::brdf`
+/// [`next_normal_variance_level`]: level 1 from level 0's bilinear field,
+/// wrapping around as the tiling sampler does; computed in f32 down the
+/// chain, rounded once per level).
+pub fn normal_mips(level0: Vec<[u8; 4]>) -> Vec<Vec<[u8; 4]>> {
+    let n = DETAIL_SIZE as i32;
+    let decode = |t: [u8; 4]| Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32) / 255.0;
+    let mut chain: Vec<(Vec3, f32)> = level0.iter().map(|&t| (decode(t), 0.0)).collect();
+    let mut out = mips(level0);
+    let mut side = n;
+    for (level, data) in out.iter_mut().enumerate().skip(1) {
+        let prev = &chain;
+        let texel =
+            |x: i32, y: i32| prev[(y.rem_euclid(side) * side + x.rem_euclid(side)) as usize];
+        let next = next_normal_variance_level(side as u32, side as u32, texel, level == 1);
+        for (t, &(_, variance)) in data.iter_mut().zip(&next) {
+            t[3] = unorm(normal_variance_encode(variance));
+        }
+        chain = next.into_iter().map(|(m, v)| (m * 0.5 + 0.5, v)).collect();
+        side /= 2;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::brdf::normal_variance_decode;
+
+    #[test]
+    fn normal_mips_keep_the_box_rgb_and_add_growing_variance() {
+        let (_, normal) = detail_maps(DetailKind::Rock, 5);
+        let plain = mips(normal.clone());
+        let baked = normal_mips(normal);
+        assert_eq!(baked.len(), plain.len());
+        let mut last = 0.0;
+        for (level, (b, p)) in baked.iter().zip(&plain).enumerate() {
+            // The shader's offsets (RGB) are the plain box mips': E3 off
+            // draws what it drew before.
+            assert!(
+                b.iter().zip(p).all(|(x, y)| x[..3] == y[..3]),
+                "level {level}"
+            );
+            let mean = b
+                .iter()
+                .map(|t| normal_variance_decode(t[3] as f32 / 255.0))
+                .sum::<f32>()
+                / b.len() as f32;
+            if level == 0 {
+                assert!(b.iter().all(|t| t[3] == 0), "level 0 has no variance");
+            } else {
+                // A mixture's variance never shrinks down the chain (8-bit
+                // rounding of the encoding aside).
+                assert!(
+                    mean > 0.0 && mean >= last * 0.98,
+                    "level {level}: {mean} after {last}"
+                );
+            }
+            last = mean;
+        }
+    }
+
+    #[test]
+    fn level_one_wraps_around_as_the_tiling_sampler_does() {
+        // A map that is flat but for one column of tilted normals at x = 0:
+        // level 1's texels at both edges see it (bilinear field wraps), the
+        // middle does not.
+        let n = DETAIL_SIZE as usize;
+        let tilted = [200u8, 128, 230, 0];
+        let level0: Vec<[u8; 4]> = (0..n * n)
+            .map(|i| {
+                if i % n == 0 {
+                    tilted
+                } else {
+                    [128, 128, 255, 0]
+                }
+            })
+            .collect();
+        let level1 = &normal_mips(level0)[1];
+        let m = n / 2;
+        let (first, last, middle) = (level1[0][3], level1[m - 1][3], level1[m / 2][3]);
+        assert!(first > 0 && last > 0, "edges {first} {last}");
+        assert_eq!(middle, 0);
+    }
 }
