@@ -99,6 +99,8 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
         sky_occlusion: settings.sky_occlusion,
+        ssdo: settings.ao.mode.directional(),
+        reflection_occlusion: settings.ao.reflection_occlusion,
     }
 }
 
