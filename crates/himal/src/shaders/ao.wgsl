@@ -24,7 +24,7 @@ struct AoParams {
     depth: vec4f,
     // O4 (SSDO): x: directional strength on lights (0 = off, 1 = full),
     // y: penumbra width (sine of elevation), z: extra width per unit roughness
-    // (reflection occlusion), w: 0
+    // (reflection occlusion), w: gain of the directional harmonic
     ssdo: vec4f,
 }
 
@@ -97,34 +97,37 @@ fn ao_cross_bilateral(tex: texture_2d<f32>, linear_sampler: sampler, px: vec2i, 
 }
 
 // O4 directional visibility along unit direction l at view-space point p with
-// view-space normal n. The SSDO texel holds the horizon rise of HBAO's slices
-// as a constant and a first harmonic in the slice angle phi (screen direction,
-// y down): rise(phi) = c0 + c1 cos phi + c2 sin phi, c0 = 1 - AO (in sine of
-// elevation, W-weighted). l lies in the slice of its screen direction; it is
+// view-space normal n. HBAO's per-slice occlusion (W-weighted rise of the
+// horizon, in sine of elevation) over the slice angle phi (screen direction,
+// y down) is kept as a constant (1 - AO, the ambient term) and a first
+// harmonic c = (c1, c2). The directional part alone, gain * max(c1 cos phi +
+// c2 sin phi, 0), is the horizon's rise toward phi: the harmonic of a
+// half-plane occluder is 0 sideways and 2/pi of its rise toward it, and W
+// lowers near-R occluders. l lies in the slice of its screen direction; it is
 // visible when its elevation clears the tangent plane's plus the rise, with a
 // penumbra of width `soft` below that horizon. Twin: passes/ao/reference.rs
 // `ssdo_visibility`; docs/techniques/O4.md.
-fn ssdo_visibility(p: vec3f, n: vec3f, l: vec3f, c: vec3f, soft: f32) -> f32 {
+fn ssdo_visibility(p: vec3f, n: vec3f, l: vec3f, c: vec2f, gain: f32, soft: f32) -> f32 {
     let v = normalize(-p);
     // The screen direction p + e l moves along (as t in hbao.wgsl integrate_direction).
     let screen = l.xy * -p.z + p.xy * l.z;
     let len = length(screen);
-    var rise = c.x;
-    var sin_t = 0.0;
-    if (len > 1e-6) {
-        let t3 = vec3f(screen / len, 0.0);
-        rise += c.y * t3.x - c.z * t3.y;
-        var t = cross(n, cross(t3, v));
-        let t_len = length(t);
-        if (t_len > 1e-12) {
-            t /= t_len;
-            let st = t.xy * -p.z + p.xy * t.z;
-            t = select(t, -t, dot(st, t3.xy) < 0.0);
-            sin_t = dot(t, v);
-        }
+    if (len <= 1e-6) {
+        return 1.0;
     }
+    let t3 = vec3f(screen / len, 0.0);
+    let rise = gain * (c.x * t3.x - c.y * t3.y);
     if (rise <= 0.0) {
         return 1.0;
+    }
+    var sin_t = 0.0;
+    var t = cross(n, cross(t3, v));
+    let t_len = length(t);
+    if (t_len > 1e-12) {
+        t /= t_len;
+        let st = t.xy * -p.z + p.xy * t.z;
+        t = select(t, -t, dot(st, t3.xy) < 0.0);
+        sin_t = dot(t, v);
     }
     let sin_l = dot(l, v);
     return clamp(1.0 + (sin_l - sin_t - rise) / soft, 0.0, 1.0);

@@ -189,6 +189,11 @@ impl AoPass {
         )
     }
 
+    /// Compiles the SSDO steps now (`Renderer::prewarm`).
+    pub fn prewarm_ssdo(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        self.ssdo_steps(ctx).map(|_| ())
+    }
+
     fn ssdo_steps(&self, ctx: &GpuContext) -> Result<&SsdoSteps, GpuError> {
         if let Some(s) = self.ssdo.get() {
             return Ok(s);

@@ -88,12 +88,15 @@ pub struct AoSettings {
     pub ssdo_strength: f32,
     /// O4: penumbra width below the horizon (sine of elevation).
     pub ssdo_softness: f32,
+    /// O4: gain from the directional harmonic to the horizon's rise (2/pi of
+    /// a half-plane's rise, and W's falloff, measured in O4.md).
+    pub ssdo_gain: f32,
     /// O4: extra penumbra width per unit of perceptual roughness for the
     /// reflection vector (a rough lobe sees past the horizon).
     pub ssdo_roughness_softness: f32,
     /// Reflection occlusion (`--reflection-occlusion`): ambient specular times
-    /// the directional term along the reflection vector (ssdo), or Lagarde's
-    /// specular occlusion from AO (other modes); off: times AO, as diffuse.
+    /// Lagarde's specular occlusion from AO and, with ssdo, times the
+    /// directional term along the reflection vector; off: times AO, as diffuse.
     pub reflection_occlusion: bool,
 }
 
@@ -116,7 +119,8 @@ impl Default for AoSettings {
             continuity: 0.1,
             selective: true,
             ssdo_strength: 1.0,
-            ssdo_softness: 0.2,
+            ssdo_softness: 0.4,
+            ssdo_gain: 1.5,
             ssdo_roughness_softness: 1.0,
             reflection_occlusion: false,
         }
@@ -143,7 +147,8 @@ impl AoSettings {
             return bad("SSDO strength must be in [0, 1]");
         }
         let soft = self.ssdo_softness > 0.0 && self.ssdo_roughness_softness >= 0.0;
-        if !(soft && self.ssdo_softness.is_finite() && self.ssdo_roughness_softness.is_finite()) {
+        let finite = self.ssdo_softness.is_finite() && self.ssdo_roughness_softness.is_finite();
+        if !(soft && finite && self.ssdo_gain >= 0.0 && self.ssdo_gain.is_finite()) {
             return bad("SSDO softness must be positive");
         }
         Ok(())
@@ -178,7 +183,7 @@ pub struct AoUniform {
     /// The projection's depth rows: P22, P23 (clip z), P32, P33 (clip w);
     /// perspective (0, near, -1, 0) and orthographic cameras alike.
     pub depth: [f32; 4],
-    /// O4: strength on lights, penumbra width, width per roughness, 0.
+    /// O4: strength on lights, penumbra width, width per roughness, gain.
     pub ssdo: [f32; 4],
 }
 
@@ -228,7 +233,7 @@ impl AoUniform {
                 s.ssdo_strength,
                 s.ssdo_softness,
                 s.ssdo_roughness_softness,
-                0.0,
+                s.ssdo_gain,
             ],
         }
     }

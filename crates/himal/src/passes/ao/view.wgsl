@@ -1,6 +1,6 @@
 // ao.view: the AO debug views (`himal render --view ao|ao-raw|stability-mask`).
 // VIEW: 1 = ao (filtered; raw values: AO, Z, N), 2 = ao-raw (HBAO before blur and
-// filter; raw: AO, continuity), 3 = stability-mask (1 = stable: temporal filter off),
+// filter; raw: AO, continuity[, c1, c2 with SSDO]), 3 = stability-mask (1 = stable: temporal filter off),
 // 4 = ssdo (O4 directional term, filtered; raw: AO, c1, c2; shown as
 // 0.5 + c1, 0.5 + c2, AO: red/green where the horizon rises toward screen +x/+y).
 // DISPLAY = true writes viewable grey levels, false raw values (EXR).
@@ -25,7 +25,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let q = min(px / i32(params.hbao_steps.z), vec2i(params.ao_size.xy) - 1);
     var raw: vec4f;
     switch VIEW {
-        case 2u: { raw = vec4f(textureLoad(hbao_load, q, 0).xy, 0.0, 1.0); }
+        // Two-channel textures read (AO, continuity, 0, 1); SSDO adds (c1, c2).
+        case 2u: { raw = textureLoad(hbao_load, q, 0); }
         case 3u: { raw = vec4f(textureLoad(stability_load, q, 0).x, 0.0, 0.0, 1.0); }
         case 4u: { raw = vec4f(textureLoad(ao, px, 0).x, textureLoad(ao_dir, px, 0).xy, 1.0); }
         default: { raw = vec4f(textureLoad(ao, px, 0).xyz, 1.0); }

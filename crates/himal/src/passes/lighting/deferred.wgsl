@@ -17,8 +17,8 @@
 // O4 (SSDO): the directional term (ao_dir, shaders/ao.wgsl `ssdo_visibility`)
 // along each light's direction scales its diffuse and specular (contact
 // shadows, blended by ao_params.ssdo.x); REFLECTION_OCCLUSION scales ambient
-// specular by it along the reflection vector (SSDO) or by Lagarde's specular
-// occlusion from AO (without SSDO), instead of by AO.
+// specular by Lagarde's specular occlusion from AO (the constant band) times,
+// with SSDO, the directional term along the reflection vector, instead of by AO.
 // CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`);
 // O4 functions: passes/ao/reference.rs `ssdo_visibility`, `specular_occlusion_lagarde`.
 #import view
@@ -83,14 +83,14 @@ override REFLECTION_OCCLUSION: bool = false;
 struct Ssdo {
     p: vec3f,
     n: vec3f,
-    // (c0 = 1 - AO, c1, c2)
-    c: vec3f,
+    // the directional harmonic (c1, c2)
+    c: vec2f,
 }
 
 // The directional term along world direction l, blended toward 1 by the strength.
 fn ssdo_light(o: Ssdo, l: vec3f) -> f32 {
     let l_v = (view.view * vec4f(l, 0.0)).xyz;
-    return mix(1.0, ssdo_visibility(o.p, o.n, l_v, o.c, ao_params.ssdo.y), ao_params.ssdo.x);
+    return mix(1.0, ssdo_visibility(o.p, o.n, l_v, o.c, ao_params.ssdo.w, ao_params.ssdo.y), ao_params.ssdo.x);
 }
 
 // Reflected radiance of the local lights at p (mask: the shadow mask texel).
@@ -192,21 +192,22 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let ao_in = albedo_ao.a * ssao;
     var spec_ao = ao_in;
     var sun_visibility = mask.r;
-    var o = Ssdo(vec3f(0.0), vec3f(0.0), vec3f(0.0));
+    var o = Ssdo(vec3f(0.0), vec3f(0.0), vec2f(0.0));
     if (SSDO) {
         let coeffs = textureLoad(ao_dir, min(px, vec2i(textureDimensions(ao_dir)) - 1), 0).xy;
-        o = Ssdo((view.view * vec4f(p, 1.0)).xyz, (view.view * vec4f(tbn[2], 0.0)).xyz, vec3f(1.0 - ssao, coeffs));
+        o = Ssdo((view.view * vec4f(p, 1.0)).xyz, (view.view * vec4f(tbn[2], 0.0)).xyz, coeffs);
         sun_visibility *= ssdo_light(o, lighting.sun_direction.xyz);
     }
     if (REFLECTION_OCCLUSION) {
+        // Both bands (Ryse): the constant through Lagarde's formula, times the
+        // directional term along the reflection vector.
         let roughness = perceptual_roughness_from_glossiness(m.x);
+        spec_ao = albedo_ao.a * specular_occlusion_lagarde(max(dot(tbn[2], v), 1e-4), ssao, roughness);
         if (SSDO) {
             let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, m.w));
             let r_v = (view.view * vec4f(r, 0.0)).xyz;
             let soft = ao_params.ssdo.y + ao_params.ssdo.z * roughness;
-            spec_ao = albedo_ao.a * ssdo_visibility(o.p, o.n, r_v, o.c, soft);
-        } else {
-            spec_ao = albedo_ao.a * specular_occlusion_lagarde(max(dot(tbn[2], v), 1e-4), ssao, roughness);
+            spec_ao *= ssdo_visibility(o.p, o.n, r_v, o.c, ao_params.ssdo.w, soft);
         }
     }
     var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis);
