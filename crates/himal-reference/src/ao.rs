@@ -211,8 +211,24 @@ mod tests {
             max: Vec3::new(10.0, 10.0, 10.0),
         }];
         let p = Vec3::new(-1e-3, 0.0, 0.0);
-        let toward = directional_visibility(&shapes, p, Vec3::Y, Vec3::new(1.0, 1.0, 0.0).normalize(), 1.0, 0.0, 1);
-        let away = directional_visibility(&shapes, p, Vec3::Y, Vec3::new(-1.0, 1.0, 0.0).normalize(), 1.0, 0.1, 64);
+        let toward = directional_visibility(
+            &shapes,
+            p,
+            Vec3::Y,
+            Vec3::new(1.0, 1.0, 0.0).normalize(),
+            1.0,
+            0.0,
+            1,
+        );
+        let away = directional_visibility(
+            &shapes,
+            p,
+            Vec3::Y,
+            Vec3::new(-1.0, 1.0, 0.0).normalize(),
+            1.0,
+            0.1,
+            64,
+        );
         assert!(toward < 0.01 && away == 1.0, "toward {toward}, away {away}");
     }
 

@@ -7,12 +7,12 @@ mod common;
 
 use common::{pixel_ray_from, render_rgba as render, renderer};
 use glam::{IVec2, Vec2, Vec3};
+use himal::gpu::testing::run_compute;
 use himal::passes::ao::reference::{self as twin, Image, StfView};
 use himal::passes::ao::{AoMode, AoSettings, AoUniform, AoView};
 use himal::passes::debug::DebugView;
 use himal::scene::{Camera, Scene};
 use himal::{FrameSettings, Renderer, ViewBuffer};
-use himal::gpu::testing::run_compute;
 use himal_reference::ao::{Shape, ambient_occlusion, directional_visibility, trace};
 
 /// The analytic shapes of `scenes/ao_sphere_on_plane.toml`.
@@ -457,7 +457,14 @@ fn ssdo_lookups_match_the_cpu_twin() {
     let (mut worst_v, mut worst_s) = (0.0f32, 0.0f32);
     for (x, g) in input.iter().zip(gpu) {
         let v3 = |i: usize| Vec3::new(x[i], x[i + 1], x[i + 2]);
-        let v = twin::ssdo_visibility(v3(0), v3(4), v3(8), Vec2::new(x[13], x[14]), x[12] * 8.0, x[15]);
+        let v = twin::ssdo_visibility(
+            v3(0),
+            v3(4),
+            v3(8),
+            Vec2::new(x[13], x[14]),
+            x[12] * 8.0,
+            x[15],
+        );
         let s = twin::specular_occlusion_lagarde(x[3], x[7], x[11]);
         worst_v = worst_v.max((v - g[0]).abs());
         worst_s = worst_s.max((s - g[1]).abs());
@@ -571,7 +578,11 @@ fn ssdo_passes_match_the_cpu_twin() {
         &history,
         &history_dir,
     );
-    let ao_pairs = cpu_ao.data.iter().zip(&gpu_ao.data).map(|(c, g)| (c[0], g[0]));
+    let ao_pairs = cpu_ao
+        .data
+        .iter()
+        .zip(&gpu_ao.data)
+        .map(|(c, g)| (c[0], g[0]));
     let (ma, _) = diff_stats(ao_pairs);
     let d_pairs = cpu_dir
         .data
@@ -634,7 +645,8 @@ fn directional_accuracy(name: &str, shapes: &[Shape]) -> [f32; 6] {
                 if n.dot(l) < 0.05 {
                     return;
                 }
-                let v_ssdo = twin::ssdo_visibility(p_v, n_v, view.transform_vector3(l), c, gain, soft);
+                let v_ssdo =
+                    twin::ssdo_visibility(p_v, n_v, view.transform_vector3(l), c, gain, soft);
                 let reference = directional_visibility(shapes, p, n, l, s.ao.radius, cone, 16);
                 sums[set * 3] += (v_ssdo - reference).abs() as f64;
                 sums[set * 3 + 1] += (1.0 - reference).abs() as f64;
@@ -747,5 +759,8 @@ fn reflection_occlusion_in_a_doorway_is_closer_to_ray_traced() {
     // (1366 px). Off and Lagarde alone must stay larger; on within 10% of its
     // measurement.
     assert!(n > 300, "{n} floor pixels inside");
-    assert!(on < 0.95 * off && on < lagarde && on < 0.56, "on {on}, off {off}, Lagarde {lagarde}");
+    assert!(
+        on < 0.95 * off && on < lagarde && on < 0.56,
+        "on {on}, off {off}, Lagarde {lagarde}"
+    );
 }

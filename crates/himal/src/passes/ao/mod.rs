@@ -41,7 +41,12 @@ pub const HISTORY: &str = "ao.history";
 pub const HISTORY_DIR: &str = "ao.history_dir";
 
 /// Declares the history rings of a `size` frame with `mode` (before the graph is built).
-pub fn declare_history(history: &mut History, device: &wgpu::Device, size: (u32, u32), mode: AoMode) {
+pub fn declare_history(
+    history: &mut History,
+    device: &wgpu::Device,
+    size: (u32, u32),
+    mode: AoMode,
+) {
     let desc = TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT);
     history.declare(device, HISTORY, &desc, 2);
     if mode.directional() {
@@ -228,7 +233,13 @@ impl AoPass {
         let (hbao, pack, blur_x, raw_format, packed_format) = if let Some(s) = ssdo_steps {
             (&s.hbao, &s.pack, &s.blur_x, SSDO_FORMAT, SSDO_FORMAT)
         } else {
-            (&self.hbao, &self.pack, &self.blur_x, RAW_FORMAT, PACKED_FORMAT)
+            (
+                &self.hbao,
+                &self.pack,
+                &self.blur_x,
+                RAW_FORMAT,
+                PACKED_FORMAT,
+            )
         };
         let raw = graph.create_texture(
             "ao.raw",
@@ -274,9 +285,7 @@ impl AoPass {
         let ring = (settings.mode.temporal())
             .then(|| history.import(graph, HISTORY))
             .flatten();
-        let ring_dir = ssdo
-            .then(|| history.import(graph, HISTORY_DIR))
-            .flatten();
+        let ring_dir = ssdo.then(|| history.import(graph, HISTORY_DIR)).flatten();
         let (ao, dir) = match ring {
             Some(ring) => {
                 let mut previous = ring.previous[0];
