@@ -1,4 +1,4 @@
-//! AO options shared by `render` and `bench` (TECHNIQUES O1-O3).
+//! AO options shared by `render` and `bench` (TECHNIQUES O1-O4).
 
 use anyhow::{Result, bail};
 use clap::Args;
@@ -6,11 +6,12 @@ use himal::passes::ao::{AoMode, AoSettings};
 
 #[derive(Args, Debug, Clone)]
 pub struct AoArgs {
-    /// Screen-space AO: off, hbao (HBAO + bilateral blur), hbao+stf (plus the selective temporal filter).
+    /// Screen-space AO: off, hbao (HBAO + bilateral blur), hbao+stf (plus the selective temporal filter),
+    /// ssdo (plus Ryse's directional occlusion: contact shadows on the sun and local lights, O4).
     #[arg(
         long,
         default_value = "hbao+stf",
-        value_name = "off|hbao|hbao+stf",
+        value_name = "off|hbao|hbao+stf|ssdo",
         allow_hyphen_values = true
     )]
     pub ao: String,
@@ -36,6 +37,18 @@ pub struct AoArgs {
     /// Blur kernel radius in pixels.
     #[arg(long, value_name = "PIXELS", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub ao_blur_radius: Option<u32>,
+    /// Reflection occlusion of ambient specular (O4): along the reflection vector with
+    /// `--ao ssdo`, Lagarde's specular occlusion from AO with the other modes.
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub reflection_occlusion: String,
+    /// How much the SSDO directional term darkens the sun and local lights (0..1).
+    #[arg(long, value_name = "0..1", allow_hyphen_values = true)]
+    pub ssdo_strength: Option<f32>,
 }
 
 impl AoArgs {
@@ -65,6 +78,17 @@ impl AoArgs {
         }
         if let Some(r) = self.ao_blur_radius {
             s.blur_radius = r;
+        }
+        s.reflection_occlusion = match self.reflection_occlusion.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--reflection-occlusion {other}: expected on or off"),
+        };
+        if let Some(k) = self.ssdo_strength {
+            if !(0.0..=1.0).contains(&k) {
+                bail!("--ssdo-strength {k}: must be in [0, 1]");
+            }
+            s.ssdo_strength = k;
         }
         s.validate().map_err(|e| match self.ao_blur_radius {
             Some(r) => anyhow::anyhow!("--ao-blur-radius {r}: {e}"),

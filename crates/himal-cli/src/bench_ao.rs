@@ -1,6 +1,6 @@
 //! `himal bench --compare-ao`: the AO cost ratios of TECHNIQUES O2/O3 in one
-//! run. Three renderers (HBAO + blur; + selective temporal filter; + STF with
-//! a brute-force blur) draw the same camera path with their frames
+//! run. Four renderers (HBAO + blur; + selective temporal filter; + STF with
+//! a brute-force blur; O4 SSDO) draw the same camera path with their frames
 //! interleaved, so all three see the same machine state.
 
 use std::collections::BTreeMap;
@@ -12,10 +12,11 @@ use himal::{FrameSettings, Renderer};
 
 use crate::GpuArgs;
 
-const VARIANTS: [(&str, AoMode, bool); 3] = [
+const VARIANTS: [(&str, AoMode, bool); 4] = [
     ("hbao", AoMode::Hbao, true),
     ("hbao+stf", AoMode::HbaoStf, true),
     ("hbao+stf, brute-force blur", AoMode::HbaoStf, false),
+    ("ssdo (O4)", AoMode::Ssdo, true),
 ];
 
 fn median(v: &mut [f64]) -> f64 {
@@ -66,6 +67,7 @@ pub fn run(
         runs[0].2.context().info
     );
     let mut totals = Vec::new();
+    let mut frames_ms = Vec::new();
     for (name, _, _, times) in runs.iter_mut() {
         let mut rows: Vec<(String, f64)> = times
             .iter_mut()
@@ -76,6 +78,7 @@ pub fn run(
         let total: f64 = rows.iter().map(|r| r.1).sum();
         let frame: f64 = times.values_mut().map(|v| median(v)).sum();
         println!("  {name}: AO {total:.3} ms of {frame:.3} ms");
+        frames_ms.push(frame);
         for (id, ms) in &rows {
             println!("    {id:<18} {ms:8.3}");
         }
@@ -99,6 +102,11 @@ pub fn run(
         base.ao.blur_radius,
         100.0 * blur_x,
         100.0 * (1.0 - totals[1].0 / totals[2].0)
+    );
+    println!(
+        "  SSDO (O4) vs hbao+stf: AO {:+.1}%, frame {:+.3} ms",
+        100.0 * (totals[3].0 / totals[1].0 - 1.0),
+        frames_ms[3] - frames_ms[1]
     );
     Ok(())
 }

@@ -160,6 +160,15 @@ fn numeric_options_out_of_range_say_the_allowed_range() {
         "--ao-radius -1: must be a number of metres in (0, 100]",
     );
     fails_with(
+        &["render", "--ssdo-strength", "-0.5"],
+        "--ssdo-strength -0.5: must be in [0, 1]",
+    );
+    fails_with(
+        &["render", "--reflection-occlusion", "maybe"],
+        "--reflection-occlusion maybe: expected on or off",
+    );
+    fails_with(&["render", "--ao", "sdo"], "ssdo");
+    fails_with(
         &["render", "--speed", "nan"],
         "--speed NaN: must be a finite",
     );

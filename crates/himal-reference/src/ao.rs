@@ -141,6 +141,39 @@ pub fn ambient_occlusion(shapes: &[Shape], p: Vec3, n: Vec3, radius: f32, sample
     (1.0 - occlusion / samples as f64) as f32
 }
 
+/// Ray-traced directional visibility (O4's ground truth): `1 - mean W(t/R)`
+/// over `samples` directions uniform in the cone of half-angle `cone`
+/// (radians) around unit `dir`, counting hits within `radius` as in
+/// [`ambient_occlusion`]. `cone = 0` is the single ray along `dir`.
+pub fn directional_visibility(
+    shapes: &[Shape],
+    p: Vec3,
+    n: Vec3,
+    dir: Vec3,
+    radius: f32,
+    cone: f32,
+    samples: u32,
+) -> f32 {
+    let (t, b) = basis(dir);
+    let origin = p + n * 1e-4;
+    let cos_max = cone.cos();
+    let mut occlusion = 0.0f64;
+    for i in 0..samples {
+        let u = hammersley(i, samples);
+        let cos = 1.0 - u.x * (1.0 - cos_max);
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * u.y;
+        let d = (t * (sin * phi.cos()) + b * (sin * phi.sin()) + dir * cos).normalize();
+        if let Some(hit) = trace(shapes, origin, d, 0.0)
+            && hit.t < radius
+        {
+            let rr = hit.t / radius;
+            occlusion += (1.0 - rr * rr) as f64;
+        }
+    }
+    (1.0 - occlusion / samples as f64) as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,6 +200,36 @@ mod tests {
         // Radius huge: W ~ 1, so AO -> 1 - 1/2.
         let ao = ambient_occlusion(&shapes, Vec3::new(-1e-3, 0.0, 0.0), Vec3::Y, 1e4, 4096);
         assert!((ao - 0.5).abs() < 0.01, "AO {ao}");
+    }
+
+    #[test]
+    fn directional_visibility_sees_a_wall() {
+        // At the foot of the wall x >= 0: toward it occluded at distance ~0,
+        // away from it open.
+        let shapes = [Shape::Box {
+            min: Vec3::new(0.0, -10.0, -10.0),
+            max: Vec3::new(10.0, 10.0, 10.0),
+        }];
+        let p = Vec3::new(-1e-3, 0.0, 0.0);
+        let toward = directional_visibility(
+            &shapes,
+            p,
+            Vec3::Y,
+            Vec3::new(1.0, 1.0, 0.0).normalize(),
+            1.0,
+            0.0,
+            1,
+        );
+        let away = directional_visibility(
+            &shapes,
+            p,
+            Vec3::Y,
+            Vec3::new(-1.0, 1.0, 0.0).normalize(),
+            1.0,
+            0.1,
+            64,
+        );
+        assert!(toward < 0.01 && away == 1.0, "toward {toward}, away {away}");
     }
 
     #[test]

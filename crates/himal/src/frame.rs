@@ -443,7 +443,7 @@ pub fn build<'a>(
                 depth: gbuffer.depth,
                 history,
             };
-            let t = passes.ao.add(&mut g, size, inputs);
+            let t = passes.ao.add(ctx, &mut g, size, inputs)?;
             Some(match aa.buffers {
                 Some(b) if b.ao => {
                     let jitter_free = stable_motion.is_some();
@@ -481,6 +481,8 @@ pub fn build<'a>(
                 let inputs = LightingInputs {
                     shadow_mask: None,
                     ao: None,
+                    ao_dir: None,
+                    ao_params: passes.ao.params(),
                     lights: &passes.shadows.local_lights,
                     envmap: &passes.envmap,
                     env: env_before,
@@ -508,6 +510,8 @@ pub fn build<'a>(
     let lighting_inputs = LightingInputs {
         shadow_mask,
         ao: ao_targets.map(|t| t.ao),
+        ao_dir: ao_targets.and_then(|t| t.dir),
+        ao_params: passes.ao.params(),
         lights: &passes.shadows.local_lights,
         envmap: &passes.envmap,
         env,

@@ -39,7 +39,7 @@ pub enum ViewBuffer {
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 24] = [
+    pub const NAMES: [&'static str; 25] = [
         "final",
         "albedo",
         "normal",
@@ -54,6 +54,7 @@ impl ViewBuffer {
         "ao",
         "ao-raw",
         "stability-mask",
+        "ssdo",
         "luminance",
         "bloom",
         "shadow-mask",
@@ -86,6 +87,7 @@ impl std::str::FromStr for ViewBuffer {
             "ao" => ViewBuffer::Ao(AoView::Ao),
             "ao-raw" => ViewBuffer::Ao(AoView::Raw),
             "stability-mask" => ViewBuffer::Ao(AoView::Stability),
+            "ssdo" => ViewBuffer::Ao(AoView::Directional),
             "luminance" => ViewBuffer::Debug(D::Luminance),
             "bloom" => ViewBuffer::Debug(D::Bloom),
             "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),

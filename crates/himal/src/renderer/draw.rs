@@ -121,8 +121,8 @@ impl Renderer {
         if settings.aa_buffers.any() {
             crate::passes::aa::temporal::buffers::declare_history(history, device, size);
         }
-        if settings.ao.mode == AoMode::HbaoStf {
-            crate::passes::ao::declare_history(history, device, size);
+        if settings.ao.mode.temporal() {
+            crate::passes::ao::declare_history(history, device, size, settings.ao.mode);
         }
         if self.res.luminance.as_ref().is_none_or(|(s, _)| *s != size) {
             self.res.luminance = Some((size, LuminanceBuffers::new(&self.ctx.device, size)));

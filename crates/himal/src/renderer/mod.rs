@@ -99,6 +99,8 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
         sky_occlusion: settings.sky_occlusion,
+        ssdo: settings.ao.mode.directional(),
+        reflection_occlusion: settings.ao.reflection_occlusion,
     }
 }
 
@@ -294,6 +296,8 @@ impl Renderer {
         for key in LightingKey::all() {
             passes.lighting.pipeline(ctx, key)?;
         }
+        // O4: `--ao ssdo`'s steps (otherwise made on its first frame).
+        passes.ao.prewarm_ssdo(ctx)?;
         // E3: `--specular-aa on|off` both ready (the renderer made the on ones).
         for specular_aa in [true, false] {
             for key in GBufferKey::for_scene(&self.res.scene, true, specular_aa) {

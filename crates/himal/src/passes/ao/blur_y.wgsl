@@ -8,6 +8,9 @@
 // Target: Rgba16Float (AO_i, Z_i = linear depth in this frame's view, N_i): the next
 // frame's history. Bindings: params, view, blurred_x, depth, stability_load, history
 // (previous frame, AO fetched bilinearly), linear_sampler.
+// fs_ssdo (O4, with STF): a second target, Rg16Float (c1, c2), the directional
+// coefficients blurred with the AO's weights and filtered with its N; its own
+// history ring (history_dir).
 // CPU twin: reference.rs `temporal_filter`.
 #import view
 #import ao
@@ -22,12 +25,29 @@ override STF: bool = true;
 @group(0) @binding(4) var stability_load: texture_2d<f32>;
 @group(0) @binding(5) var history: texture_2d<f32>;
 @group(0) @binding(6) var linear_sampler: sampler;
+@group(0) @binding(7) var history_dir: texture_2d<f32>;
+
+struct Out {
+    @location(0) history: vec4f,
+    @location(1) dir: vec4f,
+}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    return blur_and_filter(frag, false).history;
+}
+
+// The SSDO pipeline (two targets).
+@fragment
+fn fs_ssdo(@builtin(position) frag: vec4f) -> Out {
+    return blur_and_filter(frag, true);
+}
+
+fn blur_and_filter(frag: vec4f, ssdo: bool) -> Out {
     let px = vec2i(frag.xy);
     let blurred = ao_cross_bilateral(blurred_x, linear_sampler, px, vec2i(0, 1), params);
     var ao = blurred.x;
+    var dir = blurred.zw;
     var n = 1.0;
     let d = textureLoad(depth, px, 0);
     if (STF && d > 0.0) {
@@ -54,8 +74,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         if (same_surface && !(stable && params.stf.w > 0.5)) {
             let ao_prev = textureSampleLevel(history, linear_sampler, prev_uv, 0.0).x;
             ao = (n_prev * ao_prev + ao) / (n_prev + 1.0);
+            if (ssdo) {
+                let dir_prev = textureSampleLevel(history_dir, linear_sampler, prev_uv, 0.0).xy;
+                dir = (n_prev * dir_prev + dir) / (n_prev + 1.0);
+            }
             n = min(n_prev + 1.0, params.stf.y);
         }
     }
-    return vec4f(ao, blurred.y, n, 1.0);
+    return Out(vec4f(ao, blurred.y, n, 1.0), vec4f(dir, 0.0, 1.0));
 }

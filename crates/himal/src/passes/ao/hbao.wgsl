@@ -6,7 +6,10 @@
 // fraction and step offset).
 // Sources: Bavoil, Sainz, Dimitrov, "Image-Space Horizon-Based Ambient Occlusion" (2008);
 // Bavoil, Andersson, "Stable SSAO in Battlefield 3 with Selective Temporal Filtering" (GDC 2012).
-// CPU twin: passes/ao/reference.rs `hbao`.
+// SSDO (O4): Rgba16Float (AO, continuity, c1, c2), the first harmonic of each
+// direction's occlusion over the slice angle a: c1 = 2/D sum occ_d cos a_d,
+// c2 = 2/D sum occ_d sin a_d (times strength); its constant is 1 - AO.
+// CPU twin: passes/ao/reference.rs `hbao`, `hbao_ssdo`.
 #import view
 #import ao
 #import math
@@ -15,6 +18,8 @@
 // Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
 // without freeing, any shader whose branches or loop bounds read a uniform
 // block (docs/reliability.md).
+override SSDO: bool = false;
+
 @group(0) @binding(0) var<storage, read> params: AoParams;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var jitter_load: texture_2d<f32>;
@@ -114,10 +119,19 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let directions = u32(params.hbao_steps.x);
     let sector = TAU / params.hbao_steps.x;
     var occlusion = 0.0;
+    var harmonic = vec2f(0.0);
     for (var d = 0u; d < directions; d++) {
         let a = (f32(d) + jitter.x) * sector;
-        occlusion += integrate_direction(p, n, q, vec2f(cos(a), sin(a)), step_px, jitter.y);
+        let dir = vec2f(cos(a), sin(a));
+        let occ = integrate_direction(p, n, q, dir, step_px, jitter.y);
+        occlusion += occ;
+        if (SSDO) {
+            harmonic += occ * dir;
+        }
     }
     let ao = clamp(1.0 - occlusion / params.hbao_steps.x * params.hbao.z, 0.0, 1.0);
+    if (SSDO) {
+        return vec4f(ao, mask, harmonic * (2.0 / params.hbao_steps.x * params.hbao.z));
+    }
     return vec4f(ao, mask, 0.0, 0.0);
 }

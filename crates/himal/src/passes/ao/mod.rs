@@ -6,7 +6,10 @@
 //!   (AO res)        └─> ao.pack ─> ao.blur_x ─> ao.blur_y_stf ─> AO (full res, history)
 //!                        (full res)      history (previous) ─┘
 //! ```
-//! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O3.md`.
+//! With `--ao ssdo` (O4) the same nodes also carry the directional term
+//! (two coefficients, their permutations `SSDO` / `fs_ssdo`) into a second
+//! history ring, [`HISTORY_DIR`].
+//! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O4.md`.
 
 pub mod reference;
 mod settings;
@@ -15,10 +18,10 @@ use wgpu::util::DeviceExt;
 
 pub use settings::{AoMode, AoSettings, AoUniform, AoView, jitter_4x4};
 
-use crate::gpu::pipeline::{Program, uniform_buffer};
+use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{Fallback, FrameGraph, History, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{Step, clear_target, view_node};
+use crate::passes::common::{Step, clear_target, target, view_node};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -27,14 +30,29 @@ pub const STABILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 pub const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// ao.blur_y output and history: (AO, linear depth, N).
 pub const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// SSDO (O4): ao.hbao (AO, continuity, c1, c2), ao.pack / ao.blur_x (AO, Z, c1, c2).
+pub const SSDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// SSDO (O4): the directional coefficients after ao.blur_y_stf, and their history.
+pub const DIR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 
 /// The temporal filter's history ring (AO, Z, N) in the graph's [`History`].
 pub const HISTORY: &str = "ao.history";
+/// O4: the directional coefficients' history ring (c1, c2).
+pub const HISTORY_DIR: &str = "ao.history_dir";
 
-/// Declares the history ring of a `size` frame (before the graph is built).
-pub fn declare_history(history: &mut History, device: &wgpu::Device, size: (u32, u32)) {
+/// Declares the history rings of a `size` frame with `mode` (before the graph is built).
+pub fn declare_history(
+    history: &mut History,
+    device: &wgpu::Device,
+    size: (u32, u32),
+    mode: AoMode,
+) {
     let desc = TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT);
     history.declare(device, HISTORY, &desc, 2);
+    if mode.directional() {
+        let desc = TextureDesc::new_2d(size.0, size.1, DIR_FORMAT);
+        history.declare(device, HISTORY_DIR, &desc, 2);
+    }
 }
 
 /// What the AO graph nodes read besides the depth buffer.
@@ -50,8 +68,18 @@ pub struct AoInputs<'a> {
 pub struct AoTargets {
     /// Full resolution (AO, Z, N); lighting reads `.x`.
     pub ao: TextureHandle,
+    /// O4 (`--ao ssdo`): full resolution (c1, c2), the directional term.
+    pub dir: Option<TextureHandle>,
     pub raw: TextureHandle,
     pub stability: TextureHandle,
+}
+
+/// The SSDO variants of the steps (O4).
+struct SsdoSteps {
+    hbao: Step,
+    pack: Step,
+    blur_x: Step,
+    blur_y_stf: Step,
 }
 
 pub struct AoPass {
@@ -61,6 +89,8 @@ pub struct AoPass {
     blur_x: Step,
     blur_y: Step,
     blur_y_stf: Step,
+    /// Compiled on the first SSDO frame.
+    ssdo: std::sync::OnceLock<SsdoSteps>,
     view_program: Program,
     jitter: wgpu::Texture,
     linear_sampler: wgpu::Sampler,
@@ -126,6 +156,7 @@ impl AoPass {
                 HISTORY_FORMAT,
                 &[],
             )?,
+            ssdo: std::sync::OnceLock::new(),
             view_program: Program::new(ctx, "passes/ao/view.wgsl")?,
             jitter,
             linear_sampler,
@@ -135,6 +166,11 @@ impl AoPass {
                 &<AoUniform as bytemuck::Zeroable>::zeroed(),
             ),
         })
+    }
+
+    /// The parameters' buffer (`AoParams`; lighting reads the O4 fields).
+    pub fn params(&self) -> &wgpu::Buffer {
+        &self.params
     }
 
     /// Uploads this frame's parameters.
@@ -158,13 +194,27 @@ impl AoPass {
         )
     }
 
+    /// Compiles the SSDO steps now (`Renderer::prewarm`).
+    pub fn prewarm_ssdo(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        self.ssdo_steps(ctx).map(|_| ())
+    }
+
+    fn ssdo_steps(&self, ctx: &GpuContext) -> Result<&SsdoSteps, GpuError> {
+        if let Some(s) = self.ssdo.get() {
+            return Ok(s);
+        }
+        let steps = SsdoSteps::new(ctx)?;
+        Ok(self.ssdo.get_or_init(|| steps))
+    }
+
     /// Adds the AO nodes for a `size` frame.
     pub fn add<'a>(
         &'a self,
+        ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         size: (u32, u32),
         inputs: AoInputs<'a>,
-    ) -> AoTargets {
+    ) -> Result<AoTargets, GpuError> {
         let AoInputs {
             settings,
             depth,
@@ -174,13 +224,29 @@ impl AoPass {
         let (params, sampler) = (&self.params, &self.linear_sampler);
         let white = wgpu::LoadOp::Clear(wgpu::Color::WHITE);
 
+        let ssdo = settings.mode.directional();
+        let ssdo_steps = if ssdo {
+            Some(self.ssdo_steps(ctx)?)
+        } else {
+            None
+        };
+        let (hbao, pack, blur_x, raw_format, packed_format) = if let Some(s) = ssdo_steps {
+            (&s.hbao, &s.pack, &s.blur_x, SSDO_FORMAT, SSDO_FORMAT)
+        } else {
+            (
+                &self.hbao,
+                &self.pack,
+                &self.blur_x,
+                RAW_FORMAT,
+                PACKED_FORMAT,
+            )
+        };
         let raw = graph.create_texture(
             "ao.raw",
-            TextureDesc::new_2d(ao_size.0, ao_size.1, RAW_FORMAT),
+            TextureDesc::new_2d(ao_size.0, ao_size.1, raw_format),
         );
         let jitter = graph.import_texture("ao.jitter", &self.jitter);
-        let raw = self
-            .hbao
+        let raw = hbao
             .node(graph, "ao.hbao")
             .uniform("params", params)
             .read("depth", depth)
@@ -198,10 +264,9 @@ impl AoPass {
             .read("hbao_load", raw)
             .color(stability, white)
             .draw();
-        let full = TextureDesc::new_2d(size.0, size.1, PACKED_FORMAT);
+        let full = TextureDesc::new_2d(size.0, size.1, packed_format);
         let packed = graph.create_texture("ao.packed", full.clone());
-        let packed = self
-            .pack
+        let packed = pack
             .node(graph, "ao.pack")
             .uniform("params", params)
             .read("depth", depth)
@@ -210,21 +275,29 @@ impl AoPass {
             .color(packed, white)
             .draw();
         let blurred_x = graph.create_texture("ao.blurred_x", full);
-        let blurred_x = self
-            .blur_x
+        let blurred_x = blur_x
             .node(graph, "ao.blur_x")
             .uniform("params", params)
             .read("packed", packed)
             .sampler("linear_sampler", sampler)
             .color(blurred_x, white)
             .draw();
-        let ring = (settings.mode == AoMode::HbaoStf)
+        let ring = (settings.mode.temporal())
             .then(|| history.import(graph, HISTORY))
             .flatten();
-        let ao = match ring {
+        let ring_dir = ssdo.then(|| history.import(graph, HISTORY_DIR)).flatten();
+        let (ao, dir) = match ring {
             Some(ring) => {
                 let mut previous = ring.previous[0];
+                let mut previous_dir = ring_dir.map(|r| r.previous[0]);
                 if ring.frames == 0 {
+                    if let Some(p) = previous_dir.as_mut() {
+                        // No directional occlusion in the cleared history.
+                        let mut pass = graph.add_pass("ao.history_dir_clear");
+                        *p = pass.write(*p, TextureAccess::ColorAttachment);
+                        let target = *p;
+                        pass.execute(move |ctx| clear_target(ctx, target, wgpu::Color::BLACK));
+                    }
                     // The talk's clear values: (AO, Z) = (1, 0), N = 0.
                     let mut pass = graph.add_pass("ao.history_clear");
                     previous = pass.write(previous, TextureAccess::ColorAttachment);
@@ -238,20 +311,35 @@ impl AoPass {
                         clear_target(ctx, previous, clear)
                     });
                 }
-                let next = self
-                    .blur_y_stf
+                let step = match ssdo_steps {
+                    Some(s) if ring_dir.is_some() => &s.blur_y_stf,
+                    _ => &self.blur_y_stf,
+                };
+                let node = step
                     .node(graph, "ao.blur_y_stf")
                     .uniform("params", params)
                     .read("blurred_x", blurred_x)
                     .read("depth", depth)
                     .read("stability_load", stability)
                     .read("history", previous)
+                    .optional("history_dir", previous_dir, Fallback::Black)
                     .sampler("linear_sampler", sampler)
-                    .color(ring.next, white)
-                    .draw();
+                    .color(ring.next, white);
+                let (next, dir) = match ring_dir {
+                    Some(r) => {
+                        let written = node
+                            .color(r.next, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
+                            .draw_targets();
+                        (written.colors[0], Some(written.colors[1]))
+                    }
+                    None => (node.draw(), None),
+                };
                 // The history outlives the frame.
                 graph.mark_output(next);
-                next
+                if let Some(d) = dir {
+                    graph.mark_output(d);
+                }
+                (next, dir)
             }
             None => {
                 let out = graph.create_texture(
@@ -259,19 +347,27 @@ impl AoPass {
                     TextureDesc::new_2d(size.0, size.1, HISTORY_FORMAT),
                 );
                 // Without the filter (STF = false) the shader reads neither.
-                self.blur_y
+                let ao = self
+                    .blur_y
                     .node(graph, "ao.blur_y")
                     .uniform("params", params)
                     .read("blurred_x", blurred_x)
                     .read("depth", depth)
                     .optional("stability_load", None, Fallback::White)
                     .optional("history", None, Fallback::Black)
+                    .optional("history_dir", None, Fallback::Black)
                     .sampler("linear_sampler", sampler)
                     .color(out, white)
-                    .draw()
+                    .draw();
+                (ao, None)
             }
         };
-        AoTargets { ao, raw, stability }
+        Ok(AoTargets {
+            ao,
+            dir,
+            raw,
+            stability,
+        })
     }
 
     /// Draws AO debug view `kind` into `output`.
@@ -291,16 +387,42 @@ impl AoPass {
             kind as u32,
             output,
         );
-        let (ao, raw, stability) = match kind {
-            AoView::Ao => (Some(targets.ao), None, None),
-            AoView::Raw => (None, Some(targets.raw), None),
-            AoView::Stability => (None, None, Some(targets.stability)),
+        let (ao, raw, stability, dir) = match kind {
+            AoView::Ao => (Some(targets.ao), None, None, None),
+            AoView::Raw => (None, Some(targets.raw), None, None),
+            AoView::Stability => (None, None, Some(targets.stability), None),
+            // Without SSDO data the coefficients read 0 (no directional occlusion).
+            AoView::Directional => (Some(targets.ao), None, None, targets.dir),
         };
         // The view reads one buffer; the others are unused by its permutation.
         node.uniform("params", &self.params)
             .optional("ao", ao, Fallback::Black)
             .optional("hbao_load", raw, Fallback::Black)
             .optional("stability_load", stability, Fallback::Black)
+            .optional("ao_dir", dir, Fallback::Black)
             .draw()
+    }
+}
+
+impl SsdoSteps {
+    fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let on = [("SSDO", 1.0)];
+        let program = Program::new(ctx, "passes/ao/blur_y.wgsl")?;
+        let targets = [target(HISTORY_FORMAT), target(DIR_FORMAT)];
+        let mut spec = RenderSpec::fullscreen("ao.blur_y_ssdo", &targets);
+        spec.fragment_entry = Some("fs_ssdo");
+        let pipeline = program.render_pipeline(ctx, &spec)?;
+        Ok(Self {
+            hbao: Step::new(ctx, "passes/ao/hbao.wgsl", "ao.hbao_ssdo", SSDO_FORMAT, &on)?,
+            pack: Step::new(ctx, "passes/ao/pack.wgsl", "ao.pack_ssdo", SSDO_FORMAT, &on)?,
+            blur_x: Step::new(
+                ctx,
+                "passes/ao/blur_x.wgsl",
+                "ao.blur_x_ssdo",
+                SSDO_FORMAT,
+                &[],
+            )?,
+            blur_y_stf: Step { program, pipeline },
+        })
     }
 }

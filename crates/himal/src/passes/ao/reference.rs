@@ -1,7 +1,9 @@
 //! CPU twins of the AO passes (same math, same order as the WGSL), for the
 //! GPU tests: `hbao` (ao.hbao), `dilate_stability` (ao.stability), `pack`
 //! (ao.pack), `blur` (ao.blur_x / the blur of ao.blur_y) and
-//! `temporal_filter` (the STF of ao.blur_y_stf).
+//! `temporal_filter` (the STF of ao.blur_y_stf); O4: `hbao_ssdo`,
+//! `pack_ssdo`, `blur` on four channels, `temporal_filter_ssdo`, and the
+//! lighting's lookups `ssdo_visibility`, `specular_occlusion_lagarde`.
 
 use glam::{IVec2, Mat4, Vec2, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
@@ -166,12 +168,25 @@ fn integrate_direction(
 
 /// ao.hbao: (AO, continuity) at AO resolution from full-resolution device depth.
 pub fn hbao(p: &AoUniform, depth: &Image<f32>) -> Image<[f32; 2]> {
+    let full = hbao_any(p, depth, false);
+    Image::from_fn(full.width, full.height, |q| {
+        let v = full.get(q);
+        [v[0], v[1]]
+    })
+}
+
+/// ao.hbao's SSDO permutation (O4): (AO, continuity, c1, c2).
+pub fn hbao_ssdo(p: &AoUniform, depth: &Image<f32>) -> Image<[f32; 4]> {
+    hbao_any(p, depth, true)
+}
+
+fn hbao_any(p: &AoUniform, depth: &Image<f32>, ssdo: bool) -> Image<[f32; 4]> {
     let jitter = jitter_4x4();
     let (w, h) = (p.ao_size[0] as u32, p.ao_size[1] as u32);
     Image::from_fn(w, h, |q| {
         let pos = texel_position(p, depth, q);
         if -pos.z >= SKY_DEPTH {
-            return [1.0, 0.0];
+            return [1.0, 0.0, 0.0, 0.0];
         }
         let tp = |o: IVec2| texel_position(p, depth, q + o);
         let dx = nearer(tp(IVec2::X) - pos, pos - tp(-IVec2::X));
@@ -189,19 +204,27 @@ pub fn hbao(p: &AoUniform, depth: &Image<f32>) -> Image<[f32; 2]> {
         let mask = if continuous { 1.0 } else { 0.0 };
         let radius_px = (p.hbao[0] * p.proj[3] / clip_w(p, -pos.z)).min(p.hbao_steps[3]);
         if radius_px < 1.0 {
-            return [1.0, mask];
+            return [1.0, mask, 0.0, 0.0];
         }
         let step_px = radius_px / (p.hbao_steps[1] + 1.0);
         let j = jitter[((q.y & 3) * 4 + (q.x & 3)) as usize];
         let sector = std::f32::consts::TAU / p.hbao_steps[0];
         let mut occlusion = 0.0;
+        let mut harmonic = Vec2::ZERO;
         for d in 0..p.hbao_steps[0] as u32 {
             let a = (d as f32 + j[0]) * sector;
             let dir = Vec2::new(a.cos(), a.sin());
-            occlusion += integrate_direction(p, depth, pos, n, q, dir, step_px, j[1]);
+            let occ = integrate_direction(p, depth, pos, n, q, dir, step_px, j[1]);
+            occlusion += occ;
+            harmonic += occ * dir;
         }
         let ao = (1.0 - occlusion / p.hbao_steps[0] * p.hbao[2]).clamp(0.0, 1.0);
-        [ao, mask]
+        if ssdo {
+            let c = harmonic * (2.0 / p.hbao_steps[0] * p.hbao[2]);
+            [ao, mask, c.x, c.y]
+        } else {
+            [ao, mask, 0.0, 0.0]
+        }
     })
 }
 
@@ -227,14 +250,38 @@ pub fn pack(p: &AoUniform, depth: &Image<f32>, raw: &Image<[f32; 2]>) -> Image<[
     })
 }
 
-fn blur_tap(ao_z: [f32; 2], r: f32, z0: f32, scale: f32, p: &AoUniform, total: &mut Vec2) {
-    let dz = (ao_z[1] - z0) * p.blur[2] / z0;
-    let w = scale * (-r * r * p.blur[1] - dz * dz).exp2();
-    *total += Vec2::new(ao_z[0] * w, w);
+/// ao.pack's SSDO permutation: full-resolution (AO, Z, c1, c2).
+pub fn pack_ssdo(p: &AoUniform, depth: &Image<f32>, raw: &Image<[f32; 4]>) -> Image<[f32; 4]> {
+    Image::from_fn(depth.width, depth.height, |px| {
+        let z = linear_depth(p, depth.get(px));
+        let uv = (px.as_vec2() / p.hbao_steps[2] + 0.5) * v4(p.ao_size).zw();
+        let v = bilinear(raw, uv);
+        [v[0], z, v[2], v[3]]
+    })
 }
 
-/// One 1D cross-bilateral pass (`ao_cross_bilateral`) along `step` ((1,0) or (0,1)).
-pub fn blur(p: &AoUniform, img: &Image<[f32; 2]>, step: IVec2) -> Image<[f32; 2]> {
+/// `ao_blur_tap`: channel 0 AO, 1 Z, the rest (O4 coefficients) weighted as AO;
+/// `total` holds (sum AO w, sum w, sum c w...).
+fn blur_tap<const N: usize>(
+    v: [f32; N],
+    r: f32,
+    z0: f32,
+    scale: f32,
+    p: &AoUniform,
+    total: &mut [f32; N],
+) {
+    let dz = (v[1] - z0) * p.blur[2] / z0;
+    let w = scale * (-r * r * p.blur[1] - dz * dz).exp2();
+    total[0] += v[0] * w;
+    total[1] += w;
+    for k in 2..N {
+        total[k] += v[k] * w;
+    }
+}
+
+/// One 1D cross-bilateral pass (`ao_cross_bilateral`) along `step` ((1,0) or
+/// (0,1)) of (AO, Z) or, with SSDO, (AO, Z, c1, c2).
+pub fn blur<const N: usize>(p: &AoUniform, img: &Image<[f32; N]>, step: IVec2) -> Image<[f32; N]> {
     let radius = p.blur[0];
     let inner = if p.blur[3] > 0.5 {
         (radius * 0.5).floor()
@@ -244,7 +291,8 @@ pub fn blur(p: &AoUniform, img: &Image<[f32; 2]>, step: IVec2) -> Image<[f32; 2]
     let inv = Vec2::new(1.0 / img.width as f32, 1.0 / img.height as f32);
     Image::from_fn(img.width, img.height, |px| {
         let c = img.get(px);
-        let mut total = Vec2::new(c[0], 1.0);
+        let mut total = c;
+        total[1] = 1.0;
         let mut r = 1.0f32;
         while r <= inner {
             let o = step * r as i32;
@@ -259,7 +307,9 @@ pub fn blur(p: &AoUniform, img: &Image<[f32; 2]>, step: IVec2) -> Image<[f32; 2]
             blur_tap(bilinear(img, centre - o), r + 0.5, c[1], 2.0, p, &mut total);
             r += 2.0;
         }
-        [total.x / total.y, c[1]]
+        let mut out = total.map(|t| t / total[1]);
+        out[1] = c[1];
+        out
     })
 }
 
@@ -280,10 +330,34 @@ pub fn temporal_filter(
     stability: &Image<f32>,
     history: &Image<[f32; 4]>,
 ) -> Image<[f32; 4]> {
+    let blurred = Image::from_fn(blurred.width, blurred.height, |q| {
+        let v = blurred.get(q);
+        [v[0], v[1], 0.0, 0.0]
+    });
+    let dir = Image::new(
+        history.width,
+        history.height,
+        vec![[0.0; 2]; history.data.len()],
+    );
+    temporal_filter_ssdo(p, view, &blurred, depth, stability, history, &dir).0
+}
+
+/// ao.blur_y_stf's SSDO entry (`fs_ssdo`): blurred (AO, Z, c1, c2) and the
+/// two histories give the next (AO, Z, N) and (c1, c2).
+pub fn temporal_filter_ssdo(
+    p: &AoUniform,
+    view: &StfView,
+    blurred: &Image<[f32; 4]>,
+    depth: &Image<f32>,
+    stability: &Image<f32>,
+    history: &Image<[f32; 4]>,
+    history_dir: &Image<[f32; 2]>,
+) -> (Image<[f32; 4]>, Image<[f32; 2]>) {
     let full = v4(p.full_size);
     let ao_size = v4(p.ao_size).xy().as_ivec2();
-    Image::from_fn(blurred.width, blurred.height, |px| {
-        let [mut ao, z] = blurred.get(px);
+    let both = Image::from_fn(blurred.width, blurred.height, |px| {
+        let [mut ao, z, c1, c2] = blurred.get(px);
+        let mut dir = Vec2::new(c1, c2);
         let mut n = 1.0;
         let d = depth.get(px);
         if d > 0.0 {
@@ -313,9 +387,50 @@ pub fn temporal_filter(
             if same_surface && !(stable && p.stf[3] > 0.5) {
                 let ao_prev = bilinear(history, prev_uv)[0];
                 ao = (n_prev * ao_prev + ao) / (n_prev + 1.0);
+                let dir_prev = Vec2::from_array(bilinear(history_dir, prev_uv));
+                dir = (n_prev * dir_prev + dir) / (n_prev + 1.0);
                 n = (n_prev + 1.0).min(p.stf[1]);
             }
         }
-        [ao, z, n, 1.0]
-    })
+        ([ao, z, n, 1.0], [dir.x, dir.y])
+    });
+    let (w, h) = (both.width, both.height);
+    let (a, d): (Vec<_>, Vec<_>) = both.data.into_iter().unzip();
+    (Image::new(w, h, a), Image::new(w, h, d))
+}
+
+/// `ssdo_visibility` (shaders/ao.wgsl): the O4 directional term along unit
+/// `l` at view-space `pos` with normal `n`, harmonic `c` = (c1, c2).
+pub fn ssdo_visibility(pos: Vec3, n: Vec3, l: Vec3, c: Vec2, gain: f32, soft: f32) -> f32 {
+    let v = (-pos).normalize();
+    let screen = l.xy() * -pos.z + pos.xy() * l.z;
+    let len = screen.length();
+    if len <= 1e-6 {
+        return 1.0;
+    }
+    let t3 = (screen / len).extend(0.0);
+    let rise = gain * (c.x * t3.x - c.y * t3.y);
+    if rise <= 0.0 {
+        return 1.0;
+    }
+    let mut sin_t = 0.0;
+    let mut t = n.cross(t3.cross(v));
+    let t_len = t.length();
+    if t_len > 1e-12 {
+        t /= t_len;
+        let st = t.xy() * -pos.z + pos.xy() * t.z;
+        if st.dot(t3.xy()) < 0.0 {
+            t = -t;
+        }
+        sin_t = t.dot(v);
+    }
+    let sin_l = l.dot(v);
+    (1.0 + (sin_l - sin_t - rise) / soft).clamp(0.0, 1.0)
+}
+
+/// `specular_occlusion_lagarde` (shaders/ao.wgsl): reflection occlusion from
+/// AO alone (Lagarde & de Rousiers 2014), `roughness` perceptual.
+pub fn specular_occlusion_lagarde(n_o_v: f32, ao: f32, roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    ((n_o_v + ao).powf((-16.0 * alpha - 1.0).exp2()) - 1.0 + ao).clamp(0.0, 1.0)
 }

@@ -6,7 +6,7 @@ use glam::Mat4;
 
 use crate::Error;
 
-/// Which AO runs (`--ao off|hbao|hbao+stf`).
+/// Which AO runs (`--ao off|hbao|hbao+stf|ssdo`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum AoMode {
     Off,
@@ -15,10 +15,24 @@ pub enum AoMode {
     /// HBAO, the blur and the selective temporal filter (Battlefield 3).
     #[default]
     HbaoStf,
+    /// Ryse's screen-space directional occlusion (O4): `HbaoStf` plus a
+    /// directional term (first harmonic of the horizon rise) that occludes
+    /// the sun and local lights and, with reflection occlusion, ambient specular.
+    Ssdo,
 }
 
 impl AoMode {
-    pub const NAMES: [&'static str; 3] = ["off", "hbao", "hbao+stf"];
+    pub const NAMES: [&'static str; 4] = ["off", "hbao", "hbao+stf", "ssdo"];
+
+    /// The selective temporal filter runs (with its history ring).
+    pub fn temporal(self) -> bool {
+        matches!(self, AoMode::HbaoStf | AoMode::Ssdo)
+    }
+
+    /// The directional term is computed (O4).
+    pub fn directional(self) -> bool {
+        self == AoMode::Ssdo
+    }
 }
 
 impl std::str::FromStr for AoMode {
@@ -28,6 +42,7 @@ impl std::str::FromStr for AoMode {
             "off" => Ok(AoMode::Off),
             "hbao" => Ok(AoMode::Hbao),
             "hbao+stf" => Ok(AoMode::HbaoStf),
+            "ssdo" => Ok(AoMode::Ssdo),
             other => Err(Error::InvalidSettings(format!(
                 "unknown AO mode \"{other}\" (known: {})",
                 AoMode::NAMES.join(", ")
@@ -68,6 +83,21 @@ pub struct AoSettings {
     pub continuity: f32,
     /// Filter only unstable pixels (the talk); false filters every pixel.
     pub selective: bool,
+    /// O4: how much the directional term occludes the sun and local lights
+    /// (0 = not at all, 1 = fully; `--ssdo-strength`).
+    pub ssdo_strength: f32,
+    /// O4: penumbra width below the horizon (sine of elevation).
+    pub ssdo_softness: f32,
+    /// O4: gain from the directional harmonic to the horizon's rise (2/pi of
+    /// a half-plane's rise, and W's falloff, measured in O4.md).
+    pub ssdo_gain: f32,
+    /// O4: extra penumbra width per unit of perceptual roughness for the
+    /// reflection vector (a rough lobe sees past the horizon).
+    pub ssdo_roughness_softness: f32,
+    /// Reflection occlusion (`--reflection-occlusion`): ambient specular times
+    /// Lagarde's specular occlusion from AO and, with ssdo, times the
+    /// directional term along the reflection vector; off: times AO, as diffuse.
+    pub reflection_occlusion: bool,
 }
 
 impl Default for AoSettings {
@@ -88,6 +118,11 @@ impl Default for AoSettings {
             n_max: 8.0,
             continuity: 0.1,
             selective: true,
+            ssdo_strength: 1.0,
+            ssdo_softness: 0.4,
+            ssdo_gain: 1.5,
+            ssdo_roughness_softness: 1.0,
+            reflection_occlusion: false,
         }
     }
 }
@@ -107,6 +142,14 @@ impl AoSettings {
         let ok = self.n_max >= 1.0 && self.epsilon >= 0.0 && self.continuity > 0.0;
         if !ok {
             return bad("N_max >= 1, epsilon >= 0 and L > 0 are required");
+        }
+        if !(0.0..=1.0).contains(&self.ssdo_strength) {
+            return bad("SSDO strength must be in [0, 1]");
+        }
+        let soft = self.ssdo_softness > 0.0 && self.ssdo_roughness_softness >= 0.0;
+        let finite = self.ssdo_softness.is_finite() && self.ssdo_roughness_softness.is_finite();
+        if !(soft && finite && self.ssdo_gain >= 0.0 && self.ssdo_gain.is_finite()) {
+            return bad("SSDO softness must be positive");
         }
         Ok(())
     }
@@ -140,6 +183,8 @@ pub struct AoUniform {
     /// The projection's depth rows: P22, P23 (clip z), P32, P33 (clip w);
     /// perspective (0, near, -1, 0) and orthographic cameras alike.
     pub depth: [f32; 4],
+    /// O4: strength on lights, penumbra width, width per roughness, gain.
+    pub ssdo: [f32; 4],
 }
 
 impl AoUniform {
@@ -184,6 +229,12 @@ impl AoUniform {
             ],
             jitter: [0.0; 4],
             depth: [proj.z_axis.z, proj.w_axis.z, proj.z_axis.w, proj.w_axis.w],
+            ssdo: [
+                s.ssdo_strength,
+                s.ssdo_softness,
+                s.ssdo_roughness_softness,
+                s.ssdo_gain,
+            ],
         }
     }
 
@@ -203,6 +254,8 @@ pub enum AoView {
     Raw = 2,
     /// 1 = stable (continuous over 4x4: temporal filter off), 0 = unstable.
     Stability = 3,
+    /// O4 directional term (raw: AO, c1, c2).
+    Directional = 4,
 }
 
 /// 4x4 Bayer order: neighbouring pixels get far-apart rotations.

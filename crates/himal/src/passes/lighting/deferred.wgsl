@@ -14,8 +14,15 @@
 // (passes/skyocc, shaders/sky_occlusion.wgsl), faded with height above the
 // terrain; sky SH irradiance along the bent normal times the cosine-convolved
 // SH2 visibility along it; the same visibility scales ambient specular.
-// CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`).
+// O4 (SSDO): the directional term (ao_dir, shaders/ao.wgsl `ssdo_visibility`)
+// along each light's direction scales its diffuse and specular (contact
+// shadows, blended by ao_params.ssdo.x); REFLECTION_OCCLUSION scales ambient
+// specular by Lagarde's specular occlusion from AO (the constant band) times,
+// with SSDO, the directional term along the reflection vector, instead of by AO.
+// CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`);
+// O4 functions: passes/ao/reference.rs `ssdo_visibility`, `specular_occlusion_lagarde`.
 #import view
+#import ao
 #import brdf
 #import tangent_frame
 #import sh
@@ -46,6 +53,8 @@ override FOG: bool = true;
 override SSAO: bool = true;
 override ENV_SPECULAR: bool = true;
 override SKY_OCCLUSION: bool = false;
+override SSDO: bool = false;
+override REFLECTION_OCCLUSION: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
 // Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
@@ -67,9 +76,25 @@ override SKY_OCCLUSION: bool = false;
 @group(0) @binding(14) var skyocc_vis: texture_2d_array<f32>;
 @group(0) @binding(15) var skyocc_heights_load: texture_2d_array<f32>;
 @group(0) @binding(16) var skyocc_sampler: sampler;
+@group(0) @binding(17) var ao_dir: texture_2d<f32>;
+@group(0) @binding(18) var<uniform> ao_params: AoParams;
+
+// O4 inputs in view space (unused without SSDO).
+struct Ssdo {
+    p: vec3f,
+    n: vec3f,
+    // the directional harmonic (c1, c2)
+    c: vec2f,
+}
+
+// The directional term along world direction l, blended toward 1 by the strength.
+fn ssdo_light(o: Ssdo, l: vec3f) -> f32 {
+    let l_v = (view.view * vec4f(l, 0.0)).xyz;
+    return mix(1.0, ssdo_visibility(o.p, o.n, l_v, o.c, ao_params.ssdo.w, ao_params.ssdo.y), ao_params.ssdo.x);
+}
 
 // Reflected radiance of the local lights at p (mask: the shadow mask texel).
-fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f) -> vec3f {
+fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f, o: Ssdo) -> vec3f {
     var c = vec3f(0.0);
     for (var k = 0u; k < lights.count.x; k = k + 1u) {
         let l = lights.lights[k];
@@ -87,6 +112,9 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
         if (channel > 0u) {
             e *= mask[channel];
         }
+        if (SSDO) {
+            e *= ssdo_light(o, dir);
+        }
         c += brdf_cos(s, t, b, n, v, dir) * e;
     }
     return c;
@@ -95,7 +123,8 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
 // Outgoing radiance toward v (before aerial perspective).
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
 // `sky_vis`: SH2 sky visibility (open sky when SKY_OCCLUSION is off).
-fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f) -> vec3f {
+// `spec_ao`: the occlusion of ambient specular (ao_in without reflection occlusion).
+fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f) -> vec3f {
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
@@ -123,10 +152,11 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, t: vec3f, b: 
             let e_open = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
             ratio = saturate(luminance(e_n) * sky_visibility / max(luminance(e_open), 1e-9));
         }
-        c += prefiltered * (s.f0 * ab.x + ab.y) * (ao_in * ratio);
+        c += prefiltered * (s.f0 * ab.x + ab.y) * (spec_ao * ratio);
     } else {
         let e_r = max(sh9_eval(lighting.sky_irradiance, reflect(-v, n)), vec3f(0.0));
-        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao / PI);
+        let ao_spec = spec_ao * sky_visibility;
+        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao_spec / PI);
     }
     c += s.diffuse_albedo * e_n * (ao / PI);
     return c;
@@ -159,8 +189,29 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (SKY_OCCLUSION) {
         sky_vis = sky_occlusion_lookup(skyocc_table, skyocc_vis, skyocc_heights_load, skyocc_sampler, p, tbn[2]);
     }
-    var c = shade(s, m.x, m.w, albedo_ao.a * ssao, tbn[0], tbn[1], tbn[2], v, mask.r, sky_vis);
-    c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask);
+    let ao_in = albedo_ao.a * ssao;
+    var spec_ao = ao_in;
+    var sun_visibility = mask.r;
+    var o = Ssdo(vec3f(0.0), vec3f(0.0), vec2f(0.0));
+    if (SSDO) {
+        let coeffs = textureLoad(ao_dir, min(px, vec2i(textureDimensions(ao_dir)) - 1), 0).xy;
+        o = Ssdo((view.view * vec4f(p, 1.0)).xyz, (view.view * vec4f(tbn[2], 0.0)).xyz, coeffs);
+        sun_visibility *= ssdo_light(o, lighting.sun_direction.xyz);
+    }
+    if (REFLECTION_OCCLUSION) {
+        // Both bands (Ryse): the constant through Lagarde's formula, times the
+        // directional term along the reflection vector.
+        let roughness = perceptual_roughness_from_glossiness(m.x);
+        spec_ao = albedo_ao.a * specular_occlusion_lagarde(max(dot(tbn[2], v), 1e-4), ssao, roughness);
+        if (SSDO) {
+            let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, m.w));
+            let r_v = (view.view * vec4f(r, 0.0)).xyz;
+            let soft = ao_params.ssdo.y + ao_params.ssdo.z * roughness;
+            spec_ao *= ssdo_visibility(o.p, o.n, r_v, o.c, ao_params.ssdo.w, soft);
+        }
+    }
+    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis);
+    c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask, o);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);
         // fog.z = 1 (Bruneton sky, L1): the SH sky radiance toward the horizon,

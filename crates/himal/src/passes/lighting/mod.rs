@@ -2,7 +2,8 @@
 //! anisotropic GGX BRDF, SH9 sky irradiance, split-sum ambient specular,
 //! aerial perspective. CPU twin: [`reference::shade`]. Permutations (E1):
 //! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`, `ENV_SPECULAR`,
-//! `SKY_OCCLUSION`: L2 height-field sky visibility from `passes/skyocc`).
+//! `SKY_OCCLUSION`: L2 height-field sky visibility from `passes/skyocc`;
+//! `SSDO`, `REFLECTION_OCCLUSION`: O4 directional occlusion).
 
 pub mod reference;
 
@@ -31,6 +32,11 @@ pub struct LightingKey {
     pub env_specular: bool,
     /// L2 sky occlusion: SH2 visibility and bent normal from the sector pool.
     pub sky_occlusion: bool,
+    /// O4: the directional term occludes the sun and local lights (needs `ssao`).
+    pub ssdo: bool,
+    /// O4 reflection occlusion of ambient specular: along the reflection
+    /// vector with `ssdo`, Lagarde's AO formula without.
+    pub reflection_occlusion: bool,
 }
 
 impl Default for LightingKey {
@@ -41,6 +47,8 @@ impl Default for LightingKey {
             ssao: true,
             env_specular: true,
             sky_occlusion: false,
+            ssdo: false,
+            reflection_occlusion: false,
         }
     }
 }
@@ -53,20 +61,26 @@ impl LightingKey {
         ssao: false,
         env_specular: false,
         sky_occlusion: false,
+        ssdo: false,
+        reflection_occlusion: false,
     };
 
-    /// Every permutation (for pre-warming).
+    /// Every permutation (for pre-warming; `ssdo` only with `ssao`).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..32u32).map(|bits| LightingKey {
-            shadows: bits & 1 != 0,
-            fog: bits & 2 != 0,
-            ssao: bits & 4 != 0,
-            env_specular: bits & 8 != 0,
-            sky_occlusion: bits & 16 != 0,
-        })
+        (0..128u32)
+            .map(|bits| LightingKey {
+                shadows: bits & 1 != 0,
+                fog: bits & 2 != 0,
+                ssao: bits & 4 != 0,
+                env_specular: bits & 8 != 0,
+                sky_occlusion: bits & 16 != 0,
+                ssdo: bits & 32 != 0,
+                reflection_occlusion: bits & 64 != 0,
+            })
+            .filter(|k| k.ssao || !k.ssdo)
     }
 
-    fn constants(self) -> [(&'static str, f64); 5] {
+    fn constants(self) -> [(&'static str, f64); 7] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
@@ -74,6 +88,8 @@ impl LightingKey {
             ("SSAO", b(self.ssao)),
             ("ENV_SPECULAR", b(self.env_specular)),
             ("SKY_OCCLUSION", b(self.sky_occlusion)),
+            ("SSDO", b(self.ssdo)),
+            ("REFLECTION_OCCLUSION", b(self.reflection_occlusion)),
         ]
     }
 }
@@ -85,6 +101,10 @@ pub struct LightingInputs<'a> {
     pub shadow_mask: Option<TextureHandle>,
     /// Screen-space AO (`.x`); `None`: unoccluded.
     pub ao: Option<TextureHandle>,
+    /// O4 directional coefficients (c1, c2); `None`: none (read as 0).
+    pub ao_dir: Option<TextureHandle>,
+    /// `AoParams` (the O4 strength and penumbra widths).
+    pub ao_params: &'a wgpu::Buffer,
     /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
     pub lights: &'a wgpu::Buffer,
     /// Filtered environment cube (L4, `envmap.filtered` after this
@@ -145,6 +165,8 @@ impl LightingPass {
             .read("depth", gbuffer.depth)
             .optional("shadow_mask", inputs.shadow_mask, Fallback::White)
             .optional("ao", inputs.ao, Fallback::White)
+            .optional("ao_dir", inputs.ao_dir, Fallback::Black)
+            .uniform("ao_params", inputs.ao_params)
             .uniform("lights", inputs.lights)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &envmap.sampler)
