@@ -36,6 +36,16 @@ pub struct AoArgs {
     /// Blur kernel radius in pixels.
     #[arg(long, value_name = "PIXELS", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub ao_blur_radius: Option<u32>,
+    /// O5 AO colour bleeding: ambient diffuse occlusion tinted by the
+    /// low-frequency albedo around each pixel (docs/techniques/O5.md; off
+    /// by default: it overstates bounce light against a ray-traced estimate).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub ao_bleed: String,
 }
 
 impl AoArgs {
@@ -63,6 +73,11 @@ impl AoArgs {
             }
             s.radius = r;
         }
+        s.bleed = match self.ao_bleed.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--ao-bleed {other}: expected on or off"),
+        };
         if let Some(r) = self.ao_blur_radius {
             s.blur_radius = r;
         }

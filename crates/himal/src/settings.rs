@@ -36,7 +36,7 @@ pub enum ViewBuffer {
 }
 
 impl ViewBuffer {
-    pub const NAMES: [&'static str; 24] = [
+    pub const NAMES: [&'static str; 25] = [
         "final",
         "albedo",
         "normal",
@@ -51,6 +51,7 @@ impl ViewBuffer {
         "ao",
         "ao-raw",
         "stability-mask",
+        "ao-bleed",
         "luminance",
         "bloom",
         "shadow-mask",
@@ -83,6 +84,7 @@ impl std::str::FromStr for ViewBuffer {
             "ao" => ViewBuffer::Ao(AoView::Ao),
             "ao-raw" => ViewBuffer::Ao(AoView::Raw),
             "stability-mask" => ViewBuffer::Ao(AoView::Stability),
+            "ao-bleed" => ViewBuffer::Ao(AoView::Bleed),
             "luminance" => ViewBuffer::Debug(D::Luminance),
             "bloom" => ViewBuffer::Debug(D::Bloom),
             "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
@@ -188,6 +190,9 @@ pub struct FrameSettings {
     /// E3 specular anti-aliasing: glTF roughness widened by the normal
     /// variance baked into normal-map mips (Toksvig; on by default).
     pub specular_aa: bool,
+    /// The scene's `[[ambient_light]]` volumes scale the ambient light (on
+    /// by default; docs/ambient-lights.md).
+    pub ambient_lights: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -258,6 +263,7 @@ impl FrameSettings {
             envmap_every_frame: false,
             sky_model: Default::default(),
             specular_aa: true,
+            ambient_lights: true,
         }
     }
 }

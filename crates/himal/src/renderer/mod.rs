@@ -99,6 +99,7 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
         sky_occlusion: settings.sky_occlusion,
+        ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,
     }
 }
 

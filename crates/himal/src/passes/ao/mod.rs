@@ -8,6 +8,7 @@
 //! ```
 //! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O3.md`.
 
+pub mod bleed;
 pub mod reference;
 mod settings;
 
@@ -292,7 +293,8 @@ impl AoPass {
             output,
         );
         let (ao, raw, stability) = match kind {
-            AoView::Ao => (Some(targets.ao), None, None),
+            // Bleed is drawn by passes/ao/bleed (frame.rs routes it there).
+            AoView::Ao | AoView::Bleed => (Some(targets.ao), None, None),
             AoView::Raw => (None, Some(targets.raw), None),
             AoView::Stability => (None, None, Some(targets.stability)),
         };

@@ -68,6 +68,11 @@ pub struct AoSettings {
     pub continuity: f32,
     /// Filter only unstable pixels (the talk); false filters every pixel.
     pub selective: bool,
+    /// O5 colour bleeding: ambient diffuse occlusion tinted by the
+    /// low-frequency albedo around the pixel (`passes/ao/bleed`). Off by
+    /// default: measured against a one-bounce ray-traced estimate it lifts
+    /// the occlusion too much except in near-white surroundings (O5.md).
+    pub bleed: bool,
 }
 
 impl Default for AoSettings {
@@ -88,6 +93,7 @@ impl Default for AoSettings {
             n_max: 8.0,
             continuity: 0.1,
             selective: true,
+            bleed: false,
         }
     }
 }
@@ -203,6 +209,8 @@ pub enum AoView {
     Raw = 2,
     /// 1 = stable (continuous over 4x4: temporal filter off), 0 = unstable.
     Stability = 3,
+    /// O5 bleed colour (raw: rgb, coverage; `passes/ao/bleed/view.wgsl`).
+    Bleed = 4,
 }
 
 /// 4x4 Bayer order: neighbouring pixels get far-apart rotations.

@@ -4,6 +4,7 @@
 //! [`LightingKey`] (override constants `SHADOWS`, `FOG`, `SSAO`, `ENV_SPECULAR`,
 //! `SKY_OCCLUSION`: L2 height-field sky visibility from `passes/skyocc`).
 
+pub mod ambient;
 pub mod reference;
 
 use crate::gpu::pipeline::{Program, RenderSpec};
@@ -31,6 +32,9 @@ pub struct LightingKey {
     pub env_specular: bool,
     /// L2 sky occlusion: SH2 visibility and bent normal from the sector pool.
     pub sky_occlusion: bool,
+    /// O5 colour bleeding: ambient diffuse occlusion tinted per channel by
+    /// the low-frequency albedo (`passes/ao/bleed`); only with `ssao`.
+    pub ao_bleed: bool,
 }
 
 impl Default for LightingKey {
@@ -41,6 +45,7 @@ impl Default for LightingKey {
             ssao: true,
             env_specular: true,
             sky_occlusion: false,
+            ao_bleed: false,
         }
     }
 }
@@ -53,20 +58,23 @@ impl LightingKey {
         ssao: false,
         env_specular: false,
         sky_occlusion: false,
+        ao_bleed: false,
     };
 
-    /// Every permutation (for pre-warming).
+    /// Every permutation (for pre-warming; bleeding only with SSAO).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..32u32).map(|bits| LightingKey {
+        let keys = (0..64u32).map(|bits| LightingKey {
             shadows: bits & 1 != 0,
             fog: bits & 2 != 0,
             ssao: bits & 4 != 0,
             env_specular: bits & 8 != 0,
             sky_occlusion: bits & 16 != 0,
-        })
+            ao_bleed: bits & 32 != 0,
+        });
+        keys.filter(|k| k.ssao || !k.ao_bleed)
     }
 
-    fn constants(self) -> [(&'static str, f64); 5] {
+    fn constants(self) -> [(&'static str, f64); 6] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
@@ -74,6 +82,7 @@ impl LightingKey {
             ("SSAO", b(self.ssao)),
             ("ENV_SPECULAR", b(self.env_specular)),
             ("SKY_OCCLUSION", b(self.sky_occlusion)),
+            ("AO_BLEED", b(self.ao_bleed)),
         ]
     }
 }
@@ -85,6 +94,8 @@ pub struct LightingInputs<'a> {
     pub shadow_mask: Option<TextureHandle>,
     /// Screen-space AO (`.x`); `None`: unoccluded.
     pub ao: Option<TextureHandle>,
+    /// O5 bleed colour (`passes/ao/bleed`); `None`: black (plain occlusion).
+    pub ao_bleed: Option<TextureHandle>,
     /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
     pub lights: &'a wgpu::Buffer,
     /// Filtered environment cube (L4, `envmap.filtered` after this
@@ -100,12 +111,15 @@ pub struct LightingInputs<'a> {
 
 pub struct LightingPass {
     program: Program,
+    /// The scene's `[[ambient_light]]`s (also bound by the forward passes).
+    pub ambient_lights: ambient::AmbientLightBuffer,
 }
 
 impl LightingPass {
-    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+    pub fn new(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<Self, GpuError> {
         let pass = Self {
             program: Program::new(ctx, "passes/lighting/deferred.wgsl")?,
+            ambient_lights: ambient::AmbientLightBuffer::new(&ctx.device, &scene.ambient_lights),
         };
         pass.pipeline(ctx, LightingKey::default())?;
         Ok(pass)
@@ -145,7 +159,9 @@ impl LightingPass {
             .read("depth", gbuffer.depth)
             .optional("shadow_mask", inputs.shadow_mask, Fallback::White)
             .optional("ao", inputs.ao, Fallback::White)
+            .optional("ao_bleed", inputs.ao_bleed, Fallback::Black)
             .uniform("lights", inputs.lights)
+            .uniform("ambient_lights", &self.ambient_lights.buffer)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &envmap.sampler)
             .external("dfg_lut", &envmap.dfg_view)
