@@ -232,3 +232,40 @@ fn bad_ambient_lights_name_the_file_and_the_problem() {
     let scene = Scene::from_toml_str(&ok, "ok.toml", &common::scenes_dir()).expect("64 lights");
     assert_eq!(scene.ambient_lights.len(), 64);
 }
+
+/// Forward passes agree: a half-transparent BLEND glTF cube inside the
+/// interior volume is scaled like the opaque floor behind it, so its pixels
+/// show the factor too (before the forward passes applied the lights, the
+/// cube's own ambient stayed unscaled).
+#[test]
+fn blended_surfaces_are_scaled_like_opaque_ones() {
+    let material =
+        r#"{"pbrMetallicRoughness":{"baseColorFactor":[0.9,0.6,0.3,0.5]},"alphaMode":"BLEND"}"#;
+    let cube = common::cube_gltf("ambient_blend", r#""scale":[0.6,0.6,0.6]"#, material);
+    let gltf = format!(
+        "[[gltf]]\nfile = \"{}\"\ntranslation = [-1.0, 0.3, 0.0]\n",
+        cube.display()
+    );
+    let plain = common::scene("ambient_light_room");
+    let text = common::scene_text("ambient_light_room") + &gltf;
+    let scene = common::parse_scene(&text, "ambient_light_room.toml + cube");
+    let without = frame(&plain, false);
+    let off = frame(&scene, false);
+    let on = frame(&scene, true);
+    let factor = scene.ambient_lights[0].factor;
+    let (mut n, mut worst) = (0, 0.0f32);
+    for i in 0..on.len() {
+        let b = Vec3::from_slice(&off[i][..3]);
+        if (b - Vec3::from_slice(&without[i][..3])).abs().max_element() < 0.02 * b.max_element() {
+            continue; // not the cube
+        }
+        n += 1;
+        let ratio = Vec3::from_slice(&on[i][..3]) / b.max(Vec3::splat(1e-6));
+        worst = worst.max(((ratio - factor) / factor).abs().max_element());
+    }
+    eprintln!("blended cube: {n} px, max relative |on/off - factor| {worst:.2e}");
+    assert!(n > 60, "{n} cube pixels");
+    // Measured 2026-12-05 (lavapipe, 160x120): 99 px, 1.1e-3 (Rgba16Float);
+    // with the blend pass's `ambient_scale` taken out: 1.01.
+    assert!(worst < 3e-3, "{worst}");
+}
