@@ -51,7 +51,6 @@ impl ViewBuffer {
         "ao",
         "ao-raw",
         "stability-mask",
-        "ao-bleed",
         "luminance",
         "bloom",
         "shadow-mask",
@@ -62,6 +61,7 @@ impl ViewBuffer {
         "bent-normal",
         "sectors",
         "lod",
+        "ao-bleed",
     ];
 }
 
