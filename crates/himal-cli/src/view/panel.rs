@@ -279,6 +279,8 @@ impl Viewer {
         if ui.checkbox(&mut hiz, "Hi-Z occlusion").changed() {
             self.settings.occlusion = if hiz { Occlusion::Hiz } else { Occlusion::Off };
         }
+        ui.checkbox(&mut self.settings.ao.bleed, "AO colour bleeding (O5)");
+        ui.checkbox(&mut self.settings.ambient_lights, "ambient lights");
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {
