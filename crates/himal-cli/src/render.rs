@@ -236,6 +236,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub ambient_lights: String,
+    /// Wetness of up-facing surfaces, 0..1 (a water film: darker albedo,
+    /// smooth roughness; E3's screen-space normal-variance filter keeps it
+    /// from aliasing under --specular-aa on). 0: dry, no pass.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "0..1",
+        allow_hyphen_values = true
+    )]
+    pub wetness: f32,
     /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
     /// instance in a compute pass, drawn indirectly; the CPU path where the
     /// adapter cannot), cpu (per object on the render thread), off (the
@@ -397,6 +407,10 @@ impl PostArgs {
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
+        if !(0.0..=1.0).contains(&self.wetness) {
+            bail!("--wetness {}: must be in [0, 1]", self.wetness);
+        }
+        settings.wetness = self.wetness;
         let pixels = |flag: &str, v: &str| -> Result<f32> {
             match v {
                 "off" => Ok(0.0),

@@ -415,7 +415,7 @@ fn animation_names_the_scenes_clips_and_at_is_checked() {
 }
 
 #[test]
-fn bad_ao_bleed_and_ambient_lights_are_rejected() {
+fn bad_ao_bleed_ambient_lights_and_wetness_are_rejected() {
     fails_with(
         &["render", "--ao-bleed", "maybe", "--size", "8x8"],
         "--ao-bleed maybe",
@@ -424,6 +424,11 @@ fn bad_ao_bleed_and_ambient_lights_are_rejected() {
         &["render", "--ambient-lights", "2", "--size", "8x8"],
         "--ambient-lights",
     );
+    fails_with(
+        &["render", "--wetness", "1.5", "--size", "8x8"],
+        "--wetness 1.5",
+    );
+    fails_with(&["render", "--wetness", "nan", "--size", "8x8"], "--wetness");
 }
 
 #[test]

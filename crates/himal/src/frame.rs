@@ -64,6 +64,9 @@ pub struct Passes {
     pub ao: AoPass,
     /// O5: the low-frequency albedo the AO is tinted with.
     pub ao_bleed: BleedPass,
+    /// E3's screen-space filter behind an edit of the G-buffer's roughness:
+    /// the wetness example (`--wetness`).
+    pub wet: crate::passes::wet::WetPass,
     /// L3/L4: the environment cube captured and GGX-filtered.
     pub envmap: EnvMapPass,
     /// `--view env-probe` / `env-mirror`: the filtered cube shown.
@@ -116,6 +119,7 @@ impl Passes {
             gbuffer: GBufferPass::new(ctx)?,
             ao: AoPass::new(ctx)?,
             ao_bleed: BleedPass::new(ctx)?,
+            wet: crate::passes::wet::WetPass::new(ctx)?,
             envmap: EnvMapPass::new(ctx, ENVMAP_SIZE)?,
             env_view: EnvViewPass::new(ctx)?,
             probes: ProbeSet::new(ctx, &scene.probes, ENVMAP_SIZE)?,
@@ -418,6 +422,13 @@ pub fn build<'a>(
     let gbuffer = match &passes.terrain {
         Some(t) => t.add(ctx, &mut g, gbuffer, view),
         None => gbuffer,
+    };
+    // Roughness edited after texturing, with E3's screen-space filter: the
+    // wet albedo and material replace the G-buffer's for every later reader.
+    let gbuffer = if passes.wet.amount > 0.0 {
+        passes.wet.add(ctx, &mut g, size, gbuffer)
+    } else {
+        gbuffer
     };
     // V6 Hi-Z: the pyramid of this depth, for the next frame's `cull`.
     passes.cull.hiz.add(&mut g, gbuffer.depth);

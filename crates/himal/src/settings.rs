@@ -202,6 +202,9 @@ pub struct FrameSettings {
     /// The scene's `[[ambient_light]]` volumes scale the ambient light (on
     /// by default; docs/ambient-lights.md).
     pub ambient_lights: bool,
+    /// Wetness of up-facing surfaces in [0, 1] (`gbuffer.wet`, E3's
+    /// screen-space filter example); 0: the pass does not run.
+    pub wetness: f32,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -275,6 +278,7 @@ impl FrameSettings {
             sky_model: Default::default(),
             specular_aa: true,
             ambient_lights: true,
+            wetness: 0.0,
         }
     }
 }

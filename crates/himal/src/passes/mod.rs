@@ -16,3 +16,4 @@ pub mod skin;
 pub mod sky;
 pub mod skyocc;
 pub mod terrain;
+pub mod wet;

@@ -333,6 +333,8 @@ impl Renderer {
         // E3: the permutations the G-buffer and forward draws pick.
         self.res.passes.gbuffer.specular_aa = settings.specular_aa;
         self.res.passes.forward.specular_aa = settings.specular_aa;
+        self.res.passes.wet.amount = settings.wetness;
+        self.res.passes.wet.specular_aa = settings.specular_aa;
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {
