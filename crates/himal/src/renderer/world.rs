@@ -67,8 +67,8 @@ pub struct WorldState {
 }
 
 impl WorldState {
-    /// A streamer over `world` with nothing resident yet; `scene` holds one
-    /// mesh per instance kind (indexed by `InstanceKind`).
+    /// A streamer over `world` with nothing resident yet; `scene` is the
+    /// world's scene (`World::scene`: one shared mesh per `InstanceKind`).
     pub fn new(world: Arc<World>, scene: &Scene) -> Self {
         let meshes = scene
             .meshes

@@ -133,8 +133,8 @@ impl Default for AoSettings {
 }
 
 impl AoSettings {
-    /// Checks the ranges given on the fields; the error names the first
-    /// parameter out of range (`Error::InvalidSettings`, "AO: ...").
+    /// Checks the ranges given on the fields; the error
+    /// (`Error::InvalidSettings`, "AO: ...") says which check failed.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidSettings(format!("AO: {what}")));
         if !(self.radius > 0.0 && self.radius.is_finite()) {
