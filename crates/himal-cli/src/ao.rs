@@ -49,6 +49,16 @@ pub struct AoArgs {
     /// How much the SSDO directional term darkens the sun and local lights (0..1).
     #[arg(long, value_name = "0..1", allow_hyphen_values = true)]
     pub ssdo_strength: Option<f32>,
+    /// O5 AO colour bleeding: ambient diffuse occlusion tinted by the
+    /// low-frequency albedo around each pixel (docs/techniques/O5.md; off
+    /// by default: it overstates bounce light against a ray-traced estimate).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub ao_bleed: String,
 }
 
 impl AoArgs {
@@ -76,6 +86,11 @@ impl AoArgs {
             }
             s.radius = r;
         }
+        s.bleed = match self.ao_bleed.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--ao-bleed {other}: expected on or off"),
+        };
         if let Some(r) = self.ao_blur_radius {
             s.blur_radius = r;
         }

@@ -227,6 +227,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub specular_aa: String,
+    /// The scene's `[[ambient_light]]` volumes (Ryse's multiplicative
+    /// ambient lights, docs/ambient-lights.md); off: ignored.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub ambient_lights: String,
     /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
     /// instance in a compute pass, drawn indirectly; the CPU path where the
     /// adapter cannot), cpu (per object on the render thread), off (the
@@ -387,6 +396,7 @@ impl PostArgs {
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
+        settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         let pixels = |flag: &str, v: &str| -> Result<f32> {
             match v {
                 "off" => Ok(0.0),

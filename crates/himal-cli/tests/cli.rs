@@ -413,3 +413,27 @@ fn animation_names_the_scenes_clips_and_at_is_checked() {
         "--at NaN",
     );
 }
+
+#[test]
+fn bad_ao_bleed_and_ambient_lights_are_rejected() {
+    fails_with(
+        &["render", "--ao-bleed", "maybe", "--size", "8x8"],
+        "--ao-bleed maybe",
+    );
+    fails_with(
+        &["render", "--ambient-lights", "2", "--size", "8x8"],
+        "--ambient-lights",
+    );
+}
+
+#[test]
+fn too_many_ambient_lights_name_the_file() {
+    let dir = common::temp_path("cli-ambient");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("ambient.toml");
+    let table = "[[ambient_light]]\nposition = [0.0, 0.0, 0.0]\nradius = 1.0\nfactor = 0.5\n";
+    std::fs::write(&path, table.repeat(65)).expect("write");
+    let p = path.to_string_lossy().to_string();
+    fails_with(&["render", "--scene", &p, "--size", "8x8"], "ambient.toml");
+    fails_with(&["render", "--scene", &p, "--size", "8x8"], "at most 64");
+}

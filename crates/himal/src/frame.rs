@@ -29,7 +29,8 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{LodView, SceneGpu};
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
-use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform};
+use crate::passes::ao::bleed::BleedPass;
+use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform, AoView};
 use crate::passes::cull::{CullPass, CullPath, CullView};
 use crate::passes::debug::DebugPass;
 use crate::passes::envmap::probe::ProbeSet;
@@ -61,6 +62,8 @@ pub struct Passes {
     pub gbuffer: GBufferPass,
     /// B1: HBAO, its stability mask, and the bilateral blurs.
     pub ao: AoPass,
+    /// O5: the low-frequency albedo the AO is tinted with.
+    pub ao_bleed: BleedPass,
     /// L3/L4: the environment cube captured and GGX-filtered.
     pub envmap: EnvMapPass,
     /// `--view env-probe` / `env-mirror`: the filtered cube shown.
@@ -112,10 +115,11 @@ impl Passes {
             shadows: ShadowPass::new(ctx, scene)?,
             gbuffer: GBufferPass::new(ctx)?,
             ao: AoPass::new(ctx)?,
+            ao_bleed: BleedPass::new(ctx)?,
             envmap: EnvMapPass::new(ctx, ENVMAP_SIZE)?,
             env_view: EnvViewPass::new(ctx)?,
             probes: ProbeSet::new(ctx, &scene.probes, ENVMAP_SIZE)?,
-            lighting: LightingPass::new(ctx)?,
+            lighting: LightingPass::new(ctx, scene)?,
             sky: SkyPass::new(ctx)?,
             skyocc: SkyOccPass::new(ctx, scene)?,
             forward: ForwardPass::new(ctx)?,
@@ -305,6 +309,8 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
             &sun_views,
         )
     });
+    // Ambient lights on or off (their count).
+    (passes.lighting.ambient_lights).enable(&ctx.queue, settings.ambient_lights);
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);
     Planned {
@@ -463,6 +469,10 @@ pub fn build<'a>(
         }
         None => None,
     };
+    // O5: the low-frequency albedo for the coloured occlusion (or its view).
+    let ao_bleed = ao
+        .filter(|s| s.bleed || shown == ViewBuffer::Ao(AoView::Bleed))
+        .map(|_| (passes.ao_bleed).add(&mut g, size, gbuffer.albedo, gbuffer.depth));
     // L2: new sectors' height fields and SH2 visibility (side effect: the
     // pool); in a world over the terrain, with the culled pool instances.
     let sources = crate::passes::skyocc::SkyOccSources {
@@ -483,6 +493,7 @@ pub fn build<'a>(
                     ao: None,
                     ao_dir: None,
                     ao_params: passes.ao.params(),
+                    ao_bleed: None,
                     lights: &passes.shadows.local_lights,
                     envmap: &passes.envmap,
                     env: env_before,
@@ -512,6 +523,7 @@ pub fn build<'a>(
         ao: ao_targets.map(|t| t.ao),
         ao_dir: ao_targets.and_then(|t| t.dir),
         ao_params: passes.ao.params(),
+        ao_bleed,
         lights: &passes.shadows.local_lights,
         envmap: &passes.envmap,
         env,
@@ -530,6 +542,7 @@ pub fn build<'a>(
         env,
         shadow_mask,
         ao: ao_targets.map(|t| t.ao),
+        ambient_lights: &passes.lighting.ambient_lights.buffer,
     };
     let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let hdr = forward.hdr;
@@ -579,6 +592,12 @@ pub fn build<'a>(
                     .add(ctx, g, post.tonemap, hdr, post_inputs, target)
             };
             crate::passes::aa::add_chain(ctx, &mut g, chain, out, tonemap)?
+        }
+        ViewBuffer::Ao(AoView::Bleed) => {
+            let b = ao_bleed.ok_or_else(|| {
+                GpuError::Other("--view ao-bleed needs AO on (--ao hbao or hbao+stf)".into())
+            })?;
+            passes.ao_bleed.add_view(ctx, &mut g, b, out)
         }
         ViewBuffer::Ao(v) => {
             let t = ao_targets.ok_or_else(|| {

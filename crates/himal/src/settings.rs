@@ -39,7 +39,7 @@ pub enum ViewBuffer {
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 25] = [
+    pub const NAMES: [&'static str; 26] = [
         "final",
         "albedo",
         "normal",
@@ -54,7 +54,6 @@ impl ViewBuffer {
         "ao",
         "ao-raw",
         "stability-mask",
-        "ssdo",
         "luminance",
         "bloom",
         "shadow-mask",
@@ -65,6 +64,8 @@ impl ViewBuffer {
         "bent-normal",
         "sectors",
         "lod",
+        "ssdo",
+        "ao-bleed",
     ];
 }
 
@@ -88,6 +89,7 @@ impl std::str::FromStr for ViewBuffer {
             "ao-raw" => ViewBuffer::Ao(AoView::Raw),
             "stability-mask" => ViewBuffer::Ao(AoView::Stability),
             "ssdo" => ViewBuffer::Ao(AoView::Directional),
+            "ao-bleed" => ViewBuffer::Ao(AoView::Bleed),
             "luminance" => ViewBuffer::Debug(D::Luminance),
             "bloom" => ViewBuffer::Debug(D::Bloom),
             "shadow-mask" => ViewBuffer::Shadow(ShadowView::Mask),
@@ -197,6 +199,9 @@ pub struct FrameSettings {
     /// E3 specular anti-aliasing: glTF roughness widened by the normal
     /// variance baked into normal-map mips (Toksvig; on by default).
     pub specular_aa: bool,
+    /// The scene's `[[ambient_light]]` volumes scale the ambient light (on
+    /// by default; docs/ambient-lights.md).
+    pub ambient_lights: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -269,6 +274,7 @@ impl FrameSettings {
             envmap_every_frame: false,
             sky_model: Default::default(),
             specular_aa: true,
+            ambient_lights: true,
         }
     }
 }

@@ -44,7 +44,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     s.f0.g *= f.w;
     output[i] = forward_shade_premultiplied(s, f.z, input[base + 2u].xyz, input[base + 3u].xyz,
         input[base + 4u].xyz, input[base + 5u].xyz, input[base + 6u].xyz, input[base + 7u].xyz,
-        sh, pa.xyz, input[base + 9u].xy, p.w, e.xyz, pa.w);
+        sh, pa.xyz, input[base + 9u].xy, vec3f(p.w), e.xyz, pa.w);
 }
 "#;
 
@@ -103,7 +103,16 @@ fn forward_shading_matches_its_cpu_twin() {
         let mut s = surface_from_material(&m);
         s.f0.y *= tint;
         cases.push(forward_shade_premultiplied(
-            &s, f90, t, b, n, v, &light, ao, emissive, alpha,
+            &s,
+            f90,
+            t,
+            b,
+            n,
+            v,
+            &light,
+            Vec3::splat(ao),
+            emissive,
+            alpha,
         ));
     }
     let out = run_compute(

@@ -279,6 +279,22 @@ impl Viewer {
         if ui.checkbox(&mut hiz, "Hi-Z occlusion").changed() {
             self.settings.occlusion = if hiz { Occlusion::Hiz } else { Occlusion::Off };
         }
+        // O4: the directional term needs AO on; off returns to BF3's HBAO+STF.
+        let ao = &mut self.settings.ao;
+        let mut ssdo = ao.mode == AoMode::Ssdo;
+        let enabled = ao.mode != AoMode::Off;
+        if ui
+            .add_enabled(
+                enabled,
+                egui::Checkbox::new(&mut ssdo, "directional AO (SSDO)"),
+            )
+            .changed()
+        {
+            ao.mode = if ssdo { AoMode::Ssdo } else { AoMode::HbaoStf };
+        }
+        ui.checkbox(&mut ao.reflection_occlusion, "reflection occlusion");
+        ui.checkbox(&mut self.settings.ao.bleed, "AO colour bleeding (O5)");
+        ui.checkbox(&mut self.settings.ambient_lights, "ambient lights");
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {

@@ -26,6 +26,20 @@ pub fn run_compute(
     output_bytes: u64,
     workgroups: [u32; 3],
 ) -> Result<Vec<u8>, GpuError> {
+    run_compute_with(source, entry, input, &[], output_bytes, workgroups)
+}
+
+/// [`run_compute`] with more read-only storage buffers bound by name
+/// (`extra`: binding name, contents), for kernels over shared modules that
+/// bring a binding of their own (`shaders/ambient_lights.wgsl`).
+pub fn run_compute_with(
+    source: &str,
+    entry: &str,
+    input: &[u8],
+    extra: &[(&str, &[u8])],
+    output_bytes: u64,
+    workgroups: [u32; 3],
+) -> Result<Vec<u8>, GpuError> {
     use wgpu::util::DeviceExt;
     let ctx = shared_context()?;
     let program = Program::from_source(ctx, "test-kernel", source)?;
@@ -51,14 +65,24 @@ pub fn run_compute(
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let bind_group = program.bind_group(
-        ctx,
-        0,
-        &[
-            ("input", input_buffer.as_entire_binding()),
-            ("output", output_buffer.as_entire_binding()),
-        ],
-    )?;
+    let extra: Vec<(&str, wgpu::Buffer)> = extra
+        .iter()
+        .map(|(name, bytes)| {
+            let usage = wgpu::BufferUsages::STORAGE;
+            let desc = wgpu::util::BufferInitDescriptor {
+                label: Some(name),
+                contents: bytes,
+                usage,
+            };
+            (*name, ctx.device.create_buffer_init(&desc))
+        })
+        .collect();
+    let mut entries = vec![
+        ("input", input_buffer.as_entire_binding()),
+        ("output", output_buffer.as_entire_binding()),
+    ];
+    entries.extend(extra.iter().map(|(n, b)| (*n, b.as_entire_binding())));
+    let bind_group = program.bind_group(ctx, 0, &entries)?;
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());

@@ -101,6 +101,7 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         sky_occlusion: settings.sky_occlusion,
         ssdo: settings.ao.mode.directional(),
         reflection_occlusion: settings.ao.reflection_occlusion,
+        ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,
     }
 }
 

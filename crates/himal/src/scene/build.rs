@@ -167,6 +167,7 @@ pub(crate) fn build_scene(
         .map(|p| ck.finite3(&p.position, "position"))
         .collect::<Result<Vec<_>>>()?;
     let lights = super::lights::build_lights(&ck, &file.light)?;
+    let ambient_lights = super::ambient::build_ambient_lights(&ck, &file.ambient_light)?;
     let environment = match &file.environment {
         Some(e) => {
             let file = e.file.get_ref();
@@ -220,6 +221,7 @@ pub(crate) fn build_scene(
         cameras,
         sun,
         lights,
+        ambient_lights,
         bounds,
         pbr,
         probes,

@@ -21,6 +21,8 @@ pub(crate) struct FileScene {
     #[serde(default)]
     pub light: Vec<FileLight>,
     #[serde(default)]
+    pub ambient_light: Vec<FileAmbientLight>,
+    #[serde(default)]
     pub probe: Vec<FileProbe>,
     pub environment: Option<FileEnvironment>,
     #[serde(default)]
@@ -170,6 +172,22 @@ pub(crate) struct FileLight {
     pub inner_angle: Option<Spanned<f32>>,
     pub outer_angle: Option<Spanned<f32>>,
     pub shadow: Option<bool>,
+}
+
+/// `[[ambient_light]]`: a multiplier on the ambient light inside a box or
+/// sphere (Ryse's ambient lights).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileAmbientLight {
+    pub name: Option<Spanned<String>>,
+    #[serde(deserialize_with = "exact3")]
+    pub position: Spanned<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact3_opt")]
+    pub size: Option<Spanned<[f32; 3]>>,
+    pub radius: Option<Spanned<f32>>,
+    pub yaw: Option<Spanned<f32>>,
+    pub factor: Spanned<Scale>,
+    pub falloff: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]

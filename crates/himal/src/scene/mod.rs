@@ -106,12 +106,32 @@
 //! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
 //! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).
 //!
+//! `[[ambient_light]]` (Ryse's multiplicative ambient lights; at most
+//! [`MAX_AMBIENT_LIGHTS`] = 64, more is an error; docs/ambient-lights.md):
+//! inside a volume the ambient light (sky diffuse and ambient specular
+//! alike; not the sun, not `[[light]]`s) is multiplied by `factor`, so
+//! artists darken interiors (< 1) or brighten bounce areas (> 1).
+//!
+//! ```toml
+//! [[ambient_light]]
+//! name = "hall"               # optional, default ambientN
+//! position = [0.0, 1.5, 0.0]  # centre (m)
+//! size = [4.0, 1.5, 3.0]      # box half-extents (m), or
+//! # radius = 3.0              # a sphere; give exactly one of the two
+//! yaw = 30.0                  # box rotation about +Y (degrees), default 0
+//! factor = 0.3                # number or [r, g, b], each in [0, 16]
+//! falloff = 0.25              # [0, 1], the outer fraction of the half-extent
+//!                             # or radius over which the factor fades
+//!                             # (smoothstep) to 1 at the surface; default 0.25
+//! ```
+//! Overlapping volumes multiply.
+//!
 //! `[world]`: instead of objects, the file describes a streamed open world
 //! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
 //! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
 //! cameras come first (the default view), then the world's own (`air`,
 //! `river`, `village`, `peak`, `grazing`, `top`) except those they rename;
-//! `[[object]]`, `[[material]]`, `[[light]]`, `[[probe]]`, `[[gltf]]` and
+//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[gltf]]` and
 //! `[environment]` are errors. An empty `[world]` is the built-in world.
 //! Every key is optional except `height_map.file` and `.max`; defaults shown:
 //!
@@ -164,6 +184,7 @@
 //!
 //! Mesh conventions (UVs, tangents, winding) are in [`primitives`].
 
+mod ambient;
 mod build;
 mod build_vegetation;
 pub mod builtin;
@@ -189,6 +210,7 @@ use glam::{Mat4, Vec3};
 
 use crate::budget::MemoryBudget;
 
+pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
 pub use camera::{Camera, DEFAULT_NEAR, Orthographic};
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
@@ -609,6 +631,8 @@ pub struct Scene {
     pub sun: SunDesc,
     /// Point and spot lights (`[[light]]`, S3).
     pub lights: Vec<LightDesc>,
+    /// Multipliers on the ambient light inside volumes (`[[ambient_light]]`).
+    pub ambient_lights: Vec<AmbientLightDesc>,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -735,6 +759,7 @@ impl Scene {
             bounds: asset.bounds,
             pbr: asset.pbr,
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
+            ambient_lights: Vec::new(),
             probes: Vec::new(),
             environment: None,
         })

@@ -3,7 +3,9 @@
 // plus emission, premultiplied by alpha. `f90`: Schlick's F90 (below 1 for
 // a KHR_materials_specular dielectric). The caller samples the filtered
 // cube (`prefiltered`) and the DFG table (`dfg` = (A, B)). The sun is
-// unshadowed: the shadow mask holds the opaque surface behind. CPU twin:
+// unshadowed: the shadow mask holds the opaque surface behind. `ao`: the
+// occlusion times the ambient lights' RGB multiplier (both ambient terms).
+// CPU twin:
 // passes/forward/reference.rs `forward_shade_premultiplied`.
 #import brdf
 #import sh
@@ -21,7 +23,7 @@ struct Lighting {
 
 fn forward_shade_premultiplied(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
         sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9,
-        prefiltered: vec3f, dfg: vec2f, ao: f32, emissive: vec3f, alpha: f32) -> vec4f {
+        prefiltered: vec3f, dfg: vec2f, ao: vec3f, emissive: vec3f, alpha: f32) -> vec4f {
     var c = brdf_cos_f90(s, f90, t, b, n, v, sun_direction) * sun_illuminance;
     // Radiance (kcd/m^2): no 1/pi, unlike the irradiance term below.
     c += prefiltered * (s.f0 * dfg.x + f90 * dfg.y) * ao;

@@ -11,6 +11,7 @@
 //! history ring, [`HISTORY_DIR`].
 //! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O4.md`.
 
+pub mod bleed;
 pub mod reference;
 mod settings;
 
@@ -399,7 +400,8 @@ impl AoPass {
             output,
         );
         let (ao, raw, stability, dir) = match kind {
-            AoView::Ao => (Some(targets.ao), None, None, None),
+            // Bleed is drawn by passes/ao/bleed (frame.rs routes it there).
+            AoView::Ao | AoView::Bleed => (Some(targets.ao), None, None, None),
             AoView::Raw => (None, Some(targets.raw), None, None),
             AoView::Stability => (None, None, Some(targets.stability), None),
             // Without SSDO data the coefficients read 0 (no directional occlusion).

@@ -103,6 +103,11 @@ pub struct AoSettings {
     /// Lagarde's specular occlusion from AO and, with ssdo, times the
     /// directional term along the reflection vector; off: times AO, as diffuse.
     pub reflection_occlusion: bool,
+    /// O5 colour bleeding: ambient diffuse occlusion tinted by the
+    /// low-frequency albedo around the pixel (`passes/ao/bleed`). Off by
+    /// default: measured against a one-bounce ray-traced estimate it lifts
+    /// the occlusion too much except in near-white surroundings (O5.md).
+    pub bleed: bool,
 }
 
 impl Default for AoSettings {
@@ -128,6 +133,7 @@ impl Default for AoSettings {
             ssdo_gain: 1.5,
             ssdo_roughness_softness: 1.0,
             reflection_occlusion: false,
+            bleed: false,
         }
     }
 }
@@ -274,6 +280,8 @@ pub enum AoView {
     Stability = 3,
     /// O4 directional term (raw: AO, c1, c2).
     Directional = 4,
+    /// O5 bleed colour (raw: rgb, coverage; `passes/ao/bleed/view.wgsl`).
+    Bleed = 5,
 }
 
 /// 4x4 Bayer order: neighbouring pixels get far-apart rotations.

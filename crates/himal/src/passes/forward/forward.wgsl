@@ -22,6 +22,7 @@
 #import envmap
 #import forward
 #import forward_vertex
+#import ambient_lights
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -50,7 +51,7 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
     let env = forward_env(f, v, env_specular, env_sampler, dfg_lut);
     return forward_shade_premultiplied(f.s, f.f90, f.tbn[0], f.tbn[1], f.tbn[2], v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
-        env.prefiltered, env.dfg, f.ao, f.emissive, f.alpha);
+        env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, f.alpha);
 }
 
 @fragment

@@ -15,6 +15,7 @@
 #import forward
 #import forward_vertex
 #import layers
+#import ambient_lights
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -92,5 +93,10 @@ fn fs_layers(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locat
     light.base_env = textureSampleLevel(env_specular, env_sampler, r_sheen, roughness * levels).rgb;
     light.base_dfg = textureSampleLevel(dfg_lut, env_sampler, vec2f(max(dot(n_base, v), 1e-4), roughness), 0.0).xy;
     light.ao = (1.0 + material.params.y * (occlusion - 1.0)) * load_clamped(ao, px).x;
+    // Ambient lights scale every environment term, as in lighting.deferred.
+    let ambient = ambient_scale(in.world);
+    light.sheen_env *= ambient;
+    light.coat_env *= ambient;
+    light.base_env *= ambient;
     return layers_shade(m, n_base, n_coat, v, light);
 }

@@ -109,6 +109,8 @@ pub struct ForwardInputs<'a> {
     pub shadow_mask: Option<TextureHandle>,
     /// Screen-space AO (`forward.layers`; `None` without SSAO).
     pub ao: Option<TextureHandle>,
+    /// The scene's ambient lights (`passes/lighting/ambient.rs`).
+    pub ambient_lights: &'a wgpu::Buffer,
 }
 
 /// What the forward passes leave: the HDR target and the depth, written by
@@ -444,6 +446,7 @@ impl ForwardPass {
         let node = node
             .uniform("objects", &scene.objects)
             .uniform("instances", &scene.instances)
+            .uniform("ambient_lights", inputs.ambient_lights)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &inputs.envmap.sampler)
             .external("dfg_lut", &inputs.envmap.dfg_view)

@@ -28,7 +28,8 @@ pub struct ForwardLight {
 
 /// Premultiplied (radiance × alpha, alpha) of a fragment with surface `s`
 /// and Schlick F90 `f90` (below 1 for a KHR_materials_specular dielectric),
-/// right-handed frame (t, b, n), view vector `v`, ambient occlusion `ao`,
+/// right-handed frame (t, b, n), view vector `v`, ambient occlusion `ao`
+/// (times the ambient lights' multiplier, per channel),
 /// emission `emissive` (radiance) and coverage `alpha` (clamped to [0, 1]).
 #[allow(clippy::too_many_arguments)]
 pub fn forward_shade_premultiplied(
@@ -39,7 +40,7 @@ pub fn forward_shade_premultiplied(
     n: Vec3,
     v: Vec3,
     light: &ForwardLight,
-    ao: f32,
+    ao: Vec3,
     emissive: Vec3,
     alpha: f32,
 ) -> Vec4 {

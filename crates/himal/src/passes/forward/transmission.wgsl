@@ -17,6 +17,7 @@
 #import sh
 #import forward
 #import forward_vertex
+#import ambient_lights
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -53,7 +54,7 @@ fn fs_transmission(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> 
     f.s.diffuse_albedo *= 1.0 - transmission;
     let base = forward_shade_premultiplied(f.s, f.f90, f.tbn[0], f.tbn[1], n, v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
-        env.prefiltered, env.dfg, f.ao, f.emissive, 1.0).rgb;
+        env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, 1.0).rgb;
 
     // The refracted ray's exit from a volume `thickness` deep (world units);
     // thin-walled (0): the scene straight behind.

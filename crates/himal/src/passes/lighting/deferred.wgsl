@@ -21,6 +21,12 @@
 // with SSDO, the directional term along the reflection vector, instead of by AO.
 // CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`);
 // O4 functions: passes/ao/reference.rs `ssdo_visibility`, `specular_occlusion_lagarde`.
+// AO colour bleeding (O5, AO_BLEED): the ambient diffuse occlusion raised
+// per channel by the low-frequency albedo (ao_bleed, passes/ao/bleed;
+// shaders/ao_bleed.wgsl); ambient specular keeps the scalar occlusion.
+// Ambient lights (shaders/ambient_lights.wgsl, binding `ambient_lights`):
+// both ambient terms times the scene's volumes' multiplier at p.
+// CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`).
 #import view
 #import ao
 #import brdf
@@ -30,6 +36,8 @@
 #import shadow
 #import envmap
 #import sky_occlusion
+#import ao_bleed
+#import ambient_lights
 #import color
 #import math
 #import fullscreen
@@ -55,6 +63,7 @@ override ENV_SPECULAR: bool = true;
 override SKY_OCCLUSION: bool = false;
 override SSDO: bool = false;
 override REFLECTION_OCCLUSION: bool = false;
+override AO_BLEED: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
 // Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
@@ -78,6 +87,8 @@ override REFLECTION_OCCLUSION: bool = false;
 @group(0) @binding(16) var skyocc_sampler: sampler;
 @group(0) @binding(17) var ao_dir: texture_2d<f32>;
 @group(0) @binding(18) var<uniform> ao_params: AoParams;
+// O5: quarter-resolution bleed texture (1x1 black when off).
+@group(0) @binding(19) var ao_bleed: texture_2d<f32>;
 
 // O4 inputs in view space (unused without SSDO).
 struct Ssdo {
@@ -124,7 +135,9 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
 // `sun_visibility` in [0,1] scales the sun only; sky light is not shadowed here.
 // `sky_vis`: SH2 sky visibility (open sky when SKY_OCCLUSION is off).
 // `spec_ao`: the occlusion of ambient specular (ao_in without reflection occlusion).
-fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f) -> vec3f {
+// `bleed`: O5 bleed colour (black: plain occlusion). `ambient`: the ambient
+// lights' multiplier of both ambient terms.
+fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f, bleed: vec3f, ambient: vec3f) -> vec3f {
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
@@ -152,13 +165,17 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32,
             let e_open = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0));
             ratio = saturate(luminance(e_n) * sky_visibility / max(luminance(e_open), 1e-9));
         }
-        c += prefiltered * (s.f0 * ab.x + ab.y) * (spec_ao * ratio);
+        c += prefiltered * (s.f0 * ab.x + ab.y) * (ambient * (spec_ao * ratio));
     } else {
         let e_r = max(sh9_eval(lighting.sky_irradiance, reflect(-v, n)), vec3f(0.0));
         let ao_spec = spec_ao * sky_visibility;
-        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ao_spec / PI);
+        c += env_brdf_approx(s.f0, roughness, n_o_v) * e_r * (ambient * (ao_spec / PI));
     }
-    c += s.diffuse_albedo * e_n * (ao / PI);
+    var ao_diffuse = vec3f(ao_in);
+    if (AO_BLEED) {
+        ao_diffuse = ao_bleed_occlusion(ao_in, bleed);
+    }
+    c += s.diffuse_albedo * e_n * (ambient * ao_diffuse * (sky_visibility / PI));
     return c;
 }
 
@@ -210,7 +227,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             spec_ao *= ssdo_visibility(o.p, o.n, r_v, o.c, ao_params.ssdo.w, soft);
         }
     }
-    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis);
+    var bleed = vec3f(0.0);
+    if (AO_BLEED) {
+        let uv = frag.xy / (4.0 * vec2f(textureDimensions(ao_bleed)));
+        bleed = ao_bleed_colour(textureSampleLevel(ao_bleed, env_sampler, uv, 0.0));
+    }
+    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p));
     c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask, o);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);

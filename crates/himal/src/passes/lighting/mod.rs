@@ -5,6 +5,7 @@
 //! `SKY_OCCLUSION`: L2 height-field sky visibility from `passes/skyocc`;
 //! `SSDO`, `REFLECTION_OCCLUSION`: O4 directional occlusion).
 
+pub mod ambient;
 pub mod reference;
 
 use crate::gpu::pipeline::{Program, RenderSpec};
@@ -37,6 +38,9 @@ pub struct LightingKey {
     /// O4 reflection occlusion of ambient specular: along the reflection
     /// vector with `ssdo`, Lagarde's AO formula without.
     pub reflection_occlusion: bool,
+    /// O5 colour bleeding: ambient diffuse occlusion tinted per channel by
+    /// the low-frequency albedo (`passes/ao/bleed`); only with `ssao`.
+    pub ao_bleed: bool,
 }
 
 impl Default for LightingKey {
@@ -49,6 +53,7 @@ impl Default for LightingKey {
             sky_occlusion: false,
             ssdo: false,
             reflection_occlusion: false,
+            ao_bleed: false,
         }
     }
 }
@@ -63,11 +68,12 @@ impl LightingKey {
         sky_occlusion: false,
         ssdo: false,
         reflection_occlusion: false,
+        ao_bleed: false,
     };
 
-    /// Every permutation (for pre-warming; `ssdo` only with `ssao`).
+    /// Every permutation (for pre-warming; `ssdo` and bleeding only with `ssao`).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..128u32)
+        (0..256u32)
             .map(|bits| LightingKey {
                 shadows: bits & 1 != 0,
                 fog: bits & 2 != 0,
@@ -76,11 +82,12 @@ impl LightingKey {
                 sky_occlusion: bits & 16 != 0,
                 ssdo: bits & 32 != 0,
                 reflection_occlusion: bits & 64 != 0,
+                ao_bleed: bits & 128 != 0,
             })
-            .filter(|k| k.ssao || !k.ssdo)
+            .filter(|k| k.ssao || !(k.ssdo || k.ao_bleed))
     }
 
-    fn constants(self) -> [(&'static str, f64); 7] {
+    fn constants(self) -> [(&'static str, f64); 8] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
@@ -90,6 +97,7 @@ impl LightingKey {
             ("SKY_OCCLUSION", b(self.sky_occlusion)),
             ("SSDO", b(self.ssdo)),
             ("REFLECTION_OCCLUSION", b(self.reflection_occlusion)),
+            ("AO_BLEED", b(self.ao_bleed)),
         ]
     }
 }
@@ -105,6 +113,8 @@ pub struct LightingInputs<'a> {
     pub ao_dir: Option<TextureHandle>,
     /// `AoParams` (the O4 strength and penumbra widths).
     pub ao_params: &'a wgpu::Buffer,
+    /// O5 bleed colour (`passes/ao/bleed`); `None`: black (plain occlusion).
+    pub ao_bleed: Option<TextureHandle>,
     /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
     pub lights: &'a wgpu::Buffer,
     /// Filtered environment cube (L4, `envmap.filtered` after this
@@ -120,12 +130,15 @@ pub struct LightingInputs<'a> {
 
 pub struct LightingPass {
     program: Program,
+    /// The scene's `[[ambient_light]]`s (also bound by the forward passes).
+    pub ambient_lights: ambient::AmbientLightBuffer,
 }
 
 impl LightingPass {
-    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+    pub fn new(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<Self, GpuError> {
         let pass = Self {
             program: Program::new(ctx, "passes/lighting/deferred.wgsl")?,
+            ambient_lights: ambient::AmbientLightBuffer::new(&ctx.device, &scene.ambient_lights),
         };
         pass.pipeline(ctx, LightingKey::default())?;
         Ok(pass)
@@ -167,7 +180,9 @@ impl LightingPass {
             .optional("ao", inputs.ao, Fallback::White)
             .optional("ao_dir", inputs.ao_dir, Fallback::Black)
             .uniform("ao_params", inputs.ao_params)
+            .optional("ao_bleed", inputs.ao_bleed, Fallback::Black)
             .uniform("lights", inputs.lights)
+            .uniform("ambient_lights", &self.ambient_lights.buffer)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &envmap.sampler)
             .external("dfg_lut", &envmap.dfg_view)

@@ -175,3 +175,38 @@ pub fn shade_local(
     }
     brdf_cos(&surface_from_material(m), t, b, n, v, l) * e
 }
+
+/// `ambient_light_scale`: the multiplier of ambient light `l` at `p`:
+/// `mix(1, factor, smoothstep(t))`, `t = clamp((1 - r) / falloff, 0, 1)`
+/// with `r` the distance to the centre in units of the volume (the box's
+/// largest |local coordinate| / half-extent, or |p - c| / radius); falloff
+/// 0 is a hard edge at r = 1.
+pub fn ambient_light_scale(l: &crate::scene::AmbientLightDesc, p: Vec3) -> Vec3 {
+    use crate::scene::AmbientShape;
+    let d = p - l.position;
+    let r = match l.shape {
+        AmbientShape::Sphere(radius) => d.length() / radius,
+        AmbientShape::Box(half) => {
+            let local = glam::Quat::from_rotation_y(l.yaw_deg.to_radians()).inverse() * d;
+            (local.abs() / half).max_element()
+        }
+    };
+    let t = if l.falloff > 0.0 {
+        ((1.0 - r) / l.falloff).clamp(0.0, 1.0)
+    } else if r <= 1.0 {
+        1.0
+    } else {
+        0.0
+    };
+    let w = t * t * (3.0 - 2.0 * t);
+    Vec3::ONE.lerp(l.factor, w)
+}
+
+/// `ambient_scale`: the product of every light's multiplier at `p`, what
+/// both ambient terms (diffuse and specular) are multiplied by.
+pub fn ambient_scale(lights: &[crate::scene::AmbientLightDesc], p: Vec3) -> Vec3 {
+    lights
+        .iter()
+        .take(crate::scene::MAX_AMBIENT_LIGHTS)
+        .fold(Vec3::ONE, |s, l| s * ambient_light_scale(l, p))
+}

@@ -92,10 +92,14 @@ impl WorldDesc {
 
 /// Tables a world file cannot use, at the first entry of each.
 fn reject_scene_tables(ck: &Checker, f: &FileScene) -> Result<()> {
-    let first: [(&str, Option<Range<usize>>); 6] = [
+    let first: [(&str, Option<Range<usize>>); 7] = [
         ("[[object]]", f.object.first().map(|o| o.name.span())),
         ("[[material]]", f.material.first().map(|m| m.name.span())),
         ("[[light]]", f.light.first().map(|l| l.name.span())),
+        (
+            "[[ambient_light]]",
+            f.ambient_light.first().map(|a| a.position.span()),
+        ),
         ("[[probe]]", f.probe.first().map(|p| p.position.span())),
         ("[[gltf]]", f.gltf.first().map(|g| g.file.span())),
         (

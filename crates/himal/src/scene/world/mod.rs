@@ -257,6 +257,7 @@ impl World {
             cameras: self.cameras.clone(),
             sun: self.sun.clone(),
             lights: Vec::new(),
+            ambient_lights: Vec::new(),
             bounds: Aabb::new(Vec3::new(-half, bottom, -half), Vec3::new(half, top, half)),
             pbr: Default::default(),
             probes: Vec::new(),
