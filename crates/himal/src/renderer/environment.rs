@@ -8,14 +8,21 @@ use crate::math::sh::Sh9Rgb;
 use crate::passes::envmap::EnvMapPass;
 use crate::scene::{EnvironmentDesc, EnvironmentImage};
 
+/// The loaded `[environment]` of a scene, as the sky pass and lighting use it.
 pub struct EnvironmentGpu {
+    /// The equirectangular radiance (Rgba16Float, scaled by the scene's
+    /// intensity and drawn as kcd/m^2; u = longitude, v = 0 at +Y), one mip.
     pub image: wgpu::Texture,
+    /// View of [`Self::image`] the sky pass samples for the background.
     pub view: wgpu::TextureView,
+    /// Bilinear; wraps in u (longitude), clamps in v (the poles).
     pub sampler: wgpu::Sampler,
     /// Irradiance E(n) as SH9 (what `Lighting::sky_irradiance` holds).
     pub irradiance_sh: Sh9Rgb,
-    /// Keep the analytic sun.
+    /// Keep the analytic sun (`sun = true` in the scene): otherwise its
+    /// illuminance is zero, as the image holds its own sun.
     pub sun: bool,
+    /// Turn of the image about +Y (radians), added to the longitude.
     pub rotation: f32,
 }
 

@@ -12,8 +12,12 @@ use crate::passes::post::{
 };
 use crate::renderer::{FrameSettings, ViewBuffer};
 
+/// The post passes' state that outlives a frame.
 pub struct PostState {
+    /// The `Post` uniform ([`PostUniform`]), rewritten by [`Self::update`] each frame.
     pub uniform: wgpu::Buffer,
+    /// The adapted-luminance storage buffer (H3): (log L_a, L_a, L_avg,
+    /// frames since reset), luminances in kcd/m^2; only the GPU writes it.
     pub adapted: wgpu::Buffer,
     /// The next frame starts adapted (first frame, camera cut, adaptation was off).
     pub reset: bool,
@@ -26,6 +30,8 @@ fn bloom_passes(settings: &FrameSettings) -> Option<u32> {
     (settings.bloom.enabled || shown).then_some(settings.bloom.passes)
 }
 
+/// The tone-map permutation `settings` select: bloom on, a Reinhard white
+/// point set, and the tone mapper.
 pub fn tonemap_key(settings: &FrameSettings) -> TonemapKey {
     TonemapKey {
         bloom: settings.bloom.enabled,
@@ -34,6 +40,10 @@ pub fn tonemap_key(settings: &FrameSettings) -> TonemapKey {
     }
 }
 
+/// Checks the HDR-post settings: a white point (> 0) only with Reinhard,
+/// at most [`BloomSettings::MAX_PASSES`] bloom passes, bloom threshold and
+/// strength finite and >= 0, adaptation time constants (s) positive, a fixed
+/// frame delta (s) finite and >= 0, a finite exposure bias (EV).
 pub fn validate(settings: &FrameSettings) -> Result<(), Error> {
     let bad = |m: String| Err(Error::InvalidSettings(m));
     if settings.white_point.is_some() && settings.tonemapper != Tonemapper::Reinhard {
@@ -91,6 +101,8 @@ pub fn validate(settings: &FrameSettings) -> Result<(), Error> {
 }
 
 impl PostState {
+    /// A zeroed uniform and a fresh adapted-luminance buffer; the first frame
+    /// resets adaptation (starts adapted to its own average).
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
             uniform: uniform_buffer(ctx, "post", &<PostUniform as bytemuck::Zeroable>::zeroed()),
@@ -129,6 +141,9 @@ impl PostState {
         self.reset = !settings.adaptation.enabled;
     }
 
+    /// The buffers and per-frame choices the post passes of `frame::build`
+    /// need: the buffers, bloom passes (also for `--view bloom` with bloom
+    /// off), whether adaptation runs, the tone-map permutation.
     pub fn frame<'a>(&'a self, settings: &FrameSettings) -> PostFrame<'a> {
         PostFrame {
             uniform: &self.uniform,

@@ -26,6 +26,7 @@ const SKYOCC_ABOVE: f32 = 100.0;
 /// One frame of the streamed world, as [`Renderer::draw`] reports it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldFrame {
+    /// The streamer's figures for this frame (sectors wanted, missing, resident...).
     pub stream: StreamStats,
     /// Render-thread milliseconds of streaming (inside `CpuTimes::plan_ms`).
     pub stream_ms: f64,
@@ -53,6 +54,7 @@ pub struct StreamTimes {
 /// The world's streaming state between frames: the streamer and what the
 /// pool records need of each kind's mesh.
 pub struct WorldState {
+    /// Streams the world's sectors around the camera (generation on its workers).
     pub streamer: Streamer,
     /// The last applied update's figures ...
     pub stats: StreamStats,
@@ -65,6 +67,8 @@ pub struct WorldState {
 }
 
 impl WorldState {
+    /// A streamer over `world` with nothing resident yet; `scene` is the
+    /// world's scene (`World::scene`: one shared mesh per `InstanceKind`).
     pub fn new(world: Arc<World>, scene: &Scene) -> Self {
         let meshes = scene
             .meshes

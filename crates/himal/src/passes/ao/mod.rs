@@ -26,6 +26,7 @@ use crate::passes::common::{Step, clear_target, target, view_node};
 
 /// ao.hbao output: (AO, continuity).
 pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// ao.stability output (AO resolution): 1 = stable (continuous over 4x4).
 pub const STABILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 /// ao.pack and ao.blur_x output: (AO, linear depth).
 pub const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -58,7 +59,9 @@ pub fn declare_history(
 
 /// What the AO graph nodes read besides the depth buffer.
 pub struct AoInputs<'a> {
+    /// The frame's AO settings (mode, resolution, every parameter).
     pub settings: &'a AoSettings,
+    /// The G-buffer's full-resolution device depth (reverse-Z, 0 = sky).
     pub depth: TextureHandle,
     /// Holds [`HISTORY`] (declared with [`declare_history`]).
     pub history: &'a History,
@@ -71,7 +74,10 @@ pub struct AoTargets {
     pub ao: TextureHandle,
     /// O4 (`--ao ssdo`): full resolution (c1, c2), the directional term.
     pub dir: Option<TextureHandle>,
+    /// ao.hbao's output at AO resolution, before blur and filter:
+    /// (AO, continuity), with SSDO (AO, continuity, c1, c2).
     pub raw: TextureHandle,
+    /// ao.stability's mask at AO resolution (1 = stable); `--view stability-mask` shows it.
     pub stability: TextureHandle,
 }
 
@@ -83,6 +89,8 @@ struct SsdoSteps {
     blur_y_stf: Step,
 }
 
+/// The AO passes (O1-O4): the pipelines of each step, the 4x4 jitter
+/// texture, a linear sampler and the `AoParams` uniform buffer they share.
 pub struct AoPass {
     hbao: Step,
     stability: Step,
@@ -99,6 +107,9 @@ pub struct AoPass {
 }
 
 impl AoPass {
+    /// Compiles the HBAO, stability, pack and blur pipelines (the SSDO
+    /// variants wait for the first SSDO frame or [`Self::prewarm_ssdo`]) and
+    /// uploads the jitter texture; the parameters start zeroed until [`Self::update`].
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let jitter = ctx.device.create_texture_with_data(
             &ctx.queue,

@@ -16,12 +16,16 @@ pub const SKY_DEPTH: f32 = 65000.0;
 /// A row-major image of `T`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image<T> {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// `width * height` texels, row 0 first (the top row, as a texture's y = 0).
     pub data: Vec<T>,
 }
 
 impl<T: Copy> Image<T> {
+    /// Wraps row-major `data`; panics unless it holds `width * height` texels.
     pub fn new(width: u32, height: u32, data: Vec<T>) -> Self {
         assert_eq!(data.len(), (width * height) as usize, "image size");
         Self {
@@ -31,6 +35,7 @@ impl<T: Copy> Image<T> {
         }
     }
 
+    /// Fills the image with `f(texel coordinate)`, row by row.
     pub fn from_fn(width: u32, height: u32, f: impl FnMut(IVec2) -> T) -> Self {
         let mut f = f;
         let data = (0..height as i32)
@@ -47,6 +52,7 @@ impl<T: Copy> Image<T> {
         self.data[y * self.width as usize + x]
     }
 
+    /// Texel at `p` (a `textureLoad`), unclamped: `p` must lie inside the image.
     pub fn get(&self, p: IVec2) -> T {
         self.data[p.y as usize * self.width as usize + p.x as usize]
     }
@@ -315,7 +321,9 @@ pub fn blur<const N: usize>(p: &AoUniform, img: &Image<[f32; N]>, step: IVec2) -
 
 /// The matrices the temporal filter reads from `View`.
 pub struct StfView {
+    /// This frame's NDC (reverse-Z device depth) to world, jitter included.
     pub inv_view_proj: Mat4,
+    /// The previous frame's world to clip, with that frame's jitter.
     pub prev_view_proj: Mat4,
 }
 

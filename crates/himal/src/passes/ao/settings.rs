@@ -9,6 +9,7 @@ use crate::Error;
 /// Which AO runs (`--ao off|hbao|hbao+stf|ssdo`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum AoMode {
+    /// No AO pass runs; lighting reads AO = 1 (unoccluded).
     Off,
     /// HBAO and the cross-bilateral blur.
     Hbao,
@@ -22,6 +23,7 @@ pub enum AoMode {
 }
 
 impl AoMode {
+    /// The `--ao` spellings, in variant order (what `from_str` accepts).
     pub const NAMES: [&'static str; 4] = ["off", "hbao", "hbao+stf", "ssdo"];
 
     /// The selective temporal filter runs (with its history ring).
@@ -54,14 +56,15 @@ impl std::str::FromStr for AoMode {
 /// Every AO parameter; defaults are the talk's where it gives one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AoSettings {
+    /// Which AO runs; [`AoMode::Off`] skips the passes.
     pub mode: AoMode,
     /// HBAO at full instead of half resolution.
     pub full_resolution: bool,
-    /// Radius R of the horizon search (m); W(r) = 1 - r^2 / R^2 beyond which samples count 0.
+    /// Radius R of the horizon search (m, > 0); W(r) = 1 - r^2 / R^2 beyond which samples count 0.
     pub radius: f32,
-    /// Directions D of the horizon search.
+    /// Directions D of the horizon search (1..=32).
     pub directions: u32,
-    /// Steps S per direction.
+    /// Steps S per direction (1..=32).
     pub steps: u32,
     /// Occlusion multiplier (1 = the integral as is).
     pub strength: f32,
@@ -69,30 +72,32 @@ pub struct AoSettings {
     pub angle_bias_deg: f32,
     /// Cap on the projected radius (AO pixels) so close-ups stay bounded in cost.
     pub max_radius_px: f32,
-    /// Cross-bilateral kernel radius (full-resolution pixels).
+    /// Cross-bilateral kernel radius (full-resolution pixels, at most 32);
+    /// the Gaussian's sigma is (radius + 1) / 2.
     pub blur_radius: u32,
     /// Depth sharpness of the blur: dz = sharpness (z - z0) / z0.
     pub blur_sharpness: f32,
     /// Adaptive sampling (inner half point taps, outer half bilinear step 2) vs brute force.
     pub adaptive_blur: bool,
-    /// Disocclusion threshold epsilon on |1 - w_i / w_(i-1)|.
+    /// Disocclusion threshold epsilon on |1 - w_i / w_(i-1)| (>= 0).
     pub epsilon: f32,
-    /// N_max, the most frames accumulated.
+    /// N_max, the most frames accumulated (>= 1).
     pub n_max: f32,
-    /// Continuity distance L (m).
+    /// Continuity distance L (m, > 0): view-space neighbours farther apart
+    /// than this mark the pixel discontinuous (unstable).
     pub continuity: f32,
     /// Filter only unstable pixels (the talk); false filters every pixel.
     pub selective: bool,
     /// O4: how much the directional term occludes the sun and local lights
     /// (0 = not at all, 1 = fully; `--ssdo-strength`).
     pub ssdo_strength: f32,
-    /// O4: penumbra width below the horizon (sine of elevation).
+    /// O4: penumbra width below the horizon (sine of elevation, > 0).
     pub ssdo_softness: f32,
     /// O4: gain from the directional harmonic to the horizon's rise (2/pi of
-    /// a half-plane's rise, and W's falloff, measured in O4.md).
+    /// a half-plane's rise, and W's falloff, measured in O4.md; >= 0).
     pub ssdo_gain: f32,
     /// O4: extra penumbra width per unit of perceptual roughness for the
-    /// reflection vector (a rough lobe sees past the horizon).
+    /// reflection vector (a rough lobe sees past the horizon; >= 0).
     pub ssdo_roughness_softness: f32,
     /// Reflection occlusion (`--reflection-occlusion`): ambient specular times
     /// Lagarde's specular occlusion from AO and, with ssdo, times the
@@ -134,6 +139,8 @@ impl Default for AoSettings {
 }
 
 impl AoSettings {
+    /// Checks the ranges given on the fields; the error
+    /// (`Error::InvalidSettings`, "AO: ...") says which check failed.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidSettings(format!("AO: {what}")));
         if !(self.radius > 0.0 && self.radius.is_finite()) {
@@ -176,12 +183,23 @@ impl AoSettings {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct AoUniform {
+    /// 1/P00, 1/P11 (NDC to view-space x/z, y/z), near plane (m), focal
+    /// length in AO pixels (0.5 AO height P11: metres at depth z to pixels).
     pub proj: [f32; 4],
+    /// AO-resolution width, height (texels), 1/width, 1/height.
     pub ao_size: [f32; 4],
+    /// Full-resolution width, height (pixels), 1/width, 1/height.
     pub full_size: [f32; 4],
+    /// Radius R (m), 1/R^2 (the falloff W), strength, angle bias (radians).
     pub hbao: [f32; 4],
+    /// Directions D, steps S, full pixels per AO texel (1 or 2), cap on the
+    /// projected radius (AO pixels).
     pub hbao_steps: [f32; 4],
+    /// Blur kernel radius (full-res pixels), Gaussian falloff 1/(2 sigma^2),
+    /// depth sharpness, 1 = adaptive sampling.
     pub blur: [f32; 4],
+    /// STF: epsilon, N_max, continuity L (m), 1 = selective (filter only
+    /// unstable pixels).
     pub stf: [f32; 4],
     /// xy this frame's sample offset (px, y down), zw the previous frame's:
     /// the view matrices carry them, the STF's reprojection takes them out.

@@ -5,7 +5,7 @@
 //! ```text
 //! albedo, depth ─> ao.bleed (1/4 res, coverage-weighted) ─> ao.bleed_x ─> ao.bleed_y ─> lighting.deferred
 //! ```
-//! CPU twin: [`reference`]. Math and measurements: `docs/techniques/O5.md`.
+//! CPU twin: [`mod@reference`]. Math and measurements: `docs/techniques/O5.md`.
 
 pub mod reference;
 
@@ -24,6 +24,8 @@ pub fn size(full: (u32, u32)) -> (u32, u32) {
     (full.0.div_ceil(SCALE), full.1.div_ceil(SCALE))
 }
 
+/// O5's bleed passes: the 4x4 downsample and the two blur steps (one
+/// shader, `STEP` 0/1/2) and the `--view ao-bleed` program.
 pub struct BleedPass {
     downsample: Step,
     blur_x: Step,
@@ -32,6 +34,7 @@ pub struct BleedPass {
 }
 
 impl BleedPass {
+    /// Compiles the three steps' pipelines (all into [`FORMAT`]) and the view program.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let path = "passes/ao/bleed/bleed.wgsl";
         let step = |label, s: f64| Step::new(ctx, path, label, FORMAT, &[("STEP", s)]);

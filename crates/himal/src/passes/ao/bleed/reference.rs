@@ -22,8 +22,11 @@ pub fn bleed_colour(texel: Vec4) -> Vec3 {
 /// A row-major image of `w` x `h` texels.
 #[derive(Clone, Debug)]
 pub struct Texels {
+    /// Width in texels (bleed resolution: full width / [`SCALE`], rounded up).
     pub w: usize,
+    /// Height in texels.
     pub h: usize,
+    /// `w * h` texels, top row first: rgb = albedo sum / 16, a = coverage.
     pub data: Vec<Vec4>,
 }
 
