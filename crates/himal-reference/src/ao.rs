@@ -103,10 +103,16 @@ impl Shape {
 
 /// The nearest hit over all shapes.
 pub fn trace(shapes: &[Shape], origin: Vec3, dir: Vec3, t_min: f32) -> Option<Hit> {
+    trace_index(shapes, origin, dir, t_min).map(|(_, hit)| hit)
+}
+
+/// The nearest hit over `shapes` and the index of the shape hit.
+pub fn trace_index(shapes: &[Shape], origin: Vec3, dir: Vec3, t_min: f32) -> Option<(usize, Hit)> {
     shapes
         .iter()
-        .filter_map(|s| s.intersect(origin, dir, t_min))
-        .min_by(|a, b| a.t.total_cmp(&b.t))
+        .enumerate()
+        .filter_map(|(k, s)| s.intersect(origin, dir, t_min).map(|h| (k, h)))
+        .min_by(|a, b| a.1.t.total_cmp(&b.1.t))
 }
 
 /// Orthonormal tangent and bitangent of `n` (Duff et al. 2017).
@@ -120,17 +126,22 @@ fn basis(n: Vec3) -> (Vec3, Vec3) {
     )
 }
 
+/// Cosine-weighted direction `i` of `samples` about `n` (Hammersley points).
+fn cosine_direction(n: Vec3, i: u32, samples: u32) -> Vec3 {
+    let (t, b) = basis(n);
+    let u = hammersley(i, samples);
+    let r = u.x.sqrt();
+    let phi = std::f32::consts::TAU * u.y;
+    let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt());
+    (t * local.x + b * local.y + n * local.z).normalize()
+}
+
 /// Ray-traced AO at `p` with normal `n`, radius `radius`, `samples` cosine-weighted rays.
 pub fn ambient_occlusion(shapes: &[Shape], p: Vec3, n: Vec3, radius: f32, samples: u32) -> f32 {
-    let (t, b) = basis(n);
     let origin = p + n * 1e-4;
     let mut occlusion = 0.0f64;
     for i in 0..samples {
-        let u = hammersley(i, samples);
-        let r = u.x.sqrt();
-        let phi = std::f32::consts::TAU * u.y;
-        let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt());
-        let dir = (t * local.x + b * local.y + n * local.z).normalize();
+        let dir = cosine_direction(n, i, samples);
         if let Some(hit) = trace(shapes, origin, dir, 0.0)
             && hit.t < radius
         {
@@ -139,6 +150,45 @@ pub fn ambient_occlusion(shapes: &[Shape], p: Vec3, n: Vec3, radius: f32, sample
         }
     }
     (1.0 - occlusion / samples as f64) as f32
+}
+
+/// One-bounce coloured ambient occlusion, the ground truth O5 approximates.
+/// Under a uniform sky of radiance L a point sees the sky along open
+/// directions and, along blocked ones, a Lambertian surface q of albedo
+/// `rho` lit by the same sky, of radiance `rho L AO(q)` (its own ambient
+/// occlusion, no further bounce). With the falloff W of
+/// [`ambient_occlusion`] blending blocked into open directions, the
+/// effective occlusion per channel is
+/// `O(p) = mean_i [(1 - W_i) + W_i rho(q_i) AO(q_i)]` over cosine-weighted
+/// directions (`rho = 0`: [`ambient_occlusion`]).
+///
+/// `albedo[k]` is shape k's; `samples` directions at p, `inner` for each
+/// hit point's AO.
+pub fn one_bounce_occlusion(
+    shapes: &[Shape],
+    albedo: &[Vec3],
+    p: Vec3,
+    n: Vec3,
+    radius: f32,
+    samples: u32,
+    inner: u32,
+) -> Vec3 {
+    let origin = p + n * 1e-4;
+    let mut sum = Vec3::ZERO;
+    for i in 0..samples {
+        let dir = cosine_direction(n, i, samples);
+        match trace_index(shapes, origin, dir, 0.0) {
+            Some((k, hit)) if hit.t < radius => {
+                let rr = hit.t / radius;
+                let w = 1.0 - rr * rr;
+                let q = origin + dir * hit.t;
+                let ao_q = ambient_occlusion(shapes, q, hit.normal, radius, inner);
+                sum += Vec3::splat(1.0 - w) + albedo[k] * (w * ao_q);
+            }
+            _ => sum += Vec3::ONE,
+        }
+    }
+    sum / samples as f32
 }
 
 /// Ray-traced directional visibility (O4's ground truth): `1 - mean W(t/R)`

@@ -14,8 +14,7 @@ use himal::gpu::testing::run_compute;
 use himal::passes::ao::bleed::reference as twin;
 use himal::passes::ao::{AoMode, AoSettings};
 use himal::scene::{Camera, Scene, SunLight};
-use himal_reference::ao::{Shape, ambient_occlusion};
-use himal_reference::integrate::hammersley;
+use himal_reference::ao::{Shape, one_bounce_occlusion, trace_index};
 
 const SIZE: (u32, u32) = (160, 120);
 const RED: Vec3 = Vec3::new(0.8, 0.05, 0.05);
@@ -122,67 +121,6 @@ fn bleed_texture_matches_the_cpu_twin() {
     // Measured 2026-12-05 (lavapipe): 1.1e-3, the Rgba16Float rounding of
     // values up to 0.8 (half a unit in the last place: 2.4e-4) over three steps.
     assert!(worst < 2e-3, "{worst}");
-}
-
-/// The nearest hit over `shapes` and the index of the shape hit.
-fn trace_index(
-    shapes: &[Shape],
-    origin: Vec3,
-    dir: Vec3,
-    t_min: f32,
-) -> Option<(usize, himal_reference::ao::Hit)> {
-    shapes
-        .iter()
-        .enumerate()
-        .filter_map(|(k, s)| s.intersect(origin, dir, t_min).map(|h| (k, h)))
-        .min_by(|a, b| a.1.t.total_cmp(&b.1.t))
-}
-
-/// One-bounce coloured ambient occlusion, the ground truth O5 approximates.
-/// Under a uniform sky of radiance L a point sees the sky along open
-/// directions and, along blocked ones, a Lambertian surface q of albedo
-/// `rho` lit by the same sky, of radiance `rho L AO(q)` (its own ambient
-/// occlusion, no further bounce). With the falloff W of
-/// `himal_reference::ao` blending blocked into open directions, the
-/// effective occlusion per channel is
-/// `O(p) = mean_i [(1 - W_i) + W_i rho(q_i) AO(q_i)]` over cosine-weighted
-/// directions (`rho = 0`: `ambient_occlusion`).
-///
-/// `albedo[k]` is shape k's; `samples` directions at p, `inner` for each
-/// hit point's AO.
-fn one_bounce_occlusion(
-    shapes: &[Shape],
-    albedo: &[Vec3],
-    p: Vec3,
-    n: Vec3,
-    radius: f32,
-    samples: u32,
-    inner: u32,
-) -> Vec3 {
-    // Any orthonormal basis: the estimator is rotation invariant up to noise.
-    let t = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-    let t = (t - n * n.dot(t)).normalize();
-    let b = n.cross(t);
-    let origin = p + n * 1e-4;
-    let mut sum = Vec3::ZERO;
-    for i in 0..samples {
-        let u = hammersley(i, samples);
-        let r = u.x.sqrt();
-        let phi = std::f32::consts::TAU * u.y;
-        let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt());
-        let dir = (t * local.x + b * local.y + n * local.z).normalize();
-        match trace_index(shapes, origin, dir, 0.0) {
-            Some((k, hit)) if hit.t < radius => {
-                let rr = hit.t / radius;
-                let w = 1.0 - rr * rr;
-                let q = origin + dir * hit.t;
-                let ao_q = ambient_occlusion(shapes, q, hit.normal, radius, inner);
-                sum += Vec3::splat(1.0 - w) + albedo[k] * (w * ao_q);
-            }
-            _ => sum += Vec3::ONE,
-        }
-    }
-    sum / samples as f32
 }
 
 /// Measured occlusion per pixel (GPU bleed on, off; each frame over the
