@@ -428,7 +428,10 @@ fn bad_ao_bleed_ambient_lights_and_wetness_are_rejected() {
         &["render", "--wetness", "1.5", "--size", "8x8"],
         "--wetness 1.5",
     );
-    fails_with(&["render", "--wetness", "nan", "--size", "8x8"], "--wetness");
+    fails_with(
+        &["render", "--wetness", "nan", "--size", "8x8"],
+        "--wetness",
+    );
 }
 
 #[test]
