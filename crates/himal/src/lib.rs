@@ -14,6 +14,8 @@
 //! # Ok::<(), himal::Error>(())
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod budget;
 pub mod clock;
 pub mod frame;

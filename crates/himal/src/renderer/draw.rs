@@ -9,6 +9,8 @@ use crate::settings::Culling;
 
 /// One rendered frame read back to the CPU.
 pub struct RenderedFrame {
+    /// The output texture's texels: the display image (`DISPLAY_FORMAT`),
+    /// or with `FrameSettings::raw` a debug view's raw values (`RAW_FORMAT`).
     pub image: TextureData,
     /// CPU time of the frame's halves (planning and culling, graph build
     /// and recording, submit), without waiting for the GPU.
@@ -43,6 +45,7 @@ pub struct CpuTimes {
 }
 
 impl CpuTimes {
+    /// The frame's whole CPU time (ms): plan + record + submit.
     pub fn total_ms(&self) -> f64 {
         self.plan_ms + self.record_ms + self.submit_ms
     }
@@ -459,7 +462,9 @@ impl Renderer {
 /// per LOD level, a level in transition counted in both lists.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DrawnCounts {
+    /// Instances drawn, indexed by LOD level (0: the finest).
     pub instances: [u64; crate::scene::lod::MAX_LODS],
+    /// Triangles drawn (index count / 3 × instances), by LOD level.
     pub triangles: [u64; crate::scene::lod::MAX_LODS],
     /// Of those, triangles expected under one pixel (E2): each instance's
     /// level's areas at `(s f / d)^2` pixels per unit area (`s` its linear
@@ -482,10 +487,12 @@ impl DrawnCounts {
         c
     }
 
+    /// Instances over all levels.
     pub fn total_instances(&self) -> u64 {
         self.instances.iter().sum()
     }
 
+    /// Triangles over all levels.
     pub fn total_triangles(&self) -> u64 {
         self.triangles.iter().sum()
     }

@@ -105,6 +105,9 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
     }
 }
 
+/// The renderer: the GPU context, the scene uploaded to it, every pass
+/// and the state carried between frames (previous view-projection and
+/// jitter, anti-aliasing history, sky tables, the streamed world).
 pub struct Renderer {
     ctx: GpuContext,
     res: Resources,
@@ -233,14 +236,19 @@ impl Renderer {
     }
 
     /// The environment cube and DFG table (L4), for tests and tools.
+    /// The environment-map pass (filtered cube, DFG table), for tests and
+    /// tools that read its textures.
     pub fn envmap(&self) -> &EnvMapPass {
         &self.res.passes.envmap
     }
 
+    /// The device and queue the renderer draws with.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
     }
 
+    /// Triangles of every scene object at LOD0 (the uploaded scene, before
+    /// culling or LOD selection).
     pub fn scene_triangles(&self) -> u64 {
         self.res.scene.triangles
     }

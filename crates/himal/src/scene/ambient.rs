@@ -32,8 +32,12 @@ pub enum AmbientShape {
 /// half-extent or radius) the multiplier fades smoothly back to 1.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmbientLightDesc {
+    /// The table's `name`, or `ambient<k>` (k: its index in the file) when
+    /// it has none.
     pub name: String,
+    /// World-space centre of the volume (m).
     pub position: Vec3,
+    /// Box (`size`, half-extents) or sphere (`radius`); exactly one is given.
     pub shape: AmbientShape,
     /// Rotation about +Y (degrees; boxes).
     pub yaw_deg: f32,

@@ -12,7 +12,11 @@ type Result<T> = std::result::Result<T, SceneError>;
 /// Point light (all directions) or spot light (a cone).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightKind {
+    /// Radiates equally in all directions; shadowed through six cube-face
+    /// projectors (S3).
     Point,
+    /// Radiates into a cone about `LightDesc::direction`, shaped by
+    /// `inner_deg` / `outer_deg`; one shadow projector.
     Spot,
 }
 
@@ -20,8 +24,12 @@ pub enum LightKind {
 /// faded to zero at `range` by `(1 − (d/range)⁴)²`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightDesc {
+    /// The table's `name`, unique among the file's lights (a duplicate is an
+    /// error).
     pub name: String,
+    /// `kind = "point" | "spot"`.
     pub kind: LightKind,
+    /// World-space position (m).
     pub position: Vec3,
     /// Linear colour (multiplies the intensity).
     pub color: Vec3,
@@ -32,7 +40,10 @@ pub struct LightDesc {
     /// Spot axis (unit); unused for point lights.
     pub direction: Vec3,
     /// Spot cone: full intensity inside `inner_deg`, none outside `outer_deg` (half angles).
+    /// Degrees, in [0, `outer_deg`]; default 0.8 · `outer_deg`.
     pub inner_deg: f32,
+    /// Half angle (degrees, [1, 89], default 45) beyond which a spot gives no
+    /// light; also the spot's shadow projector's half field of view.
     pub outer_deg: f32,
     /// Casts shadows (S3 atlas).
     pub shadow: bool,

@@ -46,7 +46,9 @@ pub enum ForwardKind {
 /// A forward permutation: which pass and whether back faces are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ForwardKey {
+    /// Which forward pass the pipeline belongs to.
     pub kind: ForwardKind,
+    /// Draw back faces too (glTF `doubleSided`): no culling.
     pub double_sided: bool,
     /// E3: roughness widened by normal-map variance (`SPECULAR_AA`); only
     /// for the kinds that shade specular (layers, transmission, blend).
@@ -100,10 +102,12 @@ impl ForwardKey {
 /// What the forward passes read.
 #[derive(Clone, Copy)]
 pub struct ForwardInputs<'a> {
+    /// The scene's GPU data: meshes, materials and instances to draw.
     pub scene: &'a SceneGpu,
     /// Filtered cube, DFG table and sampler (L4); `env` orders the read
     /// after this frame's filtering.
     pub envmap: &'a EnvMapPass,
+    /// The filtered environment cube as a graph handle (see `envmap`).
     pub env: TextureHandle,
     /// The sun's shadow mask (`forward.layers`; `None` without shadows).
     pub shadow_mask: Option<TextureHandle>,
@@ -117,7 +121,10 @@ pub struct ForwardInputs<'a> {
 /// the transmissive surfaces (later readers must use this version).
 #[derive(Clone, Copy, Debug)]
 pub struct ForwardOut {
+    /// The HDR radiance target (kcd/m², [`HDR_FORMAT`]) with the forward
+    /// surfaces composited.
     pub hdr: TextureHandle,
+    /// The reverse-Z depth after the transmissive surfaces' writes.
     pub depth: TextureHandle,
 }
 
@@ -159,6 +166,8 @@ pub struct ForwardPass {
 }
 
 impl ForwardPass {
+    /// Loads the forward shaders and uploads the sheen albedo table (an
+    /// error if a shader does not compile).
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         use wgpu::util::DeviceExt;
         let n = reference::SHEEN_TABLE_SIZE as u32;

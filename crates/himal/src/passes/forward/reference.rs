@@ -16,7 +16,10 @@ use crate::math::sh::Sh9Rgb;
 /// samples of the filtered cube and DFG table give the shader).
 #[derive(Clone, Debug)]
 pub struct ForwardLight {
+    /// World-space unit vector towards the sun.
     pub sun_direction: Vec3,
+    /// Sun illuminance, linear RGB (klux), times its shadow where the
+    /// caller applies one.
     pub sun_illuminance: Vec3,
     /// Irradiance SH9 (`sh9_eval` gives E(n)).
     pub sky_irradiance: Sh9Rgb,
@@ -281,9 +284,11 @@ pub fn sheen_albedo_lookup(table: &[f32], n_o_v: f32, perceptual_roughness: f32)
 pub struct Layers {
     /// Linear sheen colour (0: no sheen).
     pub sheen_color: Vec3,
+    /// Sheen perceptual roughness in [0, 1].
     pub sheen_roughness: f32,
     /// Coat intensity in [0, 1] (0: no coat).
     pub clearcoat: f32,
+    /// Coat perceptual roughness in [0, 1].
     pub clearcoat_roughness: f32,
     /// KHR_materials_specular's correction of the deferred base: the true
     /// F0 minus the G-buffer's grey one, times 1 − metallic.
@@ -297,6 +302,7 @@ pub struct Layers {
 /// What the layers see (twin of `LayerLight` in shaders/layers.wgsl).
 #[derive(Clone, Copy, Debug)]
 pub struct LayerLight {
+    /// World-space unit vector towards the sun.
     pub sun_direction: Vec3,
     /// Sun illuminance times its shadow.
     pub sun: Vec3,
@@ -312,6 +318,8 @@ pub struct LayerLight {
     pub base_env: Vec3,
     /// DFG table (A, B) at the base's (n.v, roughness).
     pub base_dfg: Vec2,
+    /// Ambient occlusion in [0, 1] applied to the environment terms (not
+    /// the sun).
     pub ao: f32,
 }
 

@@ -11,9 +11,14 @@ use crate::scene::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_LIGHTS};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct AmbientLightGpu {
+    /// xyz: world-space centre (m); w: shape, 0 = box, 1 = sphere.
     pub position_shape: [f32; 4],
+    /// xyz: box half-extents (m), or the sphere's radius (m) in all three;
+    /// w: falloff fraction in [0, 1] (0: hard edge).
     pub extent_falloff: [f32; 4],
+    /// rgb: linear multiplier per channel, [0, 16]; w: 1 (unused).
     pub factor: [f32; 4],
+    /// x: cos(yaw), y: sin(yaw) of the box's rotation about +Y; zw: 0.
     pub yaw: [f32; 4],
 }
 
@@ -38,7 +43,9 @@ impl From<&AmbientLightDesc> for AmbientLightGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct AmbientLightsGpu {
+    /// x: how many of `lights` are in use (0 turns them all off); yzw: 0.
     pub count: [u32; 4],
+    /// The lights, `count[0]` of them from the start; the rest zeroed.
     pub lights: [AmbientLightGpu; MAX_AMBIENT_LIGHTS],
 }
 
@@ -56,11 +63,16 @@ impl AmbientLightsGpu {
 
 /// The buffer and how many lights it holds.
 pub struct AmbientLightBuffer {
+    /// The storage buffer holding one [`AmbientLightsGpu`] (binding 20 of
+    /// the shaders that import `ambient_lights.wgsl`); `COPY_DST` so
+    /// [`enable`](Self::enable) can rewrite the count.
     pub buffer: wgpu::Buffer,
+    /// The scene's light count, written back by `enable(.., true)`.
     pub count: u32,
 }
 
 impl AmbientLightBuffer {
+    /// Uploads the scene's lights (at most [`MAX_AMBIENT_LIGHTS`]), enabled.
     pub fn new(device: &wgpu::Device, lights: &[AmbientLightDesc]) -> Self {
         use wgpu::util::DeviceExt;
         let data = AmbientLightsGpu::new(lights);

@@ -16,6 +16,8 @@ use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::skyocc::{SkyOccFrame, SkyOccPass};
 
+/// Format of the HDR scene-radiance targets (lighting, sky, forward, bloom):
+/// linear radiance in kcd/m², before exposure and tone mapping.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The lighting permutation, Far Cry's "environment" axis: which light
@@ -117,17 +119,22 @@ pub struct LightingInputs<'a> {
     pub ao_bleed: Option<TextureHandle>,
     /// Point and spot lights (`LocalLights` in `shaders/shadow.wgsl`, S3).
     pub lights: &'a wgpu::Buffer,
-    /// Filtered environment cube (L4, `envmap.filtered` after this
-    /// frame's filtering, if any) and the pass's DFG table and sampler.
+    /// The environment-map pass, for its DFG table and cube sampler (L4).
     pub envmap: &'a EnvMapPass,
+    /// Filtered environment cube (L4, `envmap.filtered` after this
+    /// frame's filtering, if any), read as `env_specular`.
     pub env: TextureHandle,
-    /// Sky occlusion pool (L2) after this frame's sector updates.
+    /// Sky occlusion pass (L2), for its sector table and sampler.
     pub skyocc: &'a SkyOccPass,
+    /// The sky occlusion pool's visibility and height layers as graph
+    /// handles, so lighting is ordered after this frame's sector updates.
     pub skyocc_frame: SkyOccFrame,
     /// The permutation to draw with.
     pub key: LightingKey,
 }
 
+/// The deferred lighting pass (`lighting.deferred`): shades the G-buffer
+/// into an [`HDR_FORMAT`] target, one pipeline per [`LightingKey`].
 pub struct LightingPass {
     program: Program,
     /// The scene's `[[ambient_light]]`s (also bound by the forward passes).
@@ -135,6 +142,8 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
+    /// Loads `deferred.wgsl`, uploads the scene's ambient lights and builds
+    /// the default permutation (an error if the shader does not compile).
     pub fn new(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<Self, GpuError> {
         let pass = Self {
             program: Program::new(ctx, "passes/lighting/deferred.wgsl")?,

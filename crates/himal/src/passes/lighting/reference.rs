@@ -18,6 +18,7 @@ pub struct EnvironmentSpecular {
     pub filtered: Vec<CubeMip>,
     /// DFG table (A, B), `dfg_size`² texels: x = n.v, y = roughness.
     pub dfg: Vec<Vec2>,
+    /// Edge of the square DFG table (texels), so `dfg.len() == dfg_size²`.
     pub dfg_size: usize,
 }
 
@@ -42,8 +43,13 @@ impl EnvironmentSpecular {
 /// What `Lighting` holds on the GPU.
 #[derive(Clone, Debug)]
 pub struct LightingParams {
+    /// World-space unit vector towards the sun.
     pub sun_direction: Vec3,
+    /// Sun illuminance at the ground, linear RGB (klux).
     pub sun_illuminance: Vec3,
+    /// Sky irradiance E(n) as RGB SH9 (klux): ambient diffuse along the
+    /// normal (the bent normal with L2), ambient specular along the
+    /// reflection vector when `environment` is `None`.
     pub sky_irradiance: Sh9Rgb,
     /// Ambient specular from the filtered cube (`ENV_SPECULAR`); `None`: SH
     /// along the reflection vector with the fitted DFG.
