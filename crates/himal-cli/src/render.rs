@@ -227,6 +227,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub specular_aa: String,
+    /// R4: Burley's remapped roughness in the visibility term of the sun
+    /// and local lights (less specular on rough surfaces at grazing light).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub visibility_remap: String,
     /// The scene's `[[ambient_light]]` volumes (Ryse's multiplicative
     /// ambient lights, docs/ambient-lights.md); off: ignored.
     #[arg(
@@ -406,6 +415,7 @@ impl PostArgs {
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
+        settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         if !(0.0..=1.0).contains(&self.wetness) {
             bail!("--wetness {}: must be in [0, 1]", self.wetness);

@@ -199,6 +199,10 @@ pub struct FrameSettings {
     /// E3 specular anti-aliasing: glTF roughness widened by the normal
     /// variance baked into normal-map mips (Toksvig; on by default).
     pub specular_aa: bool,
+    /// R4: Burley's remapped roughness ((1 + r) / 2)^2 in the visibility
+    /// term of the sun and local lights, less specular gain on rough
+    /// surfaces at grazing light (off by default; docs/techniques/R4.md).
+    pub visibility_remap: bool,
     /// The scene's `[[ambient_light]]` volumes scale the ambient light (on
     /// by default; docs/ambient-lights.md).
     pub ambient_lights: bool,
@@ -277,6 +281,7 @@ impl FrameSettings {
             envmap_every_frame: false,
             sky_model: Default::default(),
             specular_aa: true,
+            visibility_remap: false,
             ambient_lights: true,
             wetness: 0.0,
         }

@@ -36,13 +36,16 @@ fn q8_srgb(v: f32) -> f32 {
 
 /// Lit sphere, GPU vs the CPU twin; `env`: ambient specular from the
 /// filtered cube (L4) instead of SH along the reflection vector.
-/// Returns (mean, worst) relative error.
-fn lit_sphere_errors(env: bool) -> (f32, f32) {
+/// `remap`: R4's visibility remap on. Returns (mean, worst) relative error
+/// and, over the pixels where flipping `remap` moves the twin by over 2 %,
+/// the mean relative error against the twin and against the flipped twin.
+fn lit_sphere_errors(env: bool, remap: bool) -> (f32, f32, (f32, f32)) {
     let (scene, camera) = scene_and_camera("lit_sphere", "front");
     let (w, h) = (96u32, 96u32);
     let mut settings = raw_settings(&scene, (w, h), "lighting");
     settings.aerial_extinction = 0.0;
     settings.environment_specular = env;
+    settings.visibility_remap = remap;
     let mut r = renderer(&scene);
     let gpu = render_rgba(&mut r, &camera, &settings);
 
@@ -50,6 +53,10 @@ fn lit_sphere_errors(env: bool) -> (f32, f32) {
     if env {
         light.environment = Some(environment_specular(&r));
     }
+    light.visibility_remap = remap;
+    let mut flipped = light.clone();
+    flipped.visibility_remap = !remap;
+    let (mut moved, mut moved_right, mut moved_wrong) = (0, 0.0f32, 0.0f32);
     // The G-buffer stores albedo in 8-bit sRGB and material parameters in 8 bits.
     let material = Material {
         albedo: Vec3::new(0.6, 0.3, 0.2).map(q8_srgb),
@@ -79,9 +86,16 @@ fn lit_sphere_errors(env: bool) -> (f32, f32) {
             let t = Vec3::Y.cross(n).normalize_or(Vec3::X);
             let bt = n.cross(t);
             let cpu = shade(&material, 1.0, t, bt, n, v, &light, 1.0);
+            let other = shade(&material, 1.0, t, bt, n, v, &flipped, 1.0);
             let g = gpu[(y * w + x) as usize];
             let g = Vec3::new(g[0], g[1], g[2]);
-            let rel = ((g - cpu).abs() / cpu.max(Vec3::splat(1e-3))).max_element();
+            let rel_of = |c: Vec3| ((g - c).abs() / c.max(Vec3::splat(1e-3))).max_element();
+            let rel = rel_of(cpu);
+            if ((other - cpu).abs() / cpu.max(Vec3::splat(1e-3))).max_element() > 0.02 {
+                moved += 1;
+                moved_right += rel;
+                moved_wrong += rel_of(other);
+            }
             worst = worst.max(rel);
             sum += rel;
             compared += 1;
@@ -89,15 +103,21 @@ fn lit_sphere_errors(env: bool) -> (f32, f32) {
     }
     assert!(compared > 2000, "only {compared} sphere pixels compared");
     let mean = sum / compared as f32;
-    eprintln!(
-        "lit sphere vs CPU (env specular {env}): {compared} pixels, mean relative error {mean:.5}, worst {worst:.5}"
+    let moved_errors = (
+        moved_right / moved.max(1) as f32,
+        moved_wrong / moved.max(1) as f32,
     );
-    (mean, worst)
+    eprintln!(
+        "lit sphere vs CPU (env specular {env}, R4 {remap}): {compared} pixels, mean relative error {mean:.5}, worst {worst:.5}; \
+         {moved} pixels move > 2 % with R4 flipped: error {:.5} vs the twin, {:.5} vs the flipped twin",
+        moved_errors.0, moved_errors.1
+    );
+    (mean, worst, moved_errors)
 }
 
 #[test]
 fn lit_sphere_matches_cpu_lighting_reference() {
-    let (mean, worst) = lit_sphere_errors(false);
+    let (mean, worst, _) = lit_sphere_errors(false, false);
     // Differences come from fp16 HDR storage (~5e-4), 10-bit quaternion normals
     // and the 128-segment tessellation (interpolated vs analytic normals, worst
     // in the highlight). Measured 2026-11-22 on lavapipe: mean 0.0045, worst 0.053.
@@ -107,13 +127,28 @@ fn lit_sphere_matches_cpu_lighting_reference() {
 
 #[test]
 fn lit_sphere_with_environment_specular_matches_cpu_twin() {
-    let (mean, worst) = lit_sphere_errors(true);
+    let (mean, worst, _) = lit_sphere_errors(true, false);
     // The twin samples the GPU's own filtered cube and DFG table (read back),
     // trilinear within faces: this checks the lighting pass's L4/M4 term.
     // Measured 2026-11-22 (lavapipe): mean 0.0047, worst 0.052; with the
     // twin's environment term replaced by the SH path: mean 0.056, worst 0.32.
     assert!(mean < 0.01, "mean relative error {mean}");
     assert!(worst < 0.08, "worst relative error {worst}");
+}
+
+#[test]
+fn lit_sphere_with_visibility_remap_matches_cpu_twin() {
+    let (mean, worst, (right, wrong)) = lit_sphere_errors(false, true);
+    // R4 on, GPU vs twin: the same error sources as without it. Measured
+    // 2026-12-06 (lavapipe): mean 0.0046, worst 0.052. Where R4 matters
+    // (the twin moves > 2 % when it is flipped) the frame follows the twin
+    // that has it: error 0.0142 against it, 0.0321 against the one without.
+    assert!(mean < 0.01, "mean relative error {mean}");
+    assert!(worst < 0.08, "worst relative error {worst}");
+    assert!(
+        right < 0.5 * wrong,
+        "R4 pixels: {right} vs the twin, {wrong} without R4"
+    );
 }
 
 #[test]
@@ -185,5 +220,57 @@ fn every_debug_view_renders() {
             let centre = px[16 * 32 + 16];
             assert!(centre.iter().all(|v| v.is_finite()), "{name}: {centre:?}");
         }
+    }
+}
+
+/// R4 in a frame: a metal ground under a low sun (19:15), seen looking
+/// towards the sun and away from it, for glossiness 0.25, 0.5 and 0.85.
+/// Prints the mean lit radiance of the ground with the remap over without.
+#[test]
+fn r4_visibility_remap_dims_rough_metal_under_low_sun() {
+    let (mut scene, mut camera) = scene_and_camera("r4_low_sun", "main");
+    let sun = lighting_params(&scene).sun_direction;
+    let away = Vec3::new(sun.x, 0.0, sun.z).normalize();
+    let (w, h) = (64u32, 40u32);
+    eprintln!("R4 sun elevation {:.1} deg", sun.y.asin().to_degrees());
+    // The lower half of the frame: ground only.
+    let mean = |pixels: &[[f32; 4]]| {
+        let ground = &pixels[(w * h / 2) as usize..];
+        ground.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / ground.len() as f32
+    };
+    let mut ratios = Vec::new();
+    for glossiness in [0.25, 0.5, 0.85] {
+        for v in &mut scene.meshes[0].vertices {
+            v.surface[0] = glossiness;
+        }
+        // A fresh renderer per setting: both see the same frame sequence
+        // (jitter, temporal state).
+        let mut means = [[0.0f32; 2]; 2];
+        for (k, remap) in [false, true].into_iter().enumerate() {
+            let mut r = renderer(&scene);
+            for (j, dir) in [-away, away].into_iter().enumerate() {
+                camera.position = dir * 6.0 + Vec3::Y * 1.6;
+                camera.forward = (-camera.position + Vec3::Y * 0.8).normalize();
+                let mut s = raw_settings(&scene, (w, h), "lighting");
+                s.aerial_extinction = 0.0;
+                s.visibility_remap = remap;
+                means[k][j] = mean(&render_rgba(&mut r, &camera, &s));
+            }
+        }
+        for (j, name) in ["towards the sun", "away from it"].into_iter().enumerate() {
+            let (off, on) = (means[0][j], means[1][j]);
+            eprintln!(
+                "R4 glossiness {glossiness}, looking {name}: on/off {:.3}",
+                on / off
+            );
+            assert!(on <= off * 1.0001, "R4 brightened: {on} > {off}");
+            ratios.push(on / off);
+        }
+    }
+    // Measured 2026-12-06 (lavapipe), sun at 21.5 deg: towards the sun
+    // 0.867 / 0.743 / 0.808 for glossiness 0.25 / 0.5 / 0.85, away from it
+    // 0.903 / 0.939 / 1.000 (the ground's mean lit radiance, ambient included).
+    for (i, r) in ratios.iter().step_by(2).enumerate() {
+        assert!(*r < 0.9, "towards the sun, case {i}: {r}");
     }
 }

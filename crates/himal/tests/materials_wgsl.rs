@@ -11,8 +11,8 @@ use himal::math::quat_frame::*;
 use himal::math::sampling::{Pcg32, uniform_sample_sphere};
 
 /// Per case 7 vec4 in (albedo|glossiness, reflectance|metallic|anisotropy,
-/// t, b, n, v, l); 2 vec4 out (brdf_cos, env_brdf_approx(albedo, glossiness
-/// read as roughness, n.v)).
+/// t, b, n, v, l); 3 vec4 out (brdf_cos, env_brdf_approx(albedo, glossiness
+/// read as roughness, n.v), brdf_cos of R4's `visibility_remap`).
 const BRDF_KERNEL: &str = r#"#import brdf
 @group(0) @binding(0) var<storage, read> input: array<vec4f>;
 @group(0) @binding(1) var<storage, read_write> output: array<vec4f>;
@@ -29,8 +29,9 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let n = input[i * 7u + 4u].xyz;
     let v = input[i * 7u + 5u].xyz;
     let l = input[i * 7u + 6u].xyz;
-    output[i * 2u] = vec4f(brdf_cos(s, t, b, n, v, l), 0.0);
-    output[i * 2u + 1u] = vec4f(env_brdf_approx(m.xyz, m.w, dot(n, v)), 0.0);
+    output[i * 3u] = vec4f(brdf_cos(s, t, b, n, v, l), 0.0);
+    output[i * 3u + 1u] = vec4f(env_brdf_approx(m.xyz, m.w, dot(n, v)), 0.0);
+    output[i * 3u + 2u] = vec4f(brdf_cos(analytic_surface(s, 1.0), t, b, n, v, l), 0.0);
 }
 "#;
 
@@ -155,14 +156,14 @@ fn gpu_brdf_cos_and_env_brdf_approx_match_cpu() {
         BRDF_KERNEL,
         "cs_main",
         bytemuck::cast_slice(&input),
-        (cases.len() * 32) as u64,
+        (cases.len() * 48) as u64,
         [groups, 1, 1],
     )
     .unwrap_or_else(|e| panic!("brdf kernel: {e}"));
     let gpu: &[[f32; 4]] = bytemuck::cast_slice(&out);
-    let (mut worst_brdf, mut worst_env) = (0.0_f32, 0.0_f32);
+    let (mut worst_brdf, mut worst_env, mut worst_remap) = (0.0_f32, 0.0_f32, 0.0_f32);
     let mut peak = 0.0_f32;
-    for (c, g) in cases.iter().zip(gpu.chunks(2)) {
+    for (c, g) in cases.iter().zip(gpu.chunks(3)) {
         let (t, b, n) = c.frame;
         let s = surface_from_material(&c.m);
         let cpu = brdf_cos(&s, t, b, n, c.v, c.l);
@@ -176,16 +177,22 @@ fn gpu_brdf_cos_and_env_brdf_approx_match_cpu() {
         // Relative to the value, with a floor of 1e-3 for near-black results.
         worst_brdf = worst_brdf.max(((got - cpu).abs() / cpu.max(Vec3::splat(1e-3))).max_element());
         peak = peak.max(cpu.max_element());
+        let remapped = brdf_cos(&visibility_remap(s), t, b, n, c.v, c.l);
+        let got = Vec3::from_slice(&g[2][..3]);
+        worst_remap = worst_remap
+            .max(((got - remapped).abs() / remapped.max(Vec3::splat(1e-3))).max_element());
         let env = env_brdf_approx(c.m.albedo, c.m.glossiness, n.dot(c.v));
         worst_env = worst_env.max((Vec3::from_slice(&g[1][..3]) - env).abs().max_element());
     }
     println!("GPU vs CPU brdf_cos: worst relative error {worst_brdf:.2e} (values up to {peak:.0})");
     println!("GPU vs CPU env_brdf_approx: worst absolute error {worst_env:.2e}");
+    println!("GPU vs CPU brdf_cos with R4's remap: worst relative error {worst_remap:.2e}");
     // Measured 2.4e-7 (values up to 6.6e5: gloss 1 highlights seen at
     // grazing) and 0 on 2026-11-22 (lavapipe). Thresholds 2e-5 and 1e-5
     // leave room for hardware division and inverseSqrt (a few ulp).
     assert!(worst_brdf < 2e-5, "{worst_brdf}");
     assert!(worst_env < 1e-5, "{worst_env}");
+    assert!(worst_remap < 2e-5, "{worst_remap}");
 }
 
 fn frames(count: usize) -> Vec<((Vec3, Vec3, Vec3), f32)> {

@@ -295,6 +295,7 @@ impl Viewer {
         ui.checkbox(&mut ao.reflection_occlusion, "reflection occlusion");
         ui.checkbox(&mut self.settings.ao.bleed, "AO colour bleeding (O5)");
         ui.checkbox(&mut self.settings.ambient_lights, "ambient lights");
+        ui.checkbox(&mut self.settings.visibility_remap, "visibility remap (R4)");
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {

@@ -90,7 +90,8 @@ impl ViewUniform {
 pub struct LightingUniform {
     /// xyz unit vector towards the sun (world space), w unused.
     pub sun_direction: [f32; 4],
-    /// rgb sun illuminance at the ground in klux (zero when the sun is off), w unused.
+    /// rgb sun illuminance at the ground in klux (zero when the sun is off);
+    /// w 1 = R4, Burley's remapped roughness in analytic lights' visibility term.
     pub sun_illuminance: [f32; 4],
     /// Sky irradiance E(n) as SH9, in klux.
     pub sky_irradiance: Sh9Gpu,
@@ -113,5 +114,11 @@ impl LightingUniform {
             sky_irradiance,
             fog: fog.to_array(),
         }
+    }
+
+    /// R4 on or off (`sun_illuminance.w`; see `FrameSettings::visibility_remap`).
+    pub fn with_visibility_remap(mut self, on: bool) -> Self {
+        self.sun_illuminance[3] = if on { 1.0 } else { 0.0 };
+        self
     }
 }

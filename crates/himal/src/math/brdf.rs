@@ -70,6 +70,9 @@ pub struct Surface {
     pub f0: Vec3,
     /// (alpha_x, alpha_y) along (tangent, binormal).
     pub alpha: Vec2,
+    /// The alphas of the visibility term V: `alpha`, or Burley's remap of
+    /// them for analytic lights (R4, [`visibility_remap`]).
+    pub alpha_v: Vec2,
 }
 
 /// `a (1 - s) + b s`: exact at both ends (s = 0 gives a, s = 1 gives b), like
@@ -81,10 +84,28 @@ fn lerp_exact(a: Vec3, b: Vec3, s: f32) -> Vec3 {
 /// M2: `specularReflectance = lerp(reflectance, albedo, metallic);
 /// albedo *= 1 - metallic`.
 pub fn surface_from_material(m: &Material) -> Surface {
+    let alpha = alpha_xy(m.glossiness, m.anisotropy);
     Surface {
         diffuse_albedo: m.albedo * (1.0 - m.metallic),
         f0: lerp_exact(Vec3::splat(m.reflectance), m.albedo, m.metallic),
-        alpha: alpha_xy(m.glossiness, m.anisotropy),
+        alpha,
+        alpha_v: alpha,
+    }
+}
+
+/// R4 (Burley 2012, sec. 5.6; Ryse): the visibility term of analytic
+/// lights sees the remapped roughness alpha_g = ((1 + r) / 2)^2 with r the
+/// perceptual roughness, which lowers rough surfaces' specular gain at
+/// grazing light. Anisotropic alphas keep their aspect: both scale by
+/// alpha_g / alpha of their geometric mean. D, F and image-based light keep
+/// the material's alphas (docs/techniques/R4.md).
+pub fn visibility_remap(s: Surface) -> Surface {
+    let alpha = (s.alpha.x * s.alpha.y).sqrt();
+    let r = alpha.sqrt();
+    let alpha_g = (0.5 + 0.5 * r) * (0.5 + 0.5 * r);
+    Surface {
+        alpha_v: s.alpha * (alpha_g / alpha),
+        ..s
     }
 }
 
@@ -183,7 +204,14 @@ fn specular_of(s: &Surface, f90: f32, g: &Geometry) -> Vec3 {
     }
     let d = d_ggx_aniso(g.n_o_h, g.t_o_h, g.b_o_h, s.alpha.x, s.alpha.y);
     let vis = v_smith_ggx_correlated_aniso(
-        g.n_o_v, g.n_o_l, g.t_o_v, g.b_o_v, g.t_o_l, g.b_o_l, s.alpha.x, s.alpha.y,
+        g.n_o_v,
+        g.n_o_l,
+        g.t_o_v,
+        g.b_o_v,
+        g.t_o_l,
+        g.b_o_l,
+        s.alpha_v.x,
+        s.alpha_v.y,
     );
     f_schlick(s.f0, f90, g.v_o_h) * (d * vis)
 }

@@ -358,6 +358,7 @@ mod tests {
                 diffuse_albedo: Vec3::splat((i % 2) as f32),
                 f0: Vec3::splat(0.04),
                 alpha,
+                alpha_v: alpha,
             };
             assert_eq!(brdf_cos(&s, t, b, n, v, l), brdf_cos(&s, t, -b, n, v, l));
             let aniso_normal = |b: Vec3| v.cross(b).cross(b);

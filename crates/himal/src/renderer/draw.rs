@@ -328,7 +328,8 @@ impl Renderer {
                 },
                 if settings.bent_normals { 1.0 } else { 0.0 },
             ),
-        );
+        )
+        .with_visibility_remap(settings.visibility_remap);
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));

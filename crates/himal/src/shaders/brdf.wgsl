@@ -15,6 +15,8 @@ struct Surface {
     f0: vec3f,
     // (alpha_x, alpha_y) along (tangent, binormal)
     alpha: vec2f,
+    // the alphas of the visibility term: alpha, or R4's remap (analytic lights)
+    alpha_v: vec2f,
 }
 
 fn perceptual_roughness_from_glossiness(glossiness: f32) -> f32 {
@@ -36,11 +38,26 @@ fn alpha_xy(glossiness: f32, anisotropy: f32) -> vec2f {
 // M2: specularReflectance = lerp(reflectance, albedo, metallic);
 // albedo *= 1 - metallic. F0 = reflectance literally.
 fn surface_from_material(albedo: vec3f, glossiness: f32, reflectance: f32, metallic: f32, anisotropy: f32) -> Surface {
-    return Surface(
-        albedo * (1.0 - metallic),
-        mix(vec3f(reflectance), albedo, metallic),
-        alpha_xy(glossiness, anisotropy),
-    );
+    let alpha = alpha_xy(glossiness, anisotropy);
+    return Surface(albedo * (1.0 - metallic), mix(vec3f(reflectance), albedo, metallic), alpha, alpha);
+}
+
+// R4 (Burley 2012): V of analytic lights sees alpha_g = ((1 + r) / 2)^2,
+// r the perceptual roughness of the alphas' geometric mean; aspect kept.
+fn visibility_remap(s: Surface) -> Surface {
+    let alpha = sqrt(s.alpha.x * s.alpha.y);
+    let r = sqrt(alpha);
+    let alpha_g = (0.5 + 0.5 * r) * (0.5 + 0.5 * r);
+    return Surface(s.diffuse_albedo, s.f0, s.alpha, s.alpha * (alpha_g / alpha));
+}
+
+// The surface analytic lights see: R4's remap when `remap` > 0.5 (the
+// lighting constant's sun_illuminance.w).
+fn analytic_surface(s: Surface, remap: f32) -> Surface {
+    if remap > 0.5 {
+        return visibility_remap(s);
+    }
+    return s;
 }
 
 // Isotropic GGX D = a^2 / (pi ((h.n)^2 (a^2 - 1) + 1)^2): the environment
@@ -94,7 +111,7 @@ fn specular_cos_f90(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f
     }
     let n_o_v = max(dot(n, v), BRDF_MIN_N_O_V);
     let d = d_ggx_aniso(n_o_h, dot(t, h), dot(b, h), s.alpha.x, s.alpha.y);
-    let vis = v_smith_ggx_correlated_aniso(n_o_v, n_o_l, dot(t, v), dot(b, v), dot(t, l), dot(b, l), s.alpha.x, s.alpha.y);
+    let vis = v_smith_ggx_correlated_aniso(n_o_v, n_o_l, dot(t, v), dot(b, v), dot(t, l), dot(b, l), s.alpha_v.x, s.alpha_v.y);
     return f_schlick(s.f0, f90, saturate(dot(v, h))) * (d * vis * n_o_l);
 }
 

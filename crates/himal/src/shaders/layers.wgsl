@@ -102,7 +102,7 @@ fn specular_cos_iso(s: Surface, f90: f32, n: vec3f, v: vec3f, l: vec3f) -> vec3f
 fn layers_shade(m: Layers, n: vec3f, n_c: vec3f, v: vec3f, light: LayerLight) -> vec4f {
     // The coat: a dielectric GGX lobe (F0 0.04, ior 1.5) on its own normal.
     let alpha_c = alpha_from_glossiness(1.0 - m.clearcoat_roughness);
-    let coat_surface = Surface(vec3f(0.0), vec3f(0.04), vec2f(alpha_c));
+    let coat_surface = Surface(vec3f(0.0), vec3f(0.04), vec2f(alpha_c), vec2f(alpha_c));
     let n_o_v_c = max(dot(n_c, v), BRDF_MIN_N_O_V);
     let coat = m.clearcoat * (specular_cos_iso(coat_surface, 1.0, n_c, v, light.sun_direction) * light.sun
         + light.coat_env * (0.04 * light.coat_dfg.x + light.coat_dfg.y) * light.ao);
@@ -113,7 +113,8 @@ fn layers_shade(m: Layers, n: vec3f, n_c: vec3f, v: vec3f, light: LayerLight) ->
     let s_sheen = 1.0 - max(m.sheen_color.r, max(m.sheen_color.g, m.sheen_color.b)) * light.sheen_albedo;
     // KHR_materials_specular: the base's specular minus what the deferred
     // pass gave it (Schlick is linear in F0 and F90).
-    let delta_surface = Surface(vec3f(0.0), m.base_f0_delta, vec2f(alpha_from_glossiness(1.0 - m.base_roughness)));
+    let alpha_delta = vec2f(alpha_from_glossiness(1.0 - m.base_roughness));
+    let delta_surface = Surface(vec3f(0.0), m.base_f0_delta, alpha_delta, alpha_delta);
     let base_delta = specular_cos_iso(delta_surface, m.base_f90_delta, n, v, light.sun_direction) * light.sun
         + light.base_env * (m.base_f0_delta * light.base_dfg.x + m.base_f90_delta * light.base_dfg.y) * light.ao;
     return vec4f(sheen * s_coat + coat + base_delta * (s_sheen * s_coat), 1.0 - s_sheen * s_coat);

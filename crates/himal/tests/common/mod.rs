@@ -282,6 +282,7 @@ pub fn lighting_params(scene: &Scene) -> LightingParams {
         sun_illuminance: sky.sun_illuminance,
         sky_irradiance: sky.irradiance_sh,
         environment: None,
+        visibility_remap: false,
     }
 }
 

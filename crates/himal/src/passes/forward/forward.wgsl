@@ -49,7 +49,7 @@ fn fs_blend(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> @locati
     }
     let v = to_eye(view, in.world);
     let env = forward_env(f, v, env_specular, env_sampler, dfg_lut);
-    return forward_shade_premultiplied(f.s, f.f90, f.tbn[0], f.tbn[1], f.tbn[2], v,
+    return forward_shade_premultiplied(analytic_surface(f.s, lighting.sun_illuminance.w), f.f90, f.tbn[0], f.tbn[1], f.tbn[2], v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
         env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, f.alpha);
 }

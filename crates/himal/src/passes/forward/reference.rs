@@ -338,6 +338,7 @@ pub fn layers_shade(m: &Layers, n: Vec3, n_c: Vec3, v: Vec3, light: &LayerLight)
         diffuse_albedo: Vec3::ZERO,
         f0: Vec3::splat(0.04),
         alpha: Vec2::splat(alpha_c),
+        alpha_v: Vec2::splat(alpha_c),
     };
     let (t_c, b_c) = n_c.any_orthonormal_pair();
     let n_o_v_c = n_c.dot(v).max(MIN_N_O_V);
@@ -349,10 +350,12 @@ pub fn layers_shade(m: &Layers, n: Vec3, n_c: Vec3, v: Vec3, light: &LayerLight)
         * (sheen_cos(m.sheen_roughness, n, v, light.sun_direction) * light.sun
             + light.sheen_env * (light.sheen_albedo * light.ao));
     let s_sheen = 1.0 - m.sheen_color.max_element() * light.sheen_albedo;
+    let alpha_delta = Vec2::splat(alpha_from_glossiness(1.0 - m.base_roughness));
     let delta_surface = Surface {
         diffuse_albedo: Vec3::ZERO,
         f0: m.base_f0_delta,
-        alpha: Vec2::splat(alpha_from_glossiness(1.0 - m.base_roughness)),
+        alpha: alpha_delta,
+        alpha_v: alpha_delta,
     };
     let (t, b) = n.any_orthonormal_pair();
     let base_delta = specular_cos_f90(

@@ -52,7 +52,7 @@ fn fs_transmission(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> 
     let transmission = saturate(material.transmission.x * tr_tex);
     let t_albedo = f.s.diffuse_albedo * transmission;
     f.s.diffuse_albedo *= 1.0 - transmission;
-    let base = forward_shade_premultiplied(f.s, f.f90, f.tbn[0], f.tbn[1], n, v,
+    let base = forward_shade_premultiplied(analytic_surface(f.s, lighting.sun_illuminance.w), f.f90, f.tbn[0], f.tbn[1], n, v,
         lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
         env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, 1.0).rgb;
 

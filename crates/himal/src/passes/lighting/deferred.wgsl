@@ -45,7 +45,8 @@
 struct Lighting {
     // xyz: unit vector towards the sun
     sun_direction: vec4f,
-    // rgb: sun illuminance at the ground (klux), w unused
+    // rgb: sun illuminance at the ground (klux); w: 1 = R4, Burley's
+    // remapped roughness in the visibility term of the sun and local lights
     sun_illuminance: vec4f,
     // sky irradiance E(n) as SH9 (klux)
     sky_irradiance: Sh9,
@@ -190,7 +191,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let albedo_ao = textureLoad(gbuffer_albedo, px, 0);
     let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
     let m = textureLoad(gbuffer_material, px, 0);
-    let s = surface_from_material(albedo_ao.rgb, m.x, m.y, m.z, m.w);
+    // R4: the sun and local lights see the remapped visibility (when on).
+    let s = analytic_surface(surface_from_material(albedo_ao.rgb, m.x, m.y, m.z, m.w), lighting.sun_illuminance.w);
     let dist = length(view.camera_position.xyz - p);
     let v = to_eye(view, p);
     var mask = vec4f(1.0);

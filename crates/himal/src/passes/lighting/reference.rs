@@ -54,6 +54,9 @@ pub struct LightingParams {
     /// Ambient specular from the filtered cube (`ENV_SPECULAR`); `None`: SH
     /// along the reflection vector with the fitted DFG.
     pub environment: Option<EnvironmentSpecular>,
+    /// R4: the sun sees Burley's remapped roughness in V
+    /// ([`crate::math::brdf::visibility_remap`]; `sun_illuminance.w` on the GPU).
+    pub visibility_remap: bool,
 }
 
 /// Outgoing radiance toward `v` of a point with material `m`, material AO
@@ -92,7 +95,12 @@ pub fn shade_sky_occluded(
     use crate::passes::skyocc::reference::{bent_normal_from_sh_visibility, sh2_visibility_cosine};
     let s = surface_from_material(m);
     let l = light.sun_direction;
-    let mut c = brdf_cos(&s, t, b, n, v, l) * light.sun_illuminance * sun_visibility;
+    let s_direct = if light.visibility_remap {
+        crate::math::brdf::visibility_remap(s)
+    } else {
+        s
+    };
+    let mut c = brdf_cos(&s_direct, t, b, n, v, l) * light.sun_illuminance * sun_visibility;
     let n_o_v = n.dot(v).max(1e-4);
     let (ao, n_sky) = match sky_vis {
         Some(sh) => {
@@ -153,7 +161,7 @@ pub fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// `shade_local` for one light at `p` (unshadowed): BRDF · cos · E, E in klux
+/// `shade_local` for one light at `p` (unshadowed, R4 off): BRDF · cos · E, E in klux
 /// (`intensity` in cd, `color` linear).
 #[allow(clippy::too_many_arguments)]
 pub fn shade_local(
