@@ -204,6 +204,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let mut settings = FrameSettings::new(width, height, scene.sun.clone());
     args.shadows.apply(&mut settings)?;
+    args.shadows
+        .apply_cinematic(&mut settings, &scene, args.camera.as_deref())?;
     args.post.apply(&mut settings)?;
     settings.envmap_every_frame = args.envmap_every_frame;
     settings.sky_occlusion_every_frame = args.skyocc_every_frame;

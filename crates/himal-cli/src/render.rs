@@ -505,6 +505,15 @@ pub struct ShadowArgs {
     /// Object with the hero shadow map, or off (default: the first moving object).
     #[arg(long, value_name = "NAME|off", allow_hyphen_values = true)]
     pub hero: Option<String>,
+    /// R3: the scene's or the camera's `cinematic_shadows` (author-set near
+    /// and far, logarithmic splits); off: the default cascades.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub cinematic_shadows: String,
 }
 
 impl ShadowArgs {
@@ -536,6 +545,25 @@ impl ShadowArgs {
             None => {}
         }
         s.validate()?;
+        Ok(())
+    }
+
+    /// R3: camera `camera`'s cinematic shadows (else the scene's, else the
+    /// first camera's when `camera` is `None`) under `--cinematic-shadows on`.
+    pub fn apply_cinematic(
+        &self,
+        settings: &mut FrameSettings,
+        scene: &himal::scene::Scene,
+        camera: Option<&str>,
+    ) -> Result<()> {
+        let on = on_off("--cinematic-shadows", &self.cinematic_shadows)?;
+        let name = camera.or_else(|| scene.cameras.first().map(|c| c.name.as_str()));
+        settings.shadows.cinematic = match name {
+            Some(n) if on => scene.cinematic_shadows_for(n),
+            _ if on => scene.cinematic_shadows,
+            _ => None,
+        };
+        settings.shadows.validate()?;
         Ok(())
     }
 }
@@ -728,6 +756,8 @@ pub fn setup(
     settings.raw = kind == ImageKind::Exr;
     args.post.apply(&mut settings)?;
     args.shadows.apply(&mut settings)?;
+    args.shadows
+        .apply_cinematic(&mut settings, &scene, args.camera.as_deref())?;
     settings.ao = args.ao.settings()?;
     Ok((scene, camera, settings))
 }

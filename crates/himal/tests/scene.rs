@@ -627,6 +627,16 @@ fn semantic_checks_point_at_the_offending_key() {
             "x.toml:10:12:",
             "position [NaN, 0.0, 0.0] must be finite",
         ),
+        (
+            "[cinematic_shadows]\nnear = 5.0\nfar = 2.0\n",
+            "x.toml:7:7:",
+            "cinematic_shadows far = 2 must be greater than near = 5",
+        ),
+        (
+            "[[camera]]\nname = \"c\"\nposition = [0, 1, 0]\ntarget = [0, 0, -1]\ncinematic_shadows = { near = 0.0, far = 9.0 }\n",
+            "x.toml:9:",
+            "cinematic_shadows near = 0 is out of range [0.05, 10000]",
+        ),
     ];
     for (text, place, problem) in cases {
         let msg = match Scene::from_toml_str(&format!("{base}{text}"), "x.toml", Path::new(".")) {
@@ -844,4 +854,19 @@ fn vegetation_and_orbit_errors_point_at_the_offending_key() {
             "{msg}\n(wanted {place} {problem})"
         );
     }
+}
+
+/// R3: a camera's `cinematic_shadows` wins over the scene's; cameras
+/// without one get the scene's.
+#[test]
+fn cinematic_shadows_come_from_the_camera_then_the_scene() {
+    let text = "[cinematic_shadows]\nnear = 2.0\nfar = 50.0\n\n\
+        [[camera]]\nname = \"own\"\nposition = [0, 1, 0]\ntarget = [0, 0, -1]\n\
+        cinematic_shadows = { near = 0.5, far = 8.0 }\n\n\
+        [[camera]]\nname = \"plain\"\nposition = [0, 1, 0]\ntarget = [0, 0, -1]\n";
+    let s = Scene::from_toml_str(text, "x.toml", Path::new(".")).expect("scene");
+    let own = s.cinematic_shadows_for("own").expect("own");
+    assert_eq!((own.near, own.far), (0.5, 8.0));
+    let plain = s.cinematic_shadows_for("plain").expect("scene's");
+    assert_eq!((plain.near, plain.far), (2.0, 50.0));
 }

@@ -125,3 +125,96 @@ fn sun_shadow_agrees_with_ray_cast_visibility() {
         assert!(rs >= 0.97 && rl >= 0.97, "{time}: shadowed {rs}, lit {rl}");
     }
 }
+
+/// R3: the close-up of `scenes/r3_closeup.toml` with the default cascades
+/// (camera near to 400 m, lambda 0.85) and with the camera's cinematic
+/// shadows (1 to 12 m, logarithmic). Per ground pixel: the shadow texel's
+/// world size over the pixel's footprint (below 1: the map out-resolves the
+/// screen), and the sun visibility against a hard ray cast.
+#[test]
+fn r3_cinematic_shadows_out_resolve_the_screen_in_a_close_up() {
+    let scene = common::scene("r3_closeup");
+    let (w, h) = (160u32, 90u32);
+    let light = lighting_params(&scene);
+    let m = Material {
+        albedo: Vec3::splat(0.7),
+        glossiness: 0.1,
+        reflectance: 0.04,
+        metallic: 0.0,
+        anisotropy: 0.0,
+    };
+    let mut results = Vec::new();
+    for name in ["closeup_default", "closeup"] {
+        let camera = scene.camera(name).expect("camera").clone();
+        let mut r = renderer(&scene);
+        let mut s = raw_settings(&scene, (w, h), "lighting");
+        s.aerial_extinction = 0.0;
+        s.shadows.cinematic = scene.cinematic_shadows_for(name);
+        let frame = r.render(&camera, &s).expect("on");
+        let (fits, splits) = (frame.shadows.fits.clone(), frame.shadows.splits);
+        let on = frame.image.to_rgba_f32().expect("f32");
+        s.shadow_resolution = 0;
+        let off = render_rgba(&mut r, &camera, &s);
+        let pixel_angle = 2.0 * (camera.fov_y_deg.to_radians() * 0.5).tan() / h as f32;
+        let (mut ratios, mut error, mut penumbra, mut n) = (Vec::new(), 0.0f32, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let dir = pixel_ray(&camera, (w, h), x, y);
+                let t = -camera.position.y / dir.y;
+                let p = camera.position + dir * t;
+                if t <= 0.0
+                    || p.x.abs() > 18.0
+                    || p.z.abs() > 18.0
+                    || hits_box(camera.position, dir)
+                {
+                    continue;
+                }
+                let dist = t;
+                let Some(k) = splits.iter().position(|&d| dist <= d) else {
+                    continue;
+                };
+                ratios.push(fits[k].texel_world / (dist * pixel_angle));
+                let v = -dir;
+                let sun_term = shade(&m, 1.0, Vec3::X, Vec3::NEG_Z, Vec3::Y, v, &light, 1.0)
+                    - shade(&m, 1.0, Vec3::X, Vec3::NEG_Z, Vec3::Y, v, &light, 0.0);
+                let i = (y * w + x) as usize;
+                let diff = (off[i][0] - on[i][0]) + (off[i][1] - on[i][1]) + (off[i][2] - on[i][2]);
+                let vis = 1.0 - diff / (sun_term.x + sun_term.y + sun_term.z).max(1e-6);
+                let cpu = if hits_box(p, light.sun_direction) {
+                    0.0
+                } else {
+                    1.0
+                };
+                error += (vis.clamp(0.0, 1.0) - cpu).abs();
+                penumbra += usize::from(vis > 0.1 && vis < 0.9);
+                n += 1;
+            }
+        }
+        ratios.sort_by(f32::total_cmp);
+        let q = |f: f32| ratios[((ratios.len() - 1) as f32 * f) as usize];
+        let mean_error = error / n.max(1) as f32;
+        // The fits depend on the aspect, not the size: at 1920x1080 the
+        // footprint is 90/1080 of this one.
+        let hd = 1080.0 / h as f32;
+        eprintln!(
+            "R3 {name}: splits {splits:?}; texel/pixel median {:.3}, p90 {:.3}, max {:.3} \
+             (at 1080p: {:.2}, {:.2}, {:.2}); visibility error {mean_error:.4} over {n} px, \
+             {penumbra} penumbra px",
+            q(0.5),
+            q(0.9),
+            q(1.0),
+            q(0.5) * hd,
+            q(0.9) * hd,
+            q(1.0) * hd
+        );
+        assert!(n > 5000, "{name}: {n} ground pixels");
+        results.push((q(0.5), q(0.9), mean_error, penumbra));
+    }
+    let (default, cinematic) = (results[0], results[1]);
+    // Measured 2026-12-06 (lavapipe, 160x90, 2048 cascades): texel/pixel
+    // median 0.370 -> 0.118, p90 0.555 -> 0.154 (at 1080p 4.44 -> 1.42);
+    // visibility error 0.0030 -> 0.0012; penumbra pixels 103 -> 43.
+    assert!(cinematic.0 < 1.0 && cinematic.1 < 1.0, "{cinematic:?}");
+    assert!(cinematic.0 < 0.5 * default.0, "{default:?} {cinematic:?}");
+    assert!(cinematic.2 < default.2, "{default:?} {cinematic:?}");
+}

@@ -213,12 +213,18 @@ pub(crate) fn build_scene(
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
         b.union(&o.swept_bounds(&meshes[o.mesh].bounds))
     });
+    let cinematic_shadows = file
+        .cinematic_shadows
+        .as_ref()
+        .map(|f| build_cinematic_shadows(&ck, f))
+        .transpose()?;
     Ok(Scene {
         path: Some(origin.into()),
         meshes,
         objects,
         materials,
         cameras,
+        cinematic_shadows,
         sun,
         lights,
         ambient_lights,
@@ -355,8 +361,14 @@ pub(crate) fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<Nam
             Some(n) => ck.range(n, "near", MIN_LENGTH, 1000.0)?,
             None => super::DEFAULT_NEAR,
         };
+        let cinematic_shadows = c
+            .cinematic_shadows
+            .as_ref()
+            .map(|f| build_cinematic_shadows(ck, f))
+            .transpose()?;
         out.push(NamedCamera {
             name: name.clone(),
+            cinematic_shadows,
             camera: Camera {
                 position,
                 forward,
@@ -368,6 +380,22 @@ pub(crate) fn build_cameras(ck: &Checker, file: &[FileCamera]) -> Result<Vec<Nam
         });
     }
     Ok(out)
+}
+
+/// R3: near in [0.05, 10 km], far beyond it (the error names the key).
+pub(crate) fn build_cinematic_shadows(
+    ck: &Checker,
+    f: &super::file::FileCinematicShadows,
+) -> Result<super::CinematicShadows> {
+    let near = ck.range(&f.near, "cinematic_shadows near", 0.05, 10_000.0)?;
+    let far = ck.range(&f.far, "cinematic_shadows far", 0.1, MAX_EXTENT)?;
+    if far <= near {
+        return Err(ck.err(
+            &f.far.span(),
+            format!("cinematic_shadows far = {far} must be greater than near = {near}"),
+        ));
+    }
+    Ok(super::CinematicShadows { near, far })
 }
 
 /// Meshes built so far, shared by (shape, material) key.

@@ -166,3 +166,15 @@ mod tests {
         assert!((p - Vec3::new(0.0, 0.0, -100.0)).length() < 1e-4, "{p}");
     }
 }
+
+/// R3 (Ryse): cinematic shadows, the author's near and far of the sun's
+/// cascades, split fully logarithmically between them
+/// (`[cinematic_shadows]` or a camera's `cinematic_shadows`;
+/// docs/techniques/R3.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CinematicShadows {
+    /// View distance where the cascades' texel density peaks (m, > 0).
+    pub near: f32,
+    /// View distance where the sun's shadows end (m, > `near`).
+    pub far: f32,
+}

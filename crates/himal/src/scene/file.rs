@@ -25,6 +25,7 @@ pub(crate) struct FileScene {
     #[serde(default)]
     pub probe: Vec<FileProbe>,
     pub environment: Option<FileEnvironment>,
+    pub cinematic_shadows: Option<FileCinematicShadows>,
     #[serde(default)]
     pub gltf: Vec<FileGltf>,
     pub world: Option<Spanned<FileWorld>>,
@@ -345,6 +346,15 @@ pub(crate) struct FileCamera {
     pub up: Option<Spanned<[f32; 3]>>,
     pub fov_y: Option<Spanned<f32>>,
     pub near: Option<Spanned<f32>>,
+    pub cinematic_shadows: Option<FileCinematicShadows>,
+}
+
+/// `[cinematic_shadows]` or a camera's `cinematic_shadows = { near, far }` (R3).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileCinematicShadows {
+    pub near: Spanned<f32>,
+    pub far: Spanned<f32>,
 }
 
 /// `[x, y, z]` with exactly three numbers (serde's array reader would

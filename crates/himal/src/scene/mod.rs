@@ -104,7 +104,14 @@
 //! are not imported. Errors point at `file` and name the glTF problem.
 //!
 //! `[[camera]]`: `name`, `position`, `target` or `forward` (one of them), optional
-//! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1).
+//! `up` (default +Y), `fov_y` (vertical degrees in (0, 180), default 60), `near` (default 0.1),
+//! `cinematic_shadows = { near = 0.5, far = 20.0 }` (R3, over the scene's).
+//!
+//! `[cinematic_shadows]` (R3, Ryse's cinematic shadows; `--cinematic-shadows
+//! on|off`, docs/techniques/R3.md): `near` (m, [0.05, 10000]) and `far` (m,
+//! beyond `near`) of the sun's cascades, split fully logarithmically
+//! between them, for every camera without its own (not in a `[world]`
+//! file: give its cameras their own).
 //!
 //! `[[ambient_light]]` (Ryse's multiplicative ambient lights; at most
 //! [`MAX_AMBIENT_LIGHTS`] = 64, more is an error; docs/ambient-lights.md):
@@ -211,7 +218,7 @@ use glam::{Mat4, Vec3};
 use crate::budget::MemoryBudget;
 
 pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
-pub use camera::{Camera, DEFAULT_NEAR, Orthographic};
+pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
@@ -611,6 +618,8 @@ pub struct NamedCamera {
     pub name: String,
     /// Pose and projection.
     pub camera: Camera,
+    /// R3 shadows for this camera (over the scene's `[cinematic_shadows]`).
+    pub cinematic_shadows: Option<CinematicShadows>,
 }
 
 /// A loaded scene.
@@ -627,6 +636,8 @@ pub struct Scene {
     pub materials: Vec<MaterialDesc>,
     /// Named cameras; the first is the default.
     pub cameras: Vec<NamedCamera>,
+    /// R3: the scene's `[cinematic_shadows]`, for cameras without their own.
+    pub cinematic_shadows: Option<CinematicShadows>,
     /// The sun's time and place, or a light standing in for it.
     pub sun: SunDesc,
     /// Point and spot lights (`[[light]]`, S3).
@@ -744,10 +755,12 @@ impl Scene {
         let mut cameras = vec![NamedCamera {
             name: "default".into(),
             camera: gltf::framing_camera(&asset.bounds, 40.0),
+            cinematic_shadows: None,
         }];
         cameras.extend(asset.cameras);
         Ok(Scene {
             path: Some(path.to_path_buf()),
+            cinematic_shadows: None,
             meshes: asset.meshes,
             objects: asset.objects,
             materials: Vec::new(),
@@ -830,6 +843,15 @@ impl Scene {
                     .collect::<Vec<_>>()
                     .join(", "),
             })
+    }
+
+    /// R3: the cinematic shadows of camera `name`: its own, else the scene's.
+    pub fn cinematic_shadows_for(&self, name: &str) -> Option<CinematicShadows> {
+        self.cameras
+            .iter()
+            .find(|c| c.name == name)
+            .and_then(|c| c.cinematic_shadows)
+            .or(self.cinematic_shadows)
     }
 
     /// Triangles drawn per frame (each object counts its mesh's triangles).

@@ -101,6 +101,15 @@ pub fn practical_splits(near: f32, far: f32, lambda: f32) -> [f32; CASCADES + 1]
     d
 }
 
+/// R3 cinematic splits: fully logarithmic from the author's `near` to `far`
+/// (d_i = near (far / near)^(i/N), i >= 1); the first cascade still starts
+/// at the camera's near plane so nothing in view falls outside the maps.
+pub fn cinematic_splits(camera_near: f32, near: f32, far: f32) -> [f32; CASCADES + 1] {
+    let mut d = practical_splits(near, far, 1.0);
+    d[0] = camera_near.min(near);
+    d
+}
+
 /// Smallest sphere around the view-frustum slice [d_near, d_far]: centre on
 /// the view axis at t = (d_n + d_f)(1 + k²)/2 (clamped to d_f), k² =
 /// tan²(fov/2)(1 + aspect²). Depends on the slice only, never on the camera's
@@ -160,6 +169,22 @@ pub fn fit_cascade(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// R3: equal ratios between the author's splits (fully logarithmic),
+    /// the last at `far`, the first cascade from the camera's near plane.
+    #[test]
+    fn cinematic_splits_are_logarithmic_from_the_author_near() {
+        let d = cinematic_splits(0.1, 1.0, 12.0);
+        assert_eq!(d[0], 0.1);
+        assert!((d[CASCADES] - 12.0).abs() < 1e-5, "{d:?}");
+        let ratio = 12.0f32.powf(1.0 / CASCADES as f32);
+        assert!((d[1] - ratio).abs() < 1e-5, "{d:?}");
+        for i in 1..CASCADES {
+            assert!((d[i + 1] / d[i] - ratio).abs() < 1e-4, "{d:?}");
+        }
+        // A camera near beyond the author's: the author's near still starts.
+        assert_eq!(cinematic_splits(2.0, 1.0, 12.0)[0], 1.0);
+    }
 
     /// The slice sphere holds every corner of the view slice, for a
     /// perspective camera's frustum piece and an orthographic camera's box,

@@ -540,8 +540,11 @@ impl ShadowPass {
         }
 
         // S1: the cascades (the far one only while no static map is shown).
-        let splits =
-            cascades::practical_splits(camera.near.max(0.05), s.max_distance, s.split_lambda);
+        let camera_near = camera.near.max(0.05);
+        let splits = match s.cinematic {
+            Some(c) => cascades::cinematic_splits(camera_near, c.near, c.far),
+            None => cascades::practical_splits(camera_near, s.max_distance, s.split_lambda),
+        };
         let rendered = if !sun_up {
             0
         } else if stats.static_shown && self.world.is_none() {

@@ -54,6 +54,9 @@ pub struct ShadowSettings {
     pub hero: Option<String>,
     /// Local-light shadow atlas edge in texels (S3); 0 = no local shadows.
     pub atlas_resolution: u32,
+    /// R3: the author's near and far replace the camera near and
+    /// `max_distance`, with fully logarithmic splits (`split_lambda` unused).
+    pub cinematic: Option<crate::scene::CinematicShadows>,
 }
 
 impl Default for ShadowSettings {
@@ -69,6 +72,7 @@ impl Default for ShadowSettings {
             hero_resolution: 1024,
             hero: None,
             atlas_resolution: 4096,
+            cinematic: None,
         }
     }
 }
@@ -94,6 +98,14 @@ impl ShadowSettings {
                 "static shadow map edge {} is outside 16..16384",
                 self.static_resolution
             ));
+        }
+        if let Some(c) = self.cinematic {
+            if !(c.near > 0.0 && c.far > c.near && c.far.is_finite()) {
+                return bad(format!(
+                    "cinematic shadows near {} and far {}: need 0 < near < far",
+                    c.near, c.far
+                ));
+            }
         }
         if self.static_draw_cap == 0 {
             return bad("static shadow draw cap must be at least 1".into());

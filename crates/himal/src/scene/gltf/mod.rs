@@ -780,6 +780,7 @@ fn camera(name: &str, c: &gltf::Camera, world: &Mat4) -> NamedCamera {
         }
     };
     NamedCamera {
+        cinematic_shadows: None,
         name: c.name().unwrap_or(name).to_string(),
         camera: Camera {
             position,

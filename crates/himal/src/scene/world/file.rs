@@ -92,7 +92,7 @@ impl WorldDesc {
 
 /// Tables a world file cannot use, at the first entry of each.
 fn reject_scene_tables(ck: &Checker, f: &FileScene) -> Result<()> {
-    let first: [(&str, Option<Range<usize>>); 7] = [
+    let first: [(&str, Option<Range<usize>>); 8] = [
         ("[[object]]", f.object.first().map(|o| o.name.span())),
         ("[[material]]", f.material.first().map(|m| m.name.span())),
         ("[[light]]", f.light.first().map(|l| l.name.span())),
@@ -105,6 +105,11 @@ fn reject_scene_tables(ck: &Checker, f: &FileScene) -> Result<()> {
         (
             "[environment]",
             f.environment.as_ref().map(|e| e.file.span()),
+        ),
+        // A world's cameras take `cinematic_shadows = { near, far }` instead.
+        (
+            "[cinematic_shadows]",
+            f.cinematic_shadows.as_ref().map(|c| c.near.span()),
         ),
     ];
     for (table, span) in first {

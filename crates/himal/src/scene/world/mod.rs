@@ -255,6 +255,7 @@ impl World {
             objects: Vec::new(),
             materials: Vec::new(),
             cameras: self.cameras.clone(),
+            cinematic_shadows: None,
             sun: self.sun.clone(),
             lights: Vec::new(),
             ambient_lights: Vec::new(),

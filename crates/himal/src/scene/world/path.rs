@@ -118,6 +118,7 @@ fn camera(name: &str, position: Vec3, target: Vec3, fov: f32) -> NamedCamera {
     NamedCamera {
         name: name.into(),
         camera,
+        cinematic_shadows: None,
     }
 }
 
