@@ -51,6 +51,14 @@ fn bad_post_options_are_rejected() {
             &["render", "--specular-aa", "maybe", "--size", "8x8"][..],
             "--specular-aa maybe",
         ),
+        (
+            &["render", "--visibility-remap", "maybe", "--size", "8x8"][..],
+            "--visibility-remap maybe",
+        ),
+        (
+            &["render", "--cinematic-shadows", "maybe", "--size", "8x8"][..],
+            "--cinematic-shadows maybe",
+        ),
         (&["prewarm", "--cache", "off"][..], "cache directory"),
         (&["bake", "--cache", "off"][..], "cache directory"),
         (
