@@ -59,6 +59,16 @@ pub struct AoArgs {
         allow_hyphen_values = true
     )]
     pub ao_bleed: String,
+    /// O6 large-scale AO: the height field within 7.5 m occludes ambient
+    /// light at scales the screen cannot see (docs/techniques/O6.md); it
+    /// replaces L2's sky visibility, which reads the same height field.
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub ao_large_scale: String,
 }
 
 impl AoArgs {
@@ -90,6 +100,11 @@ impl AoArgs {
             "on" => true,
             "off" => false,
             other => bail!("--ao-bleed {other}: expected on or off"),
+        };
+        s.large_scale = match self.ao_large_scale.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--ao-large-scale {other}: expected on or off"),
         };
         if let Some(r) = self.ao_blur_radius {
             s.blur_radius = r;

@@ -30,6 +30,7 @@ use crate::gpu_scene::{LodView, SceneGpu};
 use crate::graph::{FrameGraph, History};
 use crate::passes::aa::{AaBuffers, AaFrame, AaMode, BufferTaaPass, SmaaPass, TemporalPass};
 use crate::passes::ao::bleed::BleedPass;
+use crate::passes::ao::large_scale::LargeScaleInputs;
 use crate::passes::ao::{AoInputs, AoPass, AoSettings, AoTargets, AoUniform, AoView};
 use crate::passes::cull::{CullPass, CullPath, CullView};
 use crate::passes::debug::DebugPass;
@@ -252,7 +253,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         streamed,
     );
     // L2: the sectors the camera wants; jobs for the ones not resident.
-    let skyocc_on = settings.sky_occlusion || matches!(settings.view, ViewBuffer::SkyOcc(_));
+    // O6 samples the same pool's heights.
+    let skyocc_on = settings.sky_occlusion
+        || settings.ao.large_scale_on()
+        || matches!(settings.view, ViewBuffer::SkyOcc(_));
     if settings.sky_occlusion_every_frame {
         passes.skyocc.invalidate();
     }
@@ -453,12 +457,26 @@ pub fn build<'a>(
         motion: stable_motion.unwrap_or(gbuffer.motion),
         ..gbuffer
     };
+    // L2: new sectors' height fields and SH2 visibility (side effect: the
+    // pool; O6 reads its heights); in a world over the terrain, with the culled pool instances.
+    let sources = crate::passes::skyocc::SkyOccSources {
+        culled,
+        terrain: passes.terrain.as_ref().map(|t| t.heights()),
+    };
+    let skyocc = passes.skyocc.add(&mut g, scene, sources);
     let ao_targets = match ao {
         Some(settings) => {
+            let large_scale = settings.large_scale.then(|| LargeScaleInputs {
+                depth: gbuffer.depth,
+                frame: gbuffer.frame,
+                table: passes.skyocc.bindings().table,
+                heights: skyocc.heights,
+            });
             let inputs = AoInputs {
                 settings,
                 depth: gbuffer.depth,
                 history,
+                large_scale,
             };
             let t = passes.ao.add(ctx, &mut g, size, inputs)?;
             Some(match aa.buffers {
@@ -484,13 +502,6 @@ pub fn build<'a>(
     let ao_bleed = ao
         .filter(|s| s.bleed || shown == ViewBuffer::Ao(AoView::Bleed))
         .map(|_| (passes.ao_bleed).add(&mut g, size, gbuffer.albedo, gbuffer.depth));
-    // L2: new sectors' height fields and SH2 visibility (side effect: the
-    // pool); in a world over the terrain, with the culled pool instances.
-    let sources = crate::passes::skyocc::SkyOccSources {
-        culled,
-        terrain: passes.terrain.as_ref().map(|t| t.heights()),
-    };
-    let skyocc = passes.skyocc.add(&mut g, scene, sources);
     let env = match probe {
         // L3: the probe's G-buffer cube relit with the lighting and sky
         // passes (sun unshadowed, sky unoccluded), then mipped and filtered.

@@ -98,7 +98,8 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         fog: settings.aerial_extinction > 0.0 && !environment,
         ssao: settings.ao.mode != AoMode::Off,
         env_specular: settings.environment_specular,
-        sky_occlusion: settings.sky_occlusion,
+        // O6 occludes the sky from the same height field: not twice.
+        sky_occlusion: settings.sky_occlusion && !settings.ao.large_scale_on(),
         ssdo: settings.ao.mode.directional(),
         reflection_occlusion: settings.ao.reflection_occlusion,
         ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,

@@ -68,6 +68,26 @@ fn sky_occlusion_fade(sh: vec4f, y: f32, h_terrain: f32, h_blurred: f32) -> vec4
     return mix(sh, sh2_unoccluded(), t);
 }
 
+// The pool layer of the sector holding world xz, -1 where none is resident.
+fn sky_occlusion_layer(table: texture_2d<i32>, xz: vec2f) -> i32 {
+    let sector = vec2i(floor(xz / SKYOCC_SECTOR_SIZE));
+    let slot = ((sector % SKYOCC_TABLE_SIZE) + SKYOCC_TABLE_SIZE) % SKYOCC_TABLE_SIZE;
+    let entry = textureLoad(table, slot, 0);
+    if (entry.w == 0 || entry.x != sector.x || entry.y != sector.y) {
+        return -1;
+    }
+    return entry.z;
+}
+
+// The fade height (the blurred height field, m) at world xz in pool layer
+// `layer`, nearest texel (O6 samples it over metres).
+fn sky_occlusion_fade_height(heights: texture_2d_array<f32>, layer: i32, xz: vec2f) -> f32 {
+    let local = xz / SKYOCC_SECTOR_SIZE - floor(xz / SKYOCC_SECTOR_SIZE);
+    let last = vec2i(SKYOCC_SECTOR_TEXELS - 1);
+    let t = clamp(vec2i(floor(local * f32(SKYOCC_SECTOR_TEXELS))), vec2i(0), last);
+    return textureLoad(heights, t, layer, 0).y;
+}
+
 // SH2 visibility at world point p with normal n: sector table -> pool layer,
 // bilinear SH and (terrain, fade) heights, faded; unoccluded where no sector is resident.
 fn sky_occlusion_lookup(
@@ -79,14 +99,12 @@ fn sky_occlusion_lookup(
     n: vec3f,
 ) -> vec4f {
     let xz = p.xz + n.xz * SKYOCC_NORMAL_OFFSET;
-    let sector = vec2i(floor(xz / SKYOCC_SECTOR_SIZE));
-    let slot = ((sector % SKYOCC_TABLE_SIZE) + SKYOCC_TABLE_SIZE) % SKYOCC_TABLE_SIZE;
-    let entry = textureLoad(table, slot, 0);
-    if (entry.w == 0 || entry.x != sector.x || entry.y != sector.y) {
+    let layer = sky_occlusion_layer(table, xz);
+    if (layer < 0) {
         return sh2_unoccluded();
     }
-    let local = xz / SKYOCC_SECTOR_SIZE - vec2f(sector);
-    let sh = textureSampleLevel(vis, bilinear, local, entry.z, 0.0);
+    let local = xz / SKYOCC_SECTOR_SIZE - floor(xz / SKYOCC_SECTOR_SIZE);
+    let sh = textureSampleLevel(vis, bilinear, local, layer, 0.0);
     // Heights bilinear by hand (Rg32Float is not filterable); nearest texels
     // step every 25 cm, which streaks walls.
     let tc = local * f32(SKYOCC_SECTOR_TEXELS) - 0.5;
@@ -95,10 +113,10 @@ fn sky_occlusion_lookup(
     let last = vec2i(SKYOCC_SECTOR_TEXELS - 1);
     let i0 = clamp(vec2i(t0), vec2i(0), last);
     let i1 = clamp(vec2i(t0) + 1, vec2i(0), last);
-    let h00 = textureLoad(heights, i0, entry.z, 0).xy;
-    let h10 = textureLoad(heights, vec2i(i1.x, i0.y), entry.z, 0).xy;
-    let h01 = textureLoad(heights, vec2i(i0.x, i1.y), entry.z, 0).xy;
-    let h11 = textureLoad(heights, i1, entry.z, 0).xy;
+    let h00 = textureLoad(heights, i0, layer, 0).xy;
+    let h10 = textureLoad(heights, vec2i(i1.x, i0.y), layer, 0).xy;
+    let h01 = textureLoad(heights, vec2i(i0.x, i1.y), layer, 0).xy;
+    let h11 = textureLoad(heights, i1, layer, 0).xy;
     let h = mix(mix(h00, h10, f.x), mix(h01, h11, f.x), f.y);
     return sky_occlusion_fade(sh, p.y, h.x, h.y);
 }

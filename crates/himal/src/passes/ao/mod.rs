@@ -8,10 +8,13 @@
 //! ```
 //! With `--ao ssdo` (O4) the same nodes also carry the directional term
 //! (two coefficients, their permutations `SSDO` / `fs_ssdo`) into a second
-//! history ring, [`HISTORY_DIR`].
+//! history ring, [`HISTORY_DIR`]. With `--ao-large-scale on` (O6)
+//! `ao.large_scale` multiplies ao.hbao's output by the height field's
+//! occlusion first ([`large_scale`]).
 //! CPU twins: [`mod@reference`]. Math and measurements: `docs/techniques/O1.md`..`O4.md`.
 
 pub mod bleed;
+pub mod large_scale;
 pub mod reference;
 mod settings;
 
@@ -65,6 +68,8 @@ pub struct AoInputs<'a> {
     pub depth: TextureHandle,
     /// Holds [`HISTORY`] (declared with [`declare_history`]).
     pub history: &'a History,
+    /// O6: the height field and what locates a pixel in it (`None`: off).
+    pub large_scale: Option<large_scale::LargeScaleInputs<'a>>,
 }
 
 /// Textures the AO nodes produce.
@@ -101,6 +106,7 @@ pub struct AoPass {
     /// Compiled on the first SSDO frame.
     ssdo: std::sync::OnceLock<SsdoSteps>,
     view_program: Program,
+    large_scale: large_scale::LargeScalePass,
     jitter: wgpu::Texture,
     linear_sampler: wgpu::Sampler,
     params: wgpu::Buffer,
@@ -138,6 +144,7 @@ impl AoPass {
         });
         let stf_off = [("STF", 0.0)];
         Ok(Self {
+            large_scale: large_scale::LargeScalePass::new(ctx)?,
             hbao: Step::new(ctx, "passes/ao/hbao.wgsl", "ao.hbao", RAW_FORMAT, &[])?,
             stability: Step::new(
                 ctx,
@@ -231,6 +238,7 @@ impl AoPass {
             settings,
             depth,
             history,
+            large_scale,
         } = inputs;
         let ao_size = settings.ao_size(size);
         let (params, sampler) = (&self.params, &self.linear_sampler);
@@ -265,6 +273,10 @@ impl AoPass {
             .read("jitter_load", jitter)
             .color(raw, white)
             .draw();
+        let raw = match large_scale {
+            Some(ls) => (self.large_scale).add(graph, ao_size, ssdo, params, jitter, raw, ls),
+            None => raw,
+        };
         let stability = graph.create_texture(
             "ao.stability",
             TextureDesc::new_2d(ao_size.0, ao_size.1, STABILITY_FORMAT),

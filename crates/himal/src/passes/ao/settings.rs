@@ -108,6 +108,18 @@ pub struct AoSettings {
     /// default: measured against a one-bounce ray-traced estimate it lifts
     /// the occlusion too much except in near-white surroundings (O5.md).
     pub bleed: bool,
+    /// O6 large-scale AO: the screen-space AO times the occlusion of the
+    /// height field (L2's sector pool) within 7.5 m (`--ao-large-scale`,
+    /// off by default; it replaces L2's sky visibility in lighting, which
+    /// reads the same height field).
+    pub large_scale: bool,
+}
+
+impl AoSettings {
+    /// O6 runs: large-scale AO asked for and an AO pass to merge it into.
+    pub fn large_scale_on(&self) -> bool {
+        self.large_scale && self.mode != AoMode::Off
+    }
 }
 
 impl Default for AoSettings {
@@ -134,6 +146,7 @@ impl Default for AoSettings {
             ssdo_roughness_softness: 1.0,
             reflection_occlusion: false,
             bleed: false,
+            large_scale: false,
         }
     }
 }
