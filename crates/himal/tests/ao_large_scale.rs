@@ -17,6 +17,46 @@ use himal::scene::Scene;
 use himal::{FrameSettings, ViewBuffer};
 use himal_reference::ao::{Shape, ambient_occlusion, trace};
 
+/// The analytic shapes of `scenes/<name>.toml`.
+fn shapes_of(name: &str) -> Vec<Shape> {
+    let cuboid = |min: [f32; 3], max: [f32; 3]| Shape::Box {
+        min: Vec3::from_array(min),
+        max: Vec3::from_array(max),
+    };
+    let ground = Shape::Plane {
+        normal: Vec3::Y,
+        offset: 0.0,
+    };
+    match name {
+        "o6_house" => shapes(),
+        // Slopes of 1 in 2 meeting at x = 0: y = |x| / 2.
+        "o6_valley" => {
+            let (s, c) = (0.5f32.atan().sin(), 0.5f32.atan().cos());
+            vec![
+                Shape::Plane {
+                    normal: Vec3::new(s, c, 0.0),
+                    offset: 0.0,
+                },
+                Shape::Plane {
+                    normal: Vec3::new(-s, c, 0.0),
+                    offset: 0.0,
+                },
+            ]
+        }
+        "o6_interior" => vec![
+            ground,
+            cuboid([-4.2, 0.0, -4.2], [4.2, 3.0, -4.0]),
+            cuboid([-4.2, 0.0, -4.2], [-4.0, 3.0, 4.2]),
+            cuboid([4.0, 0.0, -4.2], [4.2, 3.0, 4.2]),
+            cuboid([-4.2, 0.0, 4.0], [-0.6, 3.0, 4.2]),
+            cuboid([0.6, 0.0, 4.0], [4.2, 3.0, 4.2]),
+            cuboid([-0.6, 2.2, 4.0], [0.6, 3.0, 4.2]),
+            cuboid([-4.2, 3.0, -4.2], [4.2, 3.2, 4.2]),
+        ],
+        other => panic!("no shapes for {other}"),
+    }
+}
+
 /// The analytic shapes of `scenes/o6_house.toml`.
 fn shapes() -> Vec<Shape> {
     vec![
@@ -63,7 +103,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let s = ao_ls_sample(i % 4u, b.x, b.y);
     output[i] = vec4f(s, 0.0);
     output[arrayLength(&input) / 2u + i] = vec4f(
-        ao_ls_visibility(a.w, b.z), ao_ls_weight(normalize(a.xyz), s.xy), 0.0, 0.0);
+        ao_ls_visibility(a.w, b.z, ao_ls_roof(b.w)), ao_ls_weight(normalize(a.xyz), s.xy), 0.0, 0.0);
 }
 "#;
 
@@ -77,7 +117,13 @@ fn large_scale_functions_match_the_cpu_twin() {
         let rise = 20.0 * rng.next_f32() - 5.0;
         input.push(n.extend(rise).to_array());
         let r = 0.1 + 10.0 * rng.next_f32();
-        input.push([rng.next_f32(), rng.next_f32(), r, 0.0]);
+        // The point's own column: open in half the cases, under a roof in the rest.
+        let own = if rng.next_f32() < 0.5 {
+            1.0
+        } else {
+            2.0 + 3.0 * rng.next_f32()
+        };
+        input.push([rng.next_f32(), rng.next_f32(), r, own]);
     }
     let out = run_compute(
         KERNEL,
@@ -97,7 +143,7 @@ fn large_scale_functions_match_the_cpu_twin() {
             d.x,
             d.y,
             r,
-            twin::visibility(a[3], b[2]),
+            twin::visibility(a[3], b[2], twin::roof(b[3])),
             twin::weight(n, d),
         ];
         let g = gpu[i];
@@ -179,17 +225,20 @@ fn large_scale_pass_matches_the_cpu_twin() {
         errors.len()
     );
     assert!(darkened > 100, "the scene must exercise O6: {darkened}");
-    // Measured 2026-12-06 (lavapipe): 1935 texels (168 below 0.9), mean
-    // 0.0002, p99 0.0006 (Rg16Float storage of both AO frames).
-    assert!(mean < 0.002 && p99 < 0.005, "{mean} {p99}");
+    // Measured 2026-12-06 (lavapipe): 1935 texels (187 below 0.9), mean
+    // 0.0019, p99 0.0008: Rg16Float storage of both AO frames, and a few
+    // texels at the roof test's threshold (the nearest height texel of the
+    // reconstructed position differs) that flip between covered and open.
+    assert!(mean < 0.005 && p99 < 0.005, "{mean} {p99}");
 }
 
 /// Mean |AO - ray-traced sky visibility| over the ground pixels, by region.
-#[test]
-fn large_scale_ao_is_closer_to_ray_traced_sky_visibility() {
-    let (scene, camera) = scene_and_camera("o6_house", "main");
+/// `[off, on]` x [vs sky visibility, its occluded pixels, vs 7.5 m AO, its
+/// occluded pixels] for `scenes/<name>.toml`.
+fn accuracy(name: &str) -> Vec<[f32; 4]> {
+    let (scene, camera) = scene_and_camera(name, "main");
     let size = (128u32, 72u32);
-    let shapes = shapes();
+    let shapes = shapes_of(name);
     let mut results = Vec::new();
     for large_scale in [false, true] {
         let mut r = renderer(&scene);
@@ -225,7 +274,7 @@ fn large_scale_ao_is_closer_to_ray_traced_sky_visibility() {
         }
         let mean = |k: usize, j: usize| sums[k][j] / counts[k][j].max(1) as f32;
         println!(
-            "O6 {}: mean |AO - reference| vs sky visibility {:.4} ({:.4} over {} occluded px), \
+            "O6 {name} {}: mean |AO - reference| vs sky visibility {:.4} ({:.4} over {} occluded px), \
              vs 7.5 m AO {:.4} ({:.4} over {} occluded px), {} px",
             if large_scale { "on" } else { "off" },
             mean(0, 0),
@@ -238,11 +287,21 @@ fn large_scale_ao_is_closer_to_ray_traced_sky_visibility() {
         );
         results.push([mean(0, 0), mean(0, 1), mean(1, 0), mean(1, 1)]);
     }
-    // Measured 2026-12-06 (lavapipe), off -> on: vs sky visibility 0.2801
-    // -> 0.2525 (occluded 0.3145 -> 0.2831); vs 7.5 m AO 0.1012 -> 0.0766
-    // (occluded 0.1625 -> 0.1208).
-    assert!(results[1][2] < 0.85 * results[0][2], "{results:?}");
-    for k in 0..4 {
-        assert!(results[1][k] < results[0][k], "{results:?}");
+    results
+}
+
+#[test]
+fn large_scale_ao_is_closer_to_ray_traced_occlusion() {
+    let house = accuracy("o6_house");
+    let valley = accuracy("o6_valley");
+    let interior = accuracy("o6_interior");
+    // Measured 2026-12-06 (lavapipe), mean |AO - 7.5 m ray-traced AO| off
+    // -> on: house 0.1012 -> 0.0687, valley 0.0358 -> 0.0305 (occluded
+    // pixels 0.0905 -> 0.0365), interior 0.6548 -> 0.4063; against sky
+    // visibility 0.2801 -> 0.2431, 0.1672 -> 0.1333, 0.9395 -> 0.5018.
+    assert!(interior[1][2] < 0.7 * interior[0][2], "{interior:?}");
+    assert!(valley[1][3] < 0.5 * valley[0][3], "{valley:?}");
+    for results in [&house, &valley, &interior] {
+        assert!(results[1][2] < results[0][2], "{results:?}");
     }
 }

@@ -3,7 +3,8 @@
 // resolution, between ao.hbao and the pack, so the blur and the temporal
 // filter smooth the 4 interleaved samples. Other channels pass through
 // (continuity; SSDO's coefficients). Pixels over no resident sector, and
-// samples outside them, see no occlusion.
+// samples outside them, see no occlusion. One more lookup, at the pixel
+// itself, tells whether it is under a roof.
 // Bindings: params (AoParams), view, depth (full res), gbuffer_frame,
 // jitter_load, raw (ao.hbao's output), skyocc_table, skyocc_heights_load.
 // CPU twin: passes/ao/large_scale/reference.rs `large_scale_ao`.
@@ -46,13 +47,14 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let n = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, full, 0)))[2];
     let centre = p.xz + n.xz * SKYOCC_NORMAL_OFFSET;
     let j = textureLoad(jitter_load, q % 4, 0);
+    let roof = ao_ls_roof(height_at(p.xz, p.y) - p.y);
     var sum = 0.0;
     var weights = 0.0;
     for (var k = 0u; k < 4u; k++) {
         let s = ao_ls_sample(k, j.x, j.y);
         let w = ao_ls_weight(n, s.xy);
         let h = height_at(centre + s.xy * s.z, p.y);
-        sum += w * ao_ls_visibility(h - p.y, s.z);
+        sum += w * ao_ls_visibility(h - p.y, s.z, roof);
         weights += w;
     }
     let ls = select(1.0, sum / weights, weights > 0.0);
