@@ -495,6 +495,16 @@ pub struct ShadowArgs {
     /// Object with the hero shadow map, or off (default: the first moving object).
     #[arg(long, value_name = "NAME|off", allow_hyphen_values = true)]
     pub hero: Option<String>,
+    /// Local lights with no shadow caster in their reach: skip (no atlas
+    /// tile, projector pass or mask channel) or keep (render them anyway,
+    /// to measure the saving).
+    #[arg(
+        long,
+        default_value = "skip",
+        value_name = "skip|keep",
+        allow_hyphen_values = true
+    )]
+    pub casterless_shadows: String,
 }
 
 impl ShadowArgs {
@@ -525,6 +535,11 @@ impl ShadowArgs {
             Some(name) => s.hero = Some(name.to_string()),
             None => {}
         }
+        s.skip_casterless = match self.casterless_shadows.as_str() {
+            "skip" => true,
+            "keep" => false,
+            other => bail!("--casterless-shadows {other}: expected skip or keep"),
+        };
         s.validate()?;
         Ok(())
     }

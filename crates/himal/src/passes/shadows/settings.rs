@@ -54,6 +54,10 @@ pub struct ShadowSettings {
     pub hero: Option<String>,
     /// Local-light shadow atlas edge in texels (S3); 0 = no local shadows.
     pub atlas_resolution: u32,
+    /// Give no atlas tile, projector pass or mask channel to a shadowed
+    /// local light with no caster in its reach (its shadow would be all
+    /// lit); off only to measure the saving (#23).
+    pub skip_casterless: bool,
 }
 
 impl Default for ShadowSettings {
@@ -69,6 +73,7 @@ impl Default for ShadowSettings {
             hero_resolution: 1024,
             hero: None,
             atlas_resolution: 4096,
+            skip_casterless: true,
         }
     }
 }
