@@ -1,7 +1,8 @@
 //! `himal bench --compare-ao`: the AO cost ratios of TECHNIQUES O2/O3 in one
 //! run. Four renderers (HBAO + blur; + selective temporal filter; + STF with
-//! a brute-force blur; O4 SSDO) draw the same camera path with their frames
-//! interleaved, so all three see the same machine state.
+//! a brute-force blur; O4 SSDO) draw the same camera (fixed unless
+//! `--dolly`) with their frames interleaved, so all see the same machine
+//! state.
 
 use std::collections::BTreeMap;
 
@@ -30,6 +31,7 @@ pub fn run(
     camera: &Camera,
     base: &FrameSettings,
     frames: u32,
+    dolly: f32,
 ) -> Result<()> {
     let mut runs = Vec::new();
     for (name, mode, adaptive) in VARIANTS {
@@ -50,7 +52,7 @@ pub fn run(
     }
     for i in 0..frames {
         let mut cam = camera.clone();
-        cam.position += cam.forward * (0.5 * i as f32);
+        cam.position += cam.forward * (dolly * i as f32);
         // Rotate which variant goes first so none always follows the same one.
         let n = runs.len();
         for k in 0..n {

@@ -6,6 +6,7 @@ mod ao;
 mod bake;
 mod bench;
 mod bench_ao;
+mod bench_compare;
 mod bench_envmap;
 mod bench_path;
 mod camera;
@@ -61,7 +62,8 @@ enum Command {
     /// toggles, debug views, screenshots; takes the render options (--frames N
     /// > 1: render N frames, write the last to --out and exit).
     View(view::ViewArgs),
-    /// Render a fixed camera path and print GPU time per pass.
+    /// Render frames from a fixed camera (or --dolly, --path) and print each
+    /// pass's GPU time per run and per frame, and the CPU time per frame.
     Bench(bench::BenchArgs),
     /// Render many frames (the camera dollying forward and back) and report
     /// resident and GPU memory over time: they must stay flat.

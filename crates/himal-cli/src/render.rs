@@ -514,6 +514,16 @@ pub struct ShadowArgs {
         allow_hyphen_values = true
     )]
     pub cinematic_shadows: String,
+    /// Local lights with no shadow caster in their reach: skip (no atlas
+    /// tile, projector pass or mask channel) or keep (render them anyway,
+    /// to measure the saving).
+    #[arg(
+        long,
+        default_value = "skip",
+        value_name = "skip|keep",
+        allow_hyphen_values = true
+    )]
+    pub casterless_shadows: String,
 }
 
 impl ShadowArgs {
@@ -544,6 +554,11 @@ impl ShadowArgs {
             Some(name) => s.hero = Some(name.to_string()),
             None => {}
         }
+        s.skip_casterless = match self.casterless_shadows.as_str() {
+            "skip" => true,
+            "keep" => false,
+            other => bail!("--casterless-shadows {other}: expected skip or keep"),
+        };
         s.validate()?;
         Ok(())
     }

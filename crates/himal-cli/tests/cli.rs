@@ -231,10 +231,16 @@ fn gltf_flag_reads_any_name_as_gltf() {
 }
 
 /// `bench --json` is one JSON document on standard output (it used to
-/// print the one-off sky-table lines first), and its total is a frame's.
+/// print the one-off sky-table lines first); its total is the sum of the
+/// passes' per-frame costs (per-run cost x runs / frames), and the CSV
+/// holds the same rows.
 #[test]
 fn bench_json_is_json_alone() {
-    let args = ["bench", "--json", "--frames", "3", "--size", "32x18"];
+    let csv = common::temp_path("bench.csv");
+    let c = csv.to_string_lossy();
+    let args = [
+        "bench", "--json", "--frames", "3", "--size", "32x18", "--csv", &*c,
+    ];
     let (ok, out, err) = himal(&args);
     assert!(ok, "himal {args:?} failed: {err}");
     let v: serde_json::Value = serde_json::from_str(&out)
@@ -245,14 +251,113 @@ fn bench_json_is_json_alone() {
         v["one_off"].as_array().is_some_and(|o| !o.is_empty()),
         "the sky tables' one-off times belong in the JSON: {out}"
     );
-    assert!(v["gpu_total_ms"].as_f64().is_some(), "gpu_total_ms: {out}");
-    let mean_sum: f64 = passes.iter().map(|p| p["mean_ms"].as_f64().unwrap()).sum();
-    let mean = v["gpu_total_mean_ms"].as_f64().expect("gpu_total_mean_ms");
-    // Rounded to 4 decimals per pass in the JSON.
+    let num = |p: &serde_json::Value, k: &str| p[k].as_f64().unwrap_or_else(|| panic!("{k}: {p}"));
+    for p in passes {
+        let (runs, frames) = (num(p, "runs"), num(p, "frames"));
+        assert!(runs >= 1.0 && runs <= frames && frames == 3.0, "{p}");
+        // Rounded to 4 decimals in the JSON.
+        let counted = num(p, "run_ms") * runs / frames;
+        assert!((counted - num(p, "frame_ms")).abs() < 1e-3, "{p}");
+        let timing = p["timing"].as_str().expect("timing");
+        assert!(
+            ["encoder-ts", "pass-ts", "isolated-wall"].contains(&timing),
+            "{p}"
+        );
+    }
+    let sum: f64 = passes.iter().map(|p| num(p, "frame_ms")).sum();
+    let total = v["gpu_frame_ms"].as_f64().expect("gpu_frame_ms");
     assert!(
-        (mean_sum - mean).abs() < 1e-3 * passes.len() as f64,
-        "{mean_sum} vs {mean}"
+        (sum - total).abs() < 1e-3 * passes.len() as f64,
+        "{sum} vs {total}"
     );
+    let cpu = &v["cpu_ms_median"];
+    for k in [
+        "total", "thread", "plan", "cull", "upload", "record", "submit",
+    ] {
+        assert!(cpu[k].as_f64().is_some_and(|x| x >= 0.0), "cpu {k}: {out}");
+    }
+    let text = std::fs::read_to_string(&csv).expect("bench --csv wrote the file");
+    let _ = std::fs::remove_file(&csv);
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(
+        lines[0].starts_with("pass,group,timing,run_ms,runs,frames,frame_ms"),
+        "{text}"
+    );
+    assert_eq!(lines.len(), passes.len() + 1, "{text}");
+}
+
+/// `bench --compare A B` runs both sides interleaved and prints each
+/// pass's per-frame cost on both, the ratio and its spread: AO passes on
+/// the `hbao` side only.
+#[test]
+fn bench_compare_runs_two_settings_interleaved() {
+    // Shadows off and small maps keep it quick: the base options apply to both sides.
+    let args = [
+        "bench",
+        "--compare",
+        "--ao off",
+        "--ao hbao",
+        "--frames",
+        "4",
+        "--size",
+        "32x18",
+        "--json",
+        "--isolation-frames",
+        "1",
+        "--shadows",
+        "off",
+    ];
+    let (ok, out, err) = himal(&args);
+    assert!(ok, "himal {args:?} failed: {err}");
+    let v: serde_json::Value = serde_json::from_str(&out)
+        .unwrap_or_else(|e| panic!("bench --compare --json stdout is not JSON ({e}):\n{out}"));
+    assert_eq!(v["blocks"].as_u64(), Some(4), "{out}");
+    let passes = v["passes"].as_array().expect("passes");
+    let hbao = passes
+        .iter()
+        .find(|p| p["id"] == "ao.hbao")
+        .unwrap_or_else(|| panic!("no ao.hbao row: {out}"));
+    assert_eq!(hbao["a_ms"].as_f64(), Some(0.0), "{hbao}");
+    assert!(hbao["b_ms"].as_f64().is_some_and(|b| b > 0.0), "{hbao}");
+    let gbuffer = passes
+        .iter()
+        .find(|p| p["id"] == "gbuffer")
+        .expect("gbuffer");
+    let spread = &gbuffer["block_ratio"];
+    let q = |k: &str| {
+        spread[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k}: {gbuffer}"))
+    };
+    assert!(
+        q("q1") <= q("median") && q("median") <= q("q3"),
+        "{gbuffer}"
+    );
+    // At 32x18 the AO is far inside the frame's noise: a ratio, not its side of 1.
+    assert!(
+        v["frame"]["ratio"].as_f64().is_some_and(|r| r > 0.0),
+        "{out}"
+    );
+    assert!(v["cpu"]["a_ms"].as_f64().is_some(), "{out}");
+    // The table names both sides; a bad side names itself.
+    let (ok, out, err) = himal(&[
+        "bench",
+        "--compare",
+        "--ao off",
+        "",
+        "--frames",
+        "1",
+        "--size",
+        "16x16",
+        "--shadows",
+        "off",
+        "--isolation-frames",
+        "0",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("B/A") && out.contains("frame GPU"), "{out}");
+    let bad = ["bench", "--compare", "--ao off", "--no-such"];
+    common::assert_fails_with(&bad, &himal(&bad), "--compare B");
 }
 
 /// `./run` looked for a Vulkan driver with one `ls` over two globs, which

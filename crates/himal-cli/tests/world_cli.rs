@@ -109,8 +109,11 @@ fn unknown_paths_and_scenes_without_paths_are_refused() {
         "bench", "--scene", "demo", "--path", "across", "--frames", "1", "--size", "16x16",
     ]);
     common::assert_fails_with(&["bench", "--scene", "demo"], &r, "no flight paths");
+    // --csv writes pass rows without a path; --dt is the path's alone.
+    let r = himal(&["bench", "--scene", "demo", "--dt", "0.1", "--size", "16x16"]);
+    common::assert_fails_with(&["bench", "--dt"], &r, "need --path");
     let r = himal(&[
-        "bench", "--scene", "demo", "--csv", "x.csv", "--size", "16x16",
+        "bench", "--scene", "world", "--path", "across", "--dolly", "1", "--size", "16x16",
     ]);
-    common::assert_fails_with(&["bench", "--csv"], &r, "need --path");
+    common::assert_fails_with(&["bench", "--path", "--dolly"], &r, "choose one");
 }

@@ -171,6 +171,9 @@ pub struct Planned {
     pub sky_occlusion: SkyOccStats,
     /// The world's terrain selection (`None`: no terrain).
     pub terrain: Option<TerrainStats>,
+    /// Wall milliseconds of culling: the camera's lists, the shadow fits
+    /// and caster lists, and the GPU culling's plan.
+    pub cull_ms: f64,
 }
 
 /// E2: the levels every pass draws at, seen from `camera`.
@@ -228,7 +231,9 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     let streamed = !layout.pool_batches.is_empty();
     let per_view = gpu_cull || streamed;
     let cull_view = (settings.culling != Culling::Off).then_some(view_proj);
+    let t_cull = std::time::Instant::now();
     passes.gbuffer.visible = scene.visible(cull_view, gpu_calls.map(|(g, _)| (0, g)));
+    let mut cull_ms = t_cull.elapsed().as_secs_f64() * 1e3;
     // B1: reconstruction from depth and reprojection with this jitter.
     let ao = AoUniform::new(&settings.ao, p.proj, camera.near, size);
     passes
@@ -240,6 +245,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         (passes.aa_buffers).update(&ctx.queue, jitter, prev_jitter, p.history, tuning);
     }
     // S1-S4: cascade fits, static slice, hero, atlas; culled caster lists.
+    let t_cull = std::time::Instant::now();
     let shadows = passes.shadows.update(
         ctx,
         scene,
@@ -252,6 +258,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         gpu_calls.map(|(_, shadow)| shadow),
         streamed,
     );
+    cull_ms += t_cull.elapsed().as_secs_f64() * 1e3;
     // L2: the sectors the camera wants; jobs for the ones not resident.
     // O6 samples the same pool's heights.
     let skyocc_on = settings.sky_occlusion
@@ -290,7 +297,9 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     // path alone (the CPU path has no previous depth on the CPU).
     let hiz = settings.occlusion == Occlusion::Hiz && gpu_cull;
     passes.cull.hiz.prepare(&ctx.device, size, hiz);
+    let t_cull = std::time::Instant::now();
     passes.cull.plan(ctx, &views, lod, path);
+    cull_ms += t_cull.elapsed().as_secs_f64() * 1e3;
     // The pool's own draws: the sun maps' pool views, and the camera's
     // where the CPU twin's lists are drawn directly (on the GPU path they
     // are in its multi-draws).
@@ -325,6 +334,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         shadows,
         sky_occlusion,
         terrain,
+        cull_ms,
     }
 }
 

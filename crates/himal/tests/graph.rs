@@ -203,3 +203,79 @@ fn validation_error_in_a_pass_is_returned_not_panicked() {
     let ctx = himal::gpu::testing::shared_context().expect("GPU context");
     assert!(ctx.check("after graph validation error").is_ok());
 }
+
+/// A pass that asks for compute timestamp writes is timed by them
+/// (`PassTs`, one pair per pass: a second compute pass gets none); the
+/// others by the encoder. Isolated execution times every pass alone by
+/// the wall clock and leaves the image as `execute` does.
+#[test]
+fn compute_passes_take_their_own_timestamps_and_isolation_times_each_pass() {
+    use himal::graph::TimingMethod;
+    let (device, queue) = device();
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: BYTES,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut pool = TexturePool::new();
+    let Some(mut timer) = PassTimer::new(device, queue, 8) else {
+        eprintln!("no timestamps on this adapter: nothing to check");
+        return;
+    };
+    let second_got_writes = Cell::new(true);
+    let culled_ran = Cell::new(false);
+    let build = |readback| {
+        let mut g = frame(readback, &culled_ran);
+        let mut p = g.add_pass("compute.empty");
+        p.side_effect();
+        let second = &second_got_writes;
+        p.execute(move |ctx| {
+            let writes = ctx.compute_timestamp_writes();
+            assert!(writes.is_some(), "a timed graph hands out writes");
+            second.set(ctx.compute_timestamp_writes().is_some());
+            ctx.encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("compute.empty"),
+                    timestamp_writes: writes,
+                });
+            Ok(())
+        });
+        g
+    };
+    let graph = build(&readback).compile().expect("compile");
+    let commands = graph
+        .execute(device, &mut pool, Some(&mut timer))
+        .expect("execute");
+    queue.submit([commands]);
+    let timings = timer.read_timings(device).expect("timings");
+    assert!(!second_got_writes.get(), "one pair per pass");
+    let methods: Vec<(&str, TimingMethod)> =
+        timings.iter().map(|t| (t.id.as_str(), t.method)).collect();
+    assert_eq!(
+        methods,
+        [
+            ("clear", TimingMethod::EncoderTs),
+            ("copy", TimingMethod::EncoderTs),
+            ("compute.empty", TimingMethod::PassTs)
+        ]
+    );
+    let want = read_buffer(device, &readback);
+
+    let graph = build(&readback).compile().expect("compile");
+    let (commands, isolated) = graph
+        .execute_isolated(device, queue, &mut pool, Some(&mut timer))
+        .expect("execute isolated");
+    queue.submit([commands]);
+    let timings = timer.read_timings(device).expect("timings after isolation");
+    assert_eq!(timings.len(), 3);
+    let ids: Vec<&str> = isolated.passes.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(ids, ["clear", "copy", "compute.empty"]);
+    for t in &isolated.passes {
+        assert_eq!(t.method, TimingMethod::IsolatedWall);
+        assert!(t.gpu_ms.is_finite() && t.gpu_ms >= 0.0, "{t:?}");
+    }
+    assert!(isolated.empty_submit_ms.is_finite() && isolated.empty_submit_ms >= 0.0);
+    eprintln!("isolated: {isolated:?}");
+    assert_eq!(read_buffer(device, &readback), want, "the same image");
+}

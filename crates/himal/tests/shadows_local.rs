@@ -143,3 +143,36 @@ fn local_lighting_matches_the_cpu_twin() {
     // HDR rounding); thresholds 0.005 / 0.02.
     assert!(mean < 0.005 && worst < 0.02, "mean {mean}, worst {worst}");
 }
+
+/// #23: a shadowed light with no caster in its reach gets no atlas tiles
+/// (no projector passes) and no mask channel; the mask is unchanged, since
+/// its tiles would hold no depth (`ShadowSettings::skip_casterless`).
+#[test]
+fn lights_without_casters_get_no_projector_pass() {
+    let (scene, camera) = scene_and_camera("shadow_local_casterless", "top");
+    let size = 96;
+    let mut s = raw_settings(&scene, (size, size), "shadow-mask");
+    let mut masks = Vec::new();
+    for (skip, tiles) in [(true, 6), (false, 12)] {
+        s.shadows.skip_casterless = skip;
+        let frame = renderer(&scene).render(&camera, &s).expect("frame");
+        assert_eq!(
+            frame.shadows.atlas_tiles, tiles,
+            "skip {skip}: 6 faces each"
+        );
+        masks.push(frame.image.to_rgba_f32().expect("f32"));
+    }
+    let worst = (masks[0].iter().flatten())
+        .zip(masks[1].iter().flatten())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    let shadowed = masks[0].iter().filter(|m| m[1] < 0.5).count();
+    eprintln!(
+        "mask skip vs keep: worst channel difference {worst}, lamp-shadowed pixels {shadowed}"
+    );
+    // The lamp's shadow is there on both sides (the box's, > 100 pixels).
+    assert!(shadowed > 100, "{shadowed}");
+    // Measured 2026-12-06 on lavapipe: 0 (identical); the far light only
+    // changes which tiles the atlas holds.
+    assert!(worst <= 1e-6, "{worst}");
+}

@@ -1,13 +1,24 @@
 //! Recording: one command encoder, pooled transients, timestamps per pass.
 
-use std::cell::OnceCell;
+use std::cell::{Cell, OnceCell};
 
 use super::GraphError;
 use super::builder::{Backing, ResourceKind};
 use super::compile::CompiledGraph;
 use super::pool::TexturePool;
 use super::resource::{BufferHandle, TextureHandle};
-use super::timer::PassTimer;
+use super::timer::{PassTimer, PassTiming, TimingMethod};
+
+/// Each pass's wall time when submitted alone ([`CompiledGraph::execute_isolated`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IsolatedTimings {
+    /// Each pass's submit-to-idle wall milliseconds less `empty_submit_ms`
+    /// (clamped at 0), method [`TimingMethod::IsolatedWall`].
+    pub passes: Vec<PassTiming>,
+    /// Wall milliseconds of submitting an empty command buffer and waiting
+    /// (the least of three), subtracted from each pass.
+    pub empty_submit_ms: f64,
+}
 
 /// What a pass closure records with. Resources are looked up by handle;
 /// any version of a resource the pass declared is accepted.
@@ -25,6 +36,11 @@ pub struct PassContext<'e> {
     buffers: &'e [Option<&'e wgpu::Buffer>],
     fallbacks: &'e [&'e wgpu::TextureView],
     zero_buffer: &'e wgpu::Buffer,
+    /// The pass-level query set and the pair this pass may write (taken
+    /// once; a `Cell` of a plain index keeps the context covariant in 'e).
+    pass_query_set: Option<&'e wgpu::QuerySet>,
+    pass_pair: u32,
+    pass_queries_taken: Cell<bool>,
 }
 
 impl<'e> PassContext<'e> {
@@ -93,6 +109,23 @@ impl<'e> PassContext<'e> {
         self.zero_buffer
     }
 
+    /// Timestamp writes for this pass's first compute pass, when the graph
+    /// is timed (`None` after the first call, or untimed): its GPU time
+    /// then comes from them instead of the encoder timestamps around the
+    /// pass, which lavapipe does not order against compute work.
+    pub fn compute_timestamp_writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'e>> {
+        let set = self.pass_query_set?;
+        if self.pass_queries_taken.replace(true) {
+            return None;
+        }
+        let pair = self.pass_pair;
+        Some(wgpu::ComputePassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(2 * pair),
+            end_of_pass_write_index: Some(2 * pair + 1),
+        })
+    }
+
     /// # Panics
     /// If this pass did not declare `h` (a bug in the pass code, like an
     /// out-of-bounds index); use [`Self::try_texture`] to handle it.
@@ -125,6 +158,32 @@ impl CompiledGraph<'_> {
         pool: &mut TexturePool,
         timer: Option<&mut PassTimer>,
     ) -> Result<wgpu::CommandBuffer, GraphError> {
+        self.record(device, None, pool, timer).map(|(c, _)| c)
+    }
+
+    /// As [`Self::execute`], but each pass is recorded into a command
+    /// buffer of its own, submitted alone after the work before it has
+    /// finished, and timed by the wall clock until the queue is idle: a
+    /// measurement for passes whose timestamps are not credible (bench).
+    /// The returned buffer holds only the timestamp resolve; the image is
+    /// the same as `execute`'s.
+    pub fn execute_isolated(
+        self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pool: &mut TexturePool,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<(wgpu::CommandBuffer, IsolatedTimings), GraphError> {
+        self.record(device, Some(queue), pool, timer)
+    }
+
+    fn record(
+        self,
+        device: &wgpu::Device,
+        isolate: Option<&wgpu::Queue>,
+        pool: &mut TexturePool,
+        timer: Option<&mut PassTimer>,
+    ) -> Result<(wgpu::CommandBuffer, IsolatedTimings), GraphError> {
         if let Some(t) = &timer
             && self.passes.len() > t.capacity() as usize
         {
@@ -202,7 +261,39 @@ impl CompiledGraph<'_> {
         let fallbacks = pool.fallback_views();
         let zero_buffer = pool.zero_buffer(device);
         let query = timer.as_ref().map(|t| t.query_set());
+        let pass_query = timer.as_ref().map(|t| t.pass_query_set());
+        // Each pass's pass-level pair, if it wrote one.
+        let mut pass_pairs: Vec<Option<u32>> = Vec::with_capacity(self.passes.len());
+        let mut next_pair = 0u32;
+        let mut isolated = IsolatedTimings::default();
+        let wait = || -> Result<(), GraphError> {
+            device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map(drop)
+                .map_err(|e| GraphError::Device(format!("isolated pass: {e}")))
+        };
+        if let Some(queue) = isolate {
+            let mut empty = f64::INFINITY;
+            for _ in 0..3 {
+                let t = std::time::Instant::now();
+                queue.submit(std::iter::empty());
+                wait()?;
+                empty = empty.min(t.elapsed().as_secs_f64() * 1e3);
+            }
+            isolated.empty_submit_ms = empty;
+        }
         for (i, (f, pass)) in self.closures.into_iter().zip(&self.passes).enumerate() {
+            if let Some(queue) = isolate {
+                // Everything before this pass runs to completion first.
+                let before = std::mem::replace(
+                    &mut encoder,
+                    device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some(&pass.id),
+                    }),
+                );
+                queue.submit([before.finish()]);
+                wait()?;
+            }
             if let Some(q) = query {
                 encoder.write_timestamp(q, 2 * i as u32);
             }
@@ -219,8 +310,17 @@ impl CompiledGraph<'_> {
                 buffers: &buffers,
                 fallbacks: &fallbacks,
                 zero_buffer,
+                pass_query_set: pass_query,
+                pass_pair: next_pair,
+                pass_queries_taken: Cell::new(false),
             };
             let result = f(&mut ctx);
+            if ctx.pass_queries_taken.get() {
+                pass_pairs.push(Some(next_pair));
+                next_pair += 1;
+            } else {
+                pass_pairs.push(None);
+            }
             encoder.pop_debug_group();
             if let Err(e) = result {
                 // Close the scopes before returning: the first error is the one reported.
@@ -234,9 +334,33 @@ impl CompiledGraph<'_> {
             if let Some(q) = query {
                 encoder.write_timestamp(q, 2 * i as u32 + 1);
             }
+            if let Some(queue) = isolate {
+                let alone = std::mem::replace(
+                    &mut encoder,
+                    device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("himal.frame_graph"),
+                    }),
+                );
+                let commands = alone.finish();
+                let t = std::time::Instant::now();
+                queue.submit([commands]);
+                wait()?;
+                let wall = t.elapsed().as_secs_f64() * 1e3;
+                isolated.passes.push(PassTiming {
+                    id: pass.id.clone(),
+                    gpu_ms: (wall - isolated.empty_submit_ms).max(0.0),
+                    encoder_ms: 0.0,
+                    method: TimingMethod::IsolatedWall,
+                });
+            }
         }
         if let Some(t) = timer {
-            let ids = self.passes.iter().map(|p| p.id.clone()).collect();
+            let ids = self
+                .passes
+                .iter()
+                .map(|p| p.id.clone())
+                .zip(pass_pairs)
+                .collect();
             t.record_resolve(&mut encoder, ids);
         }
         let commands = encoder.finish();
@@ -258,7 +382,7 @@ impl CompiledGraph<'_> {
                     None => GraphError::Device(format!("recording the frame graph: {message}")),
                 })
             }
-            None => Ok(commands),
+            None => Ok((commands, isolated)),
         }
     }
 }

@@ -40,7 +40,7 @@ mod tests;
 
 pub use builder::{FrameGraph, PassBuilder};
 pub use compile::{BufferKey, CompiledGraph, CompiledPass, PoolAssignment, PoolPlan, TextureKey};
-pub use execute::PassContext;
+pub use execute::{IsolatedTimings, PassContext};
 pub use history::{History, HistoryFrame};
 pub use node::{Fallback, Node, RasterFn, Written};
 pub use pool::TexturePool;
@@ -48,7 +48,7 @@ pub use resource::{
     BufferAccess, BufferDesc, BufferHandle, ResourceAccess, ResourceUse, TextureAccess,
     TextureDesc, TextureHandle,
 };
-pub use timer::{PassTimer, PassTiming};
+pub use timer::{PassTimer, PassTiming, TimingMethod};
 
 /// Frame graph misuse and device failures.
 #[derive(thiserror::Error, Debug, Clone, PartialEq, Eq)]

@@ -602,11 +602,12 @@ impl<'g, 'a> Node<'g, 'a> {
             let label = ctx.pass_id().to_string();
             if let Form::Compute = form {
                 let pipeline = compute.ok_or_else(|| GpuError::Other("no pipeline".into()))??;
+                let timestamp_writes = ctx.compute_timestamp_writes();
                 let mut cpass = ctx
                     .encoder
                     .begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some(&label),
-                        timestamp_writes: None,
+                        timestamp_writes,
                     })
                     .forget_lifetime();
                 cpass.set_pipeline(&pipeline);

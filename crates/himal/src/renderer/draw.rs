@@ -22,6 +22,9 @@ pub struct RenderedFrame {
     pub culling: crate::settings::Culling,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
+    /// With [`Renderer::set_isolated_timing`]: each pass's wall time when
+    /// submitted alone (bench; `None` otherwise).
+    pub isolated: Option<crate::graph::IsolatedTimings>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
     /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
@@ -35,6 +38,12 @@ pub struct RenderedFrame {
 pub struct CpuTimes {
     /// `plan_frame`: uniforms, shadow and sky-occlusion planning, culling.
     pub plan_ms: f64,
+    /// Of `plan_ms`: culling (the camera's lists, shadow fits and caster
+    /// lists, the GPU culling's plan).
+    pub cull_ms: f64,
+    /// Of `plan_ms`: uploads of the objects' transforms and the view and
+    /// lighting uniforms (`Queue::write_buffer`).
+    pub upload_ms: f64,
     /// Frame-graph build, compile and command recording.
     pub record_ms: f64,
     /// `Queue::submit`.
@@ -78,6 +87,8 @@ pub(super) struct FramePlan {
     shadows: ShadowStats,
     sky_occlusion: crate::passes::skyocc::SkyOccStats,
     terrain: Option<crate::passes::terrain::TerrainStats>,
+    cull_ms: f64,
+    upload_ms: f64,
 }
 
 /// One frame drawn into [`Renderer::output`], left on the GPU (a viewer
@@ -93,6 +104,9 @@ pub struct DrawnFrame {
     pub culling: crate::settings::Culling,
     /// GPU time per pass (empty where the adapter has no timestamps).
     pub timings: Vec<PassTiming>,
+    /// With [`Renderer::set_isolated_timing`]: each pass's wall time when
+    /// submitted alone (bench; `None` otherwise).
+    pub isolated: Option<crate::graph::IsolatedTimings>,
     /// Shadow draw calls and what the shadow passes rendered.
     pub shadows: ShadowStats,
     /// Sky occlusion sectors wanted, rendered this frame, resident (L2).
@@ -191,6 +205,7 @@ impl Renderer {
             gbuffer_draws,
             culling,
             timings,
+            isolated,
             shadows,
             sky_occlusion,
             world,
@@ -204,6 +219,7 @@ impl Renderer {
             gbuffer_draws,
             culling,
             timings,
+            isolated,
             shadows,
             sky_occlusion,
             world,
@@ -284,6 +300,7 @@ impl Renderer {
         .with_times(settings.time_s, prev_time)
         .with_jitter(jitter_clip.x, jitter_clip.y)
         .with_orthographic(camera.orthographic.map(|o| o.far));
+        let t_upload = std::time::Instant::now();
         self.res
             .scene
             .update_objects(&self.ctx.queue, settings.time_s, prev_time);
@@ -295,6 +312,7 @@ impl Renderer {
         } else {
             jitter
         };
+        let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
         let Some((_, _, light)) = &self.sky_light else {
             return Err(Error::InvalidSettings("sky light missing".into()));
         };
@@ -330,9 +348,11 @@ impl Renderer {
             ),
         )
         .with_visibility_remap(settings.visibility_remap);
+        let t_lighting = std::time::Instant::now();
         self.ctx
             .queue
             .write_buffer(&self.res.lighting_buffer, 0, bytemuck::bytes_of(&lighting));
+        let upload_ms = upload_ms + t_lighting.elapsed().as_secs_f64() * 1e3;
         let sun_direction = light.sun_direction;
         // E3: the permutations the G-buffer and forward draws pick.
         self.res.passes.gbuffer.specular_aa = settings.specular_aa;
@@ -360,6 +380,8 @@ impl Renderer {
             shadows: planned.shadows,
             sky_occlusion: planned.sky_occlusion,
             terrain: planned.terrain,
+            cull_ms: planned.cull_ms,
+            upload_ms,
         })
     }
 
@@ -378,6 +400,8 @@ impl Renderer {
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,
             terrain,
+            cull_ms,
+            upload_ms,
         } = self.plan_frame(camera, settings)?;
         let plan_ms = ms(t_plan);
         let t_record = std::time::Instant::now();
@@ -388,6 +412,7 @@ impl Renderer {
             timer,
             frame_index,
             sky_timings,
+            isolate_passes,
             ..
         } = self;
         let inputs = res
@@ -396,8 +421,15 @@ impl Renderer {
         let recorded = frame::build(inputs, size, settings.view)
             .map_err(Error::from)
             .and_then(|g| Ok(g.compile()?))
-            .and_then(|c| Ok(c.execute(&ctx.device, pool, timer.as_mut())?));
-        let commands = match recorded {
+            .and_then(|c| {
+                Ok(match isolate_passes {
+                    true => c
+                        .execute_isolated(&ctx.device, &ctx.queue, pool, timer.as_mut())
+                        .map(|(c, i)| (c, Some(i)))?,
+                    false => (c.execute(&ctx.device, pool, timer.as_mut())?, None),
+                })
+            });
+        let (commands, isolated) = match recorded {
             Ok(c) => c,
             Err(e) => {
                 res.history.discard();
@@ -437,6 +469,8 @@ impl Renderer {
         Ok(DrawnFrame {
             cpu: CpuTimes {
                 plan_ms,
+                cull_ms,
+                upload_ms,
                 record_ms,
                 submit_ms,
                 thread_ms,
@@ -447,6 +481,7 @@ impl Renderer {
                 c => c,
             },
             timings,
+            isolated,
             shadows: shadow_stats,
             sky_occlusion: skyocc_stats,
             world: self.world.as_ref().map(|w| world::WorldFrame {

@@ -124,6 +124,8 @@ pub struct Renderer {
     sky_light: Option<(SunDesc, SkyModel, SkyLight)>,
     /// GPU times of the sky tables / SH projection run before the next frame (L1).
     sky_timings: Vec<PassTiming>,
+    /// Submit each pass alone and time it by the wall clock (bench).
+    isolate_passes: bool,
     /// Directory of the Bruneton table cache file (`None`: compute each run).
     sky_table_cache: Option<std::path::PathBuf>,
     sky_table_sizes: crate::passes::sky::bruneton::TableSizes,
@@ -213,6 +215,7 @@ impl Renderer {
             frame_index: 0,
             sky_light: None,
             sky_timings: Vec::new(),
+            isolate_passes: false,
             sky_table_cache: None,
             sky_table_sizes: crate::passes::sky::bruneton::TableSizes::DEFAULT,
             aa_last: None,
@@ -449,6 +452,14 @@ impl Renderer {
         self.res.passes.sky.set_bruneton(&self.ctx, tables)?;
         self.sky_light = None;
         Ok(())
+    }
+
+    /// With `on`, each following frame submits every pass alone, waits for
+    /// it and reports its wall time in [`DrawnFrame::isolated`] (a
+    /// measurement for compute passes whose timestamps are not credible;
+    /// the frame is slower, its image the same).
+    pub fn set_isolated_timing(&mut self, on: bool) {
+        self.isolate_passes = on;
     }
 
     /// L1: the Bruneton table sizes (default [`TableSizes::DEFAULT`]); other

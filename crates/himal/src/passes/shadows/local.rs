@@ -103,13 +103,16 @@ pub struct LocalPlan {
 }
 
 /// Lights as the GPU reads them; with `atlas`, shadowed lights get tiles
-/// (by importance from `camera`) and mask channels.
+/// (by importance from `camera`) and mask channels. With `skip_casterless`,
+/// a shadowed light with no caster in its reach gets neither (no projector
+/// pass, no mask work: the channel would read lit everywhere).
 pub fn plan(
     lights: &[LightDesc],
     camera: Vec3,
     atlas: Option<&mut AtlasAllocator>,
     casters: &Casters,
     scene: &SceneGpu,
+    skip_casterless: bool,
 ) -> LocalPlan {
     let mut out: Vec<LocalLightGpu> = lights
         .iter()
@@ -134,10 +137,29 @@ pub fn plan(
         plan.lights = out;
         return plan;
     };
+    // Each shadowed light's casters: those within its reach.
+    let reach: Vec<Option<DrawLists>> = lights
+        .iter()
+        .map(|l| {
+            l.shadow.then(|| {
+                let bounds = Aabb::new(
+                    l.position - Vec3::splat(l.range),
+                    l.position + Vec3::splat(l.range),
+                );
+                let mut draws = DrawLists::default();
+                casters.cull_local_into(scene, &bounds, MAX_CASTER_RANGES * l.range, &mut draws);
+                draws
+            })
+        })
+        .collect();
     let requests: Vec<AtlasRequest> = lights
         .iter()
         .enumerate()
-        .filter(|(_, l)| l.shadow)
+        .filter(|(i, _)| {
+            reach[*i]
+                .as_ref()
+                .is_some_and(|d| !(skip_casterless && d.is_empty()))
+        })
         .map(|(i, l)| AtlasRequest {
             light: i as u32,
             faces: if l.kind == LightKind::Point { 6 } else { 1 },
@@ -161,7 +183,9 @@ pub fn plan(
         if mine.is_empty() {
             continue;
         }
-        let l = &lights[i];
+        let (l, Some(draws)) = (&lights[i], &reach[i]) else {
+            continue;
+        };
         let overlaps = |j: usize| {
             let o = &lights[j];
             l.position.distance(o.position) < l.range + o.range
@@ -174,12 +198,6 @@ pub fn plan(
         taken.push((i, channel));
         out[i].params[1] = channel as f32;
         out[i].params[2] = plan.tiles.len() as f32;
-        let bounds = Aabb::new(
-            l.position - Vec3::splat(l.range),
-            l.position + Vec3::splat(l.range),
-        );
-        let mut draws = DrawLists::default();
-        casters.cull_local_into(scene, &bounds, MAX_CASTER_RANGES * l.range, &mut draws);
         let mut faces = mine;
         faces.sort_by_key(|t| t.face);
         for t in faces {
@@ -197,7 +215,7 @@ pub fn plan(
             plan.projectors.push(Projector {
                 tile: *t,
                 view_proj,
-                draws: cull_frustum(&draws, casters, view_proj),
+                draws: cull_frustum(draws, casters, view_proj),
             });
         }
     }

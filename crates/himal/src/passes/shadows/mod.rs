@@ -414,6 +414,7 @@ impl ShadowPass {
             self.atlas.as_mut(),
             &self.casters,
             scene,
+            on.is_none_or(|s| s.skip_casterless),
         );
         let mut bytes = bytemuck::bytes_of(&[local.lights.len() as u32, 0, 0, 0]).to_vec();
         bytes.extend_from_slice(bytemuck::cast_slice(&local.lights));

@@ -57,6 +57,10 @@ pub struct ShadowSettings {
     /// R3: the author's near and far replace the camera near and
     /// `max_distance`, with fully logarithmic splits (`split_lambda` unused).
     pub cinematic: Option<crate::scene::CinematicShadows>,
+    /// Give no atlas tile, projector pass or mask channel to a shadowed
+    /// local light with no caster in its reach (its shadow would be all
+    /// lit); off only to measure the saving (#23).
+    pub skip_casterless: bool,
 }
 
 impl Default for ShadowSettings {
@@ -73,6 +77,7 @@ impl Default for ShadowSettings {
             hero: None,
             atlas_resolution: 4096,
             cinematic: None,
+            skip_casterless: true,
         }
     }
 }

@@ -267,7 +267,11 @@ fn run_steps(
         let mut pass = graph.add_pass(&step.id);
         pass.side_effect();
         pass.execute(move |pc| {
-            let mut cp = pc.encoder.begin_compute_pass(&Default::default());
+            let timestamp_writes = pc.compute_timestamp_writes();
+            let mut cp = pc.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&step.id),
+                timestamp_writes,
+            });
             cp.set_pipeline(&step.pipeline);
             cp.set_bind_group(0, &step.bind_group, &[]);
             cp.dispatch_workgroups(step.groups[0], step.groups[1], step.groups[2]);
