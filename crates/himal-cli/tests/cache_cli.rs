@@ -59,6 +59,10 @@ fn bad_post_options_are_rejected() {
             &["render", "--cinematic-shadows", "maybe", "--size", "8x8"][..],
             "--cinematic-shadows maybe",
         ),
+        (
+            &["render", "--ao-large-scale", "maybe", "--size", "8x8"][..],
+            "--ao-large-scale maybe",
+        ),
         (&["prewarm", "--cache", "off"][..], "cache directory"),
         (&["bake", "--cache", "off"][..], "cache directory"),
         (
