@@ -604,23 +604,37 @@ pub(crate) fn frame_settings(
     Ok(settings)
 }
 
+/// One pass's row as (CSV header name, value) pairs: the JSON object and
+/// the CSV line are written from the same list.
+fn row_fields(r: &PassRow, stats: &PassStats) -> [(&'static str, String); 11] {
+    let ms = |v: f64| format!("{v:.4}");
+    [
+        ("pass", r.id.clone()),
+        ("group", group(&r.id).to_string()),
+        ("timing", r.timing.name().to_string()),
+        ("run_ms", ms(r.run_ms)),
+        ("runs", r.runs.to_string()),
+        ("frames", stats.frames.to_string()),
+        ("frame_ms", ms(r.frame_ms)),
+        ("share", ms(stats.share(r.frame_ms))),
+        ("ts_ms", ms(r.ts_ms)),
+        ("encoder_ms", ms(r.encoder_ms)),
+        ("isolated_ms", r.isolated_ms.map_or(String::new(), ms)),
+    ]
+}
+
 fn row_json(r: &PassRow, stats: &PassStats) -> String {
-    let iso = r
-        .isolated_ms
-        .map_or("null".to_string(), |v| format!("{v:.4}"));
-    format!(
-        "{{\"id\":\"{}\",\"group\":\"{}\",\"timing\":\"{}\",\"run_ms\":{:.4},\"runs\":{},\"frames\":{},\"frame_ms\":{:.4},\"share\":{:.4},\"ts_ms\":{:.4},\"encoder_ms\":{:.4},\"isolated_ms\":{iso}}}",
-        r.id,
-        group(&r.id),
-        r.timing.name(),
-        r.run_ms,
-        r.runs,
-        stats.frames,
-        r.frame_ms,
-        stats.share(r.frame_ms),
-        r.ts_ms,
-        r.encoder_ms,
-    )
+    let fields: Vec<String> = row_fields(r, stats)
+        .into_iter()
+        .map(|(name, value)| match name {
+            // Strings quoted; JSON names the pass `id`.
+            "pass" => format!("\"id\":\"{value}\""),
+            "group" | "timing" => format!("\"{name}\":\"{value}\""),
+            "isolated_ms" if value.is_empty() => format!("\"{name}\":null"),
+            _ => format!("\"{name}\":{value}"),
+        })
+        .collect();
+    format!("{{{}}}", fields.join(","))
 }
 
 pub(crate) const CSV_HEADER: &str =
@@ -631,20 +645,8 @@ pub(crate) fn csv_rows(stats: &PassStats) -> Vec<String> {
         .rows
         .iter()
         .map(|r| {
-            format!(
-                "{},{},{},{:.4},{},{},{:.4},{:.4},{:.4},{:.4},{}",
-                r.id,
-                group(&r.id),
-                r.timing.name(),
-                r.run_ms,
-                r.runs,
-                stats.frames,
-                r.frame_ms,
-                stats.share(r.frame_ms),
-                r.ts_ms,
-                r.encoder_ms,
-                r.isolated_ms.map_or(String::new(), |v| format!("{v:.4}"))
-            )
+            let values: Vec<String> = row_fields(r, stats).into_iter().map(|(_, v)| v).collect();
+            values.join(",")
         })
         .collect()
 }
