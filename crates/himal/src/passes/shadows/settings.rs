@@ -104,13 +104,13 @@ impl ShadowSettings {
                 self.static_resolution
             ));
         }
-        if let Some(c) = self.cinematic {
-            if !(c.near > 0.0 && c.far > c.near && c.far.is_finite()) {
-                return bad(format!(
-                    "cinematic shadows near {} and far {}: need 0 < near < far",
-                    c.near, c.far
-                ));
-            }
+        if let Some(c) = self.cinematic
+            && !(c.near > 0.0 && c.far > c.near && c.far.is_finite())
+        {
+            return bad(format!(
+                "cinematic shadows near {} and far {}: need 0 < near < far",
+                c.near, c.far
+            ));
         }
         if self.static_draw_cap == 0 {
             return bad("static shadow draw cap must be at least 1".into());
