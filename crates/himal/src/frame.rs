@@ -81,6 +81,8 @@ pub struct Passes {
     pub skyocc: SkyOccPass,
     /// glTF emission and alpha-blended surfaces after lighting.
     pub forward: ForwardPass,
+    /// E4: the scene's particles, simulated, lit and drawn.
+    pub particles: crate::passes::particles::ParticlesPass,
     /// H2: the log-average luminance.
     pub luminance: LuminancePass,
     /// H2: light adaptation on the GPU.
@@ -127,6 +129,7 @@ impl Passes {
             sky: SkyPass::new(ctx)?,
             skyocc: SkyOccPass::new(ctx, scene)?,
             forward: ForwardPass::new(ctx)?,
+            particles: crate::passes::particles::ParticlesPass::new(ctx, &scene.emitters)?,
             luminance: LuminancePass::new(ctx)?,
             adapt: AdaptPass::new(ctx)?,
             bloom: BloomPass::new(ctx)?,
@@ -317,6 +320,8 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     (passes.lighting.ambient_lights).enable(&ctx.queue, settings.ambient_lights);
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);
+    // E4: this frame's particle steps (births, pre-warm after a reset).
+    (passes.particles).plan(ctx, settings.time_s, settings.particles);
     Planned {
         shadows,
         sky_occlusion,
@@ -557,6 +562,8 @@ pub fn build<'a>(
     };
     let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let hdr = forward.hdr;
+    // E4: particles simulated (their state outlives the frame).
+    let _particles = passes.particles.add_simulate(&mut g);
     // Transmissive surfaces wrote their depth: later readers see them.
     let gbuffer = GBuffer {
         depth: forward.depth,

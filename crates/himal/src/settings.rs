@@ -205,6 +205,9 @@ pub struct FrameSettings {
     /// Wetness of up-facing surfaces in [0, 1] (`gbuffer.wet`, E3's
     /// screen-space filter example); 0: the pass does not run.
     pub wetness: f32,
+    /// E4 particles: the scene's `[[emitter]]`s simulated, lit and drawn
+    /// (on by default; scenes without emitters draw nothing either way).
+    pub particles: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -279,6 +282,7 @@ impl FrameSettings {
             specular_aa: true,
             ambient_lights: true,
             wetness: 0.0,
+            particles: true,
         }
     }
 }

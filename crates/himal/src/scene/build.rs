@@ -168,6 +168,7 @@ pub(crate) fn build_scene(
         .collect::<Result<Vec<_>>>()?;
     let lights = super::lights::build_lights(&ck, &file.light)?;
     let ambient_lights = super::ambient::build_ambient_lights(&ck, &file.ambient_light)?;
+    let emitters = super::emitters::build_emitters(&ck, &file.emitter)?;
     let environment = match &file.environment {
         Some(e) => {
             let file = e.file.get_ref();
@@ -222,6 +223,7 @@ pub(crate) fn build_scene(
         sun,
         lights,
         ambient_lights,
+        emitters,
         bounds,
         pbr,
         probes,
