@@ -441,9 +441,10 @@ pub fn build<'a>(
         .terrain
         .as_ref()
         .map(|t| t as &dyn crate::passes::shadows::CascadeCaster);
-    let shadow_mask = passes
+    let sun_maps = passes
         .shadows
-        .add(&mut g, size, gbuffer, scene, culled, terrain);
+        .add_maps(&mut g, size, gbuffer, scene, culled, terrain);
+    let shadow_mask = sun_maps.and_then(|m| m.mask);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {
@@ -562,8 +563,29 @@ pub fn build<'a>(
     };
     let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let hdr = forward.hdr;
-    // E4: particles simulated (their state outlives the frame).
-    let _particles = passes.particles.add_simulate(&mut g);
+    // E4: particles simulated (their state outlives the frame), lit once
+    // each, drawn over the HDR after the forward surfaces.
+    let particle_inputs = crate::passes::particles::ParticleInputs {
+        lights: &passes.shadows.local_lights,
+        shadow_params: passes.shadows.mask_params(),
+        shadow_sampler: &passes.shadows.sampler,
+        sun_maps,
+        envmap: &passes.envmap,
+        env,
+    };
+    let hdr = match passes.particles.add_simulate(&mut g) {
+        Some(state) => {
+            let p = &passes.particles;
+            match p.add_light(&mut g, state, particle_inputs) {
+                Some(light) => {
+                    let buffers = (state, light);
+                    p.add_draw(ctx, &mut g, hdr, forward.depth, buffers, particle_inputs)
+                }
+                None => hdr,
+            }
+        }
+        None => hdr,
+    };
     // Transmissive surfaces wrote their depth: later readers see them.
     let gbuffer = GBuffer {
         depth: forward.depth,
@@ -592,7 +614,7 @@ pub fn build<'a>(
     };
     let out = g.import_texture("output", output);
     let out = match shown {
-        ViewBuffer::Final => {
+        ViewBuffer::Final | ViewBuffer::ParticleLighting => {
             let chain = AaFrame {
                 mode: aa.mode,
                 subsample: aa.subsample,

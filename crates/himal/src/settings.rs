@@ -35,11 +35,14 @@ pub enum ViewBuffer {
     Env(EnvView),
     /// Sky occlusion (L2: `sky-visibility`, `bent-normal`).
     SkyOcc(SkyOccView),
+    /// The final image with white particles: their lighting alone (E4,
+    /// `particle-lighting`).
+    ParticleLighting,
 }
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 26] = [
+    pub const NAMES: [&'static str; 27] = [
         "final",
         "albedo",
         "normal",
@@ -66,7 +69,13 @@ impl ViewBuffer {
         "lod",
         "ssdo",
         "ao-bleed",
+        "particle-lighting",
     ];
+
+    /// The tone-mapped image (the final one, or the particles' lighting in it).
+    pub fn is_final(self) -> bool {
+        matches!(self, ViewBuffer::Final | ViewBuffer::ParticleLighting)
+    }
 }
 
 impl std::str::FromStr for ViewBuffer {
@@ -100,6 +109,7 @@ impl std::str::FromStr for ViewBuffer {
             "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
+            "particle-lighting" => ViewBuffer::ParticleLighting,
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -208,6 +218,9 @@ pub struct FrameSettings {
     /// E4 particles: the scene's `[[emitter]]`s simulated, lit and drawn
     /// (on by default; scenes without emitters draw nothing either way).
     pub particles: bool,
+    /// E4: light the particles at each pixel instead of once per particle
+    /// (the reference of the per-particle light; off by default).
+    pub particles_per_pixel: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -283,6 +296,7 @@ impl FrameSettings {
             ambient_lights: true,
             wetness: 0.0,
             particles: true,
+            particles_per_pixel: false,
         }
     }
 }

@@ -65,7 +65,7 @@ pub(super) fn prepare_view(
         ViewBuffer::Shadow(v) => passes.shadows.view_pipeline(ctx, v, format).map(drop),
         ViewBuffer::Env(v) => passes.env_view.pipeline(ctx, v, format).map(drop),
         ViewBuffer::SkyOcc(v) => passes.skyocc.view_pipeline(ctx, v, format).map(drop),
-        ViewBuffer::Final => Ok(()),
+        ViewBuffer::Final | ViewBuffer::ParticleLighting => Ok(()),
     }
 }
 
@@ -104,7 +104,7 @@ pub struct DrawnFrame {
 impl Renderer {
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Final => DISPLAY_FORMAT,
+            v if v.is_final() => DISPLAY_FORMAT,
             _ if settings.raw => RAW_FORMAT,
             _ => DISPLAY_FORMAT,
         }
@@ -257,7 +257,8 @@ impl Renderer {
         let stable_motion_view = settings.aa_buffers.motion
             && settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Motion);
         let jitter = match settings.view {
-            ViewBuffer::Final | ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
+            v if v.is_final() => settings.aa.jitter(self.frame_index),
+            ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
             _ if stable_motion_view => settings.aa.jitter(self.frame_index),
             _ => [0.0, 0.0],
         };
@@ -338,6 +339,8 @@ impl Renderer {
         self.res.passes.forward.specular_aa = settings.specular_aa;
         self.res.passes.wet.amount = settings.wetness;
         self.res.passes.wet.specular_aa = settings.specular_aa;
+        self.res.passes.particles.per_pixel = settings.particles_per_pixel;
+        self.res.passes.particles.debug = settings.view == ViewBuffer::ParticleLighting;
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {
@@ -430,7 +433,7 @@ impl Renderer {
         }
         self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
-        if settings.aa.temporal() && settings.view == ViewBuffer::Final {
+        if settings.aa.temporal() && settings.view.is_final() {
             self.aa_last_jitter = jitter;
         }
         Ok(DrawnFrame {

@@ -1,7 +1,11 @@
 // Particles (TECHNIQUES E4): the buffers' structs shared by
 // particles.simulate, particles.light and forward.particles, the spawn
-// hash and one simulation step of one slot. CPU twin:
-// passes/particles/reference.rs (`step_slot`, `spawn_random`).
+// hash, one simulation step of one slot, and the light accumulation
+// (Ryse: per vertex, the lights' illuminance and their intensity-weighted
+// mean direction). CPU twin: passes/particles/reference.rs (`step_slot`,
+// `spawn_random`, `LightAcc`).
+#import color
+#import math
 
 // One slot of the particle buffer (twin: `ParticleGpu`).
 struct Particle {
@@ -99,4 +103,42 @@ fn particle_size(e: ParticleEmitter, age: f32) -> f32 {
 
 fn particle_color(e: ParticleEmitter, age: f32) -> vec4f {
     return mix(e.color_start, e.color_end, saturate(age / e.motion.x));
+}
+
+// A particle's incoming light (twin: `ParticleLightGpu`), written by
+// particles.light.
+struct ParticleLight {
+    // rgb: illuminance summed over the sun and the local lights (klux),
+    // w: sum of their luminances (the weights)
+    e: vec4f,
+    // xyz: the luminance-weighted sum of the unit directions to the lights
+    // (divide by e.w for their mean), w: the sun's visibility
+    d: vec4f,
+}
+
+// Adds illuminance `e` arriving from unit direction `l`.
+fn particle_light_add(acc: ParticleLight, e: vec3f, l: vec3f) -> ParticleLight {
+    let w = luminance(e);
+    var out = acc;
+    out.e += vec4f(e, w);
+    out.d += vec4f(l * w, 0.0);
+    return out;
+}
+
+// Diffuse radiance (kcd/m^2) of a white Lambertian particle with normal n:
+// E (n . d_mean) / pi. d_mean is not renormalised: its length (below 1
+// when the lights spread) keeps the sum exact for lights in front of n.
+fn particle_light_diffuse(acc: ParticleLight, n: vec3f) -> vec3f {
+    let d = acc.d.xyz / max(acc.e.w, 1e-12);
+    return acc.e.rgb * (saturate(dot(n, d)) / PI);
+}
+
+// The sprite's per-pixel normal (world): a hemisphere bulging toward the
+// camera over the quad's disc, corner c in [-1, 1]^2, r2 = |c|^2 < 1.
+// `view_m`: world -> view (its rows are the camera's axes).
+fn particle_sprite_normal(view_m: mat4x4f, c: vec2f, r2: f32) -> vec3f {
+    let right = vec3f(view_m[0].x, view_m[1].x, view_m[2].x);
+    let up = vec3f(view_m[0].y, view_m[1].y, view_m[2].y);
+    let back = vec3f(view_m[0].z, view_m[1].z, view_m[2].z);
+    return normalize(right * c.x + up * c.y + back * sqrt(max(1.0 - r2, 0.0)));
 }

@@ -10,15 +10,28 @@
 //! frame, the clock going back or jumping past the longest lifetime)
 //! pre-warms: the steps of the last lifetime at 30 Hz run in the same
 //! dispatch, so a single offline frame shows a settled plume.
-//! CPU twin: [`reference`]. Math and measurements: `docs/techniques/E4.md`.
+//!
+//! `particles.light` (Ryse "Particle Shading"): once per particle, the
+//! sun (shadowed by the static map, else its cascade, with R2's 4 x 4
+//! gather filter) and the local lights summed as illuminance with the
+//! intensity-weighted mean direction. `forward.particles` draws
+//! camera-facing quads premultiplied over the HDR target after the
+//! forward surfaces, shading that light with a per-pixel sprite normal,
+//! ambient from the environment cube's lowest specular mip (as diffuse)
+//! and a soft depth fade; its `PER_PIXEL` permutation evaluates the same
+//! sums per pixel (the reference of `--particle-lighting pixel`).
+//! CPU twins: [`reference`]. Math and measurements: `docs/techniques/E4.md`.
 
 pub mod reference;
 
 use glam::Vec3;
 
-use crate::gpu::pipeline::{Program, uniform_buffer};
+use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{BufferHandle, FrameGraph};
+use crate::graph::{BufferHandle, Fallback, FrameGraph, TextureHandle};
+use crate::passes::envmap::EnvMapPass;
+use crate::passes::lighting::HDR_FORMAT;
+use crate::passes::shadows::SunMaps;
 use crate::scene::EmitterDesc;
 
 /// The simulation's step when it pre-warms (s): the CLI's frame clock.
@@ -82,6 +95,17 @@ pub struct StepGpu {
     pub spawn: [u32; 4],
     /// Age of the first birth at the step's end (s), step length (s).
     pub time: [f32; 4],
+}
+
+/// One particle's light (`ParticleLight`, written by `particles.light`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ParticleLightGpu {
+    /// Illuminance summed over the lights (klux), sum of their luminances.
+    pub e: [f32; 4],
+    /// Luminance-weighted sum of the unit directions to the lights, the
+    /// sun's visibility.
+    pub d: [f32; 4],
 }
 
 /// `SimParams` of simulate.wgsl.
@@ -227,6 +251,24 @@ struct Buffers {
     steps: wgpu::Buffer,
     particles: wgpu::Buffer,
     counters: wgpu::Buffer,
+    light: wgpu::Buffer,
+}
+
+/// What the lighting and drawing of particles read from the other passes.
+#[derive(Clone, Copy)]
+pub struct ParticleInputs<'a> {
+    /// The local lights (`ShadowPass::local_lights`).
+    pub lights: &'a wgpu::Buffer,
+    /// The sun maps' matrices (`ShadowPass::mask_params`).
+    pub shadow_params: &'a wgpu::Buffer,
+    /// The maps' comparison sampler.
+    pub shadow_sampler: &'a wgpu::Sampler,
+    /// The sun's maps this frame (`None`: shadows off, particles unshadowed).
+    pub sun_maps: Option<SunMaps>,
+    /// The environment pass (its sampler).
+    pub envmap: &'a EnvMapPass,
+    /// This frame's filtered environment cube.
+    pub env: TextureHandle,
 }
 
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -244,12 +286,20 @@ pub struct ParticlesPass {
     pub sim: Simulation,
     simulate: Program,
     simulate_pipeline: wgpu::ComputePipeline,
+    light: Program,
+    light_pipeline: wgpu::ComputePipeline,
+    draw: Program,
     buffers: Option<Buffers>,
     /// Steps this frame (0: nothing planned).
     steps: usize,
     /// Particles on this frame (`FrameSettings::particles`, and the scene
     /// has emitters).
     pub active: bool,
+    /// Light each pixel instead of each particle (the reference of the
+    /// per-particle light; `FrameSettings::particle_lighting`).
+    pub per_pixel: bool,
+    /// Draw white particles (`--view particle-lighting`).
+    pub debug: bool,
 }
 
 impl ParticlesPass {
@@ -257,6 +307,9 @@ impl ParticlesPass {
     pub fn new(ctx: &GpuContext, emitters: &[EmitterDesc]) -> Result<Self, GpuError> {
         let simulate = Program::new(ctx, "passes/particles/simulate.wgsl")?;
         let simulate_pipeline = simulate.compute_pipeline(ctx, "cs_main", &[])?;
+        let light = Program::new(ctx, "passes/particles/light.wgsl")?;
+        let light_pipeline = light.compute_pipeline(ctx, "cs_main", &[])?;
+        let draw = Program::new(ctx, "passes/particles/draw.wgsl")?;
         let sim = Simulation::new(emitters);
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
@@ -273,15 +326,21 @@ impl ParticlesPass {
                 steps: storage(ctx, "particles.steps", steps * 32, none),
                 particles: storage(ctx, "particles.state", slots * 32, src),
                 counters: storage(ctx, "particles.counters", ne * 8, src),
+                light: storage(ctx, "particles.light", slots * 32, src),
             }
         });
         Ok(Self {
             sim,
             simulate,
             simulate_pipeline,
+            light,
+            light_pipeline,
+            draw,
             buffers,
             steps: 0,
             active: false,
+            per_pixel: false,
+            debug: false,
         })
     }
 
@@ -335,6 +394,107 @@ impl ParticlesPass {
             .side_effect()
             .dispatch([groups, 1, 1]);
         Some(written.buffer(particles))
+    }
+
+    /// `particles.light`: each live particle's light from the sun (its
+    /// shadow) and the local lights; returns the light buffer's version.
+    pub fn add_light<'a>(
+        &'a self,
+        g: &mut FrameGraph<'a>,
+        particles: BufferHandle,
+        inputs: ParticleInputs<'a>,
+    ) -> Option<BufferHandle> {
+        let b = self.buffers.as_ref().filter(|_| self.active)?;
+        let light = g.import_buffer("particles.light", &b.light);
+        let maps = inputs.sun_maps;
+        let far = Fallback::DepthFar;
+        let written = g
+            .compute("particles.light", &self.light)
+            .compute_pipeline(Ok(self.light_pipeline.clone()))
+            .read_buffer(
+                "particles",
+                particles,
+                crate::graph::BufferAccess::StorageRead,
+            )
+            .uniform("lights", inputs.lights)
+            .uniform("shadow_params", inputs.shadow_params)
+            .optional_array("cascades", maps.and_then(|m| m.cascades), far)
+            .optional_array("static_map", maps.and_then(|m| m.static_map), far)
+            .sampler("shadow_sampler", inputs.shadow_sampler)
+            .write_buffer("particle_light", light)
+            .dispatch([self.sim.slots().div_ceil(64), 1, 1]);
+        Some(written.buffer(light))
+    }
+
+    /// The draw pipeline: `per_pixel` lighting, `debug` white particles.
+    pub fn draw_pipeline(
+        &self,
+        ctx: &GpuContext,
+        per_pixel: bool,
+        debug: bool,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        let targets = [Some(wgpu::ColorTargetState {
+            format: HDR_FORMAT,
+            blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        let constants = [("PER_PIXEL", flag(per_pixel)), ("DEBUG", flag(debug))];
+        let mut spec = RenderSpec::fullscreen("forward.particles", &targets);
+        spec.constants = &constants;
+        self.draw.render_pipeline(ctx, &spec)
+    }
+
+    /// `forward.particles`: the live particles' quads over `hdr` (scene
+    /// `depth` read for the soft fade); returns the new HDR version.
+    pub fn add_draw<'a>(
+        &'a self,
+        ctx: &GpuContext,
+        g: &mut FrameGraph<'a>,
+        hdr: TextureHandle,
+        depth: TextureHandle,
+        (particles, light): (BufferHandle, BufferHandle),
+        inputs: ParticleInputs<'a>,
+    ) -> TextureHandle {
+        let Some(b) = self.buffers.as_ref().filter(|_| self.active) else {
+            return hdr;
+        };
+        let maps = inputs.sun_maps;
+        let far = Fallback::DepthFar;
+        let slots = self.sim.slots();
+        let storage_read = crate::graph::BufferAccess::StorageRead;
+        let written = g
+            .raster("forward.particles", &self.draw)
+            .pipeline(self.draw_pipeline(ctx, self.per_pixel, self.debug))
+            .read_buffer("particles", particles, storage_read)
+            .uniform("emitters", &b.emitters)
+            .read_buffer("particle_light", light, storage_read)
+            .read("depth", depth)
+            .read_cube("env_specular", inputs.env)
+            .sampler("env_sampler", &inputs.envmap.sampler)
+            .uniform("lights", inputs.lights)
+            .uniform("shadow_params", inputs.shadow_params)
+            .optional_array("cascades", maps.and_then(|m| m.cascades), far)
+            .optional_array("static_map", maps.and_then(|m| m.static_map), far)
+            .sampler("shadow_sampler", inputs.shadow_sampler)
+            .color(hdr, wgpu::LoadOp::Load)
+            .record(move |_, rp| {
+                rp.draw(0..6, 0..slots);
+                Ok(())
+            });
+        written.colors[0]
+    }
+
+    /// The light buffer read back (tests).
+    pub fn read_light(&self, ctx: &GpuContext) -> Result<Vec<ParticleLightGpu>, GpuError> {
+        let b = self
+            .buffers
+            .as_ref()
+            .ok_or_else(|| GpuError::Other("no emitters".into()))?;
+        let bytes = crate::gpu::read_buffer(ctx, &b.light)?;
+        Ok(bytemuck::pod_collect_to_vec(
+            &bytes[..self.sim.slots() as usize * 32],
+        ))
     }
 
     /// Runs this frame's simulation at `time_s` outside a frame (tests,

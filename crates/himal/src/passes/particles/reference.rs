@@ -1,10 +1,14 @@
-//! CPU twin of `particles.simulate` (shaders/particles.wgsl,
-//! `simulate.wgsl`): the same births, hashing, integration and deaths in
-//! f32, for the GPU-versus-CPU tests.
+//! CPU twins of `particles.simulate` (shaders/particles.wgsl,
+//! `simulate.wgsl`: the same births, hashing, integration and deaths in
+//! f32) and of `particles.light` (the light accumulation), for the
+//! GPU-versus-CPU tests.
 
 use glam::{Vec3, Vec4};
 
-use super::{EmitterGpu, ParticleGpu, SimFrame, StepGpu};
+use super::{EmitterGpu, ParticleGpu, ParticleLightGpu, SimFrame, StepGpu};
+use crate::passes::lighting::reference::{local_light_falloff, spot_cone};
+use crate::passes::post::reference::luminance;
+use crate::passes::shadows::local::LocalLightGpu;
 
 /// `particle_pcg` (PCG hash, Jarzynski and Olano 2020).
 pub fn pcg(v: u32) -> u32 {
@@ -98,4 +102,72 @@ pub fn simulate(particles: &mut [ParticleGpu], frame: &SimFrame) -> Vec<[u32; 2]
         }
     }
     counters
+}
+
+/// `local_light_illuminance` (shaders/shadow.wgsl): illuminance (klux) at
+/// `p` from `l` and the unit direction to it; `None` outside its range.
+pub fn local_illuminance(l: &LocalLightGpu, p: Vec3) -> Option<(Vec3, Vec3)> {
+    let to_l = Vec3::from_slice(&l.position_range[..3]) - p;
+    let d = to_l.length();
+    let range = l.position_range[3];
+    if d >= range || d <= 0.0 {
+        return None;
+    }
+    let dir = to_l / d;
+    let mut e = Vec3::from_slice(&l.color_kind[..3]) * local_light_falloff(d, range);
+    if l.color_kind[3] > 0.5 {
+        let axis = Vec3::from_slice(&l.direction_cos_outer[..3]);
+        e *= spot_cone((-dir).dot(axis), l.direction_cos_outer[3], l.params[0]);
+    }
+    Some((e, dir))
+}
+
+/// `particle_light_add`: illuminance `e` from unit direction `l`.
+pub fn light_add(acc: ParticleLightGpu, e: Vec3, l: Vec3) -> ParticleLightGpu {
+    let w = luminance(e);
+    let (e0, d0) = (Vec4::from(acc.e), Vec4::from(acc.d));
+    ParticleLightGpu {
+        e: (e0 + e.extend(w)).to_array(),
+        d: (d0 + (l * w).extend(0.0)).to_array(),
+    }
+}
+
+/// `particle_light_diffuse`: a white Lambertian particle's radiance
+/// (kcd/m²) with normal `n`, E (n . d_mean) / pi.
+pub fn light_diffuse(acc: &ParticleLightGpu, n: Vec3) -> Vec3 {
+    let d = Vec3::from_slice(&acc.d[..3]) / acc.e[3].max(1e-12);
+    Vec3::from_slice(&acc.e[..3]) * (n.dot(d).clamp(0.0, 1.0) / std::f32::consts::PI)
+}
+
+/// The per-pixel reference `light_diffuse` approximates: sum over the
+/// lights of E_k saturate(n . l_k) / pi.
+pub fn exact_diffuse(lights: &[(Vec3, Vec3)], n: Vec3) -> Vec3 {
+    lights
+        .iter()
+        .map(|(e, l)| *e * (n.dot(*l).clamp(0.0, 1.0) / std::f32::consts::PI))
+        .sum()
+}
+
+/// `particles.light` for one slot: the sun (`sun_e` klux toward
+/// `sun_dir`, visibility `vis`, the shadow filter's result) and `lights`.
+pub fn light_particle(
+    p: &ParticleGpu,
+    sun_dir: Vec3,
+    sun_e: Vec3,
+    vis: f32,
+    lights: &[LocalLightGpu],
+) -> ParticleLightGpu {
+    let mut acc = ParticleLightGpu::default();
+    if p.vel_alive[3] < 0.5 {
+        return acc;
+    }
+    let x = Vec3::from_slice(&p.pos_age[..3]);
+    acc = light_add(acc, sun_e * vis, sun_dir);
+    acc.d[3] = vis;
+    for l in lights {
+        if let Some((e, dir)) = local_illuminance(l, x) {
+            acc = light_add(acc, e, dir);
+        }
+    }
+    acc
 }
