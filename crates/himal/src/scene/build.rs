@@ -168,7 +168,6 @@ pub(crate) fn build_scene(
         .collect::<Result<Vec<_>>>()?;
     let lights = super::lights::build_lights(&ck, &file.light)?;
     let ambient_lights = super::ambient::build_ambient_lights(&ck, &file.ambient_light)?;
-    let emitters = super::emitters::build_emitters(&ck, &file.emitter)?;
     let environment = match &file.environment {
         Some(e) => {
             let file = e.file.get_ref();
@@ -214,6 +213,11 @@ pub(crate) fn build_scene(
     let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
         b.union(&o.swept_bounds(&meshes[o.mesh].bounds))
     });
+    let object_box = |name: &str| {
+        let o = objects.iter().find(|o| o.name == name)?;
+        Some(o.swept_bounds(&meshes[o.mesh].bounds))
+    };
+    let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
     Ok(Scene {
         path: Some(origin.into()),
         meshes,

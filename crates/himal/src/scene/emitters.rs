@@ -73,7 +73,12 @@ fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
     }
 }
 
-pub(crate) fn build_emitters(ck: &Checker, file: &[FileEmitter]) -> Result<Vec<EmitterDesc>> {
+/// `on`: the world box of a placed object by name (`None`: no such object).
+pub(crate) fn build_emitters(
+    ck: &Checker,
+    file: &[FileEmitter],
+    on: impl Fn(&str) -> Option<super::Aabb>,
+) -> Result<Vec<EmitterDesc>> {
     if let Some(e) = file.get(MAX_EMITTERS) {
         return Err(ck.err(
             &e.position.span(),
@@ -94,7 +99,22 @@ pub(crate) fn build_emitters(ck: &Checker, file: &[FileEmitter]) -> Result<Vec<E
             }
             None => format!("emitter{k}"),
         };
-        let position = ck.finite3(&e.position, "position")?;
+        let mut position = ck.finite3(&e.position, "position")?;
+        // Attached: `position` is an offset from the top centre of the object's box.
+        if let Some(name) = &e.on {
+            let b = on(name.get_ref()).ok_or_else(|| {
+                ck.err(
+                    &name.span(),
+                    format!("on = \"{}\": no [[object]] of that name", name.get_ref()),
+                )
+            })?;
+            let top = Vec3::new(
+                0.5 * (b.min.x + b.max.x),
+                b.max.y,
+                0.5 * (b.min.z + b.max.z),
+            );
+            position += top;
+        }
         let rate = ck.range(&e.rate, "rate", f32::MIN_POSITIVE, MAX_RATE)?;
         let lifetime = ck.range(&e.lifetime, "lifetime", 1e-3, MAX_LIFETIME_S)?;
         let velocity = ck.finite3_or(&e.velocity, "velocity", Vec3::ZERO)?;

@@ -181,6 +181,7 @@ pub(crate) struct FileLight {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileEmitter {
     pub name: Option<Spanned<String>>,
+    pub on: Option<Spanned<String>>,
     #[serde(deserialize_with = "exact3")]
     pub position: Spanned<[f32; 3]>,
     pub rate: Spanned<f32>,

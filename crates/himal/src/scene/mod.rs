@@ -132,6 +132,8 @@
 //! ```toml
 //! [[emitter]]
 //! name = "chimney"                 # optional, default emitterN; unique
+//! on = "house1_chimney"            # optional: position is then an offset from the
+//!                                  # top centre of this [[object]]'s box
 //! position = [0.0, 6.0, 0.0]       # where particles are born (m)
 //! rate = 40.0                      # particles per second, (0, 100000]
 //! lifetime = 6.0                   # seconds, (0, 30]

@@ -29,7 +29,7 @@ const SOFT_DISTANCE: f32 = 0.5;
 @group(0) @binding(6) var env_sampler: sampler;
 @group(0) @binding(7) var<uniform> lighting: Lighting;
 @group(0) @binding(8) var<storage, read> lights: LocalLights;
-@group(0) @binding(9) var<uniform> shadow_params: ShadowMaskParams;
+@group(0) @binding(9) var<storage, read> shadow_params: ShadowMaskParams;
 @group(0) @binding(10) var cascades: texture_depth_2d_array;
 @group(0) @binding(11) var static_map: texture_depth_2d_array;
 @group(0) @binding(12) var shadow_sampler: sampler_comparison;

@@ -12,7 +12,7 @@
 @group(0) @binding(0) var<uniform> lighting: Lighting;
 @group(0) @binding(1) var<storage, read> particles: array<Particle>;
 @group(0) @binding(2) var<storage, read> lights: LocalLights;
-@group(0) @binding(3) var<uniform> shadow_params: ShadowMaskParams;
+@group(0) @binding(3) var<storage, read> shadow_params: ShadowMaskParams;
 @group(0) @binding(4) var cascades: texture_depth_2d_array;
 @group(0) @binding(5) var static_map: texture_depth_2d_array;
 @group(0) @binding(6) var shadow_sampler: sampler_comparison;
