@@ -264,6 +264,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub particle_lighting: String,
+    /// E4 particles' ambient: sky (the sky irradiance the world's surfaces
+    /// get) or probe (the environment cube's lowest specular mip, Ryse's).
+    #[arg(
+        long,
+        default_value = "sky",
+        value_name = "sky|probe",
+        allow_hyphen_values = true
+    )]
+    pub particle_ambient: String,
     /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
     /// instance in a compute pass, drawn indirectly; the CPU path where the
     /// adapter cannot), cpu (per object on the render thread), off (the
@@ -434,6 +443,11 @@ impl PostArgs {
             "vertex" => false,
             "pixel" => true,
             other => bail!("--particle-lighting {other}: expected vertex or pixel"),
+        };
+        settings.particles_probe_ambient = match self.particle_ambient.as_str() {
+            "sky" => false,
+            "probe" => true,
+            other => bail!("--particle-ambient {other}: expected sky or probe"),
         };
         let pixels = |flag: &str, v: &str| -> Result<f32> {
             match v {

@@ -572,6 +572,7 @@ pub fn build<'a>(
         sun_maps,
         envmap: &passes.envmap,
         env,
+        ambient_lights: &passes.lighting.ambient_lights.buffer,
     };
     let hdr = match passes.particles.add_simulate(&mut g) {
         Some(state) => {

@@ -221,6 +221,10 @@ pub struct FrameSettings {
     /// E4: light the particles at each pixel instead of once per particle
     /// (the reference of the per-particle light; off by default).
     pub particles_per_pixel: bool,
+    /// E4: particles' ambient from the environment cube's lowest specular
+    /// mip (Ryse) instead of the sky irradiance the world's surfaces get
+    /// (off by default: the world's own term keeps particles consistent).
+    pub particles_probe_ambient: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -297,6 +301,7 @@ impl FrameSettings {
             wetness: 0.0,
             particles: true,
             particles_per_pixel: false,
+            particles_probe_ambient: false,
         }
     }
 }

@@ -328,10 +328,13 @@ fn frame_lights_particles_like_the_twin_and_draws_them() {
     println!(
         "particles.light: {alive} alive, {shadowed} in shadow, largest relative |GPU - CPU| {worst:.2e}"
     );
-    // Measured 0 on lavapipe (the same f32 sums in the same order); the
+    // Measured 5.8e-8 on lavapipe (f32 rounding of the same sums); the
     // sun's visibility is the GPU's (its filter is tested above).
     assert!(worst < 1e-4, "light kernel differs by {worst}");
-    assert!(alive > 100);
+    assert!(
+        alive > 100 && shadowed > 20,
+        "{alive} alive, {shadowed} shadowed"
+    );
     // The same frame without particles: they cover part of the image.
     let mut off_s = s.clone();
     off_s.particles = false;
@@ -343,4 +346,155 @@ fn frame_lights_particles_like_the_twin_and_draws_them() {
         .count();
     println!("pixels changed by the particles: {changed} of {}", on.len());
     assert!(changed > 200, "particles barely visible: {changed} pixels");
+}
+
+fn luminance(p: &[f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// Must-show (issue #21): a white diffuse particle and a white diffuse
+/// surface of the world side by side under sun, sky and a point light.
+#[test]
+fn a_white_particle_is_lit_like_a_white_wall() {
+    let (scene, camera) = common::scene_and_camera("particles_consistency", "front");
+    let mut r = common::renderer(&scene);
+    let (w, h) = (160usize, 120usize);
+    let mut s = common::raw_settings(&scene, (w as u32, h as u32), "lighting");
+    s.ao.mode = himal::passes::ao::AoMode::Off;
+    s.time_s = 1.0;
+    let sun = |r: &himal::Renderer| r.sky_light().map(|l| (l.sun_direction, l.sun_illuminance));
+    let on = common::render_rgba(&mut r, &camera, &s);
+    let (dir, e_sun) = sun(&r).expect("sun");
+    assert!(dir.z > 0.1, "the sun must light the +z faces: {dir}");
+    let mut off_s = s.clone();
+    off_s.particles = false;
+    let off = common::render_rgba(&mut r, &camera, &off_s);
+    // The particle's centre: the mean of the pixels it changed.
+    let changed: Vec<(usize, usize)> = (0..w * h)
+        .filter(|&i| (luminance(&on[i]) - luminance(&off[i])).abs() > 1e-3)
+        .map(|i| (i % w, i / w))
+        .collect();
+    assert!(
+        changed.len() > 20,
+        "particle covers {} pixels",
+        changed.len()
+    );
+    let n = changed.len() as f32;
+    let cx = (changed.iter().map(|p| p.0 as f32).sum::<f32>() / n).round() as usize;
+    let cy = (changed.iter().map(|p| p.1 as f32).sum::<f32>() / n).round() as usize;
+    // The wall point mirrored about x = 0 (the camera sits on that plane).
+    let (mx, my) = (w - 1 - cx, cy);
+    let mean = |img: &[[f32; 4]], x: usize, y: usize| {
+        let mut sum = 0.0;
+        for dy in 0..2 {
+            for dx in 0..2 {
+                sum += luminance(&img[(y + dy - 1) * w + x + dx - 1]);
+            }
+        }
+        sum / 4.0
+    };
+    let wall = mean(&on, mx, my);
+    let rel = |particle: f32| (particle - wall).abs() / wall;
+    let particle = mean(&on, cx, cy);
+    let mut probe_s = s.clone();
+    probe_s.particles_probe_ambient = true;
+    let probe = mean(&common::render_rgba(&mut r, &camera, &probe_s), cx, cy);
+    println!(
+        "sun {dir} {e_sun}: wall ({mx}, {my}) luminance {wall:.4}; particle ({cx}, {cy}) {particle:.4} \
+         ({:.2} %), with the probe's lowest mip as ambient {probe:.4} ({:.2} %)",
+        100.0 * rel(particle),
+        100.0 * rel(probe)
+    );
+    // The issue's bar: at most 5 % apart (measured 2.3 %: the particle gets
+    // the wall's sun, lamp and sky terms; what is left is the wall's rough
+    // specular). Ryse's probe-mip ambient lacks the SH's ground bounce of
+    // the sun here: measured 11.6 % darker, so it is not the default.
+    assert!(
+        rel(particle) <= 0.05,
+        "particle {particle} vs wall {wall}: {:.1} %",
+        100.0 * rel(particle)
+    );
+    assert!(probe < particle, "the probe ambient was not used");
+}
+
+/// Must-show (issue #21): per-particle lighting against the per-pixel
+/// reference of the same particles: the image difference (FLIP mean over
+/// the frame and over the particles' pixels) and the cost of the two
+/// lighting paths, frames interleaved. `HIMAL_PARTICLE_FRAMES` sets the
+/// timed frames per path (default 4).
+#[test]
+fn per_particle_light_against_per_pixel() {
+    let (scene, camera) = common::scene_and_camera("particles_smoke", "side");
+    let mut r = common::renderer(&scene);
+    let (w, h) = (160usize, 120usize);
+    let mut s = settings(&scene);
+    s.shadows.mode = himal::passes::shadows::ShadowMode::CsmStatic;
+    let frames: usize = std::env::var("HIMAL_PARTICLE_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    let rgb = |i: &[[f32; 4]]| i.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    let mut off_s = s.clone();
+    off_s.particles = false;
+    let off = common::render_rgba(&mut r, &camera, &off_s);
+    let (mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new());
+    let (mut vertex, mut pixel) = (Vec::new(), Vec::new());
+    // The same clock every frame: the particles do not move between paths.
+    for k in 0..2 * frames {
+        let per_pixel = k % 2 == 1;
+        let mut sk = s.clone();
+        sk.particles_per_pixel = per_pixel;
+        let f = r.render(&camera, &sk).expect("frame");
+        let ms: f64 = f
+            .timings
+            .iter()
+            .filter(|t| t.id == "particles.light" || t.id == "forward.particles")
+            .map(|t| t.gpu_ms)
+            .sum();
+        let img = f.image.to_rgba_f32().expect("rgba");
+        if per_pixel {
+            pixel_ms.push(ms);
+            pixel = img;
+        } else {
+            vertex_ms.push(ms);
+            vertex = img;
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (tv, tp) = (median(&mut vertex_ms), median(&mut pixel_ms));
+    let flip = himal_reference::flip::flip_map(
+        &rgb(&pixel),
+        &rgb(&vertex),
+        w,
+        h,
+        himal_reference::flip::DEFAULT_PIXELS_PER_DEGREE,
+    )
+    .expect("FLIP");
+    let covered: Vec<usize> = (0..w * h)
+        .filter(|&i| (0..3).any(|k| (pixel[i][k] - off[i][k]).abs() > 1.0 / 255.0))
+        .collect();
+    let mean_all = flip.iter().map(|&e| e as f64).sum::<f64>() / flip.len() as f64;
+    let mean_covered =
+        covered.iter().map(|&i| flip[i] as f64).sum::<f64>() / covered.len().max(1) as f64;
+    println!(
+        "per particle vs per pixel: FLIP mean {mean_all:.4} (frame), {mean_covered:.4} over {} particle pixels; \
+         lighting cost (particles.light + forward.particles) {tv:.3} ms vs {tp:.3} ms (forward.particles), \
+         ratio {:.2}, {frames} frames each, interleaved",
+        covered.len(),
+        tp / tv.max(1e-9)
+    );
+    assert!(
+        covered.len() > 200,
+        "particles cover {} pixels",
+        covered.len()
+    );
+    // Measured FLIP 0.0022 over the frame and over the particles' pixels
+    // (160 x 120, lavapipe); 0.05 would be a visible change of shading.
+    assert!(
+        mean_covered < 0.05,
+        "per-particle light is far from per-pixel: FLIP {mean_covered}"
+    );
 }

@@ -339,8 +339,11 @@ impl Renderer {
         self.res.passes.forward.specular_aa = settings.specular_aa;
         self.res.passes.wet.amount = settings.wetness;
         self.res.passes.wet.specular_aa = settings.specular_aa;
-        self.res.passes.particles.per_pixel = settings.particles_per_pixel;
-        self.res.passes.particles.debug = settings.view == ViewBuffer::ParticleLighting;
+        self.res.passes.particles.key = crate::passes::particles::ParticleKey {
+            per_pixel: settings.particles_per_pixel,
+            debug: settings.view == ViewBuffer::ParticleLighting,
+            probe_ambient: settings.particles_probe_ambient,
+        };
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {

@@ -321,11 +321,9 @@ impl Renderer {
                 passes.forward.pipeline(ctx, key)?;
             }
         }
-        // E4: per-particle and per-pixel lighting, white or not.
-        for per_pixel in [false, true] {
-            for debug in [false, true] {
-                passes.particles.draw_pipeline(ctx, per_pixel, debug)?;
-            }
+        // E4: per-particle and per-pixel lighting, white or not, either ambient.
+        for key in crate::passes::particles::ParticleKey::all() {
+            passes.particles.draw_pipeline(ctx, key)?;
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {

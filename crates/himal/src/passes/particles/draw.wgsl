@@ -13,9 +13,12 @@
 #import forward
 #import shadow
 #import view
+#import sh
+#import ambient_lights
 
 override PER_PIXEL: bool = false;
 override DEBUG: bool = false;
+override PROBE_AMBIENT: bool = false;
 
 // Fade distance of soft particles (m).
 const SOFT_DISTANCE: f32 = 0.5;
@@ -109,8 +112,12 @@ fn fs_main(in: ParticleOut) -> @location(0) vec4f {
     if (PER_PIXEL) {
         acc = light_at(in.world);
     }
-    let lowest = f32(textureNumLevels(env_specular) - 1u);
-    let ambient = textureSampleLevel(env_specular, env_sampler, n, lowest).rgb;
+    var ambient = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0)) / PI;
+    if (PROBE_AMBIENT) {
+        let lowest = f32(textureNumLevels(env_specular) - 1u);
+        ambient = textureSampleLevel(env_specular, env_sampler, n, lowest).rgb;
+    }
+    ambient *= ambient_scale(in.world);
     var albedo = in.color.rgb;
     if (DEBUG) {
         albedo = vec3f(1.0);

@@ -17,8 +17,9 @@
 //! intensity-weighted mean direction. `forward.particles` draws
 //! camera-facing quads premultiplied over the HDR target after the
 //! forward surfaces, shading that light with a per-pixel sprite normal,
-//! ambient from the environment cube's lowest specular mip (as diffuse)
-//! and a soft depth fade; its `PER_PIXEL` permutation evaluates the same
+//! the world's diffuse ambient (sky SH; or, `PROBE_AMBIENT`, Ryse's
+//! environment cube's lowest specular mip used as diffuse) and a soft
+//! depth fade; its `PER_PIXEL` permutation evaluates the same
 //! sums per pixel (the reference of `--particle-lighting pixel`).
 //! CPU twins: [`reference`]. Math and measurements: `docs/techniques/E4.md`.
 
@@ -269,6 +270,31 @@ pub struct ParticleInputs<'a> {
     pub envmap: &'a EnvMapPass,
     /// This frame's filtered environment cube.
     pub env: TextureHandle,
+    /// The ambient lights' volumes (`LightingPass::ambient_lights`).
+    pub ambient_lights: &'a wgpu::Buffer,
+}
+
+/// A permutation of `forward.particles`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ParticleKey {
+    /// Light each pixel (the reference) instead of each particle.
+    pub per_pixel: bool,
+    /// White particles (`--view particle-lighting`).
+    pub debug: bool,
+    /// Ambient from the environment cube's lowest specular mip (Ryse)
+    /// instead of the world's sky irradiance SH.
+    pub probe_ambient: bool,
+}
+
+impl ParticleKey {
+    /// Every permutation (pre-warm).
+    pub fn all() -> impl Iterator<Item = ParticleKey> {
+        (0..8u32).map(|k| ParticleKey {
+            per_pixel: k & 1 != 0,
+            debug: k & 2 != 0,
+            probe_ambient: k & 4 != 0,
+        })
+    }
 }
 
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -295,11 +321,9 @@ pub struct ParticlesPass {
     /// Particles on this frame (`FrameSettings::particles`, and the scene
     /// has emitters).
     pub active: bool,
-    /// Light each pixel instead of each particle (the reference of the
-    /// per-particle light; `FrameSettings::particle_lighting`).
-    pub per_pixel: bool,
-    /// Draw white particles (`--view particle-lighting`).
-    pub debug: bool,
+    /// This frame's permutation (per-pixel light, white, probe ambient;
+    /// from `FrameSettings`).
+    pub key: ParticleKey,
 }
 
 impl ParticlesPass {
@@ -339,8 +363,7 @@ impl ParticlesPass {
             buffers,
             steps: 0,
             active: false,
-            per_pixel: false,
-            debug: false,
+            key: ParticleKey::default(),
         })
     }
 
@@ -426,12 +449,11 @@ impl ParticlesPass {
         Some(written.buffer(light))
     }
 
-    /// The draw pipeline: `per_pixel` lighting, `debug` white particles.
+    /// The draw pipeline of permutation `key`.
     pub fn draw_pipeline(
         &self,
         ctx: &GpuContext,
-        per_pixel: bool,
-        debug: bool,
+        key: ParticleKey,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [Some(wgpu::ColorTargetState {
             format: HDR_FORMAT,
@@ -439,7 +461,11 @@ impl ParticlesPass {
             write_mask: wgpu::ColorWrites::ALL,
         })];
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        let constants = [("PER_PIXEL", flag(per_pixel)), ("DEBUG", flag(debug))];
+        let constants = [
+            ("PER_PIXEL", flag(key.per_pixel)),
+            ("DEBUG", flag(key.debug)),
+            ("PROBE_AMBIENT", flag(key.probe_ambient)),
+        ];
         let mut spec = RenderSpec::fullscreen("forward.particles", &targets);
         spec.constants = &constants;
         self.draw.render_pipeline(ctx, &spec)
@@ -465,7 +491,7 @@ impl ParticlesPass {
         let storage_read = crate::graph::BufferAccess::StorageRead;
         let written = g
             .raster("forward.particles", &self.draw)
-            .pipeline(self.draw_pipeline(ctx, self.per_pixel, self.debug))
+            .pipeline(self.draw_pipeline(ctx, self.key))
             .read_buffer("particles", particles, storage_read)
             .uniform("emitters", &b.emitters)
             .read_buffer("particle_light", light, storage_read)
@@ -477,6 +503,7 @@ impl ParticlesPass {
             .optional_array("cascades", maps.and_then(|m| m.cascades), far)
             .optional_array("static_map", maps.and_then(|m| m.static_map), far)
             .sampler("shadow_sampler", inputs.shadow_sampler)
+            .uniform("ambient_lights", inputs.ambient_lights)
             .color(hdr, wgpu::LoadOp::Load)
             .record(move |_, rp| {
                 rp.draw(0..6, 0..slots);
