@@ -8,7 +8,7 @@
 // (Ryse); no constant ambient. Soft particles: alpha fades over
 // SOFT_DISTANCE in front of the scene depth. DEBUG (--view
 // particle-lighting): white particles. CPU twin of the shading:
-// passes/particles/reference.rs `shade_particle`.
+// passes/particles/reference.rs `light_diffuse`, `sprite_normal`.
 #import particles
 #import forward
 #import shadow

@@ -171,3 +171,10 @@ pub fn light_particle(
     }
     acc
 }
+
+/// `particle_sprite_normal`: the sprite's normal at corner coordinates
+/// `c` (|c|² = `r2` < 1) under world-to-view matrix `view`.
+pub fn sprite_normal(view: glam::Mat4, c: glam::Vec2, r2: f32) -> Vec3 {
+    let row = |k: usize| Vec3::new(view.x_axis[k], view.y_axis[k], view.z_axis[k]);
+    (row(0) * c.x + row(1) * c.y + row(2) * (1.0 - r2).max(0.0).sqrt()).normalize()
+}
