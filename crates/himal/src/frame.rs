@@ -322,6 +322,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     passes.forward.sort(scene, camera.position);
     // E4: this frame's particle steps (births, pre-warm after a reset).
     (passes.particles).plan(ctx, settings.time_s, settings.particles);
+    passes.particles.sort(camera.position);
     Planned {
         shadows,
         sky_occlusion,

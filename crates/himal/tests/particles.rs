@@ -127,6 +127,19 @@ fn burst_respects_capacity_and_counts() {
 }
 
 #[test]
+fn emitters_draw_far_to_near() {
+    let ctx = shared_context().expect("GPU");
+    let scene = common::scene("particles_smoke");
+    let mut pass = ParticlesPass::new(ctx, &scene.emitters).expect("pass");
+    // Smoke (slots 0..256) at 9.0 m from this eye, the burst (256..384) at 10.9 m.
+    pass.sort(glam::Vec3::new(0.0, 4.0, 9.0));
+    assert_eq!(pass.draw_order(), &[256..384, 0..256]);
+    // From the other side the smoke is farther.
+    pass.sort(glam::Vec3::new(4.0, 0.5, -6.0));
+    assert_eq!(pass.draw_order(), &[0..256, 256..384]);
+}
+
+#[test]
 fn scene_file_checks_emitters() {
     let base = common::scene_text("particles_smoke");
     let bad = [

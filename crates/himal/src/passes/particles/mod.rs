@@ -318,6 +318,9 @@ pub struct ParticlesPass {
     buffers: Option<Buffers>,
     /// Steps this frame (0: nothing planned).
     steps: usize,
+    /// The emitters' slot ranges in draw order, far to near from the
+    /// camera ([`Self::sort`]).
+    order: Vec<std::ops::Range<u32>>,
     /// Particles on this frame (`FrameSettings::particles`, and the scene
     /// has emitters).
     pub active: bool,
@@ -362,9 +365,30 @@ impl ParticlesPass {
             draw,
             buffers,
             steps: 0,
+            order: Vec::new(),
             active: false,
             key: ParticleKey::default(),
         })
+    }
+
+    /// Orders the emitters far to near from `eye` (premultiplied "over"
+    /// composes back to front; inside an emitter the ring's order stays).
+    pub fn sort(&mut self, eye: Vec3) {
+        let mut first = 0u32;
+        let mut ranges: Vec<(f32, std::ops::Range<u32>)> = (self.sim.emitters.iter())
+            .map(|e| {
+                let r = first..first + e.capacity;
+                first += e.capacity;
+                (e.position.distance_squared(eye), r)
+            })
+            .collect();
+        ranges.sort_by(|a, b| b.0.total_cmp(&a.0));
+        self.order = ranges.into_iter().map(|(_, r)| r).collect();
+    }
+
+    /// The emitters' slot ranges in this frame's draw order.
+    pub fn draw_order(&self) -> &[std::ops::Range<u32>] {
+        &self.order
     }
 
     /// This frame's simulation at clock `time_s`: steps and parameters
@@ -487,7 +511,7 @@ impl ParticlesPass {
         };
         let maps = inputs.sun_maps;
         let far = Fallback::DepthFar;
-        let slots = self.sim.slots();
+        let order = &self.order;
         let storage_read = crate::graph::BufferAccess::StorageRead;
         let written = g
             .raster("forward.particles", &self.draw)
@@ -506,7 +530,9 @@ impl ParticlesPass {
             .uniform("ambient_lights", inputs.ambient_lights)
             .color(hdr, wgpu::LoadOp::Load)
             .record(move |_, rp| {
-                rp.draw(0..6, 0..slots);
+                for r in order {
+                    rp.draw(0..6, r.clone());
+                }
                 Ok(())
             });
         written.colors[0]
