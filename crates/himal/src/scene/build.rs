@@ -218,6 +218,13 @@ pub(crate) fn build_scene(
         Some(o.swept_bounds(&meshes[o.mesh].bounds))
     };
     let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
+    // E4: every particle slot holds its state and its light on the GPU.
+    if let Some(first) = file.emitter.first() {
+        let slots: u64 = emitters.iter().map(|e| e.capacity as u64).sum();
+        let bytes = charged.saturating_add(slots * super::emitters::SLOT_BYTES);
+        (budget.check("the scene with its emitters' particle slots", bytes))
+            .map_err(|m| ck.err(&first.position.span(), m))?;
+    }
     Ok(Scene {
         path: Some(origin.into()),
         meshes,

@@ -19,6 +19,8 @@ pub const MAX_EMITTERS: usize = 64;
 pub const MAX_LIFETIME_S: f32 = 30.0;
 /// Most particle slots of all emitters together (32 B each, plus 32 B of light).
 pub const MAX_PARTICLE_SLOTS: u32 = 1 << 18;
+/// GPU bytes of one particle slot (state and light, 32 B each).
+pub const SLOT_BYTES: u64 = 64;
 /// Highest emission rate (particles per second).
 pub const MAX_RATE: f32 = 100_000.0;
 
