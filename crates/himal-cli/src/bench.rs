@@ -116,10 +116,13 @@ pub fn group(pass: &str) -> &'static str {
     }
     // See-through surfaces are the talk's blended passes; the forward
     // additions to opaque surfaces (emission, unlit, layers) are lighting.
+    // E4's particles (simulation, lighting, quads) are blended effects too.
     if [
         "forward.blend",
         "forward.transmission",
         "forward.scene_color",
+        "forward.particles",
+        "particles.",
     ]
     .iter()
     .any(|p| pass.starts_with(p))
@@ -700,6 +703,9 @@ mod tests {
             "forward.transmission",
             "forward.scene_color",
             "forward.scene_color.mip3",
+            "forward.particles",
+            "particles.simulate",
+            "particles.light",
         ] {
             assert_eq!(group(pass), "blended", "{pass}");
         }

@@ -255,6 +255,33 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub wetness: f32,
+    /// E4 particles: the scene's `[[emitter]]`s simulated, lit and drawn
+    /// (scenes without emitters are unchanged either way).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub particles: String,
+    /// E4 particle lighting: once per particle (vertex, Ryse's) or at every
+    /// pixel (pixel, the reference it is measured against).
+    #[arg(
+        long,
+        default_value = "vertex",
+        value_name = "vertex|pixel",
+        allow_hyphen_values = true
+    )]
+    pub particle_lighting: String,
+    /// E4 particles' ambient: sky (the sky irradiance the world's surfaces
+    /// get) or probe (the environment cube's lowest specular mip, Ryse's).
+    #[arg(
+        long,
+        default_value = "sky",
+        value_name = "sky|probe",
+        allow_hyphen_values = true
+    )]
+    pub particle_ambient: String,
     /// V6 frustum culling of the G-buffer and the sun cascades: gpu (per
     /// instance in a compute pass, drawn indirectly; the CPU path where the
     /// adapter cannot), cpu (per object on the render thread), off (the
@@ -421,6 +448,17 @@ impl PostArgs {
             bail!("--wetness {}: must be in [0, 1]", self.wetness);
         }
         settings.wetness = self.wetness;
+        settings.particles = on_off("--particles", &self.particles)?;
+        settings.particles_per_pixel = match self.particle_lighting.as_str() {
+            "vertex" => false,
+            "pixel" => true,
+            other => bail!("--particle-lighting {other}: expected vertex or pixel"),
+        };
+        settings.particles_probe_ambient = match self.particle_ambient.as_str() {
+            "sky" => false,
+            "probe" => true,
+            other => bail!("--particle-ambient {other}: expected sky or probe"),
+        };
         let pixels = |flag: &str, v: &str| -> Result<f32> {
             match v {
                 "off" => Ok(0.0),

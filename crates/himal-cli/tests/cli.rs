@@ -520,6 +520,22 @@ fn animation_names_the_scenes_clips_and_at_is_checked() {
 }
 
 #[test]
+fn bad_particle_switches_are_rejected() {
+    fails_with(
+        &["render", "--particles", "maybe", "--size", "8x8"],
+        "--particles",
+    );
+    fails_with(
+        &["render", "--particle-lighting", "corner", "--size", "8x8"],
+        "--particle-lighting corner",
+    );
+    fails_with(
+        &["render", "--particle-ambient", "cube", "--size", "8x8"],
+        "--particle-ambient cube",
+    );
+}
+
+#[test]
 fn bad_ao_bleed_ambient_lights_and_wetness_are_rejected() {
     fails_with(
         &["render", "--ao-bleed", "maybe", "--size", "8x8"],

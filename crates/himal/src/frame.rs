@@ -82,6 +82,8 @@ pub struct Passes {
     pub skyocc: SkyOccPass,
     /// glTF emission and alpha-blended surfaces after lighting.
     pub forward: ForwardPass,
+    /// E4: the scene's particles, simulated, lit and drawn.
+    pub particles: crate::passes::particles::ParticlesPass,
     /// H2: the log-average luminance.
     pub luminance: LuminancePass,
     /// H2: light adaptation on the GPU.
@@ -128,6 +130,7 @@ impl Passes {
             sky: SkyPass::new(ctx)?,
             skyocc: SkyOccPass::new(ctx, scene)?,
             forward: ForwardPass::new(ctx)?,
+            particles: crate::passes::particles::ParticlesPass::new(ctx, &scene.emitters)?,
             luminance: LuminancePass::new(ctx)?,
             adapt: AdaptPass::new(ctx)?,
             bloom: BloomPass::new(ctx)?,
@@ -330,6 +333,9 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     (passes.lighting.ambient_lights).enable(&ctx.queue, settings.ambient_lights);
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);
+    // E4: this frame's particle steps (births, pre-warm after a reset).
+    (passes.particles).plan(ctx, settings.time_s, settings.particles);
+    passes.particles.sort(camera.position);
     Planned {
         shadows,
         sky_occlusion,
@@ -450,9 +456,10 @@ pub fn build<'a>(
         .terrain
         .as_ref()
         .map(|t| t as &dyn crate::passes::shadows::CascadeCaster);
-    let shadow_mask = passes
+    let sun_maps = passes
         .shadows
-        .add(&mut g, size, gbuffer, scene, culled, terrain);
+        .add_maps(&mut g, size, gbuffer, scene, culled, terrain);
+    let shadow_mask = sun_maps.and_then(|m| m.mask);
     // A3 on other buffers: the stabilised motion replaces the G-buffer's for
     // every later reader (AO TAA, resolve, `--view motion`).
     let stable_motion = match aa.buffers {
@@ -578,6 +585,30 @@ pub fn build<'a>(
     };
     let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let hdr = forward.hdr;
+    // E4: particles simulated (their state outlives the frame), lit once
+    // each, drawn over the HDR after the forward surfaces.
+    let particle_inputs = crate::passes::particles::ParticleInputs {
+        lights: &passes.shadows.local_lights,
+        shadow_params: passes.shadows.mask_params(),
+        shadow_sampler: &passes.shadows.sampler,
+        sun_maps,
+        envmap: &passes.envmap,
+        env,
+        ambient_lights: &passes.lighting.ambient_lights.buffer,
+    };
+    let hdr = match passes.particles.add_simulate(&mut g) {
+        Some(state) => {
+            let p = &passes.particles;
+            match p.add_light(&mut g, state, particle_inputs) {
+                Some(light) => {
+                    let buffers = (state, light);
+                    p.add_draw(ctx, &mut g, hdr, forward.depth, buffers, particle_inputs)
+                }
+                None => hdr,
+            }
+        }
+        None => hdr,
+    };
     // Transmissive surfaces wrote their depth: later readers see them.
     let gbuffer = GBuffer {
         depth: forward.depth,
@@ -606,7 +637,7 @@ pub fn build<'a>(
     };
     let out = g.import_texture("output", output);
     let out = match shown {
-        ViewBuffer::Final => {
+        ViewBuffer::Final | ViewBuffer::ParticleLighting => {
             let chain = AaFrame {
                 mode: aa.mode,
                 subsample: aa.subsample,

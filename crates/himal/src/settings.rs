@@ -35,11 +35,14 @@ pub enum ViewBuffer {
     Env(EnvView),
     /// Sky occlusion (L2: `sky-visibility`, `bent-normal`).
     SkyOcc(SkyOccView),
+    /// The final image with white particles: their lighting alone (E4,
+    /// `particle-lighting`).
+    ParticleLighting,
 }
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 26] = [
+    pub const NAMES: [&'static str; 27] = [
         "final",
         "albedo",
         "normal",
@@ -66,7 +69,13 @@ impl ViewBuffer {
         "lod",
         "ssdo",
         "ao-bleed",
+        "particle-lighting",
     ];
+
+    /// The tone-mapped image (the final one, or the particles' lighting in it).
+    pub fn is_final(self) -> bool {
+        matches!(self, ViewBuffer::Final | ViewBuffer::ParticleLighting)
+    }
 }
 
 impl std::str::FromStr for ViewBuffer {
@@ -100,6 +109,7 @@ impl std::str::FromStr for ViewBuffer {
             "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
+            "particle-lighting" => ViewBuffer::ParticleLighting,
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -209,6 +219,16 @@ pub struct FrameSettings {
     /// Wetness of up-facing surfaces in [0, 1] (`gbuffer.wet`, E3's
     /// screen-space filter example); 0: the pass does not run.
     pub wetness: f32,
+    /// E4 particles: the scene's `[[emitter]]`s simulated, lit and drawn
+    /// (on by default; scenes without emitters draw nothing either way).
+    pub particles: bool,
+    /// E4: light the particles at each pixel instead of once per particle
+    /// (the reference of the per-particle light; off by default).
+    pub particles_per_pixel: bool,
+    /// E4: particles' ambient from the environment cube's lowest specular
+    /// mip (Ryse) instead of the sky irradiance the world's surfaces get
+    /// (off by default: the world's own term keeps particles consistent).
+    pub particles_probe_ambient: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -284,6 +304,9 @@ impl FrameSettings {
             visibility_remap: false,
             ambient_lights: true,
             wetness: 0.0,
+            particles: true,
+            particles_per_pixel: false,
+            particles_probe_ambient: false,
         }
     }
 }

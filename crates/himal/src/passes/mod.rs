@@ -10,6 +10,7 @@ pub mod envmap;
 pub mod forward;
 pub mod gbuffer;
 pub mod lighting;
+pub mod particles;
 pub mod post;
 pub mod shadows;
 pub mod skin;

@@ -74,7 +74,7 @@ pub(super) fn prepare_view(
         ViewBuffer::Shadow(v) => passes.shadows.view_pipeline(ctx, v, format).map(drop),
         ViewBuffer::Env(v) => passes.env_view.pipeline(ctx, v, format).map(drop),
         ViewBuffer::SkyOcc(v) => passes.skyocc.view_pipeline(ctx, v, format).map(drop),
-        ViewBuffer::Final => Ok(()),
+        ViewBuffer::Final | ViewBuffer::ParticleLighting => Ok(()),
     }
 }
 
@@ -118,7 +118,7 @@ pub struct DrawnFrame {
 impl Renderer {
     fn output_format(settings: &FrameSettings) -> wgpu::TextureFormat {
         match settings.view {
-            ViewBuffer::Final => DISPLAY_FORMAT,
+            v if v.is_final() => DISPLAY_FORMAT,
             _ if settings.raw => RAW_FORMAT,
             _ => DISPLAY_FORMAT,
         }
@@ -273,7 +273,8 @@ impl Renderer {
         let stable_motion_view = settings.aa_buffers.motion
             && settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Motion);
         let jitter = match settings.view {
-            ViewBuffer::Final | ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
+            v if v.is_final() => settings.aa.jitter(self.frame_index),
+            ViewBuffer::Ao(_) => settings.aa.jitter(self.frame_index),
             _ if stable_motion_view => settings.aa.jitter(self.frame_index),
             _ => [0.0, 0.0],
         };
@@ -359,6 +360,11 @@ impl Renderer {
         self.res.passes.forward.specular_aa = settings.specular_aa;
         self.res.passes.wet.amount = settings.wetness;
         self.res.passes.wet.specular_aa = settings.specular_aa;
+        self.res.passes.particles.key = crate::passes::particles::ParticleKey {
+            per_pixel: settings.particles_per_pixel,
+            debug: settings.view == ViewBuffer::ParticleLighting,
+            probe_ambient: settings.particles_probe_ambient,
+        };
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {
@@ -463,7 +469,7 @@ impl Renderer {
         }
         self.res.passes.envmap.dirty = false;
         self.frame_index += 1;
-        if settings.aa.temporal() && settings.view == ViewBuffer::Final {
+        if settings.aa.temporal() && settings.view.is_final() {
             self.aa_last_jitter = jitter;
         }
         Ok(DrawnFrame {

@@ -234,6 +234,11 @@ impl Renderer {
         &self.res.passes.shadows
     }
 
+    /// The particles (E4): their simulation and buffers, for tests and tools.
+    pub fn particles(&self) -> &crate::passes::particles::ParticlesPass {
+        &self.res.passes.particles
+    }
+
     /// The world's terrain (`None`: a plain scene), for tests and tools.
     pub fn terrain(&self) -> Option<&crate::passes::terrain::TerrainPass> {
         self.res.passes.terrain.as_ref()
@@ -319,6 +324,10 @@ impl Renderer {
             for key in crate::passes::forward::ForwardKey::for_scene(&self.res.scene, specular_aa) {
                 passes.forward.pipeline(ctx, key)?;
             }
+        }
+        // E4: per-particle and per-pixel lighting, white or not, either ambient.
+        for key in crate::passes::particles::ParticleKey::all() {
+            passes.particles.draw_pipeline(ctx, key)?;
         }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {

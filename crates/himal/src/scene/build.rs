@@ -218,6 +218,18 @@ pub(crate) fn build_scene(
         .as_ref()
         .map(|f| build_cinematic_shadows(&ck, f))
         .transpose()?;
+    let object_box = |name: &str| {
+        let o = objects.iter().find(|o| o.name == name)?;
+        Some(o.swept_bounds(&meshes[o.mesh].bounds))
+    };
+    let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
+    // E4: every particle slot holds its state and its light on the GPU.
+    if let Some(first) = file.emitter.first() {
+        let slots: u64 = emitters.iter().map(|e| e.capacity as u64).sum();
+        let bytes = charged.saturating_add(slots * super::emitters::SLOT_BYTES);
+        (budget.check("the scene with its emitters' particle slots", bytes))
+            .map_err(|m| ck.err(&first.position.span(), m))?;
+    }
     Ok(Scene {
         path: Some(origin.into()),
         meshes,
@@ -228,6 +240,7 @@ pub(crate) fn build_scene(
         sun,
         lights,
         ambient_lights,
+        emitters,
         bounds,
         pbr,
         probes,

@@ -24,6 +24,8 @@ pub(crate) struct FileScene {
     pub ambient_light: Vec<FileAmbientLight>,
     #[serde(default)]
     pub probe: Vec<FileProbe>,
+    #[serde(default)]
+    pub emitter: Vec<FileEmitter>,
     pub environment: Option<FileEnvironment>,
     pub cinematic_shadows: Option<FileCinematicShadows>,
     #[serde(default)]
@@ -173,6 +175,30 @@ pub(crate) struct FileLight {
     pub inner_angle: Option<Spanned<f32>>,
     pub outer_angle: Option<Spanned<f32>>,
     pub shadow: Option<bool>,
+}
+
+/// `[[emitter]]`: a particle emitter (E4, `scene/emitters.rs`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileEmitter {
+    pub name: Option<Spanned<String>>,
+    pub on: Option<Spanned<String>>,
+    #[serde(deserialize_with = "exact3")]
+    pub position: Spanned<[f32; 3]>,
+    pub rate: Spanned<f32>,
+    pub lifetime: Spanned<f32>,
+    #[serde(default, deserialize_with = "exact3_opt")]
+    pub velocity: Option<Spanned<[f32; 3]>>,
+    pub spread: Option<Spanned<f32>>,
+    pub gravity: Option<Spanned<f32>>,
+    pub wind: Option<Spanned<f32>>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    pub size: Option<Spanned<[f32; 2]>>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    pub color_start: Option<Spanned<[f32; 4]>>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    pub color_end: Option<Spanned<[f32; 4]>>,
+    pub capacity: Option<Spanned<i64>>,
 }
 
 /// `[[ambient_light]]`: a multiplier on the ambient light inside a box or
@@ -370,6 +396,19 @@ fn exact3<'de, D: Deserializer<'de>>(d: D) -> Result<Spanned<[f32; 3]>, D::Error
 
 fn exact3_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Spanned<[f32; 3]>>, D::Error> {
     exact3(d).map(Some)
+}
+
+/// `[a, b, ..]` with exactly `N` numbers.
+fn exact_opt<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> Result<Option<Spanned<[f32; N]>>, D::Error> {
+    let v = Spanned::<Vec<f32>>::deserialize(d)?;
+    let span = v.span();
+    let n = v.get_ref().len();
+    let want = format!("{N} numbers");
+    <[f32; N]>::try_from(v.into_inner())
+        .map(|a| Some(Spanned::new(span, a)))
+        .map_err(|_| de::Error::invalid_length(n, &want.as_str()))
 }
 
 /// `time = "HH:MM"` or `time = 14.5` (hours); range checked later.

@@ -133,12 +133,33 @@
 //! ```
 //! Overlapping volumes multiply.
 //!
+//! `[[emitter]]` (E4 particles, `passes/particles/`; at most
+//! [`MAX_EMITTERS`] = 64):
+//!
+//! ```toml
+//! [[emitter]]
+//! name = "chimney"                 # optional, default emitterN; unique
+//! on = "house1_chimney"            # optional: position is then an offset from the
+//!                                  # top centre of this [[object]]'s box
+//! position = [0.0, 6.0, 0.0]       # where particles are born (m)
+//! rate = 40.0                      # particles per second, (0, 100000]
+//! lifetime = 6.0                   # seconds, (0, 30]
+//! velocity = [0.0, 0.8, 0.0]       # m/s, default 0
+//! spread = 0.3                     # m/s added per axis in [-spread, spread], default 0
+//! gravity = -0.05                  # multiple of 9.81 m/s^2 down, [-10, 10] (negative rises), default 0
+//! wind = 0.5                       # 1/s: how fast the velocity follows the wind, [0, 100], default 1
+//! size = [0.4, 2.5]                # quad edge at birth and death (m), default [0.5, 0.5]
+//! color_start = [0.5, 0.5, 0.5, 0.6]  # linear RGBA, default white
+//! color_end = [0.6, 0.6, 0.6, 0.0]    # default color_start with alpha 0
+//! capacity = 4096                  # particle slots, [1, 65536]; births beyond replace the oldest
+//! ```
+//!
 //! `[world]`: instead of objects, the file describes a streamed open world
 //! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
 //! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
 //! cameras come first (the default view), then the world's own (`air`,
 //! `river`, `village`, `peak`, `grazing`, `top`) except those they rename;
-//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[gltf]]` and
+//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[emitter]]`, `[[gltf]]` and
 //! `[environment]` are errors. An empty `[world]` is the built-in world.
 //! Every key is optional except `height_map.file` and `.max`; defaults shown:
 //!
@@ -196,6 +217,7 @@ mod build;
 mod build_vegetation;
 pub mod builtin;
 mod camera;
+mod emitters;
 mod environment;
 mod error;
 mod file;
@@ -219,6 +241,10 @@ use crate::budget::MemoryBudget;
 
 pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
+pub use emitters::{
+    DEFAULT_EMITTER_CAPACITY, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS, MAX_LIFETIME_S,
+    MAX_PARTICLE_SLOTS,
+};
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
 pub use heightfield::{HeightGrid, TerrainLayer, TerrainNoise};
@@ -644,6 +670,8 @@ pub struct Scene {
     pub lights: Vec<LightDesc>,
     /// Multipliers on the ambient light inside volumes (`[[ambient_light]]`).
     pub ambient_lights: Vec<AmbientLightDesc>,
+    /// Particle emitters (`[[emitter]]`, E4).
+    pub emitters: Vec<EmitterDesc>,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -773,6 +801,7 @@ impl Scene {
             pbr: asset.pbr,
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
             ambient_lights: Vec::new(),
+            emitters: Vec::new(),
             probes: Vec::new(),
             environment: None,
         })

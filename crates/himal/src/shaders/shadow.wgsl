@@ -180,3 +180,88 @@ fn shadow_cube_face(d: vec3f) -> u32 {
     }
     return select(5u, 4u, d.z > 0.0);
 }
+
+// R2 (Ryse, particle shadows): the 4 x 4 texels around `uv`, each compared
+// (stored >= depth_ref is lit), weighted per axis by a 3-tap binomial
+// shifted bilinearly, (1 - f, 2 - f, 1 + f, f) / 4: a smooth Gaussian-like
+// filter from four textureGatherCompare calls. CPU twin:
+// passes/shadows/reference.rs `DepthMap::gather_4x4`.
+fn shadow_gather_4x4(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
+                     uv: vec2f, depth_ref: f32) -> f32 {
+    let size = vec2f(textureDimensions(map));
+    let st = uv * size - 0.5;
+    let b = floor(st);
+    let f = st - b;
+    let wx = vec4f(1.0 - f.x, 2.0 - f.x, 1.0 + f.x, f.x) * 0.25;
+    let wy = vec4f(1.0 - f.y, 2.0 - f.y, 1.0 + f.y, f.y) * 0.25;
+    var v = 0.0;
+    for (var j = 0; j < 2; j++) {
+        for (var i = 0; i < 2; i++) {
+            // The corner between texels b + 2i - 1 and b + 2i (per axis):
+            // x = (0, 1), y = (1, 1), z = (1, 0), w = (0, 0) of that quad.
+            let g = textureGatherCompare(map, cmp, (b + vec2f(f32(2 * i), f32(2 * j))) / size, layer, depth_ref);
+            let x0 = 2 * i;
+            let y0 = 2 * j;
+            v += wx[x0] * wy[y0] * g.w + wx[x0 + 1] * wy[y0] * g.z
+                + wx[x0] * wy[y0 + 1] * g.x + wx[x0 + 1] * wy[y0 + 1] * g.y;
+        }
+    }
+    return v;
+}
+
+// The sun's visibility at a point without a surface (a particle, E4): the
+// map its view distance `dist` reads (static map, else its cascade), no
+// normal offset, the mask's depth bias, the 4 x 4 gather filter (R2).
+fn shadow_point_visibility(params: ShadowMaskParams, cascades: texture_depth_2d_array,
+                           static_map: texture_depth_2d_array, cmp: sampler_comparison,
+                           p: vec3f, dist: f32) -> f32 {
+    let i = shadow_map_index(params, dist);
+    if (i < 0) {
+        return 1.0;
+    }
+    var m = params.static_map;
+    var texel = params.static_info.y;
+    var range = params.static_info.z;
+    if (i < 4) {
+        m = params.cascades[i];
+        texel = params.texel[i];
+        range = params.depth_range[i];
+    }
+    let c = m * vec4f(p, 1.0);
+    let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
+    if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
+        return 1.0;
+    }
+    let depth_ref = c.z - params.filter_params.z * texel / range;
+    if (i == 4) {
+        return shadow_gather_4x4(static_map, cmp, 0, uv, depth_ref);
+    }
+    return shadow_gather_4x4(cascades, cmp, i, uv, depth_ref);
+}
+
+// Illuminance (klux) at p from local light `l` and the unit direction to
+// it; `lit` false outside its range (S3: windowed inverse square, spot cone).
+struct LocalIlluminance {
+    e: vec3f,
+    dir: vec3f,
+    lit: bool,
+}
+
+fn local_light_illuminance(l: LocalLight, p: vec3f) -> LocalIlluminance {
+    var out: LocalIlluminance;
+    out.lit = false;
+    let to_l = l.position_range.xyz - p;
+    let d = length(to_l);
+    if (d >= l.position_range.w || d <= 0.0) {
+        return out;
+    }
+    let dir = to_l / d;
+    var e = l.color_kind.rgb * local_light_falloff(d, l.position_range.w);
+    if (l.color_kind.w > 0.5) {
+        e *= spot_cone(dot(-dir, l.direction_cos_outer.xyz), l.direction_cos_outer.w, l.params.x);
+    }
+    out.e = e;
+    out.dir = dir;
+    out.lit = true;
+    return out;
+}

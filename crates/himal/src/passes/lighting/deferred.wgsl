@@ -110,16 +110,12 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
     var c = vec3f(0.0);
     for (var k = 0u; k < lights.count.x; k = k + 1u) {
         let l = lights.lights[k];
-        let to_l = l.position_range.xyz - p;
-        let d = length(to_l);
-        if (d >= l.position_range.w || d <= 0.0) {
+        let li = local_light_illuminance(l, p);
+        if (!li.lit) {
             continue;
         }
-        let dir = to_l / d;
-        var e = l.color_kind.rgb * local_light_falloff(d, l.position_range.w);
-        if (l.color_kind.w > 0.5) {
-            e *= spot_cone(dot(-dir, l.direction_cos_outer.xyz), l.direction_cos_outer.w, l.params.x);
-        }
+        let dir = li.dir;
+        var e = li.e;
         let channel = u32(l.params.y);
         if (channel > 0u) {
             e *= mask[channel];

@@ -25,6 +25,23 @@ pub struct LocalLightGpu {
     pub params: [f32; 4],
 }
 
+impl LocalLightGpu {
+    /// `l` as the GPU reads it, unshadowed (no mask channel, no tile).
+    pub fn new(l: &LightDesc) -> Self {
+        Self {
+            position_range: l.position.extend(l.range).to_array(),
+            color_kind: (l.color * l.intensity * 1e-3)
+                .extend(if l.kind == LightKind::Spot { 1.0 } else { 0.0 })
+                .to_array(),
+            direction_cos_outer: l
+                .direction
+                .extend(l.outer_deg.to_radians().cos())
+                .to_array(),
+            params: [l.inner_deg.to_radians().cos(), 0.0, 0.0, 0.0],
+        }
+    }
+}
+
 /// Twin of `ShadowTile` in `shaders/shadow.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -114,20 +131,7 @@ pub fn plan(
     scene: &SceneGpu,
     skip_casterless: bool,
 ) -> LocalPlan {
-    let mut out: Vec<LocalLightGpu> = lights
-        .iter()
-        .map(|l| LocalLightGpu {
-            position_range: l.position.extend(l.range).to_array(),
-            color_kind: (l.color * l.intensity * 1e-3)
-                .extend(if l.kind == LightKind::Spot { 1.0 } else { 0.0 })
-                .to_array(),
-            direction_cos_outer: l
-                .direction
-                .extend(l.outer_deg.to_radians().cos())
-                .to_array(),
-            params: [l.inner_deg.to_radians().cos(), 0.0, 0.0, 0.0],
-        })
-        .collect();
+    let mut out: Vec<LocalLightGpu> = lights.iter().map(LocalLightGpu::new).collect();
     let mut plan = LocalPlan {
         lights: Vec::new(),
         tiles: Vec::new(),

@@ -35,6 +35,7 @@ pub use cascades::{CASCADES, ShadowFit};
 use casters::{Casters, DrawLists};
 use depth::{DepthPipelines, ShadowViewGpu};
 use local::{LocalLightGpu, Projector, ShadowTileGpu};
+pub use nodes::SunMaps;
 pub use settings::{ShadowMode, ShadowSettings, ShadowView};
 
 /// Geometry outside the scene's objects that casts into the sun cascades
@@ -317,6 +318,12 @@ impl ShadowPass {
         format: wgpu::TextureFormat,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         view_pipeline(ctx, &self.view_program, "shadows.view", view.id(), format)
+    }
+
+    /// The mask's parameters (`ShadowMaskParams`: every sun map's
+    /// matrix and the filter), written by [`Self::update`].
+    pub fn mask_params(&self) -> &wgpu::Buffer {
+        &self.params
     }
 
     /// S2 follows a streamed world: the static map becomes a square of

@@ -24,6 +24,17 @@ struct DepthNode<'s, 'a> {
 }
 use crate::passes::common::view_node;
 
+/// The sun's shadow textures of one frame.
+#[derive(Clone, Copy, Debug)]
+pub struct SunMaps {
+    /// The shadow mask (R sun, GBA local lights).
+    pub mask: Option<TextureHandle>,
+    /// The cascades (depth array), when any was rendered.
+    pub cascades: Option<TextureHandle>,
+    /// The static map shown (S2), when there is one.
+    pub static_map: Option<TextureHandle>,
+}
+
 /// Graph names of the two static maps.
 const STATIC_NAMES: [&str; 2] = ["shadow.static0", "shadow.static1"];
 
@@ -40,6 +51,20 @@ impl ShadowPass {
         culled: Option<Culled<'a>>,
         extra: Option<&'a dyn CascadeCaster>,
     ) -> Option<TextureHandle> {
+        (self.add_maps(graph, size, gbuffer, scene, culled, extra)).and_then(|m| m.mask)
+    }
+
+    /// [`Self::add`], also returning the sun's maps it rendered or reads
+    /// (E4 particles look them up themselves).
+    pub fn add_maps<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        size: (u32, u32),
+        gbuffer: GBuffer,
+        scene: &'a SceneGpu,
+        culled: Option<Culled<'a>>,
+        extra: Option<&'a dyn CascadeCaster>,
+    ) -> Option<SunMaps> {
         let plan = self.plan.as_ref()?;
         let n = self.cascade_resolution;
         let mut desc = TextureDesc::new_2d(n, n, SHADOW_FORMAT);
@@ -190,7 +215,11 @@ impl ShadowPass {
                 }
                 Ok(())
             });
-        written.colors.first().copied()
+        Some(SunMaps {
+            mask: written.colors.first().copied(),
+            cascades,
+            static_map,
+        })
     }
 
     /// One sun view's depth node ([`DepthNode`]); returns the map's new version.

@@ -86,4 +86,22 @@ impl DepthMap<'_> {
         }
         (ring + POISSON_16[4..].iter().map(tap).sum::<f32>()) / 16.0
     }
+
+    /// `shadow_gather_4x4` (R2): the 4 x 4 texels around `uv` compared and
+    /// weighted per axis by (1 - f, 2 - f, 1 + f, f) / 4.
+    pub fn gather_4x4(&self, uv: Vec2, depth_ref: f32) -> f32 {
+        let p = uv * Vec2::new(self.width as f32, self.height as f32) - 0.5;
+        let (bx, by) = (p.x.floor(), p.y.floor());
+        let (fx, fy) = (p.x - bx, p.y - by);
+        let w = |f: f32| [1.0 - f, 2.0 - f, 1.0 + f, f].map(|x| x * 0.25);
+        let (wx, wy) = (w(fx), w(fy));
+        let mut v = 0.0;
+        for (j, wy) in wy.iter().enumerate() {
+            for (i, wx) in wx.iter().enumerate() {
+                let (x, y) = (bx as i64 + i as i64 - 1, by as i64 + j as i64 - 1);
+                v += wx * wy * self.compare(x, y, depth_ref);
+            }
+        }
+        v
+    }
 }

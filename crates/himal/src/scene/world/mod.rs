@@ -259,6 +259,7 @@ impl World {
             sun: self.sun.clone(),
             lights: Vec::new(),
             ambient_lights: Vec::new(),
+            emitters: Vec::new(),
             bounds: Aabb::new(Vec3::new(-half, bottom, -half), Vec3::new(half, top, half)),
             pbr: Default::default(),
             probes: Vec::new(),

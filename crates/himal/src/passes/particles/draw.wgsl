@@ -1,0 +1,127 @@
+// forward.particles (E4): camera-facing quads of the live particles, after
+// the deferred lighting and the forward surfaces, premultiplied over the
+// HDR target (One, OneMinusSrcAlpha). One instance per slot (dead slots
+// give a degenerate quad). Shading: the particle's accumulated light
+// (particles.light; PER_PIXEL: the same sums at each pixel, the
+// reference) with a per-pixel sphere-like sprite normal, plus ambient from
+// the environment cube's lowest (roughest) specular mip used as diffuse
+// (Ryse); no constant ambient. Soft particles: alpha fades over
+// SOFT_DISTANCE in front of the scene depth. DEBUG (--view
+// particle-lighting): white particles. CPU twin of the shading:
+// passes/particles/reference.rs `light_diffuse`, `sprite_normal`.
+#import particles
+#import forward
+#import shadow
+#import view
+#import sh
+#import ambient_lights
+
+override PER_PIXEL: bool = false;
+override DEBUG: bool = false;
+override PROBE_AMBIENT: bool = false;
+
+// Fade distance of soft particles (m).
+const SOFT_DISTANCE: f32 = 0.5;
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> particles: array<Particle>;
+@group(0) @binding(2) var<storage, read> emitters: array<ParticleEmitter>;
+@group(0) @binding(3) var<storage, read> particle_light: array<ParticleLight>;
+@group(0) @binding(4) var depth: texture_depth_2d;
+@group(0) @binding(5) var env_specular: texture_cube<f32>;
+@group(0) @binding(6) var env_sampler: sampler;
+@group(0) @binding(7) var<uniform> lighting: Lighting;
+@group(0) @binding(8) var<storage, read> lights: LocalLights;
+@group(0) @binding(9) var<storage, read> shadow_params: ShadowMaskParams;
+@group(0) @binding(10) var cascades: texture_depth_2d_array;
+@group(0) @binding(11) var static_map: texture_depth_2d_array;
+@group(0) @binding(12) var shadow_sampler: sampler_comparison;
+
+struct ParticleOut {
+    @builtin(position) clip: vec4f,
+    @location(0) world: vec3f,
+    // the quad's corner in [-1, 1]^2
+    @location(1) corner: vec2f,
+    @location(2) color: vec4f,
+    @location(3) @interpolate(flat) slot: u32,
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) slot: u32) -> ParticleOut {
+    var out: ParticleOut;
+    let p = particles[slot];
+    out.slot = slot;
+    if (p.vel_alive.w < 0.5) {
+        out.clip = vec4f(2.0, 2.0, 2.0, 1.0);
+        return out;
+    }
+    var ei = 0u;
+    for (var k = 0u; k < arrayLength(&emitters); k++) {
+        if (slot >= emitters[k].slots.x) {
+            ei = k;
+        }
+    }
+    let e = emitters[ei];
+    let corners = array<vec2f, 6>(vec2f(-1.0, -1.0), vec2f(1.0, -1.0), vec2f(1.0, 1.0),
+                                  vec2f(-1.0, -1.0), vec2f(1.0, 1.0), vec2f(-1.0, 1.0));
+    let c = corners[v];
+    let right = vec3f(view.view[0].x, view.view[1].x, view.view[2].x);
+    let up = vec3f(view.view[0].y, view.view[1].y, view.view[2].y);
+    let half_size = 0.5 * particle_size(e, p.pos_age.w);
+    out.world = p.pos_age.xyz + (right * c.x + up * c.y) * half_size;
+    out.clip = view.view_proj * vec4f(out.world, 1.0);
+    out.corner = c;
+    out.color = particle_color(e, p.pos_age.w);
+    return out;
+}
+
+// The per-pixel reference: particles.light's sums at this point.
+fn light_at(x: vec3f) -> ParticleLight {
+    var acc = ParticleLight(vec4f(0.0), vec4f(0.0));
+    let dist = dot(x - view.camera_position.xyz, shadow_params.camera_forward.xyz);
+    let vis = shadow_point_visibility(shadow_params, cascades, static_map, shadow_sampler, x, dist);
+    acc = particle_light_add(acc, lighting.sun_illuminance.rgb * vis, lighting.sun_direction.xyz);
+    for (var k = 0u; k < lights.count.x; k++) {
+        let li = local_light_illuminance(lights.lights[k], x);
+        if (li.lit) {
+            acc = particle_light_add(acc, li.e, li.dir);
+        }
+    }
+    return acc;
+}
+
+@fragment
+fn fs_main(in: ParticleOut) -> @location(0) vec4f {
+    let r2 = dot(in.corner, in.corner);
+    if (r2 >= 1.0) {
+        discard;
+    }
+    // Soft particles: the scene's view distance behind this fragment.
+    let scene_depth = textureLoad(depth, vec2i(in.clip.xy), 0);
+    var fade = 1.0;
+    if (scene_depth > 0.0) {
+        let behind = view_distance(view, scene_depth) - view_distance(view, in.clip.z);
+        fade = saturate(behind / SOFT_DISTANCE);
+    }
+    let alpha = in.color.a * (1.0 - r2) * fade;
+    if (alpha <= 0.0) {
+        discard;
+    }
+    let n = particle_sprite_normal(view.view, in.corner, r2);
+    var acc = particle_light[in.slot];
+    if (PER_PIXEL) {
+        acc = light_at(in.world);
+    }
+    var ambient = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0)) / PI;
+    if (PROBE_AMBIENT) {
+        let lowest = f32(textureNumLevels(env_specular) - 1u);
+        ambient = textureSampleLevel(env_specular, env_sampler, n, lowest).rgb;
+    }
+    ambient *= ambient_scale(in.world);
+    var albedo = in.color.rgb;
+    if (DEBUG) {
+        albedo = vec3f(1.0);
+    }
+    let c = albedo * (particle_light_diffuse(acc, n) + ambient);
+    return vec4f(c * alpha, alpha);
+}

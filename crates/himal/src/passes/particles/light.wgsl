@@ -1,0 +1,44 @@
+// particles.light (E4, Ryse "Particle Shading"): once per particle, the
+// sun (its shadow from the static map, else its cascade, through a 4 x 4
+// gather filter: R2) and every local light accumulated as illuminance and
+// the intensity-weighted mean direction. forward.particles shades the
+// quad with it and a per-pixel normal. CPU twin:
+// passes/particles/reference.rs `light_particle`.
+#import particles
+#import forward
+#import shadow
+#import view
+
+@group(0) @binding(0) var<uniform> lighting: Lighting;
+@group(0) @binding(1) var<storage, read> particles: array<Particle>;
+@group(0) @binding(2) var<storage, read> lights: LocalLights;
+@group(0) @binding(3) var<storage, read> shadow_params: ShadowMaskParams;
+@group(0) @binding(4) var cascades: texture_depth_2d_array;
+@group(0) @binding(5) var static_map: texture_depth_2d_array;
+@group(0) @binding(6) var shadow_sampler: sampler_comparison;
+@group(0) @binding(7) var<storage, read_write> particle_light: array<ParticleLight>;
+@group(0) @binding(8) var<uniform> view: View;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3u) {
+    let i = id.x;
+    if (i >= arrayLength(&particles)) {
+        return;
+    }
+    let p = particles[i];
+    var acc = ParticleLight(vec4f(0.0), vec4f(0.0));
+    if (p.vel_alive.w > 0.5) {
+        let x = p.pos_age.xyz;
+        let dist = dot(x - view.camera_position.xyz, shadow_params.camera_forward.xyz);
+        let vis = shadow_point_visibility(shadow_params, cascades, static_map, shadow_sampler, x, dist);
+        acc = particle_light_add(acc, lighting.sun_illuminance.rgb * vis, lighting.sun_direction.xyz);
+        acc.d.w = vis;
+        for (var k = 0u; k < lights.count.x; k++) {
+            let li = local_light_illuminance(lights.lights[k], x);
+            if (li.lit) {
+                acc = particle_light_add(acc, li.e, li.dir);
+            }
+        }
+    }
+    particle_light[i] = acc;
+}

@@ -1,0 +1,180 @@
+//! CPU twins of `particles.simulate` (shaders/particles.wgsl,
+//! `simulate.wgsl`: the same births, hashing, integration and deaths in
+//! f32) and of `particles.light` (the light accumulation), for the
+//! GPU-versus-CPU tests.
+
+use glam::{Vec3, Vec4};
+
+use super::{EmitterGpu, ParticleGpu, ParticleLightGpu, SimFrame, StepGpu};
+use crate::passes::lighting::reference::{local_light_falloff, spot_cone};
+use crate::passes::post::reference::luminance;
+use crate::passes::shadows::local::LocalLightGpu;
+
+/// `particle_pcg` (PCG hash, Jarzynski and Olano 2020).
+pub fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// `particle_random`: three numbers in [0, 1) from (emitter, particle
+/// number, tick).
+pub fn spawn_random(emitter: u32, n: u32, tick: u32) -> Vec3 {
+    let h = pcg(emitter ^ pcg(n ^ pcg(tick)));
+    let a = pcg(h);
+    let b = pcg(a);
+    let c = pcg(b);
+    Vec3::new((a >> 8) as f32, (b >> 8) as f32, (c >> 8) as f32) / 16777216.0
+}
+
+/// `particle_step`: slot `r` of emitter `ei` after step `s`; true when
+/// it was born in it.
+pub fn step_slot(
+    p: ParticleGpu,
+    e: &EmitterGpu,
+    ei: u32,
+    r: u32,
+    s: &StepGpu,
+    wind: Vec3,
+) -> (ParticleGpu, bool) {
+    let cap = e.slots[1];
+    let k = (r + cap - s.spawn[0]) % cap;
+    let lifetime = e.motion[0];
+    let rate = e.position_rate[3];
+    if k < s.spawn[1] {
+        let n = s.spawn[2].wrapping_add(k);
+        let age = s.time[0] - k as f32 / rate;
+        let rnd = spawn_random(ei, n, s.spawn[3]);
+        let vs = Vec4::from(e.velocity_spread);
+        let v = vs.truncate() + vs.w * (2.0 * rnd - Vec3::ONE);
+        let pos = Vec3::from_slice(&e.position_rate[..3]) + v * age;
+        let alive = if age < lifetime { 1.0 } else { 0.0 };
+        return (
+            ParticleGpu {
+                pos_age: pos.extend(age).to_array(),
+                vel_alive: v.extend(alive).to_array(),
+            },
+            true,
+        );
+    }
+    if p.vel_alive[3] < 0.5 {
+        return (p, false);
+    }
+    let dt = s.time[1];
+    let v0 = Vec3::from_slice(&p.vel_alive[..3]);
+    let a = Vec3::new(0.0, -e.motion[1], 0.0) + e.motion[2] * (wind - v0);
+    let v = v0 + a * dt;
+    let age = p.pos_age[3] + dt;
+    let pos = Vec3::from_slice(&p.pos_age[..3]) + v * dt;
+    let alive = if age < lifetime { 1.0 } else { 0.0 };
+    (
+        ParticleGpu {
+            pos_age: pos.extend(age).to_array(),
+            vel_alive: v.extend(alive).to_array(),
+        },
+        false,
+    )
+}
+
+/// `cs_main` over every slot: `particles` after `frame`'s steps, and per
+/// emitter (alive, births) as the counters hold them.
+pub fn simulate(particles: &mut [ParticleGpu], frame: &SimFrame) -> Vec<[u32; 2]> {
+    let ne = frame.emitters.len();
+    let mut counters = vec![[0u32; 2]; ne];
+    for (ei, e) in frame.emitters.iter().enumerate() {
+        let (first, cap) = (e.slots[0] as usize, e.slots[1] as usize);
+        for r in 0..cap {
+            let mut p = if frame.reset {
+                ParticleGpu::default()
+            } else {
+                particles[first + r]
+            };
+            let mut born = 0;
+            for s in 0..frame.steps_count() {
+                let st = &frame.steps[s * ne + ei];
+                let (q, b) = step_slot(p, e, ei as u32, r as u32, st, frame.wind);
+                p = q;
+                born += b as u32;
+            }
+            particles[first + r] = p;
+            counters[ei][0] += (p.vel_alive[3] > 0.5) as u32;
+            counters[ei][1] += born;
+        }
+    }
+    counters
+}
+
+/// `local_light_illuminance` (shaders/shadow.wgsl): illuminance (klux) at
+/// `p` from `l` and the unit direction to it; `None` outside its range.
+pub fn local_illuminance(l: &LocalLightGpu, p: Vec3) -> Option<(Vec3, Vec3)> {
+    let to_l = Vec3::from_slice(&l.position_range[..3]) - p;
+    let d = to_l.length();
+    let range = l.position_range[3];
+    if d >= range || d <= 0.0 {
+        return None;
+    }
+    let dir = to_l / d;
+    let mut e = Vec3::from_slice(&l.color_kind[..3]) * local_light_falloff(d, range);
+    if l.color_kind[3] > 0.5 {
+        let axis = Vec3::from_slice(&l.direction_cos_outer[..3]);
+        e *= spot_cone((-dir).dot(axis), l.direction_cos_outer[3], l.params[0]);
+    }
+    Some((e, dir))
+}
+
+/// `particle_light_add`: illuminance `e` from unit direction `l`.
+pub fn light_add(acc: ParticleLightGpu, e: Vec3, l: Vec3) -> ParticleLightGpu {
+    let w = luminance(e);
+    let (e0, d0) = (Vec4::from(acc.e), Vec4::from(acc.d));
+    ParticleLightGpu {
+        e: (e0 + e.extend(w)).to_array(),
+        d: (d0 + (l * w).extend(0.0)).to_array(),
+    }
+}
+
+/// `particle_light_diffuse`: a white Lambertian particle's radiance
+/// (kcd/m²) with normal `n`, E (n . d_mean) / pi.
+pub fn light_diffuse(acc: &ParticleLightGpu, n: Vec3) -> Vec3 {
+    let d = Vec3::from_slice(&acc.d[..3]) / acc.e[3].max(1e-12);
+    Vec3::from_slice(&acc.e[..3]) * (n.dot(d).clamp(0.0, 1.0) / std::f32::consts::PI)
+}
+
+/// The per-pixel reference `light_diffuse` approximates: sum over the
+/// lights of E_k saturate(n . l_k) / pi.
+pub fn exact_diffuse(lights: &[(Vec3, Vec3)], n: Vec3) -> Vec3 {
+    lights
+        .iter()
+        .map(|(e, l)| *e * (n.dot(*l).clamp(0.0, 1.0) / std::f32::consts::PI))
+        .sum()
+}
+
+/// `particles.light` for one slot: the sun (`sun_e` klux toward
+/// `sun_dir`, visibility `vis`, the shadow filter's result) and `lights`.
+pub fn light_particle(
+    p: &ParticleGpu,
+    sun_dir: Vec3,
+    sun_e: Vec3,
+    vis: f32,
+    lights: &[LocalLightGpu],
+) -> ParticleLightGpu {
+    let mut acc = ParticleLightGpu::default();
+    if p.vel_alive[3] < 0.5 {
+        return acc;
+    }
+    let x = Vec3::from_slice(&p.pos_age[..3]);
+    acc = light_add(acc, sun_e * vis, sun_dir);
+    acc.d[3] = vis;
+    for l in lights {
+        if let Some((e, dir)) = local_illuminance(l, x) {
+            acc = light_add(acc, e, dir);
+        }
+    }
+    acc
+}
+
+/// `particle_sprite_normal`: the sprite's normal at corner coordinates
+/// `c` (|c|² = `r2` < 1) under world-to-view matrix `view`.
+pub fn sprite_normal(view: glam::Mat4, c: glam::Vec2, r2: f32) -> Vec3 {
+    let row = |k: usize| Vec3::new(view.x_axis[k], view.y_axis[k], view.z_axis[k]);
+    (row(0) * c.x + row(1) * c.y + row(2) * (1.0 - r2).max(0.0).sqrt()).normalize()
+}

@@ -1,0 +1,186 @@
+//! `[[emitter]]` tables: particle emitters (TECHNIQUES E4), checked like
+//! the rest of the scene file. The simulation is `passes/particles/`.
+
+use glam::{Vec3, Vec4};
+
+use super::SceneError;
+use super::build::Checker;
+use super::file::FileEmitter;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Default particle capacity of one emitter.
+pub const DEFAULT_EMITTER_CAPACITY: u32 = 4096;
+/// Largest capacity of one emitter (a hard limit: more is an error).
+pub const MAX_EMITTER_CAPACITY: u32 = 65536;
+/// Most emitters in one scene.
+pub const MAX_EMITTERS: usize = 64;
+/// Longest particle lifetime (s): the simulation pre-warms over it.
+pub const MAX_LIFETIME_S: f32 = 30.0;
+/// Most particle slots of all emitters together (32 B each, plus 32 B of light).
+pub const MAX_PARTICLE_SLOTS: u32 = 1 << 18;
+/// GPU bytes of one particle slot (state and light, 32 B each).
+pub const SLOT_BYTES: u64 = 64;
+/// Highest emission rate (particles per second).
+pub const MAX_RATE: f32 = 100_000.0;
+
+/// A particle emitter: particles are born at `rate` per second at
+/// `position`, move with `velocity` plus a random spread, fall with
+/// `gravity` g, relax toward the wind at `wind` per second, and die after
+/// `lifetime` seconds; size and colour run linearly over the life.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmitterDesc {
+    /// The table's `name` (default `emitterN`), unique.
+    pub name: String,
+    /// Where particles are born (m).
+    pub position: Vec3,
+    /// Particles per second, (0, [`MAX_RATE`]].
+    pub rate: f32,
+    /// Seconds a particle lives, (0, [`MAX_LIFETIME_S`]].
+    pub lifetime: f32,
+    /// Initial velocity (m/s).
+    pub velocity: Vec3,
+    /// Random spread of the initial velocity: each axis plus a uniform
+    /// number in [-spread, spread] (m/s), >= 0.
+    pub spread: f32,
+    /// Multiple of standard gravity (9.81 m/s² down); negative rises
+    /// (buoyant smoke). [-10, 10], default 0.
+    pub gravity: f32,
+    /// Wind response (1/s): the velocity relaxes toward the wind's at this
+    /// rate. [0, 100], default 1.
+    pub wind: f32,
+    /// Quad edge (m) at birth and at death.
+    pub size: [f32; 2],
+    /// Linear RGBA at birth (alpha: opacity).
+    pub color_start: Vec4,
+    /// Linear RGBA at death.
+    pub color_end: Vec4,
+    /// Particles alive at most: a ring of this many slots; births beyond it
+    /// replace the oldest. [1, [`MAX_EMITTER_CAPACITY`]], default 4096.
+    pub capacity: u32,
+}
+
+fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
+    let a = *v.get_ref();
+    if a.iter().all(|c| c.is_finite() && *c >= 0.0)
+        && a[3] <= 1.0
+        && a[..3].iter().all(|c| *c <= 1e6)
+    {
+        Ok(Vec4::from(a))
+    } else {
+        Err(ck.err(
+            &v.span(),
+            format!("{key} {a:?}: linear RGBA, colour in [0, 1e6], alpha in [0, 1]"),
+        ))
+    }
+}
+
+/// `on`: the world box of a placed object by name (`None`: no such object).
+pub(crate) fn build_emitters(
+    ck: &Checker,
+    file: &[FileEmitter],
+    on: impl Fn(&str) -> Option<super::Aabb>,
+) -> Result<Vec<EmitterDesc>> {
+    if let Some(e) = file.get(MAX_EMITTERS) {
+        return Err(ck.err(
+            &e.position.span(),
+            format!("more than {MAX_EMITTERS} [[emitter]] tables"),
+        ));
+    }
+    let mut out: Vec<EmitterDesc> = Vec::with_capacity(file.len());
+    for (k, e) in file.iter().enumerate() {
+        let name = match &e.name {
+            Some(n) => {
+                if out.iter().any(|o| &o.name == n.get_ref()) {
+                    return Err(ck.err(
+                        &n.span(),
+                        format!("emitter \"{}\" is defined twice", n.get_ref()),
+                    ));
+                }
+                n.get_ref().clone()
+            }
+            None => format!("emitter{k}"),
+        };
+        let mut position = ck.finite3(&e.position, "position")?;
+        // Attached: `position` is an offset from the top centre of the object's box.
+        if let Some(name) = &e.on {
+            let b = on(name.get_ref()).ok_or_else(|| {
+                ck.err(
+                    &name.span(),
+                    format!("on = \"{}\": no [[object]] of that name", name.get_ref()),
+                )
+            })?;
+            let top = Vec3::new(
+                0.5 * (b.min.x + b.max.x),
+                b.max.y,
+                0.5 * (b.min.z + b.max.z),
+            );
+            position += top;
+        }
+        let rate = ck.range(&e.rate, "rate", f32::MIN_POSITIVE, MAX_RATE)?;
+        let lifetime = ck.range(&e.lifetime, "lifetime", 1e-3, MAX_LIFETIME_S)?;
+        let velocity = ck.finite3_or(&e.velocity, "velocity", Vec3::ZERO)?;
+        let spread = match &e.spread {
+            Some(s) => ck.range(s, "spread", 0.0, 1e3)?,
+            None => 0.0,
+        };
+        let gravity = match &e.gravity {
+            Some(g) => ck.range(g, "gravity", -10.0, 10.0)?,
+            None => 0.0,
+        };
+        let wind = match &e.wind {
+            Some(w) => ck.range(w, "wind", 0.0, 100.0)?,
+            None => 1.0,
+        };
+        let size = match &e.size {
+            Some(s) => {
+                let a = *s.get_ref();
+                if !a.iter().all(|x| x.is_finite() && *x >= 0.0 && *x <= 1e3) {
+                    return Err(ck.err(
+                        &s.span(),
+                        format!("size {a:?}: [start, end] in metres, each in [0, 1000]"),
+                    ));
+                }
+                a
+            }
+            None => [0.5, 0.5],
+        };
+        let color_start = match &e.color_start {
+            Some(c) => rgba(ck, c, "color_start")?,
+            None => Vec4::ONE,
+        };
+        let color_end = match &e.color_end {
+            Some(c) => rgba(ck, c, "color_end")?,
+            None => color_start.truncate().extend(0.0),
+        };
+        let capacity = match &e.capacity {
+            Some(c) => ck.int(c, "capacity", 1, MAX_EMITTER_CAPACITY as i64)?,
+            None => DEFAULT_EMITTER_CAPACITY,
+        };
+        let total: u32 = out.iter().map(|o| o.capacity).sum::<u32>() + capacity;
+        if total > MAX_PARTICLE_SLOTS {
+            let at = e.capacity.as_ref().map_or(e.position.span(), |c| c.span());
+            return Err(ck.err(
+                &at,
+                format!(
+                    "the emitters' capacities add up to {total}, more than {MAX_PARTICLE_SLOTS}"
+                ),
+            ));
+        }
+        out.push(EmitterDesc {
+            name,
+            position,
+            rate,
+            lifetime,
+            velocity,
+            spread,
+            gravity,
+            wind,
+            size,
+            color_start,
+            color_end,
+            capacity,
+        });
+    }
+    Ok(out)
+}

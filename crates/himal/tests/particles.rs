@@ -1,0 +1,642 @@
+//! E4 particles (`passes/particles/`): the simulation against its CPU twin,
+//! determinism, the capacity under a burst, the scene file's checks.
+
+mod common;
+
+use himal::gpu::testing::shared_context;
+use himal::passes::particles::reference::simulate;
+use himal::passes::particles::{ParticleGpu, ParticlesPass, births};
+
+/// Clocks of a short run: a reset (pre-warm), frames at 30 Hz, a frame
+/// without time passing, a longer step.
+const CLOCKS: [f32; 6] = [
+    2.0,
+    2.0 + 1.0 / 30.0,
+    2.0 + 2.0 / 30.0,
+    2.0 + 2.0 / 30.0,
+    2.2,
+    2.25,
+];
+
+/// The pass after a run, the particle buffer and the counters of each frame.
+type Run = (ParticlesPass, Vec<Vec<ParticleGpu>>, Vec<Vec<[u32; 2]>>);
+
+fn run(clocks: &[f32]) -> Run {
+    let ctx = shared_context().expect("GPU");
+    let scene = common::scene("particles_smoke");
+    let mut pass = ParticlesPass::new(ctx, &scene.emitters).expect("pass");
+    let (mut states, mut counters) = (Vec::new(), Vec::new());
+    for &t in clocks {
+        pass.run_simulation(ctx, t).expect("simulate");
+        states.push(pass.read_particles(ctx).expect("read"));
+        counters.push(pass.read_counters(ctx).expect("counters"));
+    }
+    (pass, states, counters)
+}
+
+#[test]
+fn simulation_matches_cpu_twin() {
+    let ctx = shared_context().expect("GPU");
+    let scene = common::scene("particles_smoke");
+    let mut pass = ParticlesPass::new(ctx, &scene.emitters).expect("pass");
+    let mut cpu = vec![ParticleGpu::default(); pass.sim.slots() as usize];
+    let mut worst = (0.0f32, 0u32);
+    for &t in &CLOCKS {
+        let frame = pass.run_simulation(ctx, t).expect("simulate");
+        let twin_counts = simulate(&mut cpu, &frame);
+        let gpu = pass.read_particles(ctx).expect("read");
+        let gpu_counts = pass.read_counters(ctx).expect("counters");
+        // Alive flags and counts exactly: births are integer arithmetic,
+        // deaths compare ages that agree to ~1e-6 s, far from a boundary.
+        assert_eq!(gpu_counts, twin_counts, "counters at t = {t}");
+        for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+            assert_eq!(
+                g.vel_alive[3], c.vel_alive[3],
+                "alive flag of slot {i} at t = {t}"
+            );
+            let d = (0..4)
+                .map(|k| {
+                    (g.pos_age[k] - c.pos_age[k])
+                        .abs()
+                        .max((g.vel_alive[k] - c.vel_alive[k]).abs())
+                })
+                .fold(0.0, f32::max);
+            if d > worst.0 {
+                worst = (d, i as u32);
+            }
+        }
+    }
+    println!(
+        "largest |GPU - CPU| over positions, ages, velocities: {:.2e} (slot {})",
+        worst.0, worst.1
+    );
+    // Measured 0 on lavapipe (the same f32 operations in the same order,
+    // over 121 pre-warm steps); a driver that contracts to FMA may differ
+    // by rounding: 1e-4 m is far below a particle's size.
+    assert!(worst.0 < 1e-4, "GPU and CPU differ by {}", worst.0);
+}
+
+#[test]
+fn two_runs_give_the_same_bytes() {
+    let (_, a, ca) = run(&CLOCKS);
+    let (_, b, cb) = run(&CLOCKS);
+    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert!(
+            bytemuck::cast_slice::<_, u8>(x) == bytemuck::cast_slice::<_, u8>(y),
+            "frame {k} differs between runs"
+        );
+    }
+    assert_eq!(ca, cb);
+}
+
+#[test]
+fn burst_respects_capacity_and_counts() {
+    let (pass, states, counters) = run(&CLOCKS);
+    let emitters = &pass.sim.emitters;
+    let burst = emitters
+        .iter()
+        .position(|e| e.name == "burst")
+        .expect("burst");
+    let e = &emitters[burst];
+    // 2000/s over 1.5 s wants 3000 alive: the ring holds 128.
+    assert!(e.rate * e.lifetime > 10.0 * e.capacity as f32);
+    let mut last = None::<f64>;
+    for (k, (&t, c)) in CLOCKS.iter().zip(&counters).enumerate() {
+        let (alive, born) = (c[burst][0], c[burst][1]);
+        assert!(alive <= e.capacity, "frame {k}: {alive} alive > capacity");
+        // Births per frame: the clock's births, at most a ring's worth per
+        // step (the first frame's pre-warm steps are checked by the twin test).
+        if let Some(l) = last {
+            assert_eq!(born, births(e, l, t as f64).spawn[1], "frame {k}: births");
+        }
+        // The alive counter is the number of live slots in the buffer.
+        let first = (0..burst).map(|i| emitters[i].capacity).sum::<u32>() as usize;
+        let slots = &states[k][first..first + e.capacity as usize];
+        let live = slots.iter().filter(|p| p.vel_alive[3] > 0.5).count() as u32;
+        assert_eq!(alive, live, "frame {k}: counter vs buffer");
+        last = Some(t as f64);
+    }
+    // The smoke's ring is larger than its rate x lifetime: all alive, no loss.
+    let smoke = emitters
+        .iter()
+        .position(|e| e.name == "smoke")
+        .expect("smoke");
+    let want = (emitters[smoke].rate * emitters[smoke].lifetime).round() as u32;
+    let got = counters[0][smoke][0];
+    assert!(got.abs_diff(want) <= 1, "smoke alive {got}, want {want}");
+}
+
+#[test]
+fn emitters_draw_far_to_near() {
+    let ctx = shared_context().expect("GPU");
+    let scene = common::scene("particles_smoke");
+    let mut pass = ParticlesPass::new(ctx, &scene.emitters).expect("pass");
+    // Smoke (slots 0..256) at 9.0 m from this eye, the burst (256..384) at 10.9 m.
+    pass.sort(glam::Vec3::new(0.0, 4.0, 9.0));
+    assert_eq!(pass.draw_order(), &[256..384, 0..256]);
+    // From the other side the smoke is farther.
+    pass.sort(glam::Vec3::new(4.0, 0.5, -6.0));
+    assert_eq!(pass.draw_order(), &[0..256, 256..384]);
+}
+
+#[test]
+fn scene_file_checks_emitters() {
+    let base = common::scene_text("particles_smoke");
+    let bad = [
+        (
+            "capacity = 128",
+            "capacity = 100000",
+            "capacity = 100000 is out of range",
+        ),
+        ("rate = 2000.0", "rate = -1.0", "rate = -1 is out of range"),
+        (
+            "lifetime = 1.5",
+            "lifetime = 0.0",
+            "lifetime = 0 is out of range",
+        ),
+        ("size = [0.1, 0.05]", "size = [0.1]", "2 numbers"),
+        (
+            "color_end = [0.3, 0.1, 0.05, 0.0]",
+            "color_end = [0.3, 0.1, 0.05, 2.0]",
+            "alpha in [0, 1]",
+        ),
+        ("name = \"burst\"", "name = \"smoke\"", "defined twice"),
+        ("wind = 0.1", "wind = nan", "wind = NaN is out of range"),
+    ];
+    for (from, to, want) in bad {
+        let text = base.replacen(from, to, 1);
+        assert_ne!(text, base, "{from} not in the scene");
+        let e = himal::scene::Scene::from_toml_str(
+            &text,
+            "particles_smoke.toml",
+            &common::scenes_dir(),
+        )
+        .err()
+        .unwrap_or_else(|| panic!("{to} accepted"))
+        .to_string();
+        assert!(
+            e.contains("particles_smoke.toml") && e.contains(want),
+            "{to}: {e}"
+        );
+    }
+}
+
+const GATHER_KERNEL: &str = r#"
+#import shadow
+
+@group(0) @binding(0) var<storage, read> input: array<vec4f>;
+@group(0) @binding(1) var<storage, read_write> output: array<f32>;
+@group(0) @binding(2) var map: texture_depth_2d_array;
+@group(0) @binding(3) var cmp: sampler_comparison;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3u) {
+    let i = id.x;
+    if (i >= arrayLength(&input)) {
+        return;
+    }
+    output[i] = shadow_gather_4x4(map, cmp, 0, input[i].xy, input[i].z);
+}
+"#;
+
+#[test]
+fn gather_filter_matches_cpu_twin() {
+    use himal::gpu::pipeline::Program;
+    use himal::passes::shadows::reference::DepthMap;
+    use wgpu::util::DeviceExt;
+    const N: u32 = 16;
+    let ctx = shared_context().expect("GPU");
+    // Depths on a 1/16 grid, queries halfway between: no comparison ties.
+    let mut rng = common::Lcg(11);
+    let stored: Vec<u16> = (0..N * N)
+        .map(|_| ((rng.next() * 16.0).floor() / 16.0 * 65535.0).round() as u16)
+        .collect();
+    let depth: Vec<f32> = stored.iter().map(|&s| s as f32 / 65535.0).collect();
+    let texture = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.depth",
+        (N, N),
+        1,
+        wgpu::TextureFormat::Depth16Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&stored),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(2 * N),
+            rows_per_image: Some(N),
+        },
+        texture.size(),
+    );
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let queries: Vec<[f32; 4]> = (0..512)
+        .map(|_| {
+            [
+                rng.next(),
+                rng.next(),
+                ((rng.next() * 16.0).floor() + 0.5) / 16.0,
+                0.0,
+            ]
+        })
+        .collect();
+    let input = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("test.queries"),
+            contents: bytemuck::cast_slice(&queries),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test.out"),
+        size: 4 * queries.len() as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let program = Program::from_source(ctx, "gather-test", GATHER_KERNEL).expect("kernel");
+    let pipeline = program
+        .compute_pipeline(ctx, "main", &[])
+        .expect("pipeline");
+    let bg = program
+        .bind_group(
+            ctx,
+            0,
+            &[
+                ("input", input.as_entire_binding()),
+                ("output", output.as_entire_binding()),
+                ("map", wgpu::BindingResource::TextureView(&view)),
+                ("cmp", wgpu::BindingResource::Sampler(&sampler)),
+            ],
+        )
+        .expect("bind group");
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let bytes = himal::gpu::read_buffer(ctx, &output).expect("read back");
+    let gpu: &[f32] = bytemuck::cast_slice(&bytes);
+    let map = DepthMap {
+        width: N,
+        height: N,
+        depth: &depth,
+    };
+    let (mut worst, mut partial) = (0.0f32, 0);
+    for (q, g) in queries.iter().zip(gpu) {
+        let c = map.gather_4x4(glam::Vec2::new(q[0], q[1]), q[2]);
+        worst = worst.max((c - g).abs());
+        partial += usize::from(c > 0.0 && c < 1.0);
+    }
+    println!("4x4 gather: largest |GPU - CPU| {worst:.2e}, {partial} of 512 partly lit");
+    // Measured 1.2e-7 on lavapipe: the same f32 weights over exact 0/1
+    // comparisons (gathers do not filter), summed in another order.
+    assert!(worst < 1e-5, "gather filter differs by {worst}");
+    assert!(partial > 100, "too few penumbra queries: {partial}");
+}
+
+fn settings(scene: &himal::scene::Scene) -> himal::FrameSettings {
+    let mut s = himal::FrameSettings::new(160, 120, scene.sun.clone());
+    s.time_s = 2.0;
+    s
+}
+
+#[test]
+fn frame_lights_particles_like_the_twin_and_draws_them() {
+    use himal::passes::particles::reference::light_particle;
+    use himal::passes::shadows::local::LocalLightGpu;
+    let (scene, camera) = common::scene_and_camera("particles_smoke", "side");
+    let mut r = common::renderer(&scene);
+    let s = settings(&scene);
+    let on = common::render_rgba(&mut r, &camera, &s);
+    let ctx = r.context();
+    let particles = r.particles().read_particles(ctx).expect("particles");
+    let light = r.particles().read_light(ctx).expect("light");
+    let sun = r.sky_light().expect("sky light");
+    let lights: Vec<LocalLightGpu> = scene.lights.iter().map(LocalLightGpu::new).collect();
+    let (mut worst, mut alive, mut shadowed) = (0.0f32, 0, 0);
+    for (p, g) in particles.iter().zip(&light) {
+        let vis = g.d[3];
+        let c = light_particle(p, sun.sun_direction, sun.sun_illuminance, vis, &lights);
+        for k in 0..4 {
+            let rel = (c.e[k] - g.e[k]).abs() / c.e[k].abs().max(1e-3);
+            let d = (c.d[k] - g.d[k]).abs() / c.e[3].abs().max(1e-3);
+            worst = worst.max(rel).max(d);
+        }
+        alive += usize::from(p.vel_alive[3] > 0.5);
+        shadowed += usize::from(p.vel_alive[3] > 0.5 && vis < 0.99);
+    }
+    println!(
+        "particles.light: {alive} alive, {shadowed} in shadow, largest relative |GPU - CPU| {worst:.2e}"
+    );
+    // Measured 5.8e-8 on lavapipe (f32 rounding of the same sums); the
+    // sun's visibility is the GPU's (its filter is tested above).
+    assert!(worst < 1e-4, "light kernel differs by {worst}");
+    assert!(
+        alive > 100 && shadowed > 20,
+        "{alive} alive, {shadowed} shadowed"
+    );
+    // The same frame without particles: they cover part of the image.
+    let mut off_s = s.clone();
+    off_s.particles = false;
+    let off = common::render_rgba(&mut r, &camera, &off_s);
+    let changed = on
+        .iter()
+        .zip(&off)
+        .filter(|(a, b)| (0..3).any(|k| (a[k] - b[k]).abs() > 1.0 / 255.0))
+        .count();
+    println!("pixels changed by the particles: {changed} of {}", on.len());
+    assert!(changed > 200, "particles barely visible: {changed} pixels");
+}
+
+fn luminance(p: &[f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// Must-show (issue #21): a white diffuse particle and a white diffuse
+/// surface of the world side by side under sun, sky and a point light.
+#[test]
+fn a_white_particle_is_lit_like_a_white_wall() {
+    let (scene, camera) = common::scene_and_camera("particles_consistency", "front");
+    let mut r = common::renderer(&scene);
+    let (w, h) = (160usize, 120usize);
+    let mut s = common::raw_settings(&scene, (w as u32, h as u32), "lighting");
+    s.ao.mode = himal::passes::ao::AoMode::Off;
+    s.time_s = 1.0;
+    let sun = |r: &himal::Renderer| r.sky_light().map(|l| (l.sun_direction, l.sun_illuminance));
+    let on = common::render_rgba(&mut r, &camera, &s);
+    let (dir, e_sun) = sun(&r).expect("sun");
+    assert!(dir.z > 0.1, "the sun must light the +z faces: {dir}");
+    let mut off_s = s.clone();
+    off_s.particles = false;
+    let off = common::render_rgba(&mut r, &camera, &off_s);
+    // The particle's centre: the mean of the pixels it changed.
+    let changed: Vec<(usize, usize)> = (0..w * h)
+        .filter(|&i| (luminance(&on[i]) - luminance(&off[i])).abs() > 1e-3)
+        .map(|i| (i % w, i / w))
+        .collect();
+    assert!(
+        changed.len() > 20,
+        "particle covers {} pixels",
+        changed.len()
+    );
+    let n = changed.len() as f32;
+    let cx = (changed.iter().map(|p| p.0 as f32).sum::<f32>() / n).round() as usize;
+    let cy = (changed.iter().map(|p| p.1 as f32).sum::<f32>() / n).round() as usize;
+    // The wall point mirrored about x = 0 (the camera sits on that plane).
+    let (mx, my) = (w - 1 - cx, cy);
+    let mean = |img: &[[f32; 4]], x: usize, y: usize| {
+        let mut sum = 0.0;
+        for dy in 0..2 {
+            for dx in 0..2 {
+                sum += luminance(&img[(y + dy - 1) * w + x + dx - 1]);
+            }
+        }
+        sum / 4.0
+    };
+    let wall = mean(&on, mx, my);
+    let rel = |particle: f32| (particle - wall).abs() / wall;
+    let particle = mean(&on, cx, cy);
+    let mut probe_s = s.clone();
+    probe_s.particles_probe_ambient = true;
+    let probe = mean(&common::render_rgba(&mut r, &camera, &probe_s), cx, cy);
+    println!(
+        "sun {dir} {e_sun}: wall ({mx}, {my}) luminance {wall:.4}; particle ({cx}, {cy}) {particle:.4} \
+         ({:.2} %), with the probe's lowest mip as ambient {probe:.4} ({:.2} %)",
+        100.0 * rel(particle),
+        100.0 * rel(probe)
+    );
+    // The issue's bar: at most 5 % apart (measured 2.3 %: the particle gets
+    // the wall's sun, lamp and sky terms; what is left is the wall's rough
+    // specular). Ryse's probe-mip ambient lacks the SH's ground bounce of
+    // the sun here: measured 11.6 % darker, so it is not the default.
+    assert!(
+        rel(particle) <= 0.05,
+        "particle {particle} vs wall {wall}: {:.1} %",
+        100.0 * rel(particle)
+    );
+    assert!(probe < particle, "the probe ambient was not used");
+}
+
+/// Must-show (issue #21): per-particle lighting against the per-pixel
+/// reference of the same particles: the image difference (FLIP mean over
+/// the particles' pixels, and the raw HDR's relative difference) and the
+/// cost of the two lighting paths, frames interleaved; by day (sun, a
+/// distant lamp) and by night with the lamp inside the plume (its light
+/// varies across a quad). `HIMAL_PARTICLE_FRAMES` sets the timed frames
+/// per path (default 4).
+#[test]
+fn per_particle_light_against_per_pixel() {
+    let night = [
+        ("time = \"15:00\"", "time = \"23:30\""),
+        ("position = [1.5, 2.5, 1.0]", "position = [0.6, 4.5, 0.8]"),
+    ];
+    let mut flips = Vec::new();
+    for (label, overrides) in [("day", &[][..]), ("night, lamp in the plume", &night[..])] {
+        let scene = common::scene_with("particles_smoke", overrides);
+        let camera = scene.camera("side").expect("camera").clone();
+        let (flip, rel, covered) = compare_paths(&scene, &camera, label);
+        assert!(covered > 200, "{label}: particles cover {covered} pixels");
+        flips.push((flip, rel));
+    }
+    // By day the sun is the same over a quad (and the canopy shades whole
+    // quads): measured FLIP 0.0000. At night the lamp's 1/d^2 inside the
+    // plume varies across a quad, Ryse's "lights with harsh fall off":
+    // measured FLIP 0.064, HDR 9.2 % apart (160 x 120, lavapipe).
+    assert!(flips[0].0 < 0.01, "day: FLIP {}", flips[0].0);
+    assert!(
+        flips[1].1 > 0.01,
+        "night: the two paths drew the same image"
+    );
+    assert!(flips[1].0 < 0.1, "night: FLIP {}", flips[1].0);
+}
+
+/// (FLIP mean over the particles' pixels, mean relative HDR difference
+/// there, pixels covered) of per-particle against per-pixel light.
+fn compare_paths(
+    scene: &himal::scene::Scene,
+    camera: &himal::scene::Camera,
+    label: &str,
+) -> (f32, f32, usize) {
+    let mut r = common::renderer(scene);
+    let (w, h) = (160usize, 120usize);
+    let mut s = settings(scene);
+    s.shadows.mode = himal::passes::shadows::ShadowMode::CsmStatic;
+    // Each frame exposed for itself: no adaptation drifting between the paths.
+    s.adaptation.enabled = false;
+    let frames: usize = std::env::var("HIMAL_PARTICLE_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    let rgb = |i: &[[f32; 4]]| i.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    // Raw HDR of both paths and without particles (no exposure involved).
+    let mut raw = common::raw_settings(scene, (w as u32, h as u32), "lighting");
+    raw.time_s = s.time_s;
+    raw.shadows.mode = s.shadows.mode;
+    let vertex_raw = common::render_rgba(&mut r, camera, &raw);
+    raw.particles_per_pixel = true;
+    let pixel_raw = common::render_rgba(&mut r, camera, &raw);
+    raw.particles = false;
+    let off_raw = common::render_rgba(&mut r, camera, &raw);
+    let (mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new());
+    let (mut vertex, mut pixel) = (Vec::new(), Vec::new());
+    // The same clock every frame: the particles do not move between paths.
+    for k in 0..2 * frames {
+        let per_pixel = k % 2 == 1;
+        let mut sk = s.clone();
+        sk.particles_per_pixel = per_pixel;
+        let f = r.render(camera, &sk).expect("frame");
+        let ms: f64 = f
+            .timings
+            .iter()
+            .filter(|t| t.id == "particles.light" || t.id == "forward.particles")
+            .map(|t| t.gpu_ms)
+            .sum();
+        let img = f.image.to_rgba_f32().expect("rgba");
+        if per_pixel {
+            pixel_ms.push(ms);
+            pixel = img;
+        } else {
+            vertex_ms.push(ms);
+            vertex = img;
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (tv, tp) = (median(&mut vertex_ms), median(&mut pixel_ms));
+    let flip = himal_reference::flip::flip_map(
+        &rgb(&pixel),
+        &rgb(&vertex),
+        w,
+        h,
+        himal_reference::flip::DEFAULT_PIXELS_PER_DEGREE,
+    )
+    .expect("FLIP");
+    let lum = |p: &[f32; 4]| luminance(p);
+    let covered: Vec<usize> = (0..w * h)
+        .filter(|&i| {
+            (lum(&pixel_raw[i]) - lum(&off_raw[i])).abs() > 1e-3 * lum(&off_raw[i]).max(1e-3)
+        })
+        .collect();
+    let n = covered.len().max(1) as f64;
+    let flip_covered = (covered.iter().map(|&i| flip[i] as f64).sum::<f64>() / n) as f32;
+    let rel = (covered
+        .iter()
+        .map(|&i| {
+            ((lum(&vertex_raw[i]) - lum(&pixel_raw[i])).abs() / lum(&pixel_raw[i]).max(1e-6)) as f64
+        })
+        .sum::<f64>()
+        / n) as f32;
+    println!(
+        "{label}: per particle vs per pixel over {} particle pixels: FLIP mean {flip_covered:.4}, \
+         HDR luminance {:.2} % apart; lighting cost {tv:.3} ms (particles.light + forward.particles) \
+         vs {tp:.3} ms (per-pixel forward.particles), ratio {:.2}, {frames} frames each, interleaved",
+        covered.len(),
+        100.0 * rel,
+        tp / tv.max(1e-9)
+    );
+    (flip_covered, rel, covered.len())
+}
+
+const SHADING_KERNEL: &str = r#"
+#import particles
+
+struct Query {
+    view_m: mat4x4f,
+    // xy: corner, z: sun luminance scale
+    corner: vec4f,
+    sun: vec4f,
+    lamp: vec4f,
+    lamp_dir: vec4f,
+}
+
+@group(0) @binding(0) var<storage, read> input: array<Query>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4f>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3u) {
+    let i = id.x;
+    if (i >= arrayLength(&input)) {
+        return;
+    }
+    let q = input[i];
+    let r2 = min(dot(q.corner.xy, q.corner.xy), 0.999);
+    let n = particle_sprite_normal(q.view_m, q.corner.xy, r2);
+    var acc = ParticleLight(vec4f(0.0), vec4f(0.0));
+    acc = particle_light_add(acc, q.sun.rgb, normalize(vec3f(0.3, 0.8, 0.5)));
+    acc = particle_light_add(acc, q.lamp.rgb, q.lamp_dir.xyz);
+    output[2u * i] = vec4f(n, 0.0);
+    output[2u * i + 1u] = vec4f(particle_light_diffuse(acc, n), 0.0);
+}
+"#;
+
+#[test]
+fn sprite_shading_matches_cpu_twin() {
+    use glam::{Mat4, Vec2, Vec3};
+    use himal::passes::particles::ParticleLightGpu;
+    use himal::passes::particles::reference::{light_add, light_diffuse, sprite_normal};
+    let mut rng = common::Lcg(5);
+    let mut input: Vec<f32> = Vec::new();
+    let mut twin = Vec::new();
+    for _ in 0..256 {
+        let eye = Vec3::new(
+            rng.next() * 10.0 - 5.0,
+            rng.next() * 4.0,
+            rng.next() * 10.0 - 5.0,
+        );
+        let turn =
+            glam::Quat::from_euler(glam::EulerRot::YXZ, rng.next() * 6.0, rng.next() - 0.5, 0.0);
+        let view = Mat4::from_rotation_translation(turn, eye).inverse();
+        let c = Vec2::new(rng.next() * 2.0 - 1.0, rng.next() * 2.0 - 1.0) * 0.7;
+        let sun = Vec3::new(90.0, 85.0, 72.0) * rng.next();
+        let lamp = Vec3::new(20.0, 14.0, 8.0) * rng.next();
+        let lamp_dir = Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
+        input.extend(view.to_cols_array());
+        input.extend([c.x, c.y, 0.0, 0.0]);
+        input.extend(sun.extend(0.0).to_array());
+        input.extend(lamp.extend(0.0).to_array());
+        input.extend(lamp_dir.extend(0.0).to_array());
+        let n = sprite_normal(view, c, c.length_squared().min(0.999));
+        let mut acc = ParticleLightGpu::default();
+        acc = light_add(acc, sun, Vec3::new(0.3, 0.8, 0.5).normalize());
+        acc = light_add(acc, lamp, lamp_dir);
+        twin.push((n, light_diffuse(&acc, n)));
+    }
+    let out = himal::gpu::testing::run_compute(
+        SHADING_KERNEL,
+        "main",
+        bytemuck::cast_slice(&input),
+        (twin.len() * 32) as u64,
+        [4, 1, 1],
+    )
+    .expect("kernel");
+    let gpu: &[[f32; 4]] = bytemuck::cast_slice(&out);
+    let (mut worst_n, mut worst_c) = (0.0f32, 0.0f32);
+    for (k, (n, c)) in twin.iter().enumerate() {
+        let (gn, gc) = (gpu[2 * k], gpu[2 * k + 1]);
+        worst_n = worst_n.max((Vec3::from_slice(&gn[..3]) - *n).abs().max_element());
+        worst_c = worst_c
+            .max((Vec3::from_slice(&gc[..3]) - *c).abs().max_element() / c.max_element().max(1e-3));
+    }
+    println!("sprite normal |GPU - CPU| {worst_n:.2e}, diffuse relative {worst_c:.2e}");
+    // Measured 6.0e-8 and 4.6e-6 (relative): f32 rounding of the same
+    // expressions (1 / pi folded differently).
+    assert!(
+        worst_n < 1e-5 && worst_c < 1e-4,
+        "normal {worst_n}, diffuse {worst_c}"
+    );
+}
