@@ -6,8 +6,6 @@ mod common;
 
 use common::Lcg;
 use glam::Vec2;
-use himal::gpu::pipeline::Program;
-use himal::gpu::testing::shared_context;
 use himal::passes::shadows::reference::{DepthMap, rotation_angle};
 
 const N: u32 = 16;
@@ -44,7 +42,6 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
 
 #[test]
 fn poisson_filter_matches_the_cpu_twin() {
-    let ctx = shared_context().expect("GPU");
     // Depths at multiples of 1/16 (exact in 16 bits up to rounding), queries
     // halfway between, so no comparison sits on a tie.
     let mut rng = Lcg(7);
@@ -52,34 +49,6 @@ fn poisson_filter_matches_the_cpu_twin() {
         .map(|_| ((rng.next() * 16.0).floor() / 16.0 * 65535.0).round() as u16)
         .collect();
     let depth: Vec<f32> = stored.iter().map(|&s| s as f32 / 65535.0).collect();
-    let texture = himal::gpu::texture_2d(
-        &ctx.device,
-        "test.depth",
-        (N, N),
-        1,
-        wgpu::TextureFormat::Depth16Unorm,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(&stored),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(2 * N),
-            rows_per_image: Some(N),
-        },
-        texture.size(),
-    );
-    let view = texture.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    });
-    let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        compare: Some(wgpu::CompareFunction::LessEqual),
-        ..Default::default()
-    });
     let queries: Vec<[f32; 4]> = (0..512)
         .map(|_| {
             [
@@ -90,46 +59,8 @@ fn poisson_filter_matches_the_cpu_twin() {
             ]
         })
         .collect();
-
-    use wgpu::util::DeviceExt;
-    let input = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("test.queries"),
-            contents: bytemuck::cast_slice(&queries),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test.out"),
-        size: 8 * queries.len() as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let program = Program::from_source(ctx, "shadow-filter-test", KERNEL).expect("kernel");
-    let pipeline = program
-        .compute_pipeline(ctx, "main", &[])
-        .expect("pipeline");
-    let bg = program
-        .bind_group(
-            ctx,
-            0,
-            &[
-                ("input", input.as_entire_binding()),
-                ("output", output.as_entire_binding()),
-                ("map", wgpu::BindingResource::TextureView(&view)),
-                ("cmp", wgpu::BindingResource::Sampler(&sampler)),
-            ],
-        )
-        .expect("bind group");
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
-    let bytes = himal::gpu::read_buffer(ctx, &output).expect("read back");
+    let bytes =
+        common::run_depth_map_kernel(KERNEL, &stored, N, &queries, 8 * queries.len() as u64);
     let gpu: &[[f32; 2]] = bytemuck::cast_slice(&bytes);
 
     let map = DepthMap {

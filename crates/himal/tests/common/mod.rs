@@ -475,3 +475,86 @@ pub fn upload_one_image_material(
     let ctx = himal::gpu::testing::shared_context().expect("GPU (lavapipe in CI)");
     himal::gpu_scene::textures::MaterialTextures::upload(ctx, &pbr).expect("upload")
 }
+
+/// Runs compute `kernel` (entry `main`; bindings `input` queries, `output`,
+/// `map` an `n`x`n` Depth16Unorm array layer holding `stored`, `cmp` a
+/// LessEqual bilinear comparison sampler) over `queries`, 64 per workgroup,
+/// and reads back `out_bytes` of output: the harness of the shadow-filter
+/// kernels' GPU-vs-twin tests.
+pub fn run_depth_map_kernel(
+    kernel: &str,
+    stored: &[u16],
+    n: u32,
+    queries: &[[f32; 4]],
+    out_bytes: u64,
+) -> Vec<u8> {
+    use wgpu::util::DeviceExt;
+    let ctx = himal::gpu::testing::shared_context().expect("GPU");
+    let texture = himal::gpu::texture_2d(
+        &ctx.device,
+        "test.depth",
+        (n, n),
+        1,
+        wgpu::TextureFormat::Depth16Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(stored),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(2 * n),
+            rows_per_image: Some(n),
+        },
+        texture.size(),
+    );
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let input = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("test.queries"),
+            contents: bytemuck::cast_slice(queries),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test.out"),
+        size: out_bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let program = himal::gpu::pipeline::Program::from_source(ctx, "depth-map-kernel", kernel)
+        .expect("kernel");
+    let pipeline = program
+        .compute_pipeline(ctx, "main", &[])
+        .expect("pipeline");
+    let bg = program
+        .bind_group(
+            ctx,
+            0,
+            &[
+                ("input", input.as_entire_binding()),
+                ("output", output.as_entire_binding()),
+                ("map", wgpu::BindingResource::TextureView(&view)),
+                ("cmp", wgpu::BindingResource::Sampler(&sampler)),
+            ],
+        )
+        .expect("bind group");
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    himal::gpu::read_buffer(ctx, &output).expect("read back")
+}
