@@ -39,23 +39,10 @@ pub struct SunMaps {
 const STATIC_NAMES: [&str; 2] = ["shadow.static0", "shadow.static1"];
 
 impl ShadowPass {
-    /// Adds the shadow nodes; returns the mask, or `None` when shadows are off
-    /// (no plan this frame). `view` is the frame constant.
-    /// `culled`: the GPU-culled lists the cascades draw (V6).
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        size: (u32, u32),
-        gbuffer: GBuffer,
-        scene: &'a SceneGpu,
-        culled: Option<Culled<'a>>,
-        extra: Option<&'a dyn CascadeCaster>,
-    ) -> Option<TextureHandle> {
-        (self.add_maps(graph, size, gbuffer, scene, culled, extra)).and_then(|m| m.mask)
-    }
-
-    /// [`Self::add`], also returning the sun's maps it rendered or reads
-    /// (E4 particles look them up themselves).
+    /// Adds the shadow nodes; returns the mask and the sun's maps it
+    /// rendered or reads (E4 particles look them up themselves), or `None`
+    /// when shadows are off (no plan this frame). `view` is the frame
+    /// constant. `culled`: the GPU-culled lists the cascades draw (V6).
     pub fn add_maps<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
