@@ -273,6 +273,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub particle_lighting: String,
+    /// E4 particles' sun shadow: static (the static map, else the cascade,
+    /// 4 x 4 gather once per particle, Ryse's) or cascaded (the world's
+    /// per-pixel lookup: the reference it is measured against).
+    #[arg(
+        long,
+        default_value = "static",
+        value_name = "static|cascaded",
+        allow_hyphen_values = true
+    )]
+    pub particle_shadows: String,
     /// E4 particles' ambient: sky (the sky irradiance the world's surfaces
     /// get) or probe (the environment cube's lowest specular mip, Ryse's).
     #[arg(
@@ -453,6 +463,11 @@ impl PostArgs {
             "vertex" => false,
             "pixel" => true,
             other => bail!("--particle-lighting {other}: expected vertex or pixel"),
+        };
+        settings.particles_cascaded_shadows = match self.particle_shadows.as_str() {
+            "static" => false,
+            "cascaded" => true,
+            other => bail!("--particle-shadows {other}: expected static or cascaded"),
         };
         settings.particles_probe_ambient = match self.particle_ambient.as_str() {
             "sky" => false,

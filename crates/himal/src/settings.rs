@@ -225,6 +225,10 @@ pub struct FrameSettings {
     /// E4: light the particles at each pixel instead of once per particle
     /// (the reference of the per-particle light; off by default).
     pub particles_per_pixel: bool,
+    /// E4: light the particles at each pixel with the world's sun shadow
+    /// (cascades, S1 filter) instead of the static map's 4 x 4 gather per
+    /// particle (the reference of Ryse's particle shadows; off by default).
+    pub particles_cascaded_shadows: bool,
     /// E4: particles' ambient from the environment cube's lowest specular
     /// mip (Ryse) instead of the sky irradiance the world's surfaces get
     /// (off by default: the world's own term keeps particles consistent).
@@ -306,6 +310,7 @@ impl FrameSettings {
             wetness: 0.0,
             particles: true,
             particles_per_pixel: false,
+            particles_cascaded_shadows: false,
             particles_probe_ambient: false,
         }
     }

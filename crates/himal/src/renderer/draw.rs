@@ -364,6 +364,7 @@ impl Renderer {
             per_pixel: settings.particles_per_pixel,
             debug: settings.view == ViewBuffer::ParticleLighting,
             probe_ambient: settings.particles_probe_ambient,
+            cascaded_shadows: settings.particles_cascaded_shadows,
         };
         let planned = frame::plan(
             &mut self.res.passes,

@@ -209,34 +209,52 @@ fn shadow_gather_4x4(map: texture_depth_2d_array, cmp: sampler_comparison, layer
     return v;
 }
 
-// The sun's visibility at a point without a surface (a particle, E4): the
-// map its view distance `dist` reads (static map, else its cascade), no
-// normal offset, the mask's depth bias, the 4 x 4 gather filter (R2).
+// The sun's visibility at a point without a surface (a particle, E4, Ryse
+// "Particle Shadows"): the static map wherever S2 shows one and it covers
+// the point (no cascades), else the cascade its view distance `dist`
+// reads; no normal offset (no surface), the mask's depth bias, the 4 x 4
+// gather filter (R2).
 fn shadow_point_visibility(params: ShadowMaskParams, cascades: texture_depth_2d_array,
                            static_map: texture_depth_2d_array, cmp: sampler_comparison,
                            p: vec3f, dist: f32) -> f32 {
+    if (params.static_info.x > 0.5) {
+        let c = params.static_map * vec4f(p, 1.0);
+        let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
+        if (all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0)) && c.z <= 1.0) {
+            let depth_ref = c.z - params.filter_params.z * params.static_info.y / params.static_info.z;
+            return shadow_gather_4x4(static_map, cmp, 0, uv, depth_ref);
+        }
+    }
     let i = shadow_map_index(params, dist);
-    if (i < 0) {
+    if (i < 0 || i == 4) {
         return 1.0;
     }
-    var m = params.static_map;
-    var texel = params.static_info.y;
-    var range = params.static_info.z;
-    if (i < 4) {
-        m = params.cascades[i];
-        texel = params.texel[i];
-        range = params.depth_range[i];
-    }
-    let c = m * vec4f(p, 1.0);
+    let c = params.cascades[i] * vec4f(p, 1.0);
     let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
     if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
         return 1.0;
     }
-    let depth_ref = c.z - params.filter_params.z * texel / range;
-    if (i == 4) {
-        return shadow_gather_4x4(static_map, cmp, 0, uv, depth_ref);
-    }
+    let depth_ref = c.z - params.filter_params.z * params.texel[i] / params.depth_range[i];
     return shadow_gather_4x4(cascades, cmp, i, uv, depth_ref);
+}
+
+// The world's sun visibility at p (normal n, view distance `dist`): the
+// map shadow_map_index picks (cascade, else the static map beyond them),
+// S1's rotated Poisson filter. shadows.mask per pixel; E4's per-pixel
+// cascaded reference for particles (n = 0).
+fn shadow_world_visibility(params: ShadowMaskParams, cascades: texture_depth_2d_array,
+                           static_map: texture_depth_2d_array, cmp: sampler_comparison,
+                           p: vec3f, n: vec3f, dist: f32) -> f32 {
+    let i = shadow_map_index(params, dist);
+    if (i == 4) {
+        return shadow_map_visibility(static_map, cmp, 0, params.static_map, params.light_rotation, p, n,
+                                     params.static_info.y, params.static_info.z, params.filter_params);
+    }
+    if (i >= 0) {
+        return shadow_map_visibility(cascades, cmp, i, params.cascades[i], params.light_rotation, p, n,
+                                     params.texel[i], params.depth_range[i], params.filter_params);
+    }
+    return 1.0;
 }
 
 // Illuminance (klux) at p from local light `l` and the unit direction to

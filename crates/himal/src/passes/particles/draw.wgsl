@@ -7,7 +7,9 @@
 // the environment cube's lowest (roughest) specular mip used as diffuse
 // (Ryse); no constant ambient. Soft particles: alpha fades over
 // SOFT_DISTANCE in front of the scene depth. DEBUG (--view
-// particle-lighting): white particles. CPU twin of the shading:
+// particle-lighting): white particles. CASCADED_SHADOWS: per-pixel light
+// with the world's sun shadow (cascades, Poisson filter: shadows.mask's
+// lookup), the reference of the static-map shadow. CPU twin of the shading:
 // passes/particles/reference.rs `light_diffuse`, `sprite_normal`.
 #import particles
 #import forward
@@ -19,6 +21,7 @@
 override PER_PIXEL: bool = false;
 override DEBUG: bool = false;
 override PROBE_AMBIENT: bool = false;
+override CASCADED_SHADOWS: bool = false;
 
 // Fade distance of soft particles (m).
 const SOFT_DISTANCE: f32 = 0.5;
@@ -79,7 +82,12 @@ fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) slot: u32) ->
 fn light_at(x: vec3f) -> ParticleLight {
     var acc = ParticleLight(vec4f(0.0), vec4f(0.0));
     let dist = dot(x - view.camera_position.xyz, shadow_params.camera_forward.xyz);
-    let vis = shadow_point_visibility(shadow_params, cascades, static_map, shadow_sampler, x, dist);
+    var vis = 0.0;
+    if (CASCADED_SHADOWS) {
+        vis = shadow_world_visibility(shadow_params, cascades, static_map, shadow_sampler, x, vec3f(0.0), dist);
+    } else {
+        vis = shadow_point_visibility(shadow_params, cascades, static_map, shadow_sampler, x, dist);
+    }
     acc = particle_light_add(acc, lighting.sun_illuminance.rgb * vis, lighting.sun_direction.xyz);
     for (var k = 0u; k < lights.count.x; k++) {
         let li = local_light_illuminance(lights.lights[k], x);
@@ -109,7 +117,7 @@ fn fs_main(in: ParticleOut) -> @location(0) vec4f {
     }
     let n = particle_sprite_normal(view.view, in.corner, r2);
     var acc = particle_light[in.slot];
-    if (PER_PIXEL) {
+    if (PER_PIXEL || CASCADED_SHADOWS) {
         acc = light_at(in.world);
     }
     var ambient = max(sh9_eval(lighting.sky_irradiance, n), vec3f(0.0)) / PI;

@@ -20,7 +20,9 @@
 //! the world's diffuse ambient (sky SH; or, `PROBE_AMBIENT`, Ryse's
 //! environment cube's lowest specular mip used as diffuse) and a soft
 //! depth fade; its `PER_PIXEL` permutation evaluates the same
-//! sums per pixel (the reference of `--particle-lighting pixel`).
+//! sums per pixel (the reference of `--particle-lighting pixel`), its
+//! `CASCADED_SHADOWS` one with the world's per-pixel cascaded sun shadow
+//! (the reference of `--particle-shadows cascaded`).
 //! CPU twins: [`reference`]. Math and measurements: `docs/techniques/E4.md`.
 
 pub mod reference;
@@ -284,15 +286,19 @@ pub struct ParticleKey {
     /// Ambient from the environment cube's lowest specular mip (Ryse)
     /// instead of the world's sky irradiance SH.
     pub probe_ambient: bool,
+    /// Light each pixel with the world's sun shadow (cascades, S1 filter)
+    /// instead of the static map's 4 x 4 gather (the reference of R2).
+    pub cascaded_shadows: bool,
 }
 
 impl ParticleKey {
     /// Every permutation (pre-warm).
     pub fn all() -> impl Iterator<Item = ParticleKey> {
-        (0..8u32).map(|k| ParticleKey {
+        (0..16u32).map(|k| ParticleKey {
             per_pixel: k & 1 != 0,
             debug: k & 2 != 0,
             probe_ambient: k & 4 != 0,
+            cascaded_shadows: k & 8 != 0,
         })
     }
 }
@@ -489,6 +495,7 @@ impl ParticlesPass {
             ("PER_PIXEL", flag(key.per_pixel)),
             ("DEBUG", flag(key.debug)),
             ("PROBE_AMBIENT", flag(key.probe_ambient)),
+            ("CASCADED_SHADOWS", flag(key.cascaded_shadows)),
         ];
         let mut spec = RenderSpec::fullscreen("forward.particles", &targets);
         spec.constants = &constants;

@@ -76,15 +76,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         return vec4f(1.0);
     }
     let r = receiver(frag, d);
-    let i = shadow_map_index(params, r.dist);
-    var vis = 1.0;
-    if (i == 4) {
-        vis = shadow_map_visibility(static_map, shadow_sampler, 0, params.static_map, params.light_rotation, r.p, r.n,
-                                    params.static_info.y, params.static_info.z, params.filter_params);
-    } else if (i >= 0) {
-        vis = shadow_map_visibility(cascades, shadow_sampler, i, params.cascades[i], params.light_rotation, r.p, r.n,
-                                    params.texel[i], params.depth_range[i], params.filter_params);
-    }
+    let vis = shadow_world_visibility(params, cascades, static_map, shadow_sampler, r.p, r.n, r.dist);
     var local = vec3f(1.0);
     for (var k = 0u; k < local_lights.count.x; k = k + 1u) {
         let l = local_lights.lights[k];
