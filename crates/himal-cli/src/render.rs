@@ -283,6 +283,16 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub particle_shadows: String,
+    /// E4 reactive mask: particles' coverage shortens the TAA history and
+    /// the temporal resolve where they drew this frame or the last (no
+    /// trails behind moving smoke; `off`: they accumulate like the rest).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub particle_reactive: String,
     /// E4 particles' ambient: sky (the sky irradiance the world's surfaces
     /// get) or probe (the environment cube's lowest specular mip, Ryse's).
     #[arg(
@@ -464,6 +474,7 @@ impl PostArgs {
             "pixel" => true,
             other => bail!("--particle-lighting {other}: expected vertex or pixel"),
         };
+        settings.particles_reactive = on_off("--particle-reactive", &self.particle_reactive)?;
         settings.particles_cascaded_shadows = match self.particle_shadows.as_str() {
             "static" => false,
             "cascaded" => true,

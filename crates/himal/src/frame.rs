@@ -596,7 +596,7 @@ pub fn build<'a>(
         env,
         ambient_lights: &passes.lighting.ambient_lights.buffer,
     };
-    let hdr = match passes.particles.add_simulate(&mut g) {
+    let (hdr, reactive) = match passes.particles.add_simulate(&mut g) {
         Some(state) => {
             let p = &passes.particles;
             match p.add_light(&mut g, state, particle_inputs) {
@@ -604,10 +604,10 @@ pub fn build<'a>(
                     let buffers = (state, light);
                     p.add_draw(ctx, &mut g, hdr, forward.depth, buffers, particle_inputs)
                 }
-                None => hdr,
+                None => (hdr, None),
             }
         }
-        None => hdr,
+        None => (hdr, None),
     };
     // Transmissive surfaces wrote their depth: later readers see them.
     let gbuffer = GBuffer {
@@ -648,6 +648,7 @@ pub fn build<'a>(
                 normals: gbuffer.frame,
                 motion: gbuffer.motion,
                 motion_jitter_free: stable_motion.is_some(),
+                reactive: reactive.filter(|_| passes.particles.reactive),
             };
             let tonemap = |g: &mut FrameGraph<'a>, target| {
                 passes

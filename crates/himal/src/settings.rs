@@ -229,6 +229,10 @@ pub struct FrameSettings {
     /// (cascades, S1 filter) instead of the static map's 4 x 4 gather per
     /// particle (the reference of Ryse's particle shadows; off by default).
     pub particles_cascaded_shadows: bool,
+    /// E4: particles mark a reactive mask that shortens the TAA history
+    /// where they drew this frame or the last (no trails behind moving
+    /// smoke; on by default).
+    pub particles_reactive: bool,
     /// E4: particles' ambient from the environment cube's lowest specular
     /// mip (Ryse) instead of the sky irradiance the world's surfaces get
     /// (off by default: the world's own term keeps particles consistent).
@@ -311,6 +315,7 @@ impl FrameSettings {
             particles: true,
             particles_per_pixel: false,
             particles_cascaded_shadows: false,
+            particles_reactive: true,
             particles_probe_ambient: false,
         }
     }

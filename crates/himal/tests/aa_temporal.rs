@@ -110,6 +110,17 @@ fn worst(gpu: &[f32], cpu: &Plane<4>) -> f32 {
 
 #[test]
 fn resolve_taa_and_unsharp_match_their_cpu_twins() {
+    chain_against_twins(false);
+}
+
+/// E4: the same chain reading a particle coverage mask (`REACTIVE`) and a
+/// history whose alpha holds last frame's coverage.
+#[test]
+fn reactive_resolve_and_taa_match_their_cpu_twins() {
+    chain_against_twins(true);
+}
+
+fn chain_against_twins(reactive: bool) {
     let ctx = shared_context().expect("GPU (lavapipe)");
     let pass = TemporalPass::new(ctx, SRGB).expect("pipelines");
     // Frame B (phase 1); the scene moved 1 px right per frame, except a
@@ -138,7 +149,27 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let t_mp = texture(ctx, MOTION_FORMAT, bytemuck::cast_slice(&mp_half), 4);
     let t_mn = texture(ctx, MOTION_FORMAT, &[], 4);
     // TAA history: the previous image, linear, as f16.
-    let hist_plane = linear(&prev);
+    let mut hist_plane = linear(&prev);
+    // Coverage in [0, 0.25): partial weights below 1 / AA_REACTIVE_GAIN.
+    let cov_bytes: Vec<u8> = (0..W * H)
+        .map(|i| {
+            if reactive {
+                ((i % W) * 7 + (i / W) * 5) as u8 % 64
+            } else {
+                0
+            }
+        })
+        .collect();
+    let mut cov_plane = Plane::<1>::new(W, H);
+    for (t, &b) in cov_plane.texels.iter_mut().zip(&cov_bytes) {
+        t[0] = b as f32 / 255.0;
+    }
+    if reactive {
+        for (i, t) in hist_plane.texels.iter_mut().enumerate() {
+            t[3] = (((i % W) * 5 + (i / W) * 13) % 7) as f32 / 28.0;
+        }
+    }
+    let t_cov = texture(ctx, wgpu::TextureFormat::R8Unorm, &cov_bytes, 1);
     let hist: Vec<f16> = hist_plane
         .texels
         .iter()
@@ -157,6 +188,8 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let m = g.import_texture("m", &t_m);
     let mp = g.import_texture("mp", &t_mp);
     let mn = g.import_texture("mn", &t_mn);
+    let cov = g.import_texture("cov", &t_cov);
+    let h = g.import_texture("h", &t_hist);
     let (resolved, mn) = pass.add_resolve(
         ctx,
         &mut g,
@@ -166,6 +199,7 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         m,
         mp,
         mn,
+        reactive.then_some((cov, h)),
     );
     let keep = g.import_texture("resolved.copy", &t_resolved);
     let keep = pass.add_unsharp(ctx, &mut g, resolved, keep);
@@ -181,7 +215,9 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     let h = g.import_texture("h", &t_hist);
     let hn = g.import_texture("hn", &t_hist_next);
     let out = g.import_texture("out", &t_taa_out);
-    let (hn, out) = pass.add_taa(ctx, &mut g, keep, h, hn, mn, mp, out);
+    let cov = g.import_texture("cov", &t_cov);
+    let cov = reactive.then_some(cov);
+    let (hn, out) = pass.add_taa(ctx, &mut g, keep, (h, hn), mn, mp, cov, out);
     let u = g.import_texture("unsharp", &t_unsharp);
     let u = pass.add_unsharp(ctx, &mut g, out, u);
     for h in [hn, u] {
@@ -189,6 +225,10 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
     }
     submit(ctx, g);
 
+    let mut hist_f16 = hist_plane.clone();
+    for t in &mut hist_f16.texels {
+        *t = t.map(|v| f32::from(f16::from_f32(v)));
+    }
     // CPU chain, each step fed with the GPU's previous result where the GPU
     // quantises (f16 targets).
     let (cpu_resolved, cpu_motion) = twin::resolve(
@@ -199,7 +239,28 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         &linear(&prev2),
         &m_plane,
         &mp_plane,
+        reactive.then_some((&cov_plane, &hist_f16)),
     );
+    if reactive {
+        let (plain, _) = twin::resolve(
+            &params,
+            ResolveMode::FlipQuad,
+            &linear(&cur),
+            &linear(&prev),
+            &linear(&prev2),
+            &m_plane,
+            &mp_plane,
+            None,
+        );
+        let moved = (plain.texels.iter().zip(&cpu_resolved.texels))
+            .filter(|(a, b)| (a[0] - b[0]).abs() > 1e-3)
+            .count();
+        println!("reactive: {moved} resolved pixels moved toward the current frame");
+        assert!(
+            moved > 50,
+            "the coverage barely changed the resolve ({moved})"
+        );
+    }
     let gpu_motion = read_f16(ctx, &t_mn);
     let dm = cpu_motion
         .texels
@@ -239,10 +300,6 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
             1.0,
         ];
     }
-    let mut hist_f16 = hist_plane.clone();
-    for t in &mut hist_f16.texels {
-        *t = t.map(|v| f32::from(f16::from_f32(v)));
-    }
     let gpu_mn = {
         let mut p = Plane::<2>::new(W, H);
         for (k, t) in p.texels.iter_mut().enumerate() {
@@ -250,7 +307,14 @@ fn resolve_taa_and_unsharp_match_their_cpu_twins() {
         }
         p
     };
-    let cpu_taa = twin::taa(&params, &gpu_in, &hist_f16, &gpu_mn, &mp_plane);
+    let cpu_taa = twin::taa(
+        &params,
+        &gpu_in,
+        &hist_f16,
+        &gpu_mn,
+        &mp_plane,
+        reactive.then_some(&cov_plane),
+    );
     let gpu_taa = read_f16(ctx, &t_taa_out);
     let d_taa = worst(&gpu_taa, &cpu_taa);
     println!("taa: max |diff| {d_taa}");

@@ -366,6 +366,7 @@ impl Renderer {
             probe_ambient: settings.particles_probe_ambient,
             cascaded_shadows: settings.particles_cascaded_shadows,
         };
+        self.res.passes.particles.reactive = settings.particles_reactive;
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {

@@ -15,6 +15,11 @@ struct AaParams {
 // Motion (previous uv - current uv) without the jitter change: the matrices
 // carry each frame's jitter, so the raw motion of a static point is the
 // jitter difference (prev_uv = uv0 - j_prev/size, curr_uv = uv0 - j/size).
+// E4 reactive mask: particle coverage at which aa.resolve and aa.taa drop
+// the previous frames entirely is 1 / gain (smoke's soft edges, a few %
+// alpha, still left a visible trail at gain 1). Twin: temporal/reference.rs.
+const AA_REACTIVE_GAIN: f32 = 4.0;
+
 fn aa_jitter_free_motion(p: AaParams, motion: vec2f, size: vec2f) -> vec2f {
     return motion + (p.jitter.zw - p.jitter.xy) / size;
 }

@@ -37,6 +37,9 @@ pub struct AaFrame<'a> {
     pub motion: TextureHandle,
     /// `motion` is `aa.taa_motion`'s stabilised jitter-free motion.
     pub motion_jitter_free: bool,
+    /// The particles' coverage this frame (E4): the TAA drops its history
+    /// there and where it recorded coverage last frame.
+    pub reactive: Option<TextureHandle>,
 }
 
 /// Adds tone mapping (`tonemap` writes into the target it is given) and the
@@ -97,6 +100,16 @@ pub fn add_chain<'a>(
         _ => ResolveMode::FlipQuad,
     };
     let t = aa.temporal;
+    // The TAA ring, when a TAA follows: its alpha is last frame's particle
+    // coverage, which the resolve reads too (E4).
+    let taa = match aa.mode {
+        AaMode::Tfq => None,
+        _ => Some(ring(g, temporal::TAA_HISTORY)?),
+    };
+    let reactive = match (aa.reactive, &taa) {
+        (Some(r), Some(h)) if mode != ResolveMode::PassThrough => Some((r, h.previous[0])),
+        _ => None,
+    };
     let (resolved, motion) = t.add_resolve(
         ctx,
         g,
@@ -106,11 +119,12 @@ pub fn add_chain<'a>(
         aa.motion,
         motion_prev,
         motion_ring.next,
+        reactive,
     );
     if aa.mode == AaMode::Tfq {
         return Ok(t.add_unsharp(ctx, g, resolved, output));
     }
-    let taa = ring(g, temporal::TAA_HISTORY)?;
+    let taa = taa.ok_or_else(|| GpuError::Other("aa.taa without its history".into()))?;
     let color = if aa.mode == AaMode::Hraa {
         g.create_texture(
             "aa.taa.out",
@@ -123,10 +137,10 @@ pub fn add_chain<'a>(
         ctx,
         g,
         resolved,
-        taa.previous[0],
-        taa.next,
+        (taa.previous[0], taa.next),
         motion,
         motion_prev,
+        aa.reactive,
         color,
     );
     Ok(if aa.mode == AaMode::Hraa {

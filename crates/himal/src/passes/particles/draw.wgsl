@@ -1,6 +1,7 @@
 // forward.particles (E4): camera-facing quads of the live particles, after
 // the deferred lighting and the forward surfaces, premultiplied over the
-// HDR target (One, OneMinusSrcAlpha). One instance per slot (dead slots
+// HDR target (One, OneMinusSrcAlpha), their coverage into a reactive mask
+// for the TAA. One instance per slot (dead slots
 // give a degenerate quad). Shading: the particle's accumulated light
 // (particles.light; PER_PIXEL: the same sums at each pixel, the
 // reference) with a per-pixel sphere-like sprite normal, plus ambient from
@@ -98,8 +99,15 @@ fn light_at(x: vec3f) -> ParticleLight {
     return acc;
 }
 
+struct DrawOut {
+    @location(0) color: vec4f,
+    // Coverage for the TAA's reactive mask (R8, blended like the colour:
+    // 1 − Π(1 − a)).
+    @location(1) reactive: vec4f,
+}
+
 @fragment
-fn fs_main(in: ParticleOut) -> @location(0) vec4f {
+fn fs_main(in: ParticleOut) -> DrawOut {
     let r2 = dot(in.corner, in.corner);
     if (r2 >= 1.0) {
         discard;
@@ -131,5 +139,5 @@ fn fs_main(in: ParticleOut) -> @location(0) vec4f {
         albedo = vec3f(1.0);
     }
     let c = albedo * (particle_light_diffuse(acc, n) + ambient);
-    return vec4f(c * alpha, alpha);
+    return DrawOut(vec4f(c * alpha, alpha), vec4f(alpha, 0.0, 0.0, alpha));
 }

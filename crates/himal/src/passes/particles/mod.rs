@@ -44,6 +44,10 @@ pub const GRAVITY: f32 = 9.81;
 /// The wind particles relax toward (m/s), until the scene has wind of its own.
 pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
 
+/// The particles' coverage (`forward.particles`' second target), the TAA's
+/// reactive mask.
+pub const REACTIVE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
 /// One particle slot (shaders/particles.wgsl `Particle`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -333,6 +337,8 @@ pub struct ParticlesPass {
     /// This frame's permutation (per-pixel light, white, probe ambient;
     /// from `FrameSettings`).
     pub key: ParticleKey,
+    /// The TAA reads the particles' coverage (`FrameSettings::particles_reactive`).
+    pub reactive: bool,
 }
 
 impl ParticlesPass {
@@ -374,6 +380,7 @@ impl ParticlesPass {
             order: Vec::new(),
             active: false,
             key: ParticleKey::default(),
+            reactive: true,
         })
     }
 
@@ -485,11 +492,14 @@ impl ParticlesPass {
         ctx: &GpuContext,
         key: ParticleKey,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        let targets = [Some(wgpu::ColorTargetState {
-            format: HDR_FORMAT,
-            blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
+        let blended = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let targets = [blended(HDR_FORMAT), blended(REACTIVE_FORMAT)];
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         let constants = [
             ("PER_PIXEL", flag(key.per_pixel)),
@@ -503,7 +513,9 @@ impl ParticlesPass {
     }
 
     /// `forward.particles`: the live particles' quads over `hdr` (scene
-    /// `depth` read for the soft fade); returns the new HDR version.
+    /// `depth` read for the soft fade); returns the new HDR version and
+    /// the particles' coverage (the TAA's reactive mask; `None` when
+    /// nothing is drawn).
     pub fn add_draw<'a>(
         &'a self,
         ctx: &GpuContext,
@@ -512,10 +524,15 @@ impl ParticlesPass {
         depth: TextureHandle,
         (particles, light): (BufferHandle, BufferHandle),
         inputs: ParticleInputs<'a>,
-    ) -> TextureHandle {
+    ) -> (TextureHandle, Option<TextureHandle>) {
         let Some(b) = self.buffers.as_ref().filter(|_| self.active) else {
-            return hdr;
+            return (hdr, None);
         };
+        let size = g.texture_desc(hdr).map_or((1, 1), |d| (d.width, d.height));
+        let reactive = g.create_texture(
+            "particles.reactive",
+            crate::graph::TextureDesc::new_2d(size.0, size.1, REACTIVE_FORMAT),
+        );
         let maps = inputs.sun_maps;
         let far = Fallback::DepthFar;
         let order = &self.order;
@@ -536,13 +553,14 @@ impl ParticlesPass {
             .sampler("shadow_sampler", inputs.shadow_sampler)
             .uniform("ambient_lights", inputs.ambient_lights)
             .color(hdr, wgpu::LoadOp::Load)
+            .color(reactive, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .record(move |_, rp| {
                 for r in order {
                     rp.draw(0..6, r.clone());
                 }
                 Ok(())
             });
-        written.colors[0]
+        (written.colors[0], Some(written.colors[1]))
     }
 
     /// The light buffer read back (tests).

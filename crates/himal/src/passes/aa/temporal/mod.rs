@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, History, TextureDesc, TextureHandle};
+use crate::graph::{Fallback, FrameGraph, History, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 
 /// Resolved colour and TAA history (linear).
@@ -169,41 +169,52 @@ impl TemporalPass {
             ResolveMode::FlipQuad,
         ] {
             for jitter_free in [false, true] {
-                pass.resolve_pipeline(ctx, mode, jitter_free)?;
+                for reactive in [false, true] {
+                    pass.resolve_pipeline(ctx, mode, jitter_free, reactive)?;
+                }
             }
         }
         for format in [RESOLVED_FORMAT, output_format] {
-            pass.taa_pipeline(ctx, format)?;
+            for reactive in [false, true] {
+                pass.taa_pipeline(ctx, format, reactive)?;
+            }
             pass.unsharp_pipeline(ctx, format)?;
         }
         Ok(pass)
     }
 
-    /// `aa.resolve` of `mode`; `jitter_free`: the motion input is already jitter-free.
+    /// `aa.resolve` of `mode`; `jitter_free`: the motion input is already
+    /// jitter-free; `reactive`: reads the particles' coverage (E4).
     pub fn resolve_pipeline(
         &self,
         ctx: &GpuContext,
         mode: ResolveMode,
         jitter_free: bool,
+        reactive: bool,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [target(RESOLVED_FORMAT), target(MOTION_FORMAT)];
         let mut spec = RenderSpec::fullscreen("aa.resolve", &targets);
         let constants = [
             ("MODE", mode as u32 as f64),
             ("JITTER_FREE_MOTION", if jitter_free { 1.0 } else { 0.0 }),
+            ("REACTIVE", if reactive { 1.0 } else { 0.0 }),
         ];
         spec.constants = &constants;
         self.resolve_program.render_pipeline(ctx, &spec)
     }
 
-    /// `aa.taa` writing its colour in `format`.
+    /// `aa.taa` writing its colour in `format`; `reactive`: reads the
+    /// particles' coverage (E4, `REACTIVE`).
     pub fn taa_pipeline(
         &self,
         ctx: &GpuContext,
         format: wgpu::TextureFormat,
+        reactive: bool,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         let targets = [target(RESOLVED_FORMAT), target(format)];
-        let spec = RenderSpec::fullscreen("aa.taa", &targets);
+        let mut spec = RenderSpec::fullscreen("aa.taa", &targets);
+        let constants = [("REACTIVE", if reactive { 1.0 } else { 0.0 })];
+        spec.constants = &constants;
         self.taa_program.render_pipeline(ctx, &spec)
     }
 
@@ -225,6 +236,8 @@ impl TemporalPass {
 
     /// `aa.resolve`: (resolved colour, motion history next). `motion` is the
     /// G-buffer's, or already jitter-free (`aa.taa_motion`) when `jitter_free`.
+    /// `reactive`: the particles' coverage and the TAA's previous history
+    /// (its alpha: last frame's coverage), E4.
     #[allow(clippy::too_many_arguments)]
     pub fn add_resolve<'a>(
         &'a self,
@@ -236,6 +249,7 @@ impl TemporalPass {
         motion: TextureHandle,
         motion_prev: TextureHandle,
         motion_next: TextureHandle,
+        reactive: Option<(TextureHandle, TextureHandle)>,
     ) -> (TextureHandle, TextureHandle) {
         let size = graph
             .texture_desc(current)
@@ -247,34 +261,38 @@ impl TemporalPass {
         let black = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
         let w = graph
             .fullscreen("aa.resolve", &self.resolve_program)
-            .pipeline(self.resolve_pipeline(ctx, mode, jitter_free))
+            .pipeline(self.resolve_pipeline(ctx, mode, jitter_free, reactive.is_some()))
             .uniform("params", &self.params)
             .read("current", current)
             .read("previous", previous.0)
             .read("previous2", previous.1)
             .read("motion", motion)
             .read("previous_motion", motion_prev)
+            .optional("reactive", reactive.map(|r| r.0), Fallback::Black)
+            .optional("taa_history", reactive.map(|r| r.1), Fallback::Black)
+            .sampler("linear_sampler", &self.linear)
             .color(out, black)
             .color(motion_next, black)
             .draw_targets();
         (w.colors[0], w.colors[1])
     }
 
-    /// `aa.taa`: returns (history next, colour) — colour written into `color_out`.
+    /// `aa.taa`: returns (history next, colour) — colour written into
+    /// `color_out`. `reactive`: the particles' coverage (E4), if any.
     #[allow(clippy::too_many_arguments)]
     pub fn add_taa<'a>(
         &'a self,
         ctx: &GpuContext,
         graph: &mut FrameGraph<'a>,
         input: TextureHandle,
-        history_prev: TextureHandle,
-        history_next: TextureHandle,
+        (history_prev, history_next): (TextureHandle, TextureHandle),
         motion: TextureHandle,
         motion_prev: TextureHandle,
+        reactive: Option<TextureHandle>,
         color_out: TextureHandle,
     ) -> (TextureHandle, TextureHandle) {
         let pipeline = match graph.texture_desc(color_out) {
-            Some(d) => self.taa_pipeline(ctx, d.format),
+            Some(d) => self.taa_pipeline(ctx, d.format, reactive.is_some()),
             None => Err(GpuError::Other("aa.taa: unknown output".into())),
         };
         let black = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
@@ -287,6 +305,7 @@ impl TemporalPass {
             .read("motion", motion)
             .read("previous_motion", motion_prev)
             .sampler("linear_sampler", &self.linear)
+            .optional("reactive", reactive, Fallback::Black)
             .color(history_next, black)
             .color(color_out, black)
             .draw_targets();

@@ -39,7 +39,13 @@ fn avg(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     ]
 }
 
-/// Twin of `aa.resolve`: returns (colour, jitter-free motion).
+/// `AA_REACTIVE_GAIN` (shaders/aa.wgsl).
+pub const REACTIVE_GAIN: f32 = 4.0;
+
+/// Twin of `aa.resolve`: returns (colour, jitter-free motion). `reactive`
+/// (E4, `REACTIVE`): the particles' coverage (the frame's size) and the
+/// TAA's previous history (its alpha: last frame's coverage).
+#[allow(clippy::too_many_arguments)]
 pub fn resolve(
     p: &AaParams,
     mode: ResolveMode,
@@ -48,6 +54,7 @@ pub fn resolve(
     previous2: &Plane<4>,
     motion: &Plane<2>,
     previous_motion: &Plane<2>,
+    reactive: Option<(&Plane<1>, &Plane<4>)>,
 ) -> (Plane<4>, Plane<2>) {
     let (w, h) = (current.width, current.height);
     let size = [w as f32, h as f32];
@@ -86,6 +93,11 @@ pub fn resolve(
                         before = avg(before, rgb(previous.load(qx + d_prev.0, qy + d_prev.1)));
                     }
                     result = avg(now, before);
+                    if let Some((cov, hist)) = reactive {
+                        let c = cov.load(x, y)[0].max(hist.load(qx, qy)[3]);
+                        let k = (REACTIVE_GAIN * c).clamp(0.0, 1.0);
+                        result = std::array::from_fn(|j| result[j] + (now[j] - result[j]) * k);
+                    }
                 }
             }
             out.texels[i] = [result[0], result[1], result[2], 1.0];
@@ -98,13 +110,16 @@ fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// Twin of `aa.taa`: the next history (= the frame's colour).
+/// Twin of `aa.taa`: the next history (= the frame's colour; alpha 1, or
+/// with `reactive`, E4, the particles' coverage, which with the history's
+/// alpha raises the new frame's weight).
 pub fn taa(
     p: &AaParams,
     input: &Plane<4>,
     history: &Plane<4>,
     motion: &Plane<2>,
     previous_motion: &Plane<2>,
+    reactive: Option<&Plane<1>>,
 ) -> Plane<4> {
     let (w, h) = (input.width, input.height);
     let size = [w as f32, h as f32];
@@ -131,14 +146,20 @@ pub fn taa(
             if p.state[0] < 3.0 || !motion_ok || !inside {
                 alpha = 1.0;
             }
-            let hs = rgb(history.sample(uv[0], uv[1]));
+            let h4 = history.sample(uv[0], uv[1]);
+            let hs = rgb(h4);
+            let mut coverage = 1.0;
+            if let Some(cov) = reactive {
+                coverage = cov.load(x, y)[0];
+                alpha = alpha.max((REACTIVE_GAIN * coverage.max(h4[3])).clamp(0.0, 1.0));
+            }
             let i = y as usize * w + x as usize;
             for c in 0..3 {
                 let t = p.tuning[1];
                 let hc = hs[c].clamp(lo[c] - t, hi[c] + t);
                 out.texels[i][c] = hc + (xv[c] - hc) * alpha;
             }
-            out.texels[i][3] = 1.0;
+            out.texels[i][3] = coverage;
         }
     }
     out

@@ -10,6 +10,9 @@
 //     of frame N around p (the centre pixel's window, not the mean),
 //   - jitter matches: history of at least 2 consecutive frames (phases alternate);
 // otherwise out = (C(p) + C(p + d_now)) / 2.
+// REACTIVE (E4): where particles drew this frame (`reactive`) or the last
+// (the TAA history's alpha at q), the previous sample is dropped in
+// proportion: smoke has no motion vectors, its N-1 sample is a ghost.
 // MODE 0: pass-through (TAA alone), 1: two-tap SMAA T2x (own samples), 2: FLIPQUAD.
 // Target 0: resolved colour (linear, Rgba16Float); target 1: jitter-free motion history.
 // CPU twin: temporal/reference.rs.
@@ -20,6 +23,7 @@
 override MODE: u32 = 2u;
 // The motion input is aa.taa_motion's stabilised jitter-free motion.
 override JITTER_FREE_MOTION: bool = false;
+override REACTIVE: bool = false;
 
 // Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
 // without freeing, any shader whose branches or loop bounds read a uniform
@@ -30,6 +34,9 @@ override JITTER_FREE_MOTION: bool = false;
 @group(0) @binding(3) var previous2: texture_2d<f32>;
 @group(0) @binding(4) var motion: texture_2d<f32>;
 @group(0) @binding(5) var previous_motion: texture_2d<f32>;
+@group(0) @binding(6) var reactive: texture_2d<f32>;
+@group(0) @binding(7) var taa_history: texture_2d<f32>;
+@group(0) @binding(8) var linear_sampler: sampler;
 
 struct ResolveOut {
     @location(0) color: vec4f,
@@ -91,6 +98,12 @@ fn fs_main(@builtin(position) frag: vec4f) -> ResolveOut {
     if (MODE == 2u) {
         before = 0.5 * (before + aa_load(previous, q + d_prev));
     }
-    out.color = vec4f(0.5 * (now + before), 1.0);
+    var result = 0.5 * (now + before);
+    if (REACTIVE) {
+        let covered = max(textureSampleLevel(reactive, linear_sampler, frag.xy / size, 0.0).r,
+                          textureLoad(taa_history, clamp(q, vec2i(0), vec2i(size) - 1), 0).a);
+        result = mix(result, now, saturate(AA_REACTIVE_GAIN * covered));
+    }
+    out.color = vec4f(result, 1.0);
     return out;
 }

@@ -5,6 +5,9 @@
 // history into the 3x3 box of the input, widened by the colour tolerance. Sample count follows signal frequency
 // (Ryse): alpha = mix(alpha_low, alpha_high, saturate(luma contrast of the box * k)),
 // fewer frames where the image is smooth, more on edges and detail.
+// REACTIVE (E4): particles' coverage this frame (`reactive`, forward.particles)
+// and in the history (its alpha) raise alpha to at least that coverage: no
+// motion vectors follow smoke, so its history is dropped where it drew.
 // Target 0: next history (linear, Rgba16Float); target 1: the frame's colour.
 // CPU twin: temporal/reference.rs.
 #import view
@@ -21,6 +24,9 @@
 @group(0) @binding(3) var motion: texture_2d<f32>;
 @group(0) @binding(4) var previous_motion: texture_2d<f32>;
 @group(0) @binding(5) var linear_sampler: sampler;
+@group(0) @binding(6) var reactive: texture_2d<f32>;
+
+override REACTIVE: bool = false;
 
 struct TaaOut {
     @location(0) history: vec4f,
@@ -57,10 +63,16 @@ fn fs_main(@builtin(position) frag: vec4f) -> TaaOut {
         alpha = 1.0;
     }
     let tolerance = vec3f(params.tuning.y);
-    let h = clamp(textureSampleLevel(history, linear_sampler, uv, 0.0).rgb, lo - tolerance, hi + tolerance);
+    let hs = textureSampleLevel(history, linear_sampler, uv, 0.0);
+    var coverage = 1.0;
+    if (REACTIVE) {
+        coverage = textureSampleLevel(reactive, linear_sampler, frag.xy / size, 0.0).r;
+        alpha = max(alpha, saturate(AA_REACTIVE_GAIN * max(coverage, hs.a)));
+    }
+    let h = clamp(hs.rgb, lo - tolerance, hi + tolerance);
     let result = mix(h, x, alpha);
     var out: TaaOut;
-    out.history = vec4f(result, 1.0);
+    out.history = vec4f(result, coverage);
     out.color = vec4f(result, 1.0);
     return out;
 }
