@@ -293,6 +293,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub particle_reactive: String,
+    /// E4: each emitter's particles drawn far to near (a GPU bitonic sort
+    /// per emitter, rings up to 1024 slots) or, off, in ring order.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub particle_sort: String,
     /// E4 particles' ambient: sky (the sky irradiance the world's surfaces
     /// get) or probe (the environment cube's lowest specular mip, Ryse's).
     #[arg(
@@ -474,6 +483,7 @@ impl PostArgs {
             "pixel" => true,
             other => bail!("--particle-lighting {other}: expected vertex or pixel"),
         };
+        settings.particles_sort = on_off("--particle-sort", &self.particle_sort)?;
         settings.particles_reactive = on_off("--particle-reactive", &self.particle_reactive)?;
         settings.particles_cascaded_shadows = match self.particle_shadows.as_str() {
             "static" => false,

@@ -601,7 +601,8 @@ pub fn build<'a>(
             let p = &passes.particles;
             match p.add_light(&mut g, state, particle_inputs) {
                 Some(light) => {
-                    let buffers = (state, light);
+                    let order = p.add_sort(&mut g, state).unwrap_or(state);
+                    let buffers = (state, light, order);
                     p.add_draw(ctx, &mut g, hdr, forward.depth, buffers, particle_inputs)
                 }
                 None => (hdr, None),

@@ -233,6 +233,9 @@ pub struct FrameSettings {
     /// where they drew this frame or the last (no trails behind moving
     /// smoke; on by default).
     pub particles_reactive: bool,
+    /// E4: each emitter's particles drawn far to near (a GPU sort per
+    /// emitter, rings up to 1024 slots; off: ring order).
+    pub particles_sort: bool,
     /// E4: particles' ambient from the environment cube's lowest specular
     /// mip (Ryse) instead of the sky irradiance the world's surfaces get
     /// (off by default: the world's own term keeps particles consistent).
@@ -316,6 +319,7 @@ impl FrameSettings {
             particles_per_pixel: false,
             particles_cascaded_shadows: false,
             particles_reactive: true,
+            particles_sort: true,
             particles_probe_ambient: false,
         }
     }

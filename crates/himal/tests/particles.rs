@@ -393,7 +393,8 @@ fn per_particle_light_against_per_pixel() {
     // By day the sun is the same over a quad (and the canopy shades whole
     // quads): measured FLIP 0.0000. At night the lamp's 1/d^2 inside the
     // plume varies across a quad, Ryse's "lights with harsh fall off":
-    // measured FLIP 0.064, HDR 9.2 % apart (160 x 120, lavapipe).
+    // measured FLIP 0.070, HDR 9.6 % apart (160 x 120, lavapipe; particles
+    // sorted inside each emitter).
     assert!(flips[0].0 < 0.01, "day: FLIP {}", flips[0].0);
     assert!(
         flips[1].1 > 0.01,
@@ -413,7 +414,7 @@ fn static_map_shadows_against_cascaded_per_pixel() {
     let cascaded = |s: &mut himal::FrameSettings| s.particles_cascaded_shadows = true;
     let (flip, rel, covered) = compare_paths(&scene, &camera, "static map vs cascaded", &cascaded);
     assert!(covered > 200, "particles cover {covered} pixels");
-    // Measured FLIP 0.0153, HDR 1.5 % apart (160 x 120, lavapipe; 33 of
+    // Measured FLIP 0.0138, HDR 1.2 % apart (160 x 120, lavapipe; 33 of
     // 121 particles in the slab's shadow): the static map's coarser texels
     // and the filters move the shadow edge across a few quads.
     assert!(flip < 0.05 && rel < 0.05, "FLIP {flip}, HDR {rel}");
@@ -701,5 +702,67 @@ fn moving_particles_leave_no_trail_under_temporal_aa() {
     assert!(
         res[3].0 <= res[2].0 / 3.0 && res[3].0 < 0.008,
         "HRAA: {res:?}"
+    );
+}
+
+/// `particles.sort`: inside each emitter the live particles draw far to
+/// near along the view direction, then the dead; the permutation equals
+/// the CPU twin's. Off, ring order.
+#[test]
+fn particles_draw_far_to_near_inside_each_emitter() {
+    use himal::passes::particles::reference::draw_order;
+    let (scene, camera) = common::scene_and_camera("particles_smoke", "side");
+    let mut r = common::renderer(&scene);
+    let mut s = settings(&scene);
+    let f = r.render(&camera, &s).expect("frame");
+    let ms: Vec<f64> = (f.timings.iter())
+        .filter(|t| t.id == "particles.sort")
+        .map(|t| t.gpu_ms)
+        .collect();
+    println!("particles.sort: {ms:?} ms (lavapipe, 2 emitters, 384 slots)");
+    let ctx = r.context();
+    let particles = r.particles().read_particles(ctx).expect("particles");
+    let order = r.particles().read_order(ctx).expect("order");
+    let records = r.particles().sim.records().to_vec();
+    let twin = draw_order(&particles, &records, camera.position, camera.forward, true);
+    let differ = order.iter().zip(&twin).filter(|(a, b)| a != b).count();
+    let depth = |slot: u32| {
+        let p = &particles[slot as usize];
+        (p.vel_alive[3] > 0.5).then(|| {
+            (glam::Vec3::from_slice(&p.pos_age[..3]) - camera.position).dot(camera.forward)
+        })
+    };
+    let mut alive = 0;
+    for e in &records {
+        let [first, cap, ..] = e.slots;
+        let ring = &order[first as usize..(first + cap) as usize];
+        let mut sorted_ring = ring.to_vec();
+        sorted_ring.sort();
+        let expect: Vec<u32> = (first..first + cap).collect();
+        assert_eq!(sorted_ring, expect, "not a permutation of the ring");
+        let keys: Vec<Option<f32>> = ring.iter().map(|&s| depth(s)).collect();
+        alive += keys.iter().flatten().count();
+        for w in keys.windows(2) {
+            match (w[0], w[1]) {
+                (Some(a), Some(b)) => assert!(a >= b, "near before far: {a} then {b}"),
+                (None, Some(_)) => panic!("a dead slot before a live one"),
+                _ => {}
+            }
+        }
+    }
+    println!(
+        "particles.sort: {alive} alive, {differ} of {} slots differ from the twin",
+        order.len()
+    );
+    // Measured 0: the same f32 depths, a strict order (ties by slot).
+    assert_eq!(differ, 0, "GPU order differs from the twin");
+    assert!(alive > 100, "{alive} alive");
+    // Off: ring order.
+    s.particles_sort = false;
+    common::render_rgba(&mut r, &camera, &s);
+    let ring = r.particles().read_order(r.context()).expect("order");
+    assert!(
+        ring.iter().enumerate().all(|(i, &v)| v == i as u32),
+        "sort off: ring order"
     );
 }

@@ -367,6 +367,7 @@ impl Renderer {
             cascaded_shadows: settings.particles_cascaded_shadows,
         };
         self.res.passes.particles.reactive = settings.particles_reactive;
+        self.res.passes.particles.sort_particles = settings.particles_sort;
         let planned = frame::plan(
             &mut self.res.passes,
             frame::PlanInputs {

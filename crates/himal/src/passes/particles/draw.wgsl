@@ -40,6 +40,8 @@ const SOFT_DISTANCE: f32 = 0.5;
 @group(0) @binding(10) var cascades: texture_depth_2d_array;
 @group(0) @binding(11) var static_map: texture_depth_2d_array;
 @group(0) @binding(12) var shadow_sampler: sampler_comparison;
+// particles.sort: the slot drawn at each instance (far to near per emitter).
+@group(0) @binding(13) var<storage, read> order: array<u32>;
 
 struct ParticleOut {
     @builtin(position) clip: vec4f,
@@ -51,8 +53,9 @@ struct ParticleOut {
 }
 
 @vertex
-fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) slot: u32) -> ParticleOut {
+fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u32) -> ParticleOut {
     var out: ParticleOut;
+    let slot = order[instance];
     let p = particles[slot];
     out.slot = slot;
     if (p.vel_alive.w < 0.5) {

@@ -44,6 +44,9 @@ pub const GRAVITY: f32 = 9.81;
 /// The wind particles relax toward (m/s), until the scene has wind of its own.
 pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
 
+/// Largest ring `particles.sort` orders (one workgroup's memory).
+pub const SORT_MAX: u32 = 1024;
+
 /// The particles' coverage (`forward.particles`' second target), the TAA's
 /// reactive mask.
 pub const REACTIVE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
@@ -259,6 +262,7 @@ struct Buffers {
     particles: wgpu::Buffer,
     counters: wgpu::Buffer,
     light: wgpu::Buffer,
+    order: wgpu::Buffer,
 }
 
 /// What the lighting and drawing of particles read from the other passes.
@@ -325,6 +329,9 @@ pub struct ParticlesPass {
     light: Program,
     light_pipeline: wgpu::ComputePipeline,
     draw: Program,
+    sort_program: Program,
+    /// `particles.sort` with SORT off and on.
+    sort_pipelines: [wgpu::ComputePipeline; 2],
     buffers: Option<Buffers>,
     /// Steps this frame (0: nothing planned).
     steps: usize,
@@ -339,6 +346,9 @@ pub struct ParticlesPass {
     pub key: ParticleKey,
     /// The TAA reads the particles' coverage (`FrameSettings::particles_reactive`).
     pub reactive: bool,
+    /// Particles drawn far to near inside each emitter
+    /// (`FrameSettings::particles_sort`; off: ring order).
+    pub sort_particles: bool,
 }
 
 impl ParticlesPass {
@@ -349,6 +359,11 @@ impl ParticlesPass {
         let light = Program::new(ctx, "passes/particles/light.wgsl")?;
         let light_pipeline = light.compute_pipeline(ctx, "cs_main", &[])?;
         let draw = Program::new(ctx, "passes/particles/draw.wgsl")?;
+        let sort_program = Program::new(ctx, "passes/particles/sort.wgsl")?;
+        let sort_pipelines = [
+            sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 0.0)])?,
+            sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 1.0)])?,
+        ];
         let sim = Simulation::new(emitters);
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
@@ -366,6 +381,7 @@ impl ParticlesPass {
                 particles: storage(ctx, "particles.state", slots * 32, src),
                 counters: storage(ctx, "particles.counters", ne * 8, src),
                 light: storage(ctx, "particles.light", slots * 32, src),
+                order: storage(ctx, "particles.order", slots * 4, src),
             }
         });
         Ok(Self {
@@ -375,12 +391,15 @@ impl ParticlesPass {
             light,
             light_pipeline,
             draw,
+            sort_program,
+            sort_pipelines,
             buffers,
             steps: 0,
             order: Vec::new(),
             active: false,
             key: ParticleKey::default(),
             reactive: true,
+            sort_particles: true,
         })
     }
 
@@ -486,6 +505,43 @@ impl ParticlesPass {
         Some(written.buffer(light))
     }
 
+    /// `particles.sort`: each emitter's slots far to near along the view
+    /// direction (rings up to [`SORT_MAX`] slots; ring order when
+    /// `sort_particles` is off); returns the order buffer's version.
+    pub fn add_sort<'a>(
+        &'a self,
+        g: &mut FrameGraph<'a>,
+        particles: BufferHandle,
+    ) -> Option<BufferHandle> {
+        let b = self.buffers.as_ref().filter(|_| self.active)?;
+        let order = g.import_buffer("particles.order", &b.order);
+        let pipeline = self.sort_pipelines[usize::from(self.sort_particles)].clone();
+        let written = g
+            .compute("particles.sort", &self.sort_program)
+            .compute_pipeline(Ok(pipeline))
+            .read_buffer(
+                "particles",
+                particles,
+                crate::graph::BufferAccess::StorageRead,
+            )
+            .uniform("emitters", &b.emitters)
+            .write_buffer("order", order)
+            .dispatch([self.sim.emitters.len() as u32, 1, 1]);
+        Some(written.buffer(order))
+    }
+
+    /// The draw order read back (tests): the slot drawn at each instance.
+    pub fn read_order(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let b = self
+            .buffers
+            .as_ref()
+            .ok_or_else(|| GpuError::Other("no emitters".into()))?;
+        let bytes = crate::gpu::read_buffer(ctx, &b.order)?;
+        Ok(bytemuck::pod_collect_to_vec(
+            &bytes[..self.sim.slots() as usize * 4],
+        ))
+    }
+
     /// The draw pipeline of permutation `key`.
     pub fn draw_pipeline(
         &self,
@@ -522,7 +578,7 @@ impl ParticlesPass {
         g: &mut FrameGraph<'a>,
         hdr: TextureHandle,
         depth: TextureHandle,
-        (particles, light): (BufferHandle, BufferHandle),
+        (particles, light, sorted): (BufferHandle, BufferHandle, BufferHandle),
         inputs: ParticleInputs<'a>,
     ) -> (TextureHandle, Option<TextureHandle>) {
         let Some(b) = self.buffers.as_ref().filter(|_| self.active) else {
@@ -543,6 +599,7 @@ impl ParticlesPass {
             .read_buffer("particles", particles, storage_read)
             .uniform("emitters", &b.emitters)
             .read_buffer("particle_light", light, storage_read)
+            .read_buffer("order", sorted, storage_read)
             .read("depth", depth)
             .read_cube("env_specular", inputs.env)
             .sampler("env_sampler", &inputs.envmap.sampler)

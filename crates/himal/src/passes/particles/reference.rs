@@ -178,3 +178,35 @@ pub fn sprite_normal(view: glam::Mat4, c: glam::Vec2, r2: f32) -> Vec3 {
     let row = |k: usize| Vec3::new(view.x_axis[k], view.y_axis[k], view.z_axis[k]);
     (row(0) * c.x + row(1) * c.y + row(2) * (1.0 - r2).max(0.0).sqrt()).normalize()
 }
+
+/// Twin of `particles.sort`: the slot drawn at each instance. Inside each
+/// emitter's ring (`slots` = [first, capacity]) the live particles far to
+/// near along `forward` from `eye` (view depth, f32 as on the GPU), then
+/// the dead; ties by slot. Rings over `SORT_MAX` (or `sort` off) keep
+/// ring order.
+pub fn draw_order(
+    particles: &[ParticleGpu],
+    emitters: &[super::EmitterGpu],
+    eye: Vec3,
+    forward: Vec3,
+    sort: bool,
+) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..particles.len() as u32).collect();
+    for e in emitters {
+        let [first, cap, ..] = e.slots;
+        if !sort || cap > super::SORT_MAX {
+            continue;
+        }
+        let key = |s: u32| {
+            let p = &particles[s as usize];
+            if p.vel_alive[3] > 0.5 {
+                (Vec3::from_slice(&p.pos_age[..3]) - eye).dot(forward)
+            } else {
+                -3.0e38
+            }
+        };
+        let ring = &mut order[first as usize..(first + cap) as usize];
+        ring.sort_by(|&a, &b| key(b).total_cmp(&key(a)).then(a.cmp(&b)));
+    }
+    order
+}
