@@ -533,6 +533,18 @@ fn bad_particle_switches_are_rejected() {
         &["render", "--particle-ambient", "cube", "--size", "8x8"],
         "--particle-ambient cube",
     );
+    fails_with(
+        &["render", "--particle-shadows", "dynamic", "--size", "8x8"],
+        "--particle-shadows dynamic",
+    );
+    fails_with(
+        &["render", "--particle-sort", "maybe", "--size", "8x8"],
+        "--particle-sort",
+    );
+    fails_with(
+        &["render", "--particle-reactive", "maybe", "--size", "8x8"],
+        "--particle-reactive",
+    );
 }
 
 #[test]
