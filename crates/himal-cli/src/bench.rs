@@ -13,9 +13,8 @@ use himal::FrameSettings;
 use himal::graph::{PassTiming, TimingMethod};
 
 use crate::GpuArgs;
-use crate::render::{
-    PostArgs, ShadowArgs, load_scene, open_renderer, parse_size, pick_camera, world_haze,
-};
+use crate::render::{PostArgs, ShadowArgs, parse_size, pick_camera, world_haze};
+use crate::scene_source::{load_scene, open_renderer};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {

@@ -14,7 +14,8 @@ use himal::graph::{PassTiming, TimingMethod};
 use himal::scene::Camera;
 
 use crate::bench::{BenchArgs, PassStats, frame_settings};
-use crate::render::{load_scene, open_renderer, parse_size, pick_camera, world_haze};
+use crate::render::{parse_size, pick_camera, world_haze};
+use crate::scene_source::{load_scene, open_renderer};
 
 /// One side's options, parsed like `himal bench`'s (later options win).
 #[derive(Parser, Debug)]

@@ -13,6 +13,7 @@ mod camera;
 mod orbit;
 mod prewarm;
 mod render;
+mod scene_source;
 mod soak;
 mod view;
 

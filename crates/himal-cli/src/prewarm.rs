@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use crate::GpuArgs;
-use crate::render::load_scene;
+use crate::scene_source::load_scene;
 
 #[derive(Args, Debug)]
 pub struct PrewarmArgs {
@@ -30,7 +30,8 @@ pub fn run(args: &PrewarmArgs) -> Result<()> {
         );
     };
     let scene = load_scene(&args.scene)?;
-    let mut renderer = crate::render::open_renderer(&args.scene, args.gpu.context()?, &scene)?;
+    let mut renderer =
+        crate::scene_source::open_renderer(&args.scene, args.gpu.context()?, &scene)?;
     renderer.prewarm()?;
     // L1: the Bruneton tables (cache file beside the pipelines) and pipelines.
     renderer.set_sky_table_cache(Some(dir.clone()));

@@ -677,7 +677,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
             Err(_) => None,
         };
     // A model is orbited, a world or scene flown.
-    let orbit = (args.gltf.is_some() || crate::render::is_gltf(&args.scene))
+    let orbit = (args.gltf.is_some() || crate::scene_source::is_gltf(&args.scene))
         .then(|| Orbit::around(&camera, &scene.bounds));
     let open_at = match std::env::var("HIMAL_VIEW_OPEN_AT") {
         Ok(v) => {

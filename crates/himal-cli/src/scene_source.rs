@@ -1,0 +1,99 @@
+//! What `--scene` names: the built-in demo, the streamed world, a scene
+//! file (with or without a `[world]` table) or a glTF model; loaded once
+//! per process and opened as a renderer.
+
+use std::path::Path;
+
+use anyhow::Result;
+use himal::Renderer;
+use himal::scene::Scene;
+
+/// The built-in streamed open world (`--scene world`).
+pub const WORLD: &str = "world";
+
+/// The world of `--scene world` (generated per sector from its seed).
+pub fn world() -> std::sync::Arc<himal::scene::world::World> {
+    std::sync::Arc::new(himal::scene::world::World::new(Default::default()))
+}
+
+pub(crate) fn is_gltf(spec: &str) -> bool {
+    let lower = spec.to_ascii_lowercase();
+    lower.ends_with(".gltf") || lower.ends_with(".glb")
+}
+
+/// The streamed world `spec` names: the built-in one, or a scene file with
+/// a `[world]` table (its cameras first, then the world's); `None` for a
+/// scene of objects. Each spec is read and built once per process (the
+/// scene and the renderer both ask, and the viewer again after a device
+/// loss).
+pub fn world_of(spec: &str) -> Result<Option<std::sync::Arc<himal::scene::world::World>>> {
+    type Worlds =
+        std::collections::HashMap<String, Option<std::sync::Arc<himal::scene::world::World>>>;
+    static WORLDS: std::sync::OnceLock<std::sync::Mutex<Worlds>> = std::sync::OnceLock::new();
+    if spec == "demo" || is_gltf(spec) {
+        return Ok(None);
+    }
+    let worlds = WORLDS.get_or_init(Default::default);
+    if let Some(w) = worlds.lock().ok().and_then(|m| m.get(spec).cloned()) {
+        return Ok(w);
+    }
+    let world = if spec == WORLD {
+        Some(world())
+    } else {
+        let file = himal::scene::world::WorldFile::load(Path::new(spec))?;
+        file.map(|f| std::sync::Arc::new(f.into_world()))
+    };
+    if let Ok(mut m) = worlds.lock() {
+        m.insert(spec.to_string(), world.clone());
+    }
+    Ok(world)
+}
+
+/// The renderer for `spec` (see [`load_scene`]): the streamed world or `scene`.
+pub fn open_renderer(spec: &str, ctx: himal::gpu::GpuContext, scene: &Scene) -> Result<Renderer> {
+    Ok(match world_of(spec)? {
+        Some(world) => Renderer::with_world(ctx, world)?,
+        None => Renderer::new(ctx, scene)?,
+    })
+}
+
+/// Loads `demo`, `world` or a scene file with a `[world]` table (its
+/// meshes, cameras and sun; sectors stream in the renderer), a glTF model
+/// (.gltf / .glb) or a scene file.
+pub fn load_scene(spec: &str) -> Result<Scene> {
+    Ok(if spec == "demo" {
+        Scene::demo()?
+    } else if is_gltf(spec) {
+        Scene::from_gltf(Path::new(spec))?
+    } else if let Some(world) = world_of(spec)? {
+        world.scene()
+    } else {
+        Scene::load(Path::new(spec))?
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The world file was parsed twice per run (once for the scene, once
+    /// for the renderer): the second ask gets the same world.
+    #[test]
+    fn a_world_is_read_once_per_spec() {
+        let spec = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../himal/tests/scenes/world_heightmap.toml"
+        );
+        let (a, b) = (world_of(spec).expect("a"), world_of(spec).expect("b"));
+        assert!(std::sync::Arc::ptr_eq(
+            &a.expect("a world"),
+            &b.expect("a world")
+        ));
+        let (a, b) = (world_of(WORLD).expect("a"), world_of(WORLD).expect("b"));
+        assert!(std::sync::Arc::ptr_eq(
+            &a.expect("world"),
+            &b.expect("world")
+        ));
+        assert!(world_of("demo").expect("demo").is_none());
+    }
+}
