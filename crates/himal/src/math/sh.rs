@@ -41,6 +41,23 @@ pub fn sh9_basis(d: Vec3) -> [f32; SH9_COUNT] {
     ]
 }
 
+/// Number of coefficients of a second-order SH (bands 0 and 1): L00, L1-1, L10, L11.
+pub const SH4_COUNT: usize = 4;
+
+/// The first two bands of [`sh9_basis`].
+pub fn sh4_basis(d: Vec3) -> [f32; SH4_COUNT] {
+    let b = sh9_basis(d);
+    [b[0], b[1], b[2], b[3]]
+}
+
+/// Irradiance at normal `n` from second-order radiance coefficients (rgb
+/// per coefficient): E(n) = sum_i A_band(i) L_i Y_i(n), clamped at zero.
+pub fn sh4_irradiance(l: &[Vec3; SH4_COUNT], n: Vec3) -> Vec3 {
+    let y = sh4_basis(n);
+    let [a0, a1, _] = SH9_COSINE_BAND_FACTORS;
+    (l[0] * (a0 * y[0]) + (l[1] * y[1] + l[2] * y[2] + l[3] * y[3]) * a1).max(Vec3::ZERO)
+}
+
 /// Nine RGB coefficients (rgb in a `Vec3` per coefficient).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sh9Rgb {

@@ -12,6 +12,7 @@ pub mod gbuffer;
 pub mod lighting;
 pub mod particles;
 pub mod post;
+pub mod probes;
 pub mod shadows;
 pub mod skin;
 pub mod sky;

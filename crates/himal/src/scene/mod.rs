@@ -229,6 +229,7 @@ mod motion;
 pub mod noise;
 mod place;
 pub mod primitives;
+pub mod raycast;
 mod terrain;
 pub mod vegetation;
 pub mod world;

@@ -1,0 +1,302 @@
+//! Ray queries against a scene's opaque triangles on the CPU, for offline
+//! bakes (L5 probes) and their references. A compressed wide BVH (obvhs),
+//! built serially so the same scene gives the same tree and the same hits.
+//!
+//! Foliage cards are left out (alpha-tested: a card's bounding triangle
+//! would block far more than its leaves); moving objects are taken where
+//! they stand at time 0.
+
+use glam::{Mat3, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+
+use super::{Aabb, Scene};
+
+/// What a ray found: distance, the face normal turned towards the ray's
+/// origin, and the surface's linear albedo.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// Distance along the ray.
+    pub t: f32,
+    /// Unit face normal on the ray's side.
+    pub normal: Vec3,
+    /// Linear albedo (the triangle's mean vertex colour).
+    pub albedo: Vec3,
+    /// The triangle belongs to terrain (`Object::ground`).
+    pub ground: bool,
+}
+
+/// Triangles with a per-triangle albedo and ground flag, in a BVH.
+pub struct RayScene {
+    tris: Vec<Triangle>,
+    albedo: Vec<Vec3>,
+    ground: Vec<bool>,
+    bvh: Option<CwBvh>,
+    bounds: Aabb,
+}
+
+impl RayScene {
+    /// The opaque, non-foliage triangles of `scene` whose bounds overlap
+    /// `region` (all of them for `None`).
+    pub fn from_scene(scene: &Scene, region: Option<&Aabb>) -> RayScene {
+        let mut tris = Vec::new();
+        let mut albedo = Vec::new();
+        let mut ground = Vec::new();
+        for object in scene.objects.iter().filter(|o| o.foliage.is_none()) {
+            let Some(mesh) = scene.meshes.get(object.mesh) else {
+                continue;
+            };
+            let m = object.transform;
+            if let Some(r) = region
+                && !mesh.bounds.transform(&m).overlaps(r)
+            {
+                continue;
+            }
+            let world = |i: u32| m.transform_point3(Vec3::from(mesh.vertices[i as usize].position));
+            for t in mesh.indices.chunks_exact(3) {
+                let [a, b, c] = [world(t[0]), world(t[1]), world(t[2])];
+                if let Some(r) = region
+                    && !Aabb::from_points([a, b, c]).overlaps(r)
+                {
+                    continue;
+                }
+                let colour = t
+                    .iter()
+                    .map(|&i| Vec3::from_slice(&mesh.vertices[i as usize].color[..3]))
+                    .sum::<Vec3>()
+                    / 3.0;
+                tris.push(Triangle {
+                    v0: a.into(),
+                    v1: b.into(),
+                    v2: c.into(),
+                });
+                albedo.push(colour);
+                ground.push(object.ground);
+            }
+        }
+        RayScene::new(tris, albedo, ground)
+    }
+
+    /// Triangles given as corner triples, each with its albedo and ground flag.
+    pub fn from_triangles(list: &[([Vec3; 3], Vec3, bool)]) -> RayScene {
+        let tris = list
+            .iter()
+            .map(|(v, _, _)| Triangle {
+                v0: v[0].into(),
+                v1: v[1].into(),
+                v2: v[2].into(),
+            })
+            .collect();
+        RayScene::new(
+            tris,
+            list.iter().map(|t| t.1).collect(),
+            list.iter().map(|t| t.2).collect(),
+        )
+    }
+
+    fn new(tris: Vec<Triangle>, albedo: Vec<Vec3>, ground: Vec<bool>) -> RayScene {
+        let bounds =
+            Aabb::from_points(tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(Vec3::from));
+        let bvh = (!tris.is_empty()).then(|| {
+            build_cwbvh_from_tris(
+                &tris,
+                BvhBuildParams::medium_build(),
+                &mut std::time::Duration::default(),
+            )
+        });
+        RayScene {
+            tris,
+            albedo,
+            ground,
+            bvh,
+            bounds,
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// No triangle at all.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// Bounds of every triangle.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Nearest hit along `dir` (unit) within (t_min, t_max).
+    pub fn trace(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
+        self.trace_filtered(origin, dir, t_min, t_max, |_| true)
+    }
+
+    /// Nearest hit on terrain only (probe heights follow the ground, not roofs).
+    pub fn trace_ground(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<SurfaceHit> {
+        self.trace_filtered(origin, dir, 0.0, t_max, |i| self.ground[i])
+    }
+
+    fn trace_filtered(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        keep: impl Fn(usize) -> bool,
+    ) -> Option<SurfaceHit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = Ray::new(Vec3A::from(origin), off_axis(dir), t_min, t_max);
+        let mut hit = RayHit::none();
+        let found = bvh.ray_traverse(ray, &mut hit, |ray, id| {
+            let prim = bvh.primitive_indices[id] as usize;
+            if keep(prim) {
+                intersect(&self.tris[prim], ray)
+            } else {
+                f32::INFINITY
+            }
+        });
+        if !found {
+            return None;
+        }
+        let prim = bvh.primitive_indices[hit.primitive_id as usize] as usize;
+        let n = Vec3::from(self.tris[prim].compute_normal()).normalize_or(Vec3::Y);
+        Some(SurfaceHit {
+            t: hit.t,
+            normal: if n.dot(dir) > 0.0 { -n } else { n },
+            albedo: self.albedo[prim],
+            ground: self.ground[prim],
+        })
+    }
+
+    /// True where nothing lies along `dir` within (t_min, t_max).
+    pub fn unoccluded(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
+        let Some(bvh) = &self.bvh else {
+            return true;
+        };
+        let ray = Ray::new(Vec3A::from(origin), off_axis(dir), t_min, t_max);
+        bvh.ray_traverse_miss(ray, |ray, id| {
+            intersect(&self.tris[bvh.primitive_indices[id] as usize], ray)
+        })
+    }
+}
+
+/// The direction with no component exactly zero: obvhs's wide-node test
+/// misses everything along a zero component (a ray straight down finds no
+/// ground). 1e-6 turns the ray by a microradian.
+fn off_axis(dir: Vec3) -> Vec3A {
+    let nudge = |c: f32| {
+        if c.abs() < 1e-6 {
+            1e-6f32.copysign(c)
+        } else {
+            c
+        }
+    };
+    Vec3A::new(nudge(dir.x), nudge(dir.y), nudge(dir.z))
+}
+
+/// Möller-Trumbore, two-sided, with edges inclusive (obvhs's own test
+/// rejects a barycentric of -0.0, so a ray straight down a shared edge or
+/// vertex of a terrain grid, where probes stand, hits neither triangle).
+fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
+    let e1 = tri.v1 - tri.v0;
+    let e2 = tri.v2 - tri.v0;
+    let p = ray.direction.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return f32::INFINITY;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - tri.v0;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = ray.direction.dot(q) * inv;
+    const EDGE: f32 = -1e-6;
+    if u < EDGE || v < EDGE || u + v > 1.0 - EDGE {
+        return f32::INFINITY;
+    }
+    let t = e2.dot(q) * inv;
+    if t >= ray.tmin && t <= ray.tmax {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// An orthonormal frame whose third column is `n` (Frisvad-style branchless
+/// construction by Duff et al. 2017), for turning z-up samples about `n`.
+pub fn frame_about(n: Vec3) -> Mat3 {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    Mat3::from_cols(t, bt, n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad(y: f32, half: f32, albedo: Vec3) -> Vec<([Vec3; 3], Vec3, bool)> {
+        let p = |x: f32, z: f32| Vec3::new(x, y, z);
+        vec![
+            (
+                [p(-half, -half), p(half, -half), p(half, half)],
+                albedo,
+                true,
+            ),
+            (
+                [p(-half, -half), p(half, half), p(-half, half)],
+                albedo,
+                true,
+            ),
+        ]
+    }
+
+    #[test]
+    fn hits_the_nearest_surface_with_its_albedo_and_a_facing_normal() {
+        let mut tris = quad(0.0, 10.0, Vec3::splat(0.2));
+        tris.extend(
+            quad(5.0, 1.0, Vec3::X)
+                .into_iter()
+                .map(|(v, a, _)| (v, a, false)),
+        );
+        let s = RayScene::from_triangles(&tris);
+        let down = s
+            .trace(Vec3::new(0.0, 10.0, 0.0), -Vec3::Y, 0.0, 100.0)
+            .unwrap();
+        assert!((down.t - 5.0).abs() < 1e-4);
+        assert_eq!(down.albedo, Vec3::X);
+        assert!(down.normal.abs_diff_eq(Vec3::Y, 1e-5));
+        let ground = s
+            .trace_ground(Vec3::new(0.0, 10.0, 0.0), -Vec3::Y, 100.0)
+            .unwrap();
+        assert!((ground.t - 10.0).abs() < 1e-4 && ground.ground);
+        let up = s
+            .trace(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0.0, 100.0)
+            .unwrap();
+        assert!(
+            up.normal.abs_diff_eq(-Vec3::Y, 1e-5),
+            "normal faces the ray"
+        );
+        assert!(!s.unoccluded(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0.0, 100.0));
+        assert!(s.unoccluded(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0.0, 2.5));
+        assert!(s.unoccluded(Vec3::new(5.0, 2.0, 0.0), Vec3::Y, 0.0, 100.0));
+    }
+
+    #[test]
+    fn frame_about_is_orthonormal_with_n_as_z() {
+        for n in [Vec3::Y, -Vec3::Z, Vec3::new(0.3, -0.8, 0.52).normalize()] {
+            let f = frame_about(n);
+            assert!(f.z_axis.abs_diff_eq(n, 1e-6));
+            assert!((f.x_axis.dot(f.y_axis)).abs() < 1e-5);
+            assert!((f.x_axis.length() - 1.0).abs() < 1e-5);
+            assert!((f.x_axis.cross(f.y_axis)).abs_diff_eq(n, 1e-5));
+        }
+    }
+}
