@@ -6,6 +6,7 @@
 //! so a shared mistake is unlikely.
 //!
 //! - [`ao`]: ray-traced ambient occlusion of analytic scenes (planes, spheres, boxes).
+//! - [`bounce`]: one-bounce indirect irradiance by path tracing (L5's ground truth).
 //! - [`flip`]: the LDR-FLIP perceptual error map between two images
 //!   (Andersson et al. 2020).
 //! - [`integrate`]: Monte Carlo (importance sampling, two-strategy MIS) and
@@ -14,6 +15,7 @@
 //!   theta form after Walter et al. 2007 and Heitz 2014.
 
 pub mod ao;
+pub mod bounce;
 pub mod flip;
 pub mod integrate;
 pub mod microfacet;

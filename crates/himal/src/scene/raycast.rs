@@ -27,11 +27,16 @@ pub struct SurfaceHit {
     pub albedo: Vec3,
     /// The triangle belongs to terrain (`Object::ground`).
     pub ground: bool,
+    /// The ray arrived from behind the surface (against its mesh normals):
+    /// the origin is inside a closed object.
+    pub backface: bool,
 }
 
 /// Triangles with a per-triangle albedo and ground flag, in a BVH.
 pub struct RayScene {
     tris: Vec<Triangle>,
+    /// Outward direction per triangle (its vertex normals' mean).
+    outward: Vec<Vec3>,
     albedo: Vec<Vec3>,
     ground: Vec<bool>,
     bvh: Option<CwBvh>,
@@ -43,6 +48,7 @@ impl RayScene {
     /// `region` (all of them for `None`).
     pub fn from_scene(scene: &Scene, region: Option<&Aabb>) -> RayScene {
         let mut tris = Vec::new();
+        let mut outward = Vec::new();
         let mut albedo = Vec::new();
         let mut ground = Vec::new();
         for object in scene.objects.iter().filter(|o| o.foliage.is_none()) {
@@ -50,6 +56,7 @@ impl RayScene {
                 continue;
             };
             let m = object.transform;
+            let normal_m = glam::Mat3::from_mat4(m).inverse().transpose();
             if let Some(r) = region
                 && !mesh.bounds.transform(&m).overlaps(r)
             {
@@ -73,15 +80,25 @@ impl RayScene {
                     v1: b.into(),
                     v2: c.into(),
                 });
+                let n: Vec3 = t
+                    .iter()
+                    .map(|&i| Vec3::from(mesh.vertices[i as usize].normal))
+                    .sum();
+                outward.push((normal_m * n).normalize_or_zero());
                 albedo.push(colour);
                 ground.push(object.ground);
             }
         }
-        RayScene::new(tris, albedo, ground)
+        RayScene::new(tris, outward, albedo, ground)
     }
 
-    /// Triangles given as corner triples, each with its albedo and ground flag.
+    /// Triangles given as corner triples (counter-clockwise seen from
+    /// outside), each with its albedo and ground flag.
     pub fn from_triangles(list: &[([Vec3; 3], Vec3, bool)]) -> RayScene {
+        let outward = list
+            .iter()
+            .map(|(v, _, _)| (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero())
+            .collect();
         let tris = list
             .iter()
             .map(|(v, _, _)| Triangle {
@@ -92,12 +109,18 @@ impl RayScene {
             .collect();
         RayScene::new(
             tris,
+            outward,
             list.iter().map(|t| t.1).collect(),
             list.iter().map(|t| t.2).collect(),
         )
     }
 
-    fn new(tris: Vec<Triangle>, albedo: Vec<Vec3>, ground: Vec<bool>) -> RayScene {
+    fn new(
+        tris: Vec<Triangle>,
+        outward: Vec<Vec3>,
+        albedo: Vec<Vec3>,
+        ground: Vec<bool>,
+    ) -> RayScene {
         let bounds =
             Aabb::from_points(tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(Vec3::from));
         let bvh = (!tris.is_empty()).then(|| {
@@ -109,6 +132,7 @@ impl RayScene {
         });
         RayScene {
             tris,
+            outward,
             albedo,
             ground,
             bvh,
@@ -170,6 +194,7 @@ impl RayScene {
             normal: if n.dot(dir) > 0.0 { -n } else { n },
             albedo: self.albedo[prim],
             ground: self.ground[prim],
+            backface: self.outward[prim].dot(dir) > 0.0,
         })
     }
 

@@ -59,19 +59,35 @@ pub fn ground_height(scene: &RayScene, xz: Vec2) -> f32 {
         .map_or(0.0, |h| top - h.t)
 }
 
-/// One probe's transfer at `p`; `seed` decorrelates the sample patterns of neighbours.
-pub fn bake_probe(scene: &RayScene, p: Vec3, settings: &BakeSettings, seed: u64) -> Transfer {
+/// A probe whose rays meet this fraction of back faces stands inside a
+/// closed object (a house on its grid point): its transfer is taken from
+/// its neighbours instead.
+pub const INSIDE_FRACTION: f32 = 0.2;
+
+/// One probe's transfer at `p` and the fraction of its rays that hit a
+/// back face; `seed` decorrelates the sample patterns of neighbours.
+pub fn bake_probe(
+    scene: &RayScene,
+    p: Vec3,
+    settings: &BakeSettings,
+    seed: u64,
+) -> (Transfer, f32) {
     let mut rng = Pcg32::new(seed);
     let shift = rng.next_vec2();
     let n = settings.rays.max(1);
     let m = settings.visibility_rays.max(1);
     let mut t = Transfer::default();
+    let mut back = 0u32;
     for k in 0..n {
         let u = (hammersley(k, n) + shift).fract();
         let w = uniform_sample_sphere(u);
         let Some(hit) = scene.trace(p, w, 0.0, f32::INFINITY) else {
             continue;
         };
+        if hit.backface {
+            back += 1;
+            continue;
+        }
         let x = p + w * hit.t + hit.normal * SURFACE_BIAS;
         let frame = frame_about(hit.normal);
         let spin = rng.next_vec2();
@@ -96,7 +112,7 @@ pub fn bake_probe(scene: &RayScene, p: Vec3, settings: &BakeSettings, seed: u64)
             }
         }
     }
-    t
+    (t, back as f32 / n as f32)
 }
 
 /// A mip-0 cell: probes at their grid positions, `probe_height` above the
@@ -114,7 +130,7 @@ pub fn bake_cell(scene: &RayScene, key: CellKey, origin: Vec2, settings: &BakeSe
         (g(key.x) << 40) ^ (g(key.z) << 16) ^ k as u64
     };
     let threads = crate::scene::world::worker_count(settings.threads).max(1);
-    let mut probes = vec![Transfer::default(); PROBES_PER_CELL];
+    let mut probes = vec![(Transfer::default(), 0.0); PROBES_PER_CELL];
     let chunk = PROBES_PER_CELL.div_ceil(threads);
     std::thread::scope(|s| {
         for (n, out) in probes.chunks_mut(chunk).enumerate() {
@@ -131,9 +147,46 @@ pub fn bake_cell(scene: &RayScene, key: CellKey, origin: Vec2, settings: &BakeSe
     for (h, p) in heights.iter_mut().zip(&positions) {
         *h = p.y;
     }
+    let inside: Vec<bool> = probes.iter().map(|p| p.1 > INSIDE_FRACTION).collect();
     Cell {
         key,
         heights,
-        probes,
+        probes: fill_inside(probes.into_iter().map(|p| p.0).collect(), &inside),
     }
+}
+
+/// Probes inside objects take the mean of their nearest outside neighbours
+/// in the cell (ring by ring); a cell all inside keeps zero light.
+fn fill_inside(mut probes: Vec<Transfer>, inside: &[bool]) -> Vec<Transfer> {
+    let n = CELL_PROBES as i32;
+    let source = probes.clone();
+    for k in (0..PROBES_PER_CELL).filter(|&k| inside[k]) {
+        let (i, j) = ((k % CELL_PROBES) as i32, (k / CELL_PROBES) as i32);
+        for ring in 1..n {
+            let mut sum = Transfer::default();
+            let mut count = 0.0;
+            for dj in -ring..=ring {
+                for di in -ring..=ring {
+                    let (x, z) = (i + di, j + dj);
+                    if di.abs().max(dj.abs()) != ring
+                        || !(0..n).contains(&x)
+                        || !(0..n).contains(&z)
+                    {
+                        continue;
+                    }
+                    let q = (z * n + x) as usize;
+                    if !inside[q] {
+                        sum.m.iter_mut().zip(source[q].m).for_each(|(a, b)| *a += b);
+                        count += 1.0;
+                    }
+                }
+            }
+            if count > 0.0 {
+                sum.m.iter_mut().for_each(|a| *a /= count);
+                probes[k] = sum;
+                break;
+            }
+        }
+    }
+    probes
 }

@@ -1,0 +1,396 @@
+//! L5 radiance-transfer probes: the bake, the cell files and the per-frame
+//! CPU path (transfer, clip map, sampling) against a path-traced one-bounce
+//! reference (docs/techniques/L5.md).
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use himal::math::sh::sh4_basis;
+use himal::passes::probes::cell::{Cell, CellKey};
+use himal::passes::probes::reference::{ClipMap, Sh4, lighting_sh, sky_radiance_sh, transfer_cell};
+use himal::passes::probes::{BakeSettings, bake_cell};
+use himal::passes::sky::SkyLight;
+use himal::passes::sky::reference::{GROUND_ALBEDO, sky_irradiance_sh};
+use himal::scene::Scene;
+use himal::scene::raycast::RayScene;
+use himal_reference::bounce::{Found, Light, Samples, Surfaces, one_bounce_irradiance};
+
+/// The grid origin of a scene: the world's, centred on (0, 0).
+const ORIGIN: Vec2 = Vec2::new(-5120.0, -5120.0);
+
+struct Caster<'a>(&'a RayScene);
+
+impl Surfaces for Caster<'_> {
+    fn nearest(&self, o: Vec3, d: Vec3) -> Option<Found> {
+        self.0.trace(o, d, 0.0, f32::INFINITY).map(|h| Found {
+            t: h.t,
+            normal: h.normal,
+            albedo: h.albedo,
+        })
+    }
+    fn clear(&self, o: Vec3, d: Vec3) -> bool {
+        self.0.unoccluded(o, d, 0.0, f32::INFINITY)
+    }
+}
+
+/// The four mip-0 cells around the origin ([-64, 64] m in x and z).
+fn centre_cells() -> Vec<CellKey> {
+    [(79, 79), (80, 79), (79, 80), (80, 80)]
+        .into_iter()
+        .map(|(x, z)| CellKey { mip: 0, x, z })
+        .collect()
+}
+
+/// Deterministic numbers in [0, 1).
+fn hash01(i: u32, salt: u32) -> f32 {
+    let mut h = i.wrapping_mul(0x9E37_79B9) ^ salt.wrapping_mul(0x85EB_CA6B);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7FEB_352D);
+    h ^= h >> 15;
+    (h >> 8) as f32 / (1u32 << 24) as f32
+}
+
+/// A sample point on a surface: position, normal, and whether it is ground.
+struct Point {
+    p: Vec3,
+    n: Vec3,
+    ground: bool,
+}
+
+/// `ground` points from rays straight down over [-56, 56]^2 (bilinear taps stay on baked probes) (ground or
+/// roof), then `walls` points from horizontal rays 1.5 m up that hit a
+/// non-ground surface within 20 m.
+fn sample_points(rs: &RayScene, ground: u32, walls: u32) -> Vec<Point> {
+    let mut out = Vec::new();
+    for i in 0..ground {
+        let xz = Vec2::new(hash01(i, 1), hash01(i, 2)) * 112.0 - 56.0;
+        let from = Vec3::new(xz.x, 200.0, xz.y);
+        if let Some(h) = rs.trace(from, -Vec3::Y, 0.0, 400.0) {
+            out.push(Point {
+                p: from - Vec3::Y * h.t,
+                n: h.normal,
+                ground: h.ground,
+            });
+        }
+    }
+    let mut i = 0;
+    let mut found = 0;
+    while found < walls && i < walls * 40 {
+        i += 1;
+        let xz = Vec2::new(hash01(i, 3), hash01(i, 4)) * 112.0 - 56.0;
+        let a = hash01(i, 5) * std::f32::consts::TAU;
+        let d = Vec3::new(a.cos(), 0.0, a.sin());
+        let from = Vec3::new(xz.x, 1.5, xz.y);
+        if let Some(h) = rs.trace(from, d, 0.0, 20.0)
+            && !h.ground
+            && h.normal.y.abs() < 0.1
+        {
+            out.push(Point {
+                p: from + d * h.t,
+                n: h.normal,
+                ground: false,
+            });
+            found += 1;
+        }
+    }
+    out
+}
+
+/// Reference irradiance at every point for every light, on two threads.
+fn reference(
+    rs: &RayScene,
+    points: &[Point],
+    lights: &[Light],
+    samples: Samples,
+) -> Vec<Vec<Vec3>> {
+    let caster = Caster(rs);
+    let half = points.len().div_ceil(2);
+    std::thread::scope(|s| {
+        let jobs: Vec<_> = points
+            .chunks(half)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let caster = &caster;
+                s.spawn(move || {
+                    chunk
+                        .iter()
+                        .enumerate()
+                        .map(|(i, q)| {
+                            one_bounce_irradiance(
+                                caster,
+                                q.p,
+                                q.n,
+                                lights,
+                                samples,
+                                (c * half + i) as u32,
+                            )
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        jobs.into_iter()
+            .flat_map(|j| j.join().expect("reference thread"))
+            .collect()
+    })
+}
+
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// Relative L1 error sum |E - E_ref| / sum E_ref (luminance) over points.
+fn relative_l1(pairs: &[(f32, f32)]) -> f32 {
+    let err: f32 = pairs.iter().map(|(a, r)| (a - r).abs()).sum();
+    let total: f32 = pairs.iter().map(|(_, r)| r).sum();
+    err / total.max(1e-9)
+}
+
+/// One scene at one time of day: relative L1 errors against the path tracer.
+struct Row {
+    /// Probes on open ground, and on roofs and walls.
+    ground: f32,
+    other: f32,
+    /// himal without probes (the sky SH's flat ground bounce).
+    flat_ground: f32,
+    flat_other: f32,
+    /// Probes against the path tracer lit by the probes' own SH2 lighting
+    /// (what remains is the probes' spacing, height and SH2 radiance).
+    sh_lit_ground: f32,
+    /// Mean indirect illuminance on open ground (klux), reference and probes.
+    mean_ref: f32,
+    mean_probe: f32,
+}
+
+fn accuracy(name: &str) -> Vec<Row> {
+    let scene: Scene = common::scene(name);
+    let rs = RayScene::from_scene(&scene, None);
+    let settings = BakeSettings::default();
+    let cells: Vec<Cell> = centre_cells()
+        .into_iter()
+        .map(|k| bake_cell(&rs, k, ORIGIN, &settings))
+        .collect();
+    let points = sample_points(&rs, 1000, 300);
+    let times = [8.0, 12.0, 17.0];
+    let skies: Vec<SkyLight> = times
+        .iter()
+        .map(|&t| {
+            SkyLight::new(
+                t,
+                scene.sun.latitude_deg,
+                scene.sun.day_of_year,
+                scene.sun.turbidity,
+            )
+        })
+        .collect();
+    let sky_fns: Vec<Box<dyn Fn(Vec3) -> Vec3 + Sync>> = skies
+        .iter()
+        .map(|s| {
+            let sky = s.sky.clone();
+            Box::new(move |d: Vec3| {
+                if d.y > 0.0 {
+                    sky.radiance(d)
+                } else {
+                    Vec3::ZERO
+                }
+            }) as Box<dyn Fn(Vec3) -> Vec3 + Sync>
+        })
+        .collect();
+    let lightings: Vec<Sh4> = skies
+        .iter()
+        .map(|sky| {
+            let sh = sky_radiance_sh(|d| sky.sky.radiance(d));
+            lighting_sh(&sh, sky.sun_direction, sky.sun_illuminance)
+        })
+        .collect();
+    // The same lighting as the probes get it, sun included, as a radiance
+    // function: separates what SH2 lighting costs from what probes cost.
+    let sh_fns: Vec<Box<dyn Fn(Vec3) -> Vec3 + Sync>> = lightings
+        .iter()
+        .map(|l| {
+            let l = *l;
+            Box::new(move |d: Vec3| {
+                let y = sh4_basis(d);
+                (0..4).map(|j| l[j] * y[j]).sum::<Vec3>()
+            }) as Box<dyn Fn(Vec3) -> Vec3 + Sync>
+        })
+        .collect();
+    let mut lights: Vec<Light> = skies
+        .iter()
+        .zip(&sky_fns)
+        .map(|(s, f)| Light {
+            sky: f.as_ref(),
+            to_sun: s.sun_direction,
+            sun_illuminance: s.sun_illuminance,
+        })
+        .collect();
+    lights.extend(sh_fns.iter().map(|f| Light {
+        sky: f.as_ref(),
+        to_sun: Vec3::Y,
+        sun_illuminance: Vec3::ZERO,
+    }));
+    let truth = reference(
+        &rs,
+        &points,
+        &lights,
+        Samples {
+            primary: 256,
+            sky: 16,
+        },
+    );
+    let mut rows = Vec::new();
+    for t in 0..times.len() {
+        let lighting = lightings[t];
+        let probes: Vec<(CellKey, Vec<Sh4>)> = cells
+            .iter()
+            .map(|c| (c.key, transfer_cell(c, &lighting)))
+            .collect();
+        let map = ClipMap::inject(ORIGIN, Vec2::ZERO, |k| {
+            probes
+                .iter()
+                .find(|(key, _)| *key == k)
+                .map(|(_, p)| p.as_slice())
+        });
+        let (mut ground, mut other) = (Vec::new(), Vec::new());
+        for (q, e) in points.iter().zip(&truth) {
+            let got = map
+                .irradiance(Vec2::ZERO, q.p, q.n)
+                .expect("inside the clip map");
+            let pair = (luminance(got), luminance(e[t]));
+            if q.ground {
+                ground.push(pair)
+            } else {
+                other.push(pair)
+            }
+        }
+        let sh_lit: Vec<(f32, f32)> = points
+            .iter()
+            .zip(&truth)
+            .filter(|(q, _)| q.ground)
+            .map(|(q, e)| {
+                let got = map.irradiance(Vec2::ZERO, q.p, q.n).expect("inside");
+                (luminance(got), luminance(e[times.len() + t]))
+            })
+            .collect();
+        // himal without probes: the sky SH's flat ground below the horizon
+        // (GROUND_ALBEDO lit by the unshadowed sun and sky), E = L_g pi (1 - n.y) / 2.
+        let sky = &skies[t];
+        let e_up = sky_irradiance_sh(&sky.sky).eval(Vec3::Y).max(Vec3::ZERO)
+            + sky.sun_illuminance * sky.sun_direction.y.max(0.0);
+        let l_ground = GROUND_ALBEDO * e_up / std::f32::consts::PI;
+        let flat = |n: Vec3| l_ground * (std::f32::consts::PI * (1.0 - n.y) * 0.5);
+        let flat_pairs = |keep: bool| -> Vec<(f32, f32)> {
+            points
+                .iter()
+                .zip(&truth)
+                .filter(|(q, _)| q.ground == keep)
+                .map(|(q, e)| (luminance(flat(q.n)), luminance(e[t])))
+                .collect()
+        };
+        let row = Row {
+            ground: relative_l1(&ground),
+            other: relative_l1(&other),
+            flat_ground: relative_l1(&flat_pairs(true)),
+            flat_other: relative_l1(&flat_pairs(false)),
+            sh_lit_ground: relative_l1(&sh_lit),
+            mean_ref: ground.iter().map(|p| p.1).sum::<f32>() / ground.len() as f32,
+            mean_probe: ground.iter().map(|p| p.0).sum::<f32>() / ground.len() as f32,
+        };
+        eprintln!(
+            "| {name} | {:>4}h | {} / {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} / {:.3} |",
+            times[t],
+            ground.len(),
+            other.len(),
+            row.ground,
+            row.flat_ground,
+            row.sh_lit_ground,
+            row.other,
+            row.flat_other,
+            row.mean_ref,
+            row.mean_probe
+        );
+        rows.push(row);
+    }
+    rows
+}
+#[test]
+fn l5_probes_against_path_traced_one_bounce_village_and_valley() {
+    eprintln!(
+        "| scene | time | points ground / other | probes ground | flat ground | probes vs SH2-lit truth | probes other | flat other | mean E ref / probes (klux) |"
+    );
+    let all: Vec<_> = ["l5_village", "l5_valley"]
+        .into_iter()
+        .map(|n| (n, accuracy(n)))
+        .collect();
+    for (name, rows) in &all {
+        for (t, r) in rows.iter().enumerate() {
+            assert!(
+                r.mean_ref > 0.1,
+                "{name} time {t}: no indirect light to compare"
+            );
+            // Measured (L5.md): on open ground the probes' error is at most
+            // 0.75 of the flat ground's (village 12h: 0.750 vs 1.000).
+            assert!(
+                r.ground < 0.8 * r.flat_ground,
+                "{name} time {t}: open ground {} vs flat {}",
+                r.ground,
+                r.flat_ground
+            );
+        }
+    }
+    // The goal, 0.20 on open ground, is met in the valley at noon
+    // (measured 0.091); the village's near-wall bounce and low suns are
+    // beyond 8 m spacing and SH2 (explained in L5.md).
+    assert!(
+        all[1].1[1].ground <= 0.12,
+        "valley at noon: {}",
+        all[1].1[1].ground
+    );
+}
+
+#[test]
+fn the_bake_is_deterministic_and_its_files_round_trip() {
+    let scene = common::scene("l5_village");
+    let rs = RayScene::from_scene(&scene, None);
+    let key = CellKey {
+        mip: 0,
+        x: 80,
+        z: 79,
+    };
+    let quick = BakeSettings {
+        rays: 32,
+        visibility_rays: 8,
+        ..Default::default()
+    };
+    let one = bake_cell(
+        &rs,
+        key,
+        ORIGIN,
+        &BakeSettings {
+            threads: 1,
+            ..quick
+        },
+    );
+    let two = bake_cell(
+        &rs,
+        key,
+        ORIGIN,
+        &BakeSettings {
+            threads: 2,
+            ..quick
+        },
+    );
+    assert_eq!(
+        one.encode(),
+        two.encode(),
+        "same bytes for any thread count"
+    );
+    // Probes stand 2 m above the meadow, and on it, not on the roofs.
+    assert!(
+        one.heights.iter().all(|h| (h - 2.0).abs() < 1e-3),
+        "{:?}",
+        one.heights
+    );
+    let back = Cell::decode(&one.encode(), std::path::Path::new("m0_80_79.hmlp")).unwrap();
+    assert_eq!(back.key, key);
+}
