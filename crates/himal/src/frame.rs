@@ -80,6 +80,8 @@ pub struct Passes {
     pub sky: SkyPass,
     /// L2: sky-occlusion sectors and their visibility.
     pub skyocc: SkyOccPass,
+    /// L5: radiance-transfer probes streamed in cells, the clip map.
+    pub indirect: crate::passes::indirect::IndirectPass,
     /// glTF emission and alpha-blended surfaces after lighting.
     pub forward: ForwardPass,
     /// E4: the scene's particles, simulated, lit and drawn.
@@ -129,6 +131,7 @@ impl Passes {
             lighting: LightingPass::new(ctx, scene)?,
             sky: SkyPass::new(ctx)?,
             skyocc: SkyOccPass::new(ctx, scene)?,
+            indirect: crate::passes::indirect::IndirectPass::new(ctx)?,
             forward: ForwardPass::new(ctx)?,
             particles: crate::passes::particles::ParticlesPass::new(ctx, &scene.emitters)?,
             luminance: LuminancePass::new(ctx)?,
@@ -172,6 +175,8 @@ pub struct Planned {
     pub shadows: ShadowStats,
     /// Sky-occlusion sectors planned and rendered.
     pub sky_occlusion: SkyOccStats,
+    /// L5 probe cells resident, uploaded and released.
+    pub indirect: crate::passes::indirect::IndirectStats,
     /// The world's terrain selection (`None`: no terrain).
     pub terrain: Option<TerrainStats>,
     /// Wall milliseconds of culling: the camera's lists, the shadow fits
@@ -271,6 +276,13 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         passes.skyocc.invalidate();
     }
     let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
+    // L5: the probe cells around the camera streamed into the pool.
+    let indirect = match settings.indirect {
+        true => passes
+            .indirect
+            .update(ctx, glam::Vec2::new(camera.position.x, camera.position.z)),
+        false => Default::default(),
+    };
     let mut views = Vec::new();
     if per_view {
         views.push(match settings.culling {
@@ -339,6 +351,7 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     Planned {
         shadows,
         sky_occlusion,
+        indirect,
         terrain,
         cull_ms,
     }
@@ -538,6 +551,7 @@ pub fn build<'a>(
                     env: env_before,
                     skyocc: &passes.skyocc,
                     skyocc_frame: skyocc,
+                    indirect: None,
                     key: LightingKey::RELIGHT,
                 };
                 let hdr = passes.lighting.add(ctx, g, edge, stored, inputs);
@@ -557,6 +571,21 @@ pub fn build<'a>(
         }
         _ => passes.envmap.add(&mut g, sky_no_disk),
     };
+    // L5: SH probes for this sky and sun, injected around the camera.
+    let indirect = match lighting_key.indirect {
+        true => passes.indirect.add(&mut g).map(|f| (&passes.indirect, f)),
+        false => None,
+    };
+    if shown == ViewBuffer::Indirect && indirect.is_none() {
+        return Err(GpuError::Other(
+            "--view indirect needs --indirect on and baked probe cells".into(),
+        ));
+    }
+    let lighting_key = LightingKey {
+        indirect: indirect.is_some(),
+        indirect_view: indirect.is_some() && lighting_key.indirect_view,
+        ..lighting_key
+    };
     let lighting_inputs = LightingInputs {
         shadow_mask,
         ao: ao_targets.map(|t| t.ao),
@@ -568,6 +597,7 @@ pub fn build<'a>(
         env,
         skyocc: &passes.skyocc,
         skyocc_frame: skyocc,
+        indirect,
         key: lighting_key,
     };
     let hdr = passes
@@ -688,6 +718,11 @@ pub fn build<'a>(
         ViewBuffer::Debug(v) => passes
             .debug
             .add(ctx, &mut g, v, gbuffer, hdr, post_inputs, out),
+        // The lighting pass wrote the probes' irradiance (INDIRECT_VIEW).
+        ViewBuffer::Indirect => {
+            let lighting = crate::passes::debug::DebugView::Lighting;
+            (passes.debug).add(ctx, &mut g, lighting, gbuffer, hdr, post_inputs, out)
+        }
     };
     g.mark_output(out);
     Ok(g)

@@ -38,11 +38,14 @@ pub enum ViewBuffer {
     /// The final image with white particles: their lighting alone (E4,
     /// `particle-lighting`).
     ParticleLighting,
+    /// L5's indirect irradiance from the probes' clip map (klux, raw; the
+    /// lighting view's display), `indirect`.
+    Indirect,
 }
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 27] = [
+    pub const NAMES: [&'static str; 28] = [
         "final",
         "albedo",
         "normal",
@@ -70,6 +73,7 @@ impl ViewBuffer {
         "ssdo",
         "ao-bleed",
         "particle-lighting",
+        "indirect",
     ];
 
     /// The tone-mapped image (the final one, or the particles' lighting in it).
@@ -110,6 +114,7 @@ impl std::str::FromStr for ViewBuffer {
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
             "particle-lighting" => ViewBuffer::ParticleLighting,
+            "indirect" => ViewBuffer::Indirect,
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -159,6 +164,9 @@ pub struct FrameSettings {
     /// library (the L3 relighting test compares against unoccluded lighting);
     /// the CLI turns it on.
     pub sky_occlusion: bool,
+    /// L5: indirect light from the baked radiance-transfer probes (needs
+    /// [`crate::Renderer::set_probe_cells`]; `--indirect`).
+    pub indirect: bool,
     /// L2: evaluate the sky light along the bent normal (on by default);
     /// off keeps the visibility but uses the surface normal (comparisons).
     pub bent_normals: bool,
@@ -299,6 +307,7 @@ impl FrameSettings {
             time_s: 0.0,
             environment_specular: true,
             sky_occlusion: false,
+            indirect: false,
             bent_normals: true,
             instancing: true,
             culling: Culling::Gpu,

@@ -14,15 +14,18 @@ pub enum Fallback {
     DepthFar,
     /// A 1x1x1 3D texture of zeros (an absent lookup table).
     Black3d,
+    /// A one-layer 2D array of zeros (an absent clip map).
+    BlackArray,
 }
 
 impl Fallback {
     /// Every fallback, in the order of their pool slots.
-    pub const ALL: [Fallback; 4] = [
+    pub const ALL: [Fallback; 5] = [
         Fallback::White,
         Fallback::Black,
         Fallback::DepthFar,
         Fallback::Black3d,
+        Fallback::BlackArray,
     ];
 
     pub(crate) fn index(self) -> usize {
@@ -32,7 +35,9 @@ impl Fallback {
     pub(crate) fn value(self) -> wgpu::Color {
         match self {
             Fallback::White => wgpu::Color::WHITE,
-            Fallback::Black | Fallback::DepthFar | Fallback::Black3d => wgpu::Color::TRANSPARENT,
+            Fallback::Black | Fallback::DepthFar | Fallback::Black3d | Fallback::BlackArray => {
+                wgpu::Color::TRANSPARENT
+            }
         }
     }
 
@@ -54,6 +59,9 @@ impl Fallback {
                 !depth && *view_dimension == wgpu::TextureViewDimension::D2
             }
             Fallback::Black3d => !depth && *view_dimension == wgpu::TextureViewDimension::D3,
+            Fallback::BlackArray => {
+                !depth && *view_dimension == wgpu::TextureViewDimension::D2Array
+            }
         }
     }
 
@@ -81,7 +89,7 @@ impl Fallback {
         }
         let format = match f {
             Fallback::DepthFar => wgpu::TextureFormat::Depth32Float,
-            Fallback::White | Fallback::Black | Fallback::Black3d => {
+            Fallback::White | Fallback::Black | Fallback::Black3d | Fallback::BlackArray => {
                 wgpu::TextureFormat::Rgba8Unorm
             }
         };
@@ -94,7 +102,7 @@ impl Fallback {
             wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
         let dimension = match f {
-            Fallback::DepthFar => Some(wgpu::TextureViewDimension::D2Array),
+            Fallback::DepthFar | Fallback::BlackArray => Some(wgpu::TextureViewDimension::D2Array),
             Fallback::White | Fallback::Black | Fallback::Black3d => None,
         };
         let view = texture.create_view(&wgpu::TextureViewDescriptor {

@@ -45,6 +45,7 @@ impl Source<'_> {
             Source::Texture(..) => "a texture",
             Source::Fallback(Fallback::DepthFar) => "the depth-array fallback",
             Source::Fallback(Fallback::Black3d) => "the 3D fallback",
+            Source::Fallback(Fallback::BlackArray) => "the black array fallback",
             Source::Fallback(_) => "a colour fallback",
             Source::ZeroBuffer => "the zero buffer",
             Source::Storage(_) | Source::StorageView(..) => "a storage texture",

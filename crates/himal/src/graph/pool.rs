@@ -67,8 +67,8 @@ impl TexturePool {
             self.fallbacks = Fallback::ALL.iter().map(|f| f.texture(device)).collect();
         }
         for (f, (texture, view)) in Fallback::ALL.iter().zip(&self.fallbacks) {
-            if *f == Fallback::Black3d {
-                continue; // zero-initialised by wgpu; not a render target
+            if matches!(f, Fallback::Black3d | Fallback::BlackArray) {
+                continue; // zero-initialised by wgpu
             }
             let depth = *f == Fallback::DepthFar;
             let attachment = depth.then(|| texture.create_view(&Default::default()));

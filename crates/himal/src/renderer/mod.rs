@@ -103,6 +103,9 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ssdo: settings.ao.mode.directional(),
         reflection_occlusion: settings.ao.reflection_occlusion,
         ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,
+        // L5 transfers the analytic sky and sun; not under an HDR environment.
+        indirect: settings.indirect && !environment,
+        indirect_view: settings.view == crate::settings::ViewBuffer::Indirect,
     }
 }
 
@@ -446,9 +449,21 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&no_disk),
         );
+        // L5: the sky and sun the probes transfer, and the ground they replace.
+        let indirect = crate::passes::indirect::IndirectLight::of_sky(&light);
+        self.res.passes.indirect.set_light(indirect);
         self.sky_light = Some((sun.clone(), model, light));
         self.res.passes.envmap.dirty = true;
         Ok(())
+    }
+
+    /// L5: the baked probe cells to stream indirect light from
+    /// (`ProbeStore::bake`); `None` turns it off whatever the settings say.
+    pub fn set_probe_cells(
+        &mut self,
+        store: Option<std::sync::Arc<crate::passes::indirect::ProbeStore>>,
+    ) {
+        self.res.passes.indirect.set_store(store);
     }
 
     /// L1: draws and lights the Bruneton sky from `tables` (made on this

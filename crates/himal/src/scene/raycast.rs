@@ -150,6 +150,19 @@ impl RayScene {
         self.tris.is_empty()
     }
 
+    /// A hash of the triangles, their albedo and ground flags (cache keys).
+    pub fn fingerprint(&self) -> u32 {
+        let mut h = crc32fast::Hasher::new();
+        for (t, (a, g)) in self.tris.iter().zip(self.albedo.iter().zip(&self.ground)) {
+            for v in [t.v0, t.v1, t.v2] {
+                h.update(bytemuck::cast_slice(&v.to_array()));
+            }
+            h.update(bytemuck::cast_slice(&a.to_array()));
+            h.update(&[*g as u8]);
+        }
+        h.finalize()
+    }
+
     /// Bounds of every triangle.
     pub fn bounds(&self) -> Aabb {
         self.bounds

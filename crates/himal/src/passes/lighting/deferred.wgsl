@@ -26,6 +26,8 @@
 // shaders/ao_bleed.wgsl); ambient specular keeps the scalar occlusion.
 // Ambient lights (shaders/ambient_lights.wgsl, binding `ambient_lights`):
 // both ambient terms times the scene's volumes' multiplier at p.
+// Indirect light (L5, INDIRECT): the probes' clip map (shaders/indirect.wgsl,
+// passes/indirect) replaces the flat ground bounce of the sky SH.
 // CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`).
 #import view
 #import ao
@@ -38,6 +40,7 @@
 #import sky_occlusion
 #import ao_bleed
 #import ambient_lights
+#import indirect
 #import color
 #import math
 #import fullscreen
@@ -65,6 +68,8 @@ override SKY_OCCLUSION: bool = false;
 override SSDO: bool = false;
 override REFLECTION_OCCLUSION: bool = false;
 override AO_BLEED: bool = false;
+override INDIRECT: bool = false;
+override INDIRECT_VIEW: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
 // Read-only storage, not uniform: lavapipe 22.3 recompiles, per draw and
@@ -90,6 +95,13 @@ override AO_BLEED: bool = false;
 @group(0) @binding(18) var<uniform> ao_params: AoParams;
 // O5: quarter-resolution bleed texture (1x1 black when off).
 @group(0) @binding(19) var ao_bleed: texture_2d<f32>;
+// L5 (INDIRECT): the probes' clip map, one texture per colour channel
+// (zeros and a black array when off).
+@group(0) @binding(21) var<storage, read> indirect_params: IndirectParams;
+@group(0) @binding(22) var indirect_r: texture_2d_array<f32>;
+@group(0) @binding(23) var indirect_g: texture_2d_array<f32>;
+@group(0) @binding(24) var indirect_b: texture_2d_array<f32>;
+@group(0) @binding(25) var indirect_sampler: sampler;
 
 // O4 inputs in view space (unused without SSDO).
 struct Ssdo {
@@ -133,8 +145,9 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
 // `sky_vis`: SH2 sky visibility (open sky when SKY_OCCLUSION is off).
 // `spec_ao`: the occlusion of ambient specular (ao_in without reflection occlusion).
 // `bleed`: O5 bleed colour (black: plain occlusion). `ambient`: the ambient
-// lights' multiplier of both ambient terms.
-fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f, bleed: vec3f, ambient: vec3f) -> vec3f {
+// lights' multiplier of both ambient terms. `indirect`: L5's irradiance
+// (rgb) and coverage (a; 0 keeps the sky SH's flat ground).
+fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f, bleed: vec3f, ambient: vec3f, indirect: vec4f) -> vec3f {
     let l = lighting.sun_direction.xyz;
     var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
@@ -172,7 +185,15 @@ fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32,
     if (AO_BLEED) {
         ao_diffuse = ao_bleed_occlusion(ao_in, bleed);
     }
-    c += s.diffuse_albedo * e_n * (ambient * ao_diffuse * (sky_visibility / PI));
+    // Sky light through the sky's visibility; L5's bounce instead of the
+    // flat ground where the probes cover p (it comes from the occluders, so
+    // sky occlusion does not darken it again).
+    var e_ambient = e_n * sky_visibility;
+    if (INDIRECT) {
+        let e_ground = max(sh9_eval(indirect_params.ground, n_sky), vec3f(0.0));
+        e_ambient = max(e_n - e_ground * indirect.a, vec3f(0.0)) * sky_visibility + indirect.rgb;
+    }
+    c += s.diffuse_albedo * e_ambient * (ambient * ao_diffuse / PI);
     return c;
 }
 
@@ -230,7 +251,14 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let uv = frag.xy / (4.0 * vec2f(textureDimensions(ao_bleed)));
         bleed = ao_bleed_colour(textureSampleLevel(ao_bleed, env_sampler, uv, 0.0));
     }
-    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p));
+    var indirect = vec4f(0.0);
+    if (INDIRECT) {
+        indirect = indirect_irradiance(indirect_params, indirect_r, indirect_g, indirect_b, indirect_sampler, p, tbn[2]);
+        if (INDIRECT_VIEW) {
+            return vec4f(indirect.rgb, 1.0);
+        }
+    }
+    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p), indirect);
     c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask, o);
     if (FOG) {
         let transmittance = exp(-lighting.fog.x * dist);

@@ -14,6 +14,7 @@ use crate::graph::{Fallback, FrameGraph, TextureDesc, TextureHandle};
 use crate::passes::common::target;
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::indirect::{IndirectFrame, IndirectPass};
 use crate::passes::skyocc::{SkyOccFrame, SkyOccPass};
 
 /// Format of the HDR scene-radiance targets (lighting, sky, forward, bloom):
@@ -43,6 +44,11 @@ pub struct LightingKey {
     /// O5 colour bleeding: ambient diffuse occlusion tinted per channel by
     /// the low-frequency albedo (`passes/ao/bleed`); only with `ssao`.
     pub ao_bleed: bool,
+    /// L5: indirect light from the probes' clip map replaces the sky SH's
+    /// flat ground bounce (passes/indirect).
+    pub indirect: bool,
+    /// `--view indirect`: the pass writes L5's irradiance alone (needs `indirect`).
+    pub indirect_view: bool,
 }
 
 impl Default for LightingKey {
@@ -56,6 +62,8 @@ impl Default for LightingKey {
             ssdo: false,
             reflection_occlusion: false,
             ao_bleed: false,
+            indirect: false,
+            indirect_view: false,
         }
     }
 }
@@ -71,11 +79,13 @@ impl LightingKey {
         ssdo: false,
         reflection_occlusion: false,
         ao_bleed: false,
+        indirect: false,
+        indirect_view: false,
     };
 
     /// Every permutation (for pre-warming; `ssdo` and bleeding only with `ssao`).
     pub fn all() -> impl Iterator<Item = LightingKey> {
-        (0..256u32)
+        (0..1024u32)
             .map(|bits| LightingKey {
                 shadows: bits & 1 != 0,
                 fog: bits & 2 != 0,
@@ -85,11 +95,14 @@ impl LightingKey {
                 ssdo: bits & 32 != 0,
                 reflection_occlusion: bits & 64 != 0,
                 ao_bleed: bits & 128 != 0,
+                indirect: bits & 256 != 0,
+                indirect_view: bits & 512 != 0,
             })
             .filter(|k| k.ssao || !(k.ssdo || k.ao_bleed))
+            .filter(|k| k.indirect || !k.indirect_view)
     }
 
-    fn constants(self) -> [(&'static str, f64); 8] {
+    fn constants(self) -> [(&'static str, f64); 10] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("SHADOWS", b(self.shadows)),
@@ -100,6 +113,8 @@ impl LightingKey {
             ("SSDO", b(self.ssdo)),
             ("REFLECTION_OCCLUSION", b(self.reflection_occlusion)),
             ("AO_BLEED", b(self.ao_bleed)),
+            ("INDIRECT", b(self.indirect)),
+            ("INDIRECT_VIEW", b(self.indirect_view)),
         ]
     }
 }
@@ -129,6 +144,9 @@ pub struct LightingInputs<'a> {
     /// The sky occlusion pool's visibility and height layers as graph
     /// handles, so lighting is ordered after this frame's sector updates.
     pub skyocc_frame: SkyOccFrame,
+    /// L5: the probes' pass (its parameters and sampler) and this frame's
+    /// clip map; `None`: no indirect light (the sky SH's flat ground).
+    pub indirect: Option<(&'a IndirectPass, IndirectFrame)>,
     /// The permutation to draw with.
     pub key: LightingKey,
 }
@@ -199,6 +217,23 @@ impl LightingPass {
             .read_array("skyocc_vis", inputs.skyocc_frame.vis)
             .read_array("skyocc_heights_load", inputs.skyocc_frame.heights)
             .sampler("skyocc_sampler", sky.sampler)
+            .optional_buffer("indirect_params", inputs.indirect.map(|i| &i.0.params))
+            .optional_array(
+                "indirect_r",
+                inputs.indirect.map(|i| i.1.clip[0]),
+                Fallback::BlackArray,
+            )
+            .optional_array(
+                "indirect_g",
+                inputs.indirect.map(|i| i.1.clip[1]),
+                Fallback::BlackArray,
+            )
+            .optional_array(
+                "indirect_b",
+                inputs.indirect.map(|i| i.1.clip[2]),
+                Fallback::BlackArray,
+            )
+            .sampler("indirect_sampler", &envmap.sampler)
             .color(hdr, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .draw()
     }

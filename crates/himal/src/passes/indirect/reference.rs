@@ -94,26 +94,39 @@ impl ClipMap {
     }
 
     /// `probes.inject`: each texel takes its probe from the resident cell of
-    /// its cascade's mip; `probes(key)` gives a resident cell's SH probes.
+    /// its cascade's mip, else the nearest probe of the next coarser (then
+    /// finer) resident mip; `probes(key)` gives a resident cell's SH probes.
     pub fn inject<'a>(
         origin: Vec2,
         camera: Vec2,
         probes: impl Fn(CellKey) -> Option<&'a [Sh4]>,
     ) -> ClipMap {
         let base = Self::bases(origin, camera);
+        let n = CELL_PROBES as i32;
         let texels = (0..CASCADES)
             .map(|c| {
                 (0..CLIP_RES * CLIP_RES)
                     .map(|t| {
                         let g = base[c] + IVec2::new(t % CLIP_RES, t / CLIP_RES);
-                        let n = CELL_PROBES as i32;
-                        let key = CellKey {
-                            mip: c as u8,
-                            x: g.x.div_euclid(n),
-                            z: g.y.div_euclid(n),
-                        };
-                        let local = g.rem_euclid(IVec2::splat(n));
-                        probes(key).map(|p| p[(local.y * n + local.x) as usize])
+                        let x = (g.as_vec2() + 0.5) * texel_size(c);
+                        (0..CASCADES).find_map(|k| {
+                            let m = if c + k < CASCADES {
+                                c + k
+                            } else {
+                                CASCADES - 1 - k
+                            };
+                            let gm = (x / texel_size(m)).floor().as_ivec2();
+                            if gm.min_element() < 0 {
+                                return None;
+                            }
+                            let key = CellKey {
+                                mip: m as u8,
+                                x: gm.x / n,
+                                z: gm.y / n,
+                            };
+                            let local = gm % n;
+                            probes(key).map(|p| p[(local.y * n + local.x) as usize])
+                        })
                     })
                     .collect()
             })
@@ -185,7 +198,7 @@ impl ClipMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::passes::probes::cell::PROBES_PER_CELL;
+    use crate::passes::indirect::cell::PROBES_PER_CELL;
 
     const O: Vec2 = Vec2::new(-5120.0, -5120.0);
 

@@ -103,11 +103,11 @@ pub fn bake_probe(
         let y_i = sh4_basis(w);
         // 4 pi / N (sphere estimator) * rho / pi * pi / M (cosine estimator).
         let scale = 4.0 * std::f32::consts::PI / (n as f32 * m as f32);
-        for c in 0..3 {
+        for (c, rows) in t.m.chunks_exact_mut(16).enumerate() {
             let rho = hit.albedo[c];
-            for i in 0..4 {
-                for j in 0..4 {
-                    t.m[c * 16 + i * 4 + j] += scale * rho * y_i[i] * t_j[j];
+            for (row, yi) in rows.chunks_exact_mut(4).zip(y_i) {
+                for (v, tj) in row.iter_mut().zip(t_j) {
+                    *v += scale * rho * yi * tj;
                 }
             }
         }

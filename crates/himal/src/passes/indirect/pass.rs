@@ -1,0 +1,328 @@
+//! The per-frame GPU work of L5: cells streamed into the fixed pool,
+//! `probes.transfer` (SH probes for this frame's sky and sun) and
+//! `probes.inject` (the camera-centred clip map deferred lighting samples).
+
+use std::sync::Arc;
+
+use glam::Vec2;
+use half::f16;
+
+use super::cell::{Cell, MIPS, PROBES_PER_CELL, TRANSFER_FLOATS};
+use super::pool::{Admit, CellPool, POOL_CELLS, cells_per_axis, wanted_cells};
+use super::reference::{CASCADES, CLIP_RES, ClipMap, Sh4, lighting_sh, sky_radiance_sh};
+use super::store::ProbeStore;
+use crate::gpu::pipeline::{Program, uniform_buffer};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::{BufferDesc, FrameGraph, TextureDesc, TextureHandle};
+use crate::math::sh::{Sh9Gpu, Sh9Rgb};
+use crate::passes::sky::SkyLight;
+use crate::passes::sky::reference::{sky_and_ground_irradiance_sh, sky_irradiance_sh};
+
+/// Words of one probe's transfer on the GPU (f16 pairs).
+const PROBE_WORDS: usize = TRANSFER_FLOATS / 2;
+/// Probes in the pool.
+pub const POOL_PROBES: usize = POOL_CELLS * PROBES_PER_CELL;
+/// Format of the three clip-map textures (one colour channel's SH2 each).
+pub const CLIP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// `IndirectParams` in `shaders/indirect.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct IndirectParams {
+    /// The lighting SH2, rgb per coefficient (w unused).
+    pub lighting: [[f32; 4]; 4],
+    /// Grid origin (x, z), camera (x, z).
+    pub origin_camera: [f32; 4],
+    /// Per cascade: global probe index of texel (0, 0).
+    pub base: [[i32; 4]; CASCADES],
+    /// Per mip: cells per axis, byte offset of its page table.
+    pub tables: [[i32; 4]; MIPS],
+    /// The sky SH's flat ground bounce (what the probes replace).
+    pub ground: Sh9Gpu,
+    /// x: probes in the pool.
+    pub counts: [u32; 4],
+}
+
+/// The sky and sun the probes transfer, and the ground they replace.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndirectLight {
+    /// Sky above the horizon plus the sun, SH2 radiance.
+    pub lighting: Sh4,
+    /// The flat ground bounce inside the sky irradiance SH.
+    pub ground: Sh9Rgb,
+}
+
+impl IndirectLight {
+    /// The lighting of `light`'s time of day: its sky (above the horizon)
+    /// and sun in SH2, and the flat ground in its irradiance SH.
+    pub fn of_sky(light: &SkyLight) -> IndirectLight {
+        let sky = sky_radiance_sh(|d| light.sky.radiance(d));
+        let with_ground =
+            sky_and_ground_irradiance_sh(&light.sky, light.sun_direction, light.sun_illuminance);
+        IndirectLight {
+            lighting: lighting_sh(&sky, light.sun_direction, light.sun_illuminance),
+            ground: with_ground.add(&sky_irradiance_sh(&light.sky).scale(-1.0)),
+        }
+    }
+}
+
+/// What streaming did this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IndirectStats {
+    /// Cells resident after the update.
+    pub resident: u32,
+    /// Cells uploaded this frame.
+    pub uploaded: u32,
+    /// Cells freed (streamed out) or evicted this frame.
+    pub released: u32,
+}
+
+/// Byte offsets of each mip's page table in the packed table buffer.
+pub fn table_offsets() -> [i32; MIPS] {
+    let mut o = [0; MIPS];
+    for m in 1..MIPS {
+        let n = cells_per_axis(m as u8 - 1);
+        o[m] = o[m - 1] + n * n;
+    }
+    o
+}
+
+/// Bytes of all page tables.
+pub fn table_bytes() -> usize {
+    let n = cells_per_axis(MIPS as u8 - 1);
+    (table_offsets()[MIPS - 1] + n * n) as usize
+}
+
+/// A cell's transfer as the GPU stores it: f16 pairs, channel-major.
+pub fn pack_cell(cell: &Cell) -> Vec<u32> {
+    cell.probes
+        .iter()
+        .flat_map(|p| {
+            p.m.chunks_exact(2).map(|pair| {
+                let lo = f16::from_f32(pair[0]).to_bits() as u32;
+                let hi = f16::from_f32(pair[1]).to_bits() as u32;
+                lo | (hi << 16)
+            })
+        })
+        .collect()
+}
+
+/// The clip map of this frame as graph textures (r, g, b channels' SH2).
+#[derive(Clone, Copy, Debug)]
+pub struct IndirectFrame {
+    /// `probes.clip_r`, `_g`, `_b`: 32 x 32, 5 layers.
+    pub clip: [TextureHandle; 3],
+}
+
+/// L5's GPU state: the cell pool, its page tables, the two passes.
+pub struct IndirectPass {
+    transfer: Program,
+    inject: Program,
+    transfer_pipeline: wgpu::ComputePipeline,
+    inject_pipeline: wgpu::ComputePipeline,
+    /// Transfer of every pool slot (f16 pairs).
+    pub cells: wgpu::Buffer,
+    /// Per-mip page tables, one byte per cell.
+    pub tables: wgpu::Buffer,
+    /// `IndirectParams`.
+    pub params: wgpu::Buffer,
+    pool: CellPool,
+    store: Option<Arc<ProbeStore>>,
+    light: Option<IndirectLight>,
+    camera: Vec2,
+}
+
+impl IndirectPass {
+    /// Compiles both passes and allocates the fixed pool (80 cells).
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let transfer = Program::new(ctx, "passes/indirect/transfer.wgsl")?;
+        let inject = Program::new(ctx, "passes/indirect/inject.wgsl")?;
+        let storage = |label: &str, size: usize| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let tables = storage("himal.indirect.tables", table_bytes().div_ceil(4) * 4);
+        ctx.queue
+            .write_buffer(&tables, 0, &vec![0xffu8; table_bytes().div_ceil(4) * 4]);
+        Ok(Self {
+            transfer_pipeline: transfer.compute_pipeline(ctx, "cs_main", &[])?,
+            inject_pipeline: inject.compute_pipeline(ctx, "cs_main", &[])?,
+            transfer,
+            inject,
+            cells: storage("himal.indirect.cells", POOL_PROBES * PROBE_WORDS * 4),
+            tables,
+            params: uniform_buffer(
+                ctx,
+                "himal.indirect.params",
+                &<IndirectParams as bytemuck::Zeroable>::zeroed(),
+            ),
+            pool: CellPool::default(),
+            store: None,
+            light: None,
+            camera: Vec2::ZERO,
+        })
+    }
+
+    /// The baked cells to stream from (`None`: no indirect light); the pool empties.
+    pub fn set_store(&mut self, store: Option<Arc<ProbeStore>>) {
+        self.store = store;
+        self.pool = CellPool::default();
+    }
+
+    /// This time of day's lighting (the renderer sets it with the sky).
+    pub fn set_light(&mut self, light: IndirectLight) {
+        self.light = Some(light);
+    }
+
+    /// The baked cells, if any.
+    pub fn store(&self) -> Option<&Arc<ProbeStore>> {
+        self.store.as_ref()
+    }
+
+    /// The pool (for views, statistics and tests).
+    pub fn pool(&self) -> &CellPool {
+        &self.pool
+    }
+
+    /// Streams the cells the camera (x, z) wants into the pool (freeing
+    /// the others first, then nearest first: farthest-first eviction can
+    /// only strike cells no longer wanted), uploads them and the page
+    /// tables, and writes this frame's parameters.
+    pub fn update(&mut self, ctx: &GpuContext, camera: Vec2) -> IndirectStats {
+        let mut stats = IndirectStats::default();
+        let (Some(store), Some(light)) = (self.store.clone(), self.light) else {
+            return stats;
+        };
+        self.camera = camera;
+        let origin = store.origin;
+        let mut wanted: Vec<_> = wanted_cells(origin, camera)
+            .into_iter()
+            .filter(|k| store.cell(*k).is_some())
+            .collect();
+        let gone: Vec<_> = self
+            .pool
+            .resident()
+            .filter(|(_, k)| !wanted.contains(k))
+            .map(|(_, k)| k)
+            .collect();
+        for k in &gone {
+            self.pool.release(*k);
+            stats.released += 1;
+        }
+        let distance = |k: &super::cell::CellKey| super::pool::cell_distance(*k, origin, camera);
+        wanted.sort_by(|a, b| distance(a).total_cmp(&distance(b)).then(a.cmp(b)));
+        let mut changed = !gone.is_empty();
+        for k in wanted {
+            let slot = match self.pool.admit(k, origin, camera) {
+                Admit::Resident(_) | Admit::Refused => continue,
+                Admit::Stored(s) => s,
+                Admit::Evicted { slot, .. } => {
+                    stats.released += 1;
+                    slot
+                }
+            };
+            let words = pack_cell(store.cell(k).expect("wanted cells are baked"));
+            let offset = slot as u64 * (PROBES_PER_CELL * PROBE_WORDS * 4) as u64;
+            ctx.queue
+                .write_buffer(&self.cells, offset, bytemuck::cast_slice(&words));
+            stats.uploaded += 1;
+            changed = true;
+        }
+        if changed {
+            ctx.queue
+                .write_buffer(&self.tables, 0, &self.packed_tables());
+        }
+        stats.resident = self.pool.used() as u32;
+        let params = self.params_for(origin, camera, &light);
+        ctx.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        stats
+    }
+
+    /// Every mip's page table, bytes packed into words.
+    pub fn packed_tables(&self) -> Vec<u8> {
+        let mut bytes: Vec<u8> = (0..MIPS as u8)
+            .flat_map(|m| self.pool.page_table(m))
+            .collect();
+        bytes.resize(table_bytes().div_ceil(4) * 4, 0xff);
+        bytes
+    }
+
+    fn params_for(&self, origin: Vec2, camera: Vec2, light: &IndirectLight) -> IndirectParams {
+        let bases = ClipMap::bases(origin, camera);
+        let offsets = table_offsets();
+        IndirectParams {
+            lighting: light.lighting.map(|c| c.extend(0.0).to_array()),
+            origin_camera: [origin.x, origin.y, camera.x, camera.y],
+            base: bases.map(|b| [b.x, b.y, 0, 0]),
+            tables: std::array::from_fn(|m| [cells_per_axis(m as u8), offsets[m], 0, 0]),
+            ground: Sh9Gpu::from(&light.ground),
+            counts: [POOL_PROBES as u32, 0, 0, 0],
+        }
+    }
+
+    /// `probes.transfer` then `probes.inject`; `None` without baked cells
+    /// or lighting.
+    pub fn add<'a>(&'a self, g: &mut FrameGraph<'a>) -> Option<IndirectFrame> {
+        self.store.as_ref()?;
+        self.light.as_ref()?;
+        let sh = g.create_buffer("probes.sh", BufferDesc::new((POOL_PROBES * 3 * 16) as u64));
+        let sh = g
+            .compute("probes.transfer", &self.transfer)
+            .compute_pipeline(Ok(self.transfer_pipeline.clone()))
+            .uniform("params", &self.params)
+            .uniform("cells", &self.cells)
+            .write_buffer("sh_probes", sh)
+            .dispatch([(POOL_PROBES as u32).div_ceil(64), 1, 1])
+            .buffer(sh);
+        let desc = TextureDesc {
+            depth_or_layers: CASCADES as u32,
+            ..TextureDesc::new_2d(CLIP_RES as u32, CLIP_RES as u32, CLIP_FORMAT)
+        };
+        let clip = ["probes.clip_r", "probes.clip_g", "probes.clip_b"]
+            .map(|n| g.create_texture(n, desc.clone()));
+        let written = g
+            .compute("probes.inject", &self.inject)
+            .compute_pipeline(Ok(self.inject_pipeline.clone()))
+            .uniform("params", &self.params)
+            .uniform("tables", &self.tables)
+            .read_buffer("sh_probes", sh, crate::graph::BufferAccess::StorageRead)
+            .storage("clip_r", clip[0])
+            .storage("clip_g", clip[1])
+            .storage("clip_b", clip[2])
+            .dispatch([
+                (CLIP_RES as u32).div_ceil(8),
+                (CLIP_RES as u32).div_ceil(8),
+                CASCADES as u32,
+            ]);
+        // The new versions, in declaration order.
+        Some(IndirectFrame {
+            clip: [written.storage[0], written.storage[1], written.storage[2]],
+        })
+    }
+
+    /// The camera (x, z) of the last update.
+    pub fn camera(&self) -> Vec2 {
+        self.camera
+    }
+}
+
+/// The CPU twin's probes for `pool` and `store` under `lighting`: what
+/// `probes.transfer` leaves for the cells resident now.
+pub fn resident_sh(
+    pool: &CellPool,
+    store: &ProbeStore,
+    lighting: &Sh4,
+) -> Vec<(super::cell::CellKey, Vec<Sh4>)> {
+    pool.resident()
+        .filter_map(|(_, k)| {
+            store
+                .cell(k)
+                .map(|c| (k, super::reference::transfer_cell(c, lighting)))
+        })
+        .collect()
+}
