@@ -1,6 +1,8 @@
 //! `himal bake`: offline data, computed ahead of rendering with a progress
 //! bar. L1: the Bruneton tables (default and/or Bruneton 2017's reference
 //! sizes) into the table cache that `render`, `view` and `prewarm` read.
+//! L5 (`--probes`): a scene's radiance-transfer probe cells, resumable
+//! (cells already in the cache are kept).
 
 use std::time::Instant;
 
@@ -13,15 +15,17 @@ use crate::render::parse_table_sizes;
 
 #[derive(Args, Debug)]
 pub struct BakeArgs {
-    /// Bruneton table sizes to bake (`--sky-tables` picks them when rendering).
-    #[arg(
-        long,
-        default_value = "default",
-        value_name = "default|reference|all",
-        allow_hyphen_values = true
-    )]
-    pub tables: String,
-    /// Recompute tables the cache already holds.
+    /// Bruneton table sizes to bake (`--sky-tables` picks them when
+    /// rendering); default: `default`, none with `--probes`.
+    #[arg(long, value_name = "default|reference|all", allow_hyphen_values = true)]
+    pub tables: Option<String>,
+    /// L5: bake the radiance-transfer probe cells of `--scene`.
+    #[arg(long)]
+    pub probes: bool,
+    /// The scene whose probes `--probes` bakes: `demo` or a scene file.
+    #[arg(long, default_value = "demo")]
+    pub scene: String,
+    /// Recompute tables (and, with `--probes`, cells) the cache already holds.
     #[arg(long)]
     pub force: bool,
     #[command(flatten)]
@@ -35,7 +39,27 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             crate::CACHE_ENV
         );
     };
-    let names = match args.tables.as_str() {
+    if args.probes {
+        if crate::scene_source::world_of(&args.scene)?.is_some() {
+            bail!("bake --probes: the streamed world's cells are not baked yet (issue #19)");
+        }
+        let scene = crate::scene_source::load_scene(&args.scene)?;
+        let start = Instant::now();
+        let store = crate::scene_source::probe_cells(&scene, Some(&dir), args.force)?;
+        println!(
+            "bake: {} probe cells of {} (mips 0-4) in {:.1} s, under {}",
+            store.len(),
+            args.scene,
+            start.elapsed().as_secs_f64(),
+            dir.join("probes").display()
+        );
+    }
+    let tables = match (&args.tables, args.probes) {
+        (Some(t), _) => t.as_str(),
+        (None, true) => return Ok(()),
+        (None, false) => "default",
+    };
+    let names = match tables {
         "all" => vec!["default", "reference"],
         one @ ("default" | "reference") => vec![one],
         other => bail!("--tables {other}: expected default, reference or all"),

@@ -363,6 +363,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut settings = settings;
     let mut renderer = open_renderer(&args.scene, args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
+    if settings.indirect {
+        crate::scene_source::attach_probes(&mut renderer, &scene, args.gpu.cache_dir().as_deref())?;
+    }
     if let Some(name) = &args.path {
         renderer.set_sky_table_sizes(args.post.table_sizes()?);
         let run = crate::bench_path::PathRun {

@@ -170,7 +170,7 @@ fn open(args: &BenchArgs) -> Result<Running> {
     let mut renderer = open_renderer(&args.scene, args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
     // The sky tables from the cache: a comparison does not time them.
-    args.post.configure(&mut renderer, &args.gpu)?;
+    args.post.configure(&mut renderer, &args.gpu, &scene)?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let dolly = args.dolly.unwrap_or(0.0);
     Ok(Running {

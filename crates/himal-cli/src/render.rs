@@ -186,6 +186,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub sky_occlusion: String,
+    /// L5 indirect light from radiance-transfer probes (baked on first use
+    /// into the cache; `himal bake --probes` ahead of time).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub indirect: String,
     /// L2: sky light along the bent normal (off: along the surface normal).
     #[arg(
         long,
@@ -381,7 +390,15 @@ impl PostArgs {
     /// Sets the renderer's sky table cache (`gpu`'s cache directory) and
     /// sizes; says so when reference tables will be computed (minutes on a
     /// software rasteriser).
-    pub fn configure(&self, renderer: &mut Renderer, gpu: &crate::GpuArgs) -> Result<()> {
+    pub fn configure(
+        &self,
+        renderer: &mut Renderer,
+        gpu: &crate::GpuArgs,
+        scene: &Scene,
+    ) -> Result<()> {
+        if on_off("--indirect", &self.indirect)? {
+            crate::scene_source::attach_probes(renderer, scene, gpu.cache_dir().as_deref())?;
+        }
         let sizes = self.table_sizes()?;
         let config = himal::passes::sky::bruneton::AtmosphereConfig::earth(sizes);
         let cached = gpu
@@ -469,6 +486,7 @@ impl PostArgs {
         settings.environment_specular = on_off("--env-specular", &self.env_specular)?;
         settings.environment_probes = on_off("--env-probes", &self.env_probes)?;
         settings.sky_occlusion = on_off("--sky-occlusion", &self.sky_occlusion)?;
+        settings.indirect = on_off("--indirect", &self.indirect)?;
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
@@ -888,7 +906,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .transpose()?;
     let mut renderer = args.open_renderer(args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
-    args.post.configure(&mut renderer, &args.gpu)?;
+    args.post.configure(&mut renderer, &args.gpu, &scene)?;
     if args.graph {
         print!("{}", renderer.describe_graph(&settings)?);
         return Ok(());

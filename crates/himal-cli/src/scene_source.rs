@@ -2,6 +2,10 @@
 //! file (with or without a `[world]` table) or a glTF model; loaded once
 //! per process and opened as a renderer.
 
+use std::sync::Arc;
+
+use himal::passes::indirect::{BakeSettings, ProbeStore};
+use himal::scene::raycast::RayScene;
 use std::path::Path;
 
 use anyhow::Result;
@@ -70,6 +74,62 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     } else {
         Scene::load(Path::new(spec))?
     })
+}
+
+/// L5: hands `renderer` its scene's probe cells ([`probe_cells`]); the
+/// streamed world's are not baked yet (an error, not a silent dark frame).
+pub fn attach_probes(renderer: &mut Renderer, scene: &Scene, cache: Option<&Path>) -> Result<()> {
+    if renderer.world().is_some() {
+        anyhow::bail!(
+            "--indirect on: the streamed world's probe cells are not baked yet (issue #19); \
+             use the demo or a scene file"
+        );
+    }
+    renderer.set_probe_cells(Some(probe_cells(scene, cache, false)?));
+    Ok(())
+}
+
+/// L5: `scene`'s probe cells, read from `cache` where an earlier bake
+/// left them (unless `force`), the rest baked now with a progress bar (stderr).
+pub fn probe_cells(scene: &Scene, cache: Option<&Path>, force: bool) -> Result<Arc<ProbeStore>> {
+    let geometry = RayScene::from_scene(scene, None);
+    let settings = BakeSettings::default();
+    if let Some(dir) = cache.filter(|_| force) {
+        let folder = himal::passes::indirect::store::cache_folder(dir, &geometry, &settings);
+        if folder.exists() {
+            std::fs::remove_dir_all(&folder)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", folder.display()))?;
+        }
+    }
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{bar:30}] {pos}/{len} cells, {elapsed} (eta {eta}) {msg}",
+        )?
+        .progress_chars("=> "),
+    );
+    bar.set_prefix("L5 probes");
+    let start = std::time::Instant::now();
+    let (store, report) = ProbeStore::bake(&geometry, &settings, cache, &mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .map_err(|e| anyhow::anyhow!("probe bake: {e}"))?;
+    bar.finish_and_clear();
+    if report.baked > 0 {
+        eprintln!(
+            "L5 probes: baked {} cells ({} from the cache) in {:.1} s{}",
+            report.baked,
+            report.cached,
+            start.elapsed().as_secs_f64(),
+            if cache.is_none() {
+                "; no cache directory: baked again next run"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(Arc::new(store))
 }
 
 #[cfg(test)]

@@ -48,7 +48,7 @@ pub fn run(args: &SoakArgs) -> Result<()> {
     let (scene, camera, mut settings) = setup(r)?;
     let mut renderer = r.open_renderer(r.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
-    r.post.configure(&mut renderer, &r.gpu)?;
+    r.post.configure(&mut renderer, &r.gpu, &scene)?;
     let every = args.every.unwrap_or((r.frames / 20).max(1)).max(1);
     println!(
         "soak: {} frames at {}x{} on {}",

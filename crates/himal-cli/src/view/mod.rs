@@ -175,7 +175,9 @@ impl Viewer {
             self.args
                 .open_renderer(self.args.gpu.context()?, &self.scene)?
         };
-        self.args.post.configure(&mut renderer, &self.args.gpu)?;
+        self.args
+            .post
+            .configure(&mut renderer, &self.args.gpu, &self.scene)?;
         self.renderer = renderer;
         if let Some(window) = window {
             let presentation = self.presentation(&window)?;
@@ -637,7 +639,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     let (scene, camera, mut settings) = crate::render::setup(args)?;
     let mut renderer = args.open_renderer(args.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
-    args.post.configure(&mut renderer, &args.gpu)?;
+    args.post.configure(&mut renderer, &args.gpu, &scene)?;
     let paths = renderer
         .world()
         .map(|w| w.paths.clone())

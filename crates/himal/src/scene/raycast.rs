@@ -3,8 +3,8 @@
 //! built serially so the same scene gives the same tree and the same hits.
 //!
 //! Foliage cards are left out (alpha-tested: a card's bounding triangle
-//! would block far more than its leaves); moving objects are taken where
-//! they stand at time 0.
+//! would block far more than its leaves), and so are moving and animated
+//! objects (what is baked must stay put).
 
 use glam::{Mat3, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
@@ -44,14 +44,15 @@ pub struct RayScene {
 }
 
 impl RayScene {
-    /// The opaque, non-foliage triangles of `scene` whose bounds overlap
+    /// The opaque, still, non-foliage triangles of `scene` whose bounds overlap
     /// `region` (all of them for `None`).
     pub fn from_scene(scene: &Scene, region: Option<&Aabb>) -> RayScene {
         let mut tris = Vec::new();
         let mut outward = Vec::new();
         let mut albedo = Vec::new();
         let mut ground = Vec::new();
-        for object in scene.objects.iter().filter(|o| o.foliage.is_none()) {
+        let still = |o: &&super::Object| o.foliage.is_none() && o.motion.is_none();
+        for object in scene.objects.iter().filter(still) {
             let Some(mesh) = scene.meshes.get(object.mesh) else {
                 continue;
             };
