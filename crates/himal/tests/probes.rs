@@ -592,3 +592,56 @@ fn lighting_swaps_the_flat_ground_for_the_probes() {
     assert!(mean < 0.002, "{mean}");
     assert!(errors[n * 99 / 100] < 0.005, "p99 {}", errors[n * 99 / 100]);
 }
+
+/// A flight across the world: the pool never holds more than 16 cells per
+/// mip, and every clip-map texel the lighting can sample (12 texels of each
+/// side of the camera, bilinear taps included) finds its own mip's cell.
+#[test]
+fn a_flight_keeps_the_pool_bounded_and_the_clip_map_covered() {
+    use himal::passes::indirect::cell::MIPS;
+    use himal::passes::indirect::pool::{CELLS_PER_MIP, CellPool, cells_per_axis};
+    use himal::passes::indirect::reference::{CLIP_RES, texel_size};
+
+    let mut pool = CellPool::default();
+    let (mut uploads, mut frames, mut missing) = (0usize, 0, 0);
+    // 9 km diagonal, 7 m per frame (25 m/s at 1/30 s... a fast flight).
+    let (a, b) = (Vec2::new(-4500.0, -4300.0), Vec2::new(4400.0, 4550.0));
+    let steps = ((b - a).length() / 7.0) as usize;
+    for i in 0..=steps {
+        let cam = a.lerp(b, i as f32 / steps as f32);
+        let step = pool.stream(ORIGIN, cam, |_| true);
+        uploads += step.uploads.len();
+        frames += 1;
+        for mip in 0..MIPS as u8 {
+            let n = pool.resident().filter(|(_, k)| k.mip == mip).count();
+            assert!(n <= CELLS_PER_MIP, "frame {i}: mip {mip} holds {n}");
+        }
+        let bases = ClipMap::bases(ORIGIN, cam);
+        for (c, base) in bases.iter().enumerate() {
+            for t in 0..CLIP_RES * CLIP_RES {
+                let g = *base + glam::IVec2::new(t % CLIP_RES, t / CLIP_RES);
+                let centre = ORIGIN + (g.as_vec2() + 0.5) * texel_size(c);
+                if (centre - cam).abs().max_element() > 12.0 * texel_size(c) {
+                    continue;
+                }
+                let key = CellKey {
+                    mip: c as u8,
+                    x: g.x.div_euclid(8),
+                    z: g.y.div_euclid(8),
+                };
+                let cells = cells_per_axis(c as u8);
+                if key.x < 0 || key.z < 0 || key.x >= cells || key.z >= cells {
+                    continue; // beyond the world's edge
+                }
+                if pool.slot_of(key).is_none() {
+                    missing += 1;
+                }
+            }
+        }
+    }
+    eprintln!(
+        "flight: {frames} frames, {uploads} cell uploads ({:.2} per frame), pool <= 16 per mip",
+        uploads as f32 / frames as f32
+    );
+    assert_eq!(missing, 0, "texels without their cell");
+}

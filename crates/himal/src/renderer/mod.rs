@@ -280,6 +280,7 @@ impl Renderer {
         if hiz > 0 {
             rows.push(("cull.hiz (2 pyramids)".to_string(), hiz));
         }
+        rows.extend(self.res.passes.indirect.memory());
         rows
     }
 

@@ -8,7 +8,7 @@ use glam::Vec2;
 use half::f16;
 
 use super::cell::{Cell, MIPS, PROBES_PER_CELL, TRANSFER_FLOATS};
-use super::pool::{Admit, CellPool, POOL_CELLS, cells_per_axis, wanted_cells};
+use super::pool::{CellPool, POOL_CELLS, cells_per_axis};
 use super::reference::{CASCADES, CLIP_RES, ClipMap, Sh4, lighting_sh, sky_radiance_sh};
 use super::store::ProbeStore;
 use crate::gpu::pipeline::{Program, uniform_buffer};
@@ -188,10 +188,9 @@ impl IndirectPass {
         &self.pool
     }
 
-    /// Streams the cells the camera (x, z) wants into the pool (freeing
-    /// the others first, then nearest first: farthest-first eviction can
-    /// only strike cells no longer wanted), uploads them and the page
-    /// tables, and writes this frame's parameters.
+    /// Streams the cells the camera (x, z) wants into the pool
+    /// ([`CellPool::stream`]), uploads them and the page tables, and writes
+    /// this frame's parameters.
     pub fn update(&mut self, ctx: &GpuContext, camera: Vec2) -> IndirectStats {
         let mut stats = IndirectStats::default();
         let (Some(store), Some(light)) = (self.store.clone(), self.light) else {
@@ -199,38 +198,17 @@ impl IndirectPass {
         };
         self.camera = camera;
         let origin = store.origin;
-        let mut wanted: Vec<_> = wanted_cells(origin, camera)
-            .into_iter()
-            .filter(|k| store.cell(*k).is_some())
-            .collect();
-        let gone: Vec<_> = self
+        let step = self
             .pool
-            .resident()
-            .filter(|(_, k)| !wanted.contains(k))
-            .map(|(_, k)| k)
-            .collect();
-        for k in &gone {
-            self.pool.release(*k);
-            stats.released += 1;
-        }
-        let distance = |k: &super::cell::CellKey| super::pool::cell_distance(*k, origin, camera);
-        wanted.sort_by(|a, b| distance(a).total_cmp(&distance(b)).then(a.cmp(b)));
-        let mut changed = !gone.is_empty();
-        for k in wanted {
-            let slot = match self.pool.admit(k, origin, camera) {
-                Admit::Resident(_) | Admit::Refused => continue,
-                Admit::Stored(s) => s,
-                Admit::Evicted { slot, .. } => {
-                    stats.released += 1;
-                    slot
-                }
-            };
-            let words = pack_cell(store.cell(k).expect("wanted cells are baked"));
+            .stream(origin, camera, |k| store.cell(k).is_some());
+        stats.released = step.released;
+        let changed = step.released > 0 || !step.uploads.is_empty();
+        for (slot, k) in step.uploads {
+            let words = pack_cell(store.cell(k).expect("streamed cells are baked"));
             let offset = slot as u64 * (PROBES_PER_CELL * PROBE_WORDS * 4) as u64;
             ctx.queue
                 .write_buffer(&self.cells, offset, bytemuck::cast_slice(&words));
             stats.uploaded += 1;
-            changed = true;
         }
         if changed {
             ctx.queue
@@ -303,6 +281,19 @@ impl IndirectPass {
         Some(IndirectFrame {
             clip: [written.storage[0], written.storage[1], written.storage[2]],
         })
+    }
+
+    /// GPU bytes that outlive a frame, by name (the clip map is a frame
+    /// target: 3 x 32 x 32 x 5 RGBA16F = 120 KiB, in the frame pool).
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        vec![
+            ("probes.cells (80-cell pool)".to_string(), self.cells.size()),
+            (
+                "probes.page tables (5 mips)".to_string(),
+                self.tables.size(),
+            ),
+            ("probes.params".to_string(), self.params.size()),
+        ]
     }
 
     /// The camera (x, z) of the last update.

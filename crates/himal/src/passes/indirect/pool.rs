@@ -154,6 +154,57 @@ impl CellPool {
     }
 }
 
+/// What one streaming step did: cells to upload into their slots, and
+/// how many were freed or evicted.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StreamStep {
+    /// (slot, cell) to copy to the GPU.
+    pub uploads: Vec<(u32, CellKey)>,
+    /// Cells streamed out (no longer wanted) or evicted.
+    pub released: u32,
+}
+
+impl CellPool {
+    /// One frame of streaming for a camera at (x, z): cells no longer
+    /// wanted are freed first, then the wanted ones that `available` says
+    /// are baked are admitted nearest first (so farthest-first eviction can
+    /// only strike cells nobody wants).
+    pub fn stream(
+        &mut self,
+        origin: Vec2,
+        camera: Vec2,
+        available: impl Fn(CellKey) -> bool,
+    ) -> StreamStep {
+        let mut step = StreamStep::default();
+        let mut wanted: Vec<CellKey> = wanted_cells(origin, camera)
+            .into_iter()
+            .filter(|k| available(*k))
+            .collect();
+        let gone: Vec<CellKey> = self
+            .resident()
+            .map(|(_, k)| k)
+            .filter(|k| !wanted.contains(k))
+            .collect();
+        for k in gone {
+            self.release(k);
+            step.released += 1;
+        }
+        let distance = |k: &CellKey| cell_distance(*k, origin, camera);
+        wanted.sort_by(|a, b| distance(a).total_cmp(&distance(b)).then(a.cmp(b)));
+        for k in wanted {
+            match self.admit(k, origin, camera) {
+                Admit::Resident(_) | Admit::Refused => {}
+                Admit::Stored(s) => step.uploads.push((s, k)),
+                Admit::Evicted { slot, .. } => {
+                    step.released += 1;
+                    step.uploads.push((slot, k));
+                }
+            }
+        }
+        step
+    }
+}
+
 /// Cells per axis of mip `mip` over the 160-sector grid.
 pub fn cells_per_axis(mip: u8) -> i32 {
     (GRID_SECTORS + (1 << mip) - 1) >> mip
