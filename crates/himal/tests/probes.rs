@@ -7,6 +7,7 @@ mod common;
 use glam::{Vec2, Vec3};
 use himal::math::sh::sh4_basis;
 use himal::passes::indirect::cell::{Cell, CellKey};
+use himal::passes::indirect::pool::CellPool;
 use himal::passes::indirect::reference::{
     ClipMap, Sh4, lighting_sh, sky_radiance_sh, transfer_cell,
 };
@@ -247,7 +248,11 @@ fn accuracy(name: &str) -> Vec<Row> {
             .iter()
             .map(|c| (c.key, transfer_cell(c, &lighting)))
             .collect();
-        let map = ClipMap::inject(ORIGIN, Vec2::ZERO, |k| {
+        let mut pool = CellPool::default();
+        for c in &cells {
+            pool.admit(c.key, ORIGIN, Vec2::ZERO);
+        }
+        let map = ClipMap::inject_resident(ORIGIN, Vec2::ZERO, &pool, |k| {
             probes
                 .iter()
                 .find(|(key, _)| *key == k)
@@ -447,7 +452,9 @@ fn gpu_indirect_matches_the_cpu_twins() {
                 .map(|c| (*k, transfer_cell(c, &light.lighting)))
         })
         .collect();
-    let map = ClipMap::inject(ORIGIN, cam, |k| {
+    let mut pool = CellPool::default();
+    pool.stream(ORIGIN, cam, |k| store.cell(k).is_some());
+    let map = ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
         sh.iter()
             .find(|(key, _)| *key == k)
             .map(|(_, p)| p.as_slice())
@@ -542,7 +549,9 @@ fn lighting_swaps_the_flat_ground_for_the_probes() {
                 .map(|c| (*k, transfer_cell(c, &light.lighting)))
         })
         .collect();
-    let map = ClipMap::inject(ORIGIN, cam, |k| {
+    let mut pool = CellPool::default();
+    pool.stream(ORIGIN, cam, |k| store.cell(k).is_some());
+    let map = ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
         sh.iter()
             .find(|(key, _)| *key == k)
             .map(|(_, p)| p.as_slice())
@@ -599,7 +608,7 @@ fn lighting_swaps_the_flat_ground_for_the_probes() {
 #[test]
 fn a_flight_keeps_the_pool_bounded_and_the_clip_map_covered() {
     use himal::passes::indirect::cell::MIPS;
-    use himal::passes::indirect::pool::{CELLS_PER_MIP, CellPool, cells_per_axis};
+    use himal::passes::indirect::pool::{CELLS_PER_MIP, cells_per_axis};
     use himal::passes::indirect::reference::{CLIP_RES, texel_size};
 
     let mut pool = CellPool::default();

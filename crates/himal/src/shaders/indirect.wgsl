@@ -21,8 +21,8 @@ struct IndirectParams {
     origin_camera: vec4f,
     // Per cascade: global probe index (x, z) of texel (0, 0).
     base: array<vec4i, 5>,
-    // Per mip: x = cells per axis, y = byte offset of its page table.
-    tables: array<vec4i, 5>,
+    // x: sectors per axis of the combined page table (160).
+    grid: vec4i,
     // The flat ground bounce of the sky SH, which the probes replace.
     ground: Sh9,
     // x: probes in the pool (slots x 64).

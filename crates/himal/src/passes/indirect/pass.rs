@@ -7,8 +7,8 @@ use std::sync::Arc;
 use glam::Vec2;
 use half::f16;
 
-use super::cell::{Cell, MIPS, PROBES_PER_CELL, TRANSFER_FLOATS};
-use super::pool::{CellPool, POOL_CELLS, cells_per_axis};
+use super::cell::{Cell, GRID_SECTORS, PROBES_PER_CELL, TRANSFER_FLOATS};
+use super::pool::{CellPool, NO_CELL, POOL_CELLS};
 use super::reference::{CASCADES, CLIP_RES, ClipMap, Sh4, lighting_sh, sky_radiance_sh};
 use super::store::ProbeStore;
 use crate::gpu::pipeline::{Program, uniform_buffer};
@@ -35,8 +35,8 @@ pub struct IndirectParams {
     pub origin_camera: [f32; 4],
     /// Per cascade: global probe index of texel (0, 0).
     pub base: [[i32; 4]; CASCADES],
-    /// Per mip: cells per axis, byte offset of its page table.
-    pub tables: [[i32; 4]; MIPS],
+    /// x: sectors per axis of the combined page table.
+    pub grid: [i32; 4],
     /// The sky SH's flat ground bounce (what the probes replace).
     pub ground: Sh9Gpu,
     /// x: probes in the pool.
@@ -77,21 +77,8 @@ pub struct IndirectStats {
     pub released: u32,
 }
 
-/// Byte offsets of each mip's page table in the packed table buffer.
-pub fn table_offsets() -> [i32; MIPS] {
-    let mut o = [0; MIPS];
-    for m in 1..MIPS {
-        let n = cells_per_axis(m as u8 - 1);
-        o[m] = o[m - 1] + n * n;
-    }
-    o
-}
-
-/// Bytes of all page tables.
-pub fn table_bytes() -> usize {
-    let n = cells_per_axis(MIPS as u8 - 1);
-    (table_offsets()[MIPS - 1] + n * n) as usize
-}
+/// Bytes of the combined page table: one per sector of the 160 x 160 grid.
+pub const TABLE_BYTES: usize = (GRID_SECTORS * GRID_SECTORS) as usize;
 
 /// A cell's transfer as the GPU stores it: f16 pairs, channel-major.
 pub fn pack_cell(cell: &Cell) -> Vec<u32> {
@@ -114,7 +101,7 @@ pub struct IndirectFrame {
     pub clip: [TextureHandle; 3],
 }
 
-/// L5's GPU state: the cell pool, its page tables, the two passes.
+/// L5's GPU state: the cell pool, its page table, the two passes.
 pub struct IndirectPass {
     transfer: Program,
     inject: Program,
@@ -122,8 +109,8 @@ pub struct IndirectPass {
     inject_pipeline: wgpu::ComputePipeline,
     /// Transfer of every pool slot (f16 pairs).
     pub cells: wgpu::Buffer,
-    /// Per-mip page tables, one byte per cell.
-    pub tables: wgpu::Buffer,
+    /// The combined page table, one byte per sector (25 KiB).
+    pub table: wgpu::Buffer,
     /// `IndirectParams`.
     pub params: wgpu::Buffer,
     pool: CellPool,
@@ -145,16 +132,15 @@ impl IndirectPass {
                 mapped_at_creation: false,
             })
         };
-        let tables = storage("himal.indirect.tables", table_bytes().div_ceil(4) * 4);
-        ctx.queue
-            .write_buffer(&tables, 0, &vec![0xffu8; table_bytes().div_ceil(4) * 4]);
+        let table = storage("himal.indirect.table", TABLE_BYTES);
+        ctx.queue.write_buffer(&table, 0, &[NO_CELL; TABLE_BYTES]);
         Ok(Self {
             transfer_pipeline: transfer.compute_pipeline(ctx, "cs_main", &[])?,
             inject_pipeline: inject.compute_pipeline(ctx, "cs_main", &[])?,
             transfer,
             inject,
             cells: storage("himal.indirect.cells", POOL_PROBES * PROBE_WORDS * 4),
-            tables,
+            table,
             params: uniform_buffer(
                 ctx,
                 "himal.indirect.params",
@@ -212,7 +198,7 @@ impl IndirectPass {
         }
         if changed {
             ctx.queue
-                .write_buffer(&self.tables, 0, &self.packed_tables());
+                .write_buffer(&self.table, 0, &self.pool.combined_table());
         }
         stats.resident = self.pool.used() as u32;
         let params = self.params_for(origin, camera, &light);
@@ -221,23 +207,13 @@ impl IndirectPass {
         stats
     }
 
-    /// Every mip's page table, bytes packed into words.
-    pub fn packed_tables(&self) -> Vec<u8> {
-        let mut bytes: Vec<u8> = (0..MIPS as u8)
-            .flat_map(|m| self.pool.page_table(m))
-            .collect();
-        bytes.resize(table_bytes().div_ceil(4) * 4, 0xff);
-        bytes
-    }
-
     fn params_for(&self, origin: Vec2, camera: Vec2, light: &IndirectLight) -> IndirectParams {
         let bases = ClipMap::bases(origin, camera);
-        let offsets = table_offsets();
         IndirectParams {
             lighting: light.lighting.map(|c| c.extend(0.0).to_array()),
             origin_camera: [origin.x, origin.y, camera.x, camera.y],
             base: bases.map(|b| [b.x, b.y, 0, 0]),
-            tables: std::array::from_fn(|m| [cells_per_axis(m as u8), offsets[m], 0, 0]),
+            grid: [GRID_SECTORS, 0, 0, 0],
             ground: Sh9Gpu::from(&light.ground),
             counts: [POOL_PROBES as u32, 0, 0, 0],
         }
@@ -267,7 +243,7 @@ impl IndirectPass {
             .compute("probes.inject", &self.inject)
             .compute_pipeline(Ok(self.inject_pipeline.clone()))
             .uniform("params", &self.params)
-            .uniform("tables", &self.tables)
+            .uniform("table", &self.table)
             .read_buffer("sh_probes", sh, crate::graph::BufferAccess::StorageRead)
             .storage("clip_r", clip[0])
             .storage("clip_g", clip[1])
@@ -289,8 +265,8 @@ impl IndirectPass {
         vec![
             ("probes.cells (80-cell pool)".to_string(), self.cells.size()),
             (
-                "probes.page tables (5 mips)".to_string(),
-                self.tables.size(),
+                "probes.page table (160 x 160 sectors)".to_string(),
+                self.table.size(),
             ),
             ("probes.params".to_string(), self.params.size()),
         ]

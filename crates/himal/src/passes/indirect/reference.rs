@@ -93,40 +93,40 @@ impl ClipMap {
         })
     }
 
-    /// `probes.inject`: each texel takes its probe from the resident cell of
-    /// its cascade's mip, else the nearest probe of the next coarser (then
-    /// finer) resident mip; `probes(key)` gives a resident cell's SH probes.
+    /// `probes.inject` through the combined page table `table` (one byte
+    /// per sector, [`super::pool::CellPool::combined_table`]): the finest
+    /// resident cell over the texel centre's sector and its probe nearest
+    /// the centre; `probes(slot)` gives that slot's SH probes.
     pub fn inject<'a>(
         origin: Vec2,
         camera: Vec2,
-        probes: impl Fn(CellKey) -> Option<&'a [Sh4]>,
+        table: &[u8],
+        probes: impl Fn(u32) -> Option<&'a [Sh4]>,
     ) -> ClipMap {
         let base = Self::bases(origin, camera);
         let n = CELL_PROBES as i32;
+        let sectors = super::cell::GRID_SECTORS;
         let texels = (0..CASCADES)
             .map(|c| {
                 (0..CLIP_RES * CLIP_RES)
                     .map(|t| {
                         let g = base[c] + IVec2::new(t % CLIP_RES, t / CLIP_RES);
                         let x = (g.as_vec2() + 0.5) * texel_size(c);
-                        (0..CASCADES).find_map(|k| {
-                            let m = if c + k < CASCADES {
-                                c + k
-                            } else {
-                                CASCADES - 1 - k
-                            };
-                            let gm = (x / texel_size(m)).floor().as_ivec2();
-                            if gm.min_element() < 0 {
-                                return None;
-                            }
-                            let key = CellKey {
-                                mip: m as u8,
-                                x: gm.x / n,
-                                z: gm.y / n,
-                            };
-                            let local = gm % n;
-                            probes(key).map(|p| p[(local.y * n + local.x) as usize])
-                        })
+                        let s = (x / texel_size(0) / n as f32).floor().as_ivec2();
+                        if s.min_element() < 0 || s.max_element() >= sectors {
+                            return None;
+                        }
+                        let slot = table[(s.y * sectors + s.x) as usize];
+                        if slot == super::pool::NO_CELL {
+                            return None;
+                        }
+                        // Slots are per mip, 16 each: the slot names the cell's mip.
+                        let m = slot as usize / super::pool::CELLS_PER_MIP;
+                        let local = (x / texel_size(m))
+                            .floor()
+                            .as_ivec2()
+                            .rem_euclid(IVec2::splat(n));
+                        probes(slot as u32).map(|p| p[(local.y * n + local.x) as usize])
                     })
                     .collect()
             })
@@ -136,6 +136,20 @@ impl ClipMap {
             base,
             texels,
         }
+    }
+
+    /// [`ClipMap::inject`] for the cells resident in `pool`, their SH
+    /// probes from `probes(key)`.
+    pub fn inject_resident<'a>(
+        origin: Vec2,
+        camera: Vec2,
+        pool: &super::pool::CellPool,
+        probes: impl Fn(CellKey) -> Option<&'a [Sh4]>,
+    ) -> ClipMap {
+        let table = pool.combined_table();
+        Self::inject(origin, camera, &table, |slot| {
+            pool.cell(slot).and_then(&probes)
+        })
     }
 
     fn texel(&self, c: usize, t: IVec2) -> Option<Sh4> {
@@ -234,7 +248,10 @@ mod tests {
             .map(|k| [Vec3::splat(k as f32), Vec3::ZERO, Vec3::ZERO, Vec3::ZERO])
             .collect();
         let camera = key.corner(O) + 32.0;
-        let map = ClipMap::inject(O, camera, |k| (k == key).then_some(sh.as_slice()));
+        let mut pool = crate::passes::indirect::pool::CellPool::default();
+        pool.admit(key, O, camera);
+        let map =
+            ClipMap::inject_resident(O, camera, &pool, |k| (k == key).then_some(sh.as_slice()));
         let at = |i: usize, j: usize| Cell::probe_xz(key, O, i, j);
         let s = map.sample_cascade(0, at(3, 4)).unwrap();
         assert!((s[0].x - 35.0).abs() < 1e-4, "{}", s[0].x);
