@@ -599,6 +599,15 @@ pub struct ShadowArgs {
         allow_hyphen_values = true
     )]
     pub casterless_shadows: String,
+    /// The mask's hero pass only inside the screen rectangle of the hero
+    /// map's box (exact), or over the whole screen (to measure the saving).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub shadow_hero_scissor: String,
 }
 
 impl ShadowArgs {
@@ -633,6 +642,11 @@ impl ShadowArgs {
             "skip" => true,
             "keep" => false,
             other => bail!("--casterless-shadows {other}: expected skip or keep"),
+        };
+        s.hero_scissor = match self.shadow_hero_scissor.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--shadow-hero-scissor {other}: expected on or off"),
         };
         s.validate()?;
         Ok(())

@@ -177,7 +177,13 @@ impl ShadowPass {
             "shadow.mask",
             TextureDesc::new_2d(size.0, size.1, MASK_FORMAT),
         );
-        let hero = hero_map.is_some();
+        // The hero pass's scissor: everywhere, or its box's rectangle
+        // (`hero_screen_rect`), or nothing when that is off screen.
+        let hero = match (hero_map.is_some(), plan.hero_rect) {
+            (false, _) => None,
+            (true, None) => Some([0, 0, size.0, size.1]),
+            (true, Some(r)) => r.and_then(|r| ndc_scissor(r, size)),
+        };
         let far = Fallback::DepthFar;
         let written = graph
             .raster("shadows.mask", &self.mask_program)
@@ -196,8 +202,9 @@ impl ShadowPass {
             .record(move |_, rp| {
                 rp.draw(0..3, 0..1);
                 // Ryse's hero blend: min into R over the mask just drawn.
-                if hero {
+                if let Some([x, y, w, h]) = hero {
                     rp.set_pipeline(&self.hero_blend);
+                    rp.set_scissor_rect(x, y, w, h);
                     rp.draw(0..3, 0..1);
                 }
                 Ok(())

@@ -61,6 +61,10 @@ pub struct ShadowSettings {
     /// local light with no caster in its reach (its shadow would be all
     /// lit); off only to measure the saving (#23).
     pub skip_casterless: bool,
+    /// Draw the hero map's pass of the mask only inside the screen
+    /// rectangle of its light-space box (exact: outside it the pass writes
+    /// lit); off only to measure the saving (#23).
+    pub hero_scissor: bool,
 }
 
 impl Default for ShadowSettings {
@@ -78,6 +82,7 @@ impl Default for ShadowSettings {
             atlas_resolution: 4096,
             cinematic: None,
             skip_casterless: true,
+            hero_scissor: true,
         }
     }
 }
