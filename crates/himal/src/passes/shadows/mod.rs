@@ -113,6 +113,8 @@ struct FramePlan {
     /// y1) of the hero map's box on screen, `Some(None)` when it covers no
     /// pixel ([`hero_screen_rect`]); `None`: the whole screen.
     hero_rect: Option<Option<[f32; 4]>>,
+    /// `ShadowSettings::mask_tiles`: classify the mask's tiles first.
+    mask_tiles: bool,
     /// S3 projectors into the atlas.
     projectors: Vec<Projector>,
 }
@@ -164,6 +166,10 @@ pub struct ShadowPass {
     views: Vec<wgpu::Buffer>,
     mask_program: Program,
     mask: wgpu::RenderPipeline,
+    /// The mask reading `shadows.mask_tiles`' states (`TILES`, #23).
+    mask_tiled: wgpu::RenderPipeline,
+    tiles_program: Program,
+    tiles: wgpu::ComputePipeline,
     hero_blend: wgpu::RenderPipeline,
     params: wgpu::Buffer,
     view_program: Program,
@@ -247,6 +253,12 @@ impl ShadowPass {
         let targets = [crate::passes::common::target(MASK_FORMAT)];
         let mask =
             mask_program.render_pipeline(ctx, &RenderSpec::fullscreen("shadows.mask", &targets))?;
+        let tiled = [("TILES", 1.0)];
+        let mut tiled_spec = RenderSpec::fullscreen("shadows.mask", &targets);
+        tiled_spec.constants = &tiled;
+        let mask_tiled = mask_program.render_pipeline(ctx, &tiled_spec)?;
+        let tiles_program = Program::new(ctx, "passes/shadows/mask_tiles.wgsl")?;
+        let tiles = tiles_program.compute_pipeline(ctx, "cs_main", &[])?;
         // Min on R = max of the occlusions (Ryse's hero blend); G, B, A untouched.
         let min_blend = [Some(wgpu::ColorTargetState {
             format: MASK_FORMAT,
@@ -288,6 +300,9 @@ impl ShadowPass {
             views,
             mask_program,
             mask,
+            mask_tiled,
+            tiles_program,
+            tiles,
             hero_blend,
             params,
             view_program,
@@ -455,6 +470,7 @@ impl ShadowPass {
         let mut stats = ShadowStats::default();
         let mut plan = FramePlan {
             projectors: local.projectors,
+            mask_tiles: s.mask_tiles,
             ..FramePlan::default()
         };
         stats.atlas_tiles = plan.projectors.len() as u32;

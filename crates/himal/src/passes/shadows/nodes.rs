@@ -2,7 +2,10 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::graph::Fallback;
+use crate::graph::{BufferAccess, BufferDesc, Fallback};
+
+/// Edge of a mask tile in pixels (`SHADOW_TILE` in shadows/shadow.wgsl).
+const TILE: u32 = 16;
 use crate::passes::cull::{Culled, bind_instances};
 
 /// One sun view's depth node: `lists` (and, with `culled`, the GPU list
@@ -185,9 +188,38 @@ impl ShadowPass {
             (true, Some(r)) => r.and_then(|r| ndc_scissor(r, size)),
         };
         let far = Fallback::DepthFar;
-        let written = graph
+        // #23: each tile's state per map (one vec4u a tile), then the mask.
+        let tiles = plan.mask_tiles.then(|| {
+            let n = size.0.div_ceil(TILE) as u64 * size.1.div_ceil(TILE) as u64;
+            let states = graph.create_buffer("shadow.mask_tiles", BufferDesc::new(16 * n));
+            graph
+                .compute("shadows.mask_tiles", &self.tiles_program)
+                .compute_pipeline(Ok(self.tiles.clone()))
+                .uniform("params", &self.params)
+                .read("depth", gbuffer.depth)
+                .read("gbuffer_frame", gbuffer.frame)
+                .optional_array("cascades", cascades, far)
+                .optional_array("static_map", static_map, far)
+                .optional_array("atlas", atlas_map, far)
+                .uniform("local_lights", &self.local_lights)
+                .uniform("light_tiles", &self.light_tiles)
+                .write_buffer("tile_states", states)
+                .dispatch([size.0.div_ceil(TILE), size.1.div_ceil(TILE), 1])
+                .buffer(states)
+        });
+        let mask_pipeline = if tiles.is_some() {
+            &self.mask_tiled
+        } else {
+            &self.mask
+        };
+        let node = graph
             .raster("shadows.mask", &self.mask_program)
-            .pipeline(Ok(self.mask.clone()))
+            .pipeline(Ok(mask_pipeline.clone()));
+        let node = match tiles {
+            Some(h) => node.read_buffer("tile_states", h, BufferAccess::StorageRead),
+            None => node.optional_buffer("tile_states", None),
+        };
+        let written = node
             .uniform("params", &self.params)
             .read("depth", gbuffer.depth)
             .read("gbuffer_frame", gbuffer.frame)

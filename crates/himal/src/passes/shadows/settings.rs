@@ -65,6 +65,11 @@ pub struct ShadowSettings {
     /// rectangle of its light-space box (exact: outside it the pass writes
     /// lit); off only to measure the saving (#23).
     pub hero_scissor: bool,
+    /// Classify each 16 x 16 tile of the mask first (`shadows.mask_tiles`):
+    /// a map lit or shadowed over the whole tile costs the mask no tap
+    /// (exact). Off by default: on lavapipe the pass costs more than the
+    /// taps it saves (docs/performance.md, #23).
+    pub mask_tiles: bool,
 }
 
 impl Default for ShadowSettings {
@@ -83,6 +88,7 @@ impl Default for ShadowSettings {
             cinematic: None,
             skip_casterless: true,
             hero_scissor: true,
+            mask_tiles: false,
         }
     }
 }
