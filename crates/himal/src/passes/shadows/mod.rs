@@ -761,7 +761,7 @@ pub fn ndc_scissor(r: [f32; 4], size: (u32, u32)) -> Option<[u32; 4]> {
     let x1 = ((r[2] * 0.5 + 0.5) * w + 2.0).ceil().clamp(0.0, w);
     let y0 = ((0.5 - r[3] * 0.5) * h - 2.0).floor().clamp(0.0, h);
     let y1 = ((0.5 - r[1] * 0.5) * h + 2.0).ceil().clamp(0.0, h);
-    (x1 > x0 && y1 > y0).then(|| [x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+    (x1 > x0 && y1 > y0).then_some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
 }
 
 /// Every static object's draws, opaque first (the static map's fill order).
