@@ -3,10 +3,10 @@
 
 use super::*;
 use crate::graph::{BufferAccess, BufferDesc, Fallback};
-
-/// Edge of a mask tile in pixels (`SHADOW_TILE` in shadows/shadow.wgsl).
-const TILE: u32 = 16;
 use crate::passes::cull::{Culled, bind_instances};
+
+/// Edge of a mask tile in pixels (`SHADOW_TILE` in shaders/shadow.wgsl).
+const TILE: u32 = 16;
 
 /// One sun view's depth node: `lists` (and, with `culled`, the GPU list
 /// they name) into layer `target.1` of `target.0` (cleared to the far
