@@ -617,6 +617,25 @@ pub struct ShadowArgs {
         allow_hyphen_values = true
     )]
     pub casterless_shadows: String,
+    /// The mask's hero pass only inside the screen rectangle of the hero
+    /// map's box (exact), or over the whole screen (to measure the saving).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub shadow_hero_scissor: String,
+    /// Classify each 16 x 16 tile of the shadow mask first: a map lit or
+    /// shadowed over the whole tile costs no filter tap (exact); off
+    /// (default): filter every pixel (on lavapipe the cheaper of the two).
+    #[arg(
+        long,
+        default_value = "off",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub shadow_mask_tiles: String,
 }
 
 impl ShadowArgs {
@@ -651,6 +670,16 @@ impl ShadowArgs {
             "skip" => true,
             "keep" => false,
             other => bail!("--casterless-shadows {other}: expected skip or keep"),
+        };
+        s.hero_scissor = match self.shadow_hero_scissor.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--shadow-hero-scissor {other}: expected on or off"),
+        };
+        s.mask_tiles = match self.shadow_mask_tiles.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--shadow-mask-tiles {other}: expected on or off"),
         };
         s.validate()?;
         Ok(())

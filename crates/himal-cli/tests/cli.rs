@@ -548,6 +548,18 @@ fn bad_particle_switches_are_rejected() {
 }
 
 #[test]
+fn bad_shadow_mask_switches_are_rejected() {
+    fails_with(
+        &["render", "--shadow-hero-scissor", "maybe", "--size", "8x8"],
+        "--shadow-hero-scissor maybe",
+    );
+    fails_with(
+        &["render", "--shadow-mask-tiles", "2", "--size", "8x8"],
+        "--shadow-mask-tiles 2",
+    );
+}
+
+#[test]
 fn bad_ao_bleed_ambient_lights_and_wetness_are_rejected() {
     fails_with(
         &["render", "--ao-bleed", "maybe", "--size", "8x8"],

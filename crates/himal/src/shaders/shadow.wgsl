@@ -92,20 +92,49 @@ fn shadow_poisson_tap(map: texture_depth_2d_array, cmp: sampler_comparison, laye
     return textureSampleCompareLevel(map, cmp, uv + r * scale, layer, depth_ref);
 }
 
+// Where a receiver reads a map: `uv`, the compare depth and the disk's
+// rotation; `inside` false where the map reads lit without a tap (off the
+// map, beyond its far plane).
+struct ShadowLookup {
+    uv: vec2f,
+    depth_ref: f32,
+    angle: f32,
+    inside: bool,
+}
+
 // `light_rotation`: world -> light view; the disk's rotation is keyed on the
 // world texel (light-view xy / texel), the same cell whatever the map's offset.
+fn shadow_map_lookup(light_view_proj: mat4x4f, light_rotation: mat4x4f, p: vec3f, n: vec3f,
+                     texel_world: f32, depth_range: f32, filter_params: vec4f) -> ShadowLookup {
+    var out: ShadowLookup;
+    let q = vec4f(p + n * (filter_params.y * texel_world), 1.0);
+    let c = light_view_proj * q;
+    out.uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
+    out.inside = all(out.uv >= vec2f(0.0)) && all(out.uv <= vec2f(1.0)) && c.z <= 1.0;
+    let cell = floor((light_rotation * q).xy / texel_world);
+    out.depth_ref = c.z - filter_params.z * texel_world / depth_range;
+    out.angle = shadow_rotation_angle(cell);
+    return out;
+}
+
 fn shadow_map_visibility(map: texture_depth_2d_array, cmp: sampler_comparison, layer: i32,
                          light_view_proj: mat4x4f, light_rotation: mat4x4f, p: vec3f, n: vec3f,
                          texel_world: f32, depth_range: f32, filter_params: vec4f) -> f32 {
-    let q = vec4f(p + n * (filter_params.y * texel_world), 1.0);
-    let c = light_view_proj * q;
-    let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
-    if (any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || c.z > 1.0) {
+    let l = shadow_map_lookup(light_view_proj, light_rotation, p, n, texel_world, depth_range, filter_params);
+    if (!l.inside) {
         return 1.0;
     }
-    let cell = floor((light_rotation * q).xy / texel_world);
-    let depth_ref = c.z - filter_params.z * texel_world / depth_range;
-    return shadow_poisson_visibility(map, cmp, layer, uv, depth_ref, filter_params.x, shadow_rotation_angle(cell));
+    return shadow_poisson_visibility(map, cmp, layer, l.uv, l.depth_ref, filter_params.x, l.angle);
+}
+
+// The lookup of the map `i` (shadow_map_index: 0..3 cascades, 4 static).
+fn shadow_world_lookup(params: ShadowMaskParams, i: i32, p: vec3f, n: vec3f) -> ShadowLookup {
+    if (i == 4) {
+        return shadow_map_lookup(params.static_map, params.light_rotation, p, n, params.static_info.y,
+                                 params.static_info.z, params.filter_params);
+    }
+    return shadow_map_lookup(params.cascades[i], params.light_rotation, p, n, params.texel[i],
+                             params.depth_range[i], params.filter_params);
 }
 
 // Map a point at view distance `dist` reads: 0..3 cascades, 4 static map, -1 none.
@@ -125,6 +154,55 @@ fn shadow_map_index(params: ShadowMaskParams, dist: f32) -> i32 {
         return -1;
     }
     return i;
+}
+
+// #23 tile classification (shadows.mask_tiles; CPU twins in
+// passes/shadows/reference.rs `tile_reach`, `texel_verdict`, `tile_state`).
+// A tile's state per map: filter per pixel, lit (every tap passes), shadowed
+// (every tap fails).
+const SHADOW_TILE_FILTER = 0u;
+const SHADOW_TILE_LIT = 1u;
+const SHADOW_TILE_SHADOWED = 2u;
+// Screen tile edge (pixels), and the most texels per axis of a tile's
+// footprint in a map (beyond: filter per pixel; 30² cells of 4 x 4 bytes
+// keep the pass in 16 KiB of workgroup memory).
+const SHADOW_TILE = 16u;
+const SHADOW_TILE_MAX_TEXELS = 30;
+
+// Texels from the one holding a lookup's uv to the farthest that any filter
+// tap can read, per axis: a tap reads floor(st) and floor(st) + 1 at
+// st = uv * size - 0.5 + offset, |offset| <= 1.03 radius (the disk).
+fn shadow_tile_reach(radius_texels: f32) -> i32 {
+    return i32(ceil(1.03 * radius_texels + 0.5));
+}
+
+// Verdict of one texel of depth z read by lookups with compare depths in
+// [ref_min, ref_max]: bit 0 every comparison passes (lit), bit 1 every one
+// fails (shadowed). `eps`: margin for rounding between this pass and the
+// mask's own lookup, and for a 16-bit map (1/65535).
+fn shadow_texel_verdict(z: f32, ref_min: f32, ref_max: f32) -> u32 {
+    let eps = 3e-5;
+    return select(0u, 1u, z >= ref_max + eps) | select(0u, 2u, z + eps < ref_min);
+}
+
+// The state of a map over a tile: `inside` of its `valid` pixels (not sky)
+// read it; `read`: one map, footprint small enough; `lit`, `shadowed`:
+// every texel's verdict agreed. Shadowed only when every pixel reads it
+// (the others are lit).
+fn shadow_tile_state(inside: u32, valid: u32, read: bool, lit: bool, shadowed: bool) -> u32 {
+    if (inside == 0u) {
+        return SHADOW_TILE_LIT;
+    }
+    if (!read) {
+        return SHADOW_TILE_FILTER;
+    }
+    if (lit) {
+        return SHADOW_TILE_LIT;
+    }
+    if (shadowed && inside == valid) {
+        return SHADOW_TILE_SHADOWED;
+    }
+    return SHADOW_TILE_FILTER;
 }
 
 // A point or spot light (S3; twin: passes/shadows/local.rs `LocalLightGpu`).
@@ -154,6 +232,43 @@ struct ShadowTile {
     rect: vec4f,
     // x: world texel size per metre of distance
     info: vec4f,
+}
+
+// The atlas tile local light `l` (channel > 0) reads at p: its cube face's
+// (point) or its one tile (spot); -1 beyond its range.
+fn shadow_local_tile(l: LocalLight, p: vec3f) -> i32 {
+    let to_p = p - l.position_range.xyz;
+    if (length(to_p) >= l.position_range.w) {
+        return -1;
+    }
+    var tile = u32(l.params.z);
+    if (l.color_kind.w < 0.5) {
+        tile += shadow_cube_face(to_p);
+    }
+    return i32(tile);
+}
+
+// Where p (normal n) reads local light `l`'s atlas tile `t` in an atlas of
+// `atlas_size` texels: normal offset and depth bias of 1.5 and 2 texels at
+// the receiver's distance.
+fn shadow_local_lookup(l: LocalLight, t: ShadowTile, p: vec3f, n: vec3f, atlas_size: vec2f) -> ShadowLookup {
+    var out: ShadowLookup;
+    out.inside = false;
+    let to_p = p - l.position_range.xyz;
+    let d = length(to_p);
+    let texel = t.info.x * d;
+    let q = p + n * (1.5 * texel) - (to_p / d) * (2.0 * texel);
+    let c = t.view_proj * vec4f(q, 1.0);
+    if (c.w <= 0.0) {
+        return out;
+    }
+    let ndc = c.xyz / c.w;
+    let uv_tile = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    out.inside = all(uv_tile >= vec2f(0.0)) && all(uv_tile <= vec2f(1.0)) && ndc.z <= 1.0;
+    out.uv = t.rect.xy + uv_tile * t.rect.zw;
+    out.depth_ref = ndc.z;
+    out.angle = shadow_rotation_angle(floor(out.uv * atlas_size));
+    return out;
 }
 
 // Windowed inverse square: 1/d² · (1 − (d/range)⁴)², zero at the range
@@ -246,15 +361,17 @@ fn shadow_world_visibility(params: ShadowMaskParams, cascades: texture_depth_2d_
                            static_map: texture_depth_2d_array, cmp: sampler_comparison,
                            p: vec3f, n: vec3f, dist: f32) -> f32 {
     let i = shadow_map_index(params, dist);
+    if (i < 0) {
+        return 1.0;
+    }
+    let l = shadow_world_lookup(params, i, p, n);
+    if (!l.inside) {
+        return 1.0;
+    }
     if (i == 4) {
-        return shadow_map_visibility(static_map, cmp, 0, params.static_map, params.light_rotation, p, n,
-                                     params.static_info.y, params.static_info.z, params.filter_params);
+        return shadow_poisson_visibility(static_map, cmp, 0, l.uv, l.depth_ref, params.filter_params.x, l.angle);
     }
-    if (i >= 0) {
-        return shadow_map_visibility(cascades, cmp, i, params.cascades[i], params.light_rotation, p, n,
-                                     params.texel[i], params.depth_range[i], params.filter_params);
-    }
-    return 1.0;
+    return shadow_poisson_visibility(cascades, cmp, i, l.uv, l.depth_ref, params.filter_params.x, l.angle);
 }
 
 // Illuminance (klux) at p from local light `l` and the unit direction to

@@ -5,10 +5,13 @@
 // (S3), each shadowed light in its channel, read from its atlas tile.
 // Bindings: view, params (ShadowMaskParams), depth, gbuffer_frame (normal),
 // cascades, static_map, hero_map, atlas (depth arrays), shadow_sampler
-// (comparison), local_lights, light_tiles.
+// (comparison), local_lights, light_tiles, tile_states (TILES: the
+// per-tile states of shadows.mask_tiles, #23: a map lit or shadowed over the
+// whole tile costs no tap).
 #import view
 #import tangent_frame
 #import shadow
+#import shadow_receiver
 #import fullscreen
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -22,51 +25,35 @@
 @group(0) @binding(8) var atlas: texture_depth_2d_array;
 @group(0) @binding(9) var<storage, read> local_lights: LocalLights;
 @group(0) @binding(10) var<storage, read> light_tiles: array<ShadowTile>;
+@group(0) @binding(11) var<storage, read> tile_states: array<vec4u>;
 
-// Visibility of `r` from local light `l` (channel > 0): the tile of its cube
-// face (point) or its one tile (spot), normal offset and depth bias of 1.5
-// and 2 texels at the receiver's distance, the same Poisson filter.
-fn local_visibility(l: LocalLight, r: Receiver) -> f32 {
-    let to_p = r.p - l.position_range.xyz;
-    let d = length(to_p);
-    if (d >= l.position_range.w) {
-        return 1.0;
+override TILES: bool = false;
+
+// 2-bit state of slot `slot` (0 sun, 1 + k local light k) in `states`;
+// slots past 63 filter.
+fn slot_state(states: vec4u, slot: u32) -> u32 {
+    if (slot >= 64u) {
+        return SHADOW_TILE_FILTER;
     }
-    var tile = u32(l.params.z);
-    if (l.color_kind.w < 0.5) {
-        tile += shadow_cube_face(to_p);
-    }
-    let t = light_tiles[tile];
-    let texel = t.info.x * d;
-    let q = r.p + r.n * (1.5 * texel) - (to_p / d) * (2.0 * texel);
-    let c = t.view_proj * vec4f(q, 1.0);
-    if (c.w <= 0.0) {
-        return 1.0;
-    }
-    let ndc = c.xyz / c.w;
-    let uv_tile = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    if (any(uv_tile < vec2f(0.0)) || any(uv_tile > vec2f(1.0)) || ndc.z > 1.0) {
-        return 1.0;
-    }
-    let uv = t.rect.xy + uv_tile * t.rect.zw;
-    let cell = floor(uv * vec2f(textureDimensions(atlas)));
-    return shadow_poisson_visibility(atlas, shadow_sampler, 0, uv, ndc.z, params.filter_params.x,
-                                     shadow_rotation_angle(cell));
+    return (states[slot / 16u] >> (2u * (slot % 16u))) & 3u;
 }
 
-struct Receiver {
-    p: vec3f,
-    n: vec3f,
-    dist: f32,
+// Visibility of `r` from local light `l` (channel > 0): the tile of its cube
+// face (point) or its one tile (spot), the same Poisson filter.
+fn local_visibility(l: LocalLight, r: Receiver) -> f32 {
+    let tile = shadow_local_tile(l, r.p);
+    if (tile < 0) {
+        return 1.0;
+    }
+    let k = shadow_local_lookup(l, light_tiles[tile], r.p, r.n, vec2f(textureDimensions(atlas)));
+    if (!k.inside) {
+        return 1.0;
+    }
+    return shadow_poisson_visibility(atlas, shadow_sampler, 0, k.uv, k.depth_ref, params.filter_params.x, k.angle);
 }
 
 fn receiver(frag: vec4f, d: f32) -> Receiver {
-    let px = vec2i(frag.xy);
-    var r: Receiver;
-    r.p = world_at_fragment(view, frag.xy, d);
-    r.n = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)))[2];
-    r.dist = dot(r.p - view.camera_position.xyz, params.camera_forward.xyz);
-    return r;
+    return shadow_receiver(view, params, frag.xy, d, textureLoad(gbuffer_frame, vec2i(frag.xy), 0));
 }
 
 @fragment
@@ -75,15 +62,33 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (d <= 0.0) {
         return vec4f(1.0);
     }
+    var states = vec4u(0u);
+    if (TILES) {
+        let t = vec2u(frag.xy) / SHADOW_TILE;
+        let tiles_x = (textureDimensions(depth).x + SHADOW_TILE - 1u) / SHADOW_TILE;
+        states = tile_states[t.y * tiles_x + t.x];
+    }
     let r = receiver(frag, d);
-    let vis = shadow_world_visibility(params, cascades, static_map, shadow_sampler, r.p, r.n, r.dist);
+    var vis = 1.0;
+    let sun = slot_state(states, 0u);
+    if (sun == SHADOW_TILE_SHADOWED) {
+        vis = 0.0;
+    } else if (sun == SHADOW_TILE_FILTER) {
+        vis = shadow_world_visibility(params, cascades, static_map, shadow_sampler, r.p, r.n, r.dist);
+    }
     var local = vec3f(1.0);
     for (var k = 0u; k < local_lights.count.x; k = k + 1u) {
         let l = local_lights.lights[k];
         let channel = u32(l.params.y);
-        if (channel > 0u) {
-            local[channel - 1u] = min(local[channel - 1u], local_visibility(l, r));
+        let state = slot_state(states, k + 1u);
+        if (channel == 0u || state == SHADOW_TILE_LIT) {
+            continue;
         }
+        var v = 0.0;
+        if (state == SHADOW_TILE_FILTER) {
+            v = local_visibility(l, r);
+        }
+        local[channel - 1u] = min(local[channel - 1u], v);
     }
     return vec4f(vis, local);
 }

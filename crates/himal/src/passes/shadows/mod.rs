@@ -109,6 +109,12 @@ struct FramePlan {
     /// The world's static map: this frame's tiles.
     static_tiles: Vec<StaticTile>,
     hero: Option<(ShadowFit, DrawLists)>,
+    /// With `ShadowSettings::hero_scissor`, the NDC rectangle (x0, y0, x1,
+    /// y1) of the hero map's box on screen, `Some(None)` when it covers no
+    /// pixel ([`hero_screen_rect`]); `None`: the whole screen.
+    hero_rect: Option<Option<[f32; 4]>>,
+    /// `ShadowSettings::mask_tiles`: classify the mask's tiles first.
+    mask_tiles: bool,
     /// S3 projectors into the atlas.
     projectors: Vec<Projector>,
 }
@@ -160,6 +166,10 @@ pub struct ShadowPass {
     views: Vec<wgpu::Buffer>,
     mask_program: Program,
     mask: wgpu::RenderPipeline,
+    /// The mask reading `shadows.mask_tiles`' states (`TILES`, #23).
+    mask_tiled: wgpu::RenderPipeline,
+    tiles_program: Program,
+    tiles: wgpu::ComputePipeline,
     hero_blend: wgpu::RenderPipeline,
     params: wgpu::Buffer,
     view_program: Program,
@@ -243,6 +253,12 @@ impl ShadowPass {
         let targets = [crate::passes::common::target(MASK_FORMAT)];
         let mask =
             mask_program.render_pipeline(ctx, &RenderSpec::fullscreen("shadows.mask", &targets))?;
+        let tiled = [("TILES", 1.0)];
+        let mut tiled_spec = RenderSpec::fullscreen("shadows.mask", &targets);
+        tiled_spec.constants = &tiled;
+        let mask_tiled = mask_program.render_pipeline(ctx, &tiled_spec)?;
+        let tiles_program = Program::new(ctx, "passes/shadows/mask_tiles.wgsl")?;
+        let tiles = tiles_program.compute_pipeline(ctx, "cs_main", &[])?;
         // Min on R = max of the occlusions (Ryse's hero blend); G, B, A untouched.
         let min_blend = [Some(wgpu::ColorTargetState {
             format: MASK_FORMAT,
@@ -284,6 +300,9 @@ impl ShadowPass {
             views,
             mask_program,
             mask,
+            mask_tiled,
+            tiles_program,
+            tiles,
             hero_blend,
             params,
             view_program,
@@ -451,6 +470,7 @@ impl ShadowPass {
         let mut stats = ShadowStats::default();
         let mut plan = FramePlan {
             projectors: local.projectors,
+            mask_tiles: s.mask_tiles,
             ..FramePlan::default()
         };
         stats.atlas_tiles = plan.projectors.len() as u32;
@@ -622,6 +642,19 @@ impl ShadowPass {
             write_view(CASCADES + 1, fit.light_view_proj);
             params.hero = fit.light_view_proj.to_cols_array_2d();
             params.hero_info = [1.0, fit.texel_world, fit.depth_range, 0.0];
+            if s.hero_scissor {
+                let offset = NORMAL_OFFSET_TEXELS * fit.texel_world;
+                let near = if camera.orthographic.is_some() {
+                    0.0
+                } else {
+                    camera.near
+                };
+                let view_proj = camera.view_projection(aspect);
+                // The hero's top in light view, 1 m up (as `hero_fit`).
+                let b = mesh.transform(&object.transform_at(time_s));
+                let top = b.transform(&fit.light_rotation).max.z + 1.0;
+                plan.hero_rect = Some(hero_screen_rect(&fit, top, offset, view_proj, near));
+            }
             plan.hero = Some((fit, lists));
         }
 
@@ -663,6 +696,72 @@ impl ShadowPass {
         self.plan = Some(plan);
         stats
     }
+}
+
+/// NDC rectangle (x0, y0, x1, y1) holding every receiver the hero map can
+/// shadow. The mask's hero pass reads the map at q = p + n * `offset`; a q
+/// outside the fit's light-view box reads lit (`shadow_map_visibility`
+/// returns 1 off the map and beyond its far plane), and so does a q nearer
+/// the sun than `top` (the hero's highest light-view z: every depth stored
+/// lies below it, the comparison passes). So that box, its near side cut
+/// to `top` and grown by `offset`, cut at the camera's near plane (clip w =
+/// `near`) and projected by `view_proj`, bounds the pixels the pass can
+/// change (the hull of its corners and its edges' crossings of that plane).
+/// `None`: no pixel.
+pub fn hero_screen_rect(
+    fit: &ShadowFit,
+    top: f32,
+    offset: f32,
+    view_proj: Mat4,
+    near: f32,
+) -> Option<[f32; 4]> {
+    let lo = fit.min - Vec3::splat(offset);
+    let hi = Vec3::new(fit.max.x, fit.max.y, fit.max.z.min(top)) + Vec3::splat(offset);
+    let to_world = view_proj * fit.light_rotation.inverse();
+    let bit = |k: usize, b: usize, a: f32, c: f32| if k & b == 0 { a } else { c };
+    let clip: Vec<glam::Vec4> = (0..8)
+        .map(|k| {
+            let p = Vec3::new(
+                bit(k, 1, lo.x, hi.x),
+                bit(k, 2, lo.y, hi.y),
+                bit(k, 4, lo.z, hi.z),
+            );
+            to_world * p.extend(1.0)
+        })
+        .collect();
+    let mut points: Vec<glam::Vec4> = clip.iter().copied().filter(|c| c.w >= near).collect();
+    // The 12 edges: corner pairs differing in one bit.
+    for k in 0..8usize {
+        for b in [1usize, 2, 4] {
+            let (a, c) = (clip[k], clip[k | b]);
+            if k & b == 0 && (a.w - near) * (c.w - near) < 0.0 {
+                points.push(a.lerp(c, (near - a.w) / (c.w - a.w)));
+            }
+        }
+    }
+    let mut r = [
+        f32::INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    for c in points {
+        let (x, y) = (c.x / c.w, c.y / c.w);
+        r = [r[0].min(x), r[1].min(y), r[2].max(x), r[3].max(y)];
+    }
+    r.iter().all(|v| v.is_finite()).then_some(r)
+}
+
+/// Pixel scissor (x, y, w, h) of NDC rectangle `r` in a `size` image, grown
+/// by two pixels (the TAA jitter moves the image by under one); `None` when
+/// it covers no pixel.
+pub fn ndc_scissor(r: [f32; 4], size: (u32, u32)) -> Option<[u32; 4]> {
+    let (w, h) = (size.0 as f32, size.1 as f32);
+    let x0 = ((r[0] * 0.5 + 0.5) * w - 2.0).floor().clamp(0.0, w);
+    let x1 = ((r[2] * 0.5 + 0.5) * w + 2.0).ceil().clamp(0.0, w);
+    let y0 = ((0.5 - r[3] * 0.5) * h - 2.0).floor().clamp(0.0, h);
+    let y1 = ((0.5 - r[1] * 0.5) * h + 2.0).ceil().clamp(0.0, h);
+    (x1 > x0 && y1 > y0).then_some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
 }
 
 /// Every static object's draws, opaque first (the static map's fill order).

@@ -2,8 +2,11 @@
 //! atlas, the mask, and the debug view (planned by `ShadowPass::update`).
 
 use super::*;
-use crate::graph::Fallback;
+use crate::graph::{BufferAccess, BufferDesc, Fallback};
 use crate::passes::cull::{Culled, bind_instances};
+
+/// Edge of a mask tile in pixels (`SHADOW_TILE` in shaders/shadow.wgsl).
+const TILE: u32 = 16;
 
 /// One sun view's depth node: `lists` (and, with `culled`, the GPU list
 /// they name) into layer `target.1` of `target.0` (cleared to the far
@@ -177,11 +180,46 @@ impl ShadowPass {
             "shadow.mask",
             TextureDesc::new_2d(size.0, size.1, MASK_FORMAT),
         );
-        let hero = hero_map.is_some();
+        // The hero pass's scissor: everywhere, or its box's rectangle
+        // (`hero_screen_rect`), or nothing when that is off screen.
+        let hero = match (hero_map.is_some(), plan.hero_rect) {
+            (false, _) => None,
+            (true, None) => Some([0, 0, size.0, size.1]),
+            (true, Some(r)) => r.and_then(|r| ndc_scissor(r, size)),
+        };
         let far = Fallback::DepthFar;
-        let written = graph
+        // #23: each tile's state per map (one vec4u a tile), then the mask.
+        let tiles = plan.mask_tiles.then(|| {
+            let n = size.0.div_ceil(TILE) as u64 * size.1.div_ceil(TILE) as u64;
+            let states = graph.create_buffer("shadow.mask_tiles", BufferDesc::new(16 * n));
+            graph
+                .compute("shadows.mask_tiles", &self.tiles_program)
+                .compute_pipeline(Ok(self.tiles.clone()))
+                .uniform("params", &self.params)
+                .read("depth", gbuffer.depth)
+                .read("gbuffer_frame", gbuffer.frame)
+                .optional_array("cascades", cascades, far)
+                .optional_array("static_map", static_map, far)
+                .optional_array("atlas", atlas_map, far)
+                .uniform("local_lights", &self.local_lights)
+                .uniform("light_tiles", &self.light_tiles)
+                .write_buffer("tile_states", states)
+                .dispatch([size.0.div_ceil(TILE), size.1.div_ceil(TILE), 1])
+                .buffer(states)
+        });
+        let mask_pipeline = if tiles.is_some() {
+            &self.mask_tiled
+        } else {
+            &self.mask
+        };
+        let node = graph
             .raster("shadows.mask", &self.mask_program)
-            .pipeline(Ok(self.mask.clone()))
+            .pipeline(Ok(mask_pipeline.clone()));
+        let node = match tiles {
+            Some(h) => node.read_buffer("tile_states", h, BufferAccess::StorageRead),
+            None => node.optional_buffer("tile_states", None),
+        };
+        let written = node
             .uniform("params", &self.params)
             .read("depth", gbuffer.depth)
             .read("gbuffer_frame", gbuffer.frame)
@@ -196,8 +234,9 @@ impl ShadowPass {
             .record(move |_, rp| {
                 rp.draw(0..3, 0..1);
                 // Ryse's hero blend: min into R over the mask just drawn.
-                if hero {
+                if let Some([x, y, w, h]) = hero {
                     rp.set_pipeline(&self.hero_blend);
+                    rp.set_scissor_rect(x, y, w, h);
                     rp.draw(0..3, 0..1);
                 }
                 Ok(())

@@ -105,3 +105,98 @@ impl DepthMap<'_> {
         v
     }
 }
+
+impl DepthMap<'_> {
+    /// Depth of texel (x, y), clamped to the edge (the sampler's addressing).
+    pub fn texel(&self, x: i64, y: i64) -> f32 {
+        let x = x.clamp(0, self.width as i64 - 1) as usize;
+        let y = y.clamp(0, self.height as i64 - 1) as usize;
+        self.depth[y * self.width as usize + x]
+    }
+}
+
+/// `SHADOW_TILE_FILTER`, `_LIT`, `_SHADOWED` (#23, `shadows.mask_tiles`).
+pub const TILE_FILTER: u32 = 0;
+/// Every tap of every pixel of the tile passes.
+pub const TILE_LIT: u32 = 1;
+/// Every tap of every pixel of the tile fails.
+pub const TILE_SHADOWED: u32 = 2;
+
+/// `shadow_tile_reach`: texels from a lookup's own to the farthest a tap reads.
+pub fn tile_reach(radius_texels: f32) -> i32 {
+    (1.03 * radius_texels + 0.5).ceil() as i32
+}
+
+/// `shadow_texel_verdict`: bit 0 every comparison with [ref_min, ref_max]
+/// passes, bit 1 every one fails.
+pub fn texel_verdict(z: f32, ref_min: f32, ref_max: f32) -> u32 {
+    let eps = 3e-5;
+    u32::from(z >= ref_max + eps) | (u32::from(z + eps < ref_min) << 1)
+}
+
+/// `shadow_tile_state`.
+pub fn tile_state(inside: u32, valid: u32, read: bool, lit: bool, shadowed: bool) -> u32 {
+    if inside == 0 {
+        TILE_LIT
+    } else if !read {
+        TILE_FILTER
+    } else if lit {
+        TILE_LIT
+    } else if shadowed && inside == valid {
+        TILE_SHADOWED
+    } else {
+        TILE_FILTER
+    }
+}
+
+/// One map's state over one tile as `shadows.mask_tiles` finds it: the
+/// pixels' lookups inside the map (`lookups`: uv, compare depth) of `valid`
+/// pixels not sky, binned by texel, each bin's compare depths spread over
+/// the taps' reach, every texel of the footprint given its verdict;
+/// `max_texels`: the grid's edge (`SHADOW_TILE_MAX_TEXELS`).
+pub fn classify_tile(
+    map: &DepthMap,
+    lookups: &[(Vec2, f32)],
+    valid: u32,
+    radius_texels: f32,
+    max_texels: i32,
+) -> u32 {
+    let size = Vec2::new(map.width as f32, map.height as f32);
+    let cells: Vec<(i64, i64, f32)> = lookups
+        .iter()
+        .map(|(uv, r)| {
+            let c = (*uv * size).floor();
+            (c.x as i64, c.y as i64, *r)
+        })
+        .collect();
+    let inside = cells.len() as u32;
+    if inside == 0 {
+        return tile_state(0, valid, false, false, false);
+    }
+    let reach = tile_reach(radius_texels) as i64;
+    let x0 = cells.iter().map(|c| c.0).min().unwrap_or(0) - reach;
+    let y0 = cells.iter().map(|c| c.1).min().unwrap_or(0) - reach;
+    let x1 = cells.iter().map(|c| c.0).max().unwrap_or(0) + reach;
+    let y1 = cells.iter().map(|c| c.1).max().unwrap_or(0) + reach;
+    let read = x1 - x0 < max_texels as i64 && y1 - y0 < max_texels as i64;
+    let (mut lit, mut shadowed) = (true, true);
+    if read {
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let near = cells
+                    .iter()
+                    .filter(|c| (c.0 - x).abs() <= reach && (c.1 - y).abs() <= reach);
+                let (lo, hi) = near.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), c| {
+                    (lo.min(c.2), hi.max(c.2))
+                });
+                if hi == f32::NEG_INFINITY {
+                    continue;
+                }
+                let v = texel_verdict(map.texel(x, y), lo, hi);
+                lit &= v & 1 != 0;
+                shadowed &= v & 2 != 0;
+            }
+        }
+    }
+    tile_state(inside, valid, read, lit, shadowed)
+}

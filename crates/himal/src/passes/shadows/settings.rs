@@ -61,6 +61,15 @@ pub struct ShadowSettings {
     /// local light with no caster in its reach (its shadow would be all
     /// lit); off only to measure the saving (#23).
     pub skip_casterless: bool,
+    /// Draw the hero map's pass of the mask only inside the screen
+    /// rectangle of its light-space box (exact: outside it the pass writes
+    /// lit); off only to measure the saving (#23).
+    pub hero_scissor: bool,
+    /// Classify each 16 x 16 tile of the mask first (`shadows.mask_tiles`):
+    /// a map lit or shadowed over the whole tile costs the mask no tap
+    /// (exact). Off by default: on lavapipe the pass costs more than the
+    /// taps it saves (docs/performance.md, #23).
+    pub mask_tiles: bool,
 }
 
 impl Default for ShadowSettings {
@@ -78,6 +87,8 @@ impl Default for ShadowSettings {
             atlas_resolution: 4096,
             cinematic: None,
             skip_casterless: true,
+            hero_scissor: true,
+            mask_tiles: false,
         }
     }
 }
