@@ -48,7 +48,12 @@ fn bake_then_render_with_probes_and_their_view() {
         "{err}"
     );
 
-    for (view, name) in [("final", "on.png"), ("indirect", "view.png")] {
+    for (view, name) in [
+        ("final", "on.png"),
+        ("indirect", "view.png"),
+        ("probe-cells", "cells.png"),
+        ("clipmap", "clip.png"),
+    ] {
         let out_path = dir.join(name);
         let (ok, _, err) = himal(
             &cache,
@@ -86,7 +91,7 @@ fn the_indirect_view_needs_the_probes_and_the_world_is_refused() {
         "render", "--scene", VILLAGE, "--size", "32x18", "--view", "indirect", "--out", out,
     ];
     let r = himal(&cache, &args);
-    common::assert_fails_with(&args, &r, "--view indirect needs --indirect on");
+    common::assert_fails_with(&args, &r, "need --indirect on");
     let args = [
         "render",
         "--scene",

@@ -277,6 +277,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     }
     let sky_occlusion = passes.skyocc.update(ctx, scene, camera, aspect, skyocc_on);
     // L5: the probe cells around the camera streamed into the pool.
+    passes.indirect.view = match settings.view {
+        ViewBuffer::Indirect(v) => v as u32,
+        _ => 0,
+    };
     let indirect = match settings.indirect {
         true => passes
             .indirect
@@ -576,9 +580,10 @@ pub fn build<'a>(
         true => passes.indirect.add(&mut g).map(|f| (&passes.indirect, f)),
         false => None,
     };
-    if shown == ViewBuffer::Indirect && indirect.is_none() {
+    if matches!(shown, ViewBuffer::Indirect(_)) && indirect.is_none() {
         return Err(GpuError::Other(
-            "--view indirect needs --indirect on and baked probe cells".into(),
+            "--view indirect, probe-cells and clipmap need --indirect on and baked probe cells"
+                .into(),
         ));
     }
     let lighting_key = LightingKey {
@@ -719,7 +724,7 @@ pub fn build<'a>(
             .debug
             .add(ctx, &mut g, v, gbuffer, hdr, post_inputs, out),
         // The lighting pass wrote the probes' irradiance (INDIRECT_VIEW).
-        ViewBuffer::Indirect => {
+        ViewBuffer::Indirect(_) => {
             let lighting = crate::passes::debug::DebugView::Lighting;
             (passes.debug).add(ctx, &mut g, lighting, gbuffer, hdr, post_inputs, out)
         }

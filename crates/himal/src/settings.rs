@@ -38,14 +38,29 @@ pub enum ViewBuffer {
     /// The final image with white particles: their lighting alone (E4,
     /// `particle-lighting`).
     ParticleLighting,
-    /// L5's indirect irradiance from the probes' clip map (klux, raw; the
-    /// lighting view's display), `indirect`.
-    Indirect,
+    /// L5's probes (the lighting view's display): `indirect` (irradiance,
+    /// klux raw), `probe-cells` (the grid of the cascade each pixel reads),
+    /// `clipmap` (the cascade as a hue).
+    Indirect(IndirectView),
+}
+
+/// What `--view indirect|probe-cells|clipmap` shows (L5); the number is
+/// the mode the lighting pass reads (`IndirectParams::counts.y`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum IndirectView {
+    /// The probes' indirect irradiance.
+    Irradiance = 0,
+    /// The irradiance with the probes of the sampled cascade as dots and
+    /// the cells' borders as lines.
+    ProbeCells = 1,
+    /// The cascade each pixel samples as a hue (C + 1 blended in), shaded
+    /// by the irradiance.
+    ClipMap = 2,
 }
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 28] = [
+    pub const NAMES: [&'static str; 30] = [
         "final",
         "albedo",
         "normal",
@@ -74,6 +89,8 @@ impl ViewBuffer {
         "ao-bleed",
         "particle-lighting",
         "indirect",
+        "probe-cells",
+        "clipmap",
     ];
 
     /// The tone-mapped image (the final one, or the particles' lighting in it).
@@ -114,7 +131,9 @@ impl std::str::FromStr for ViewBuffer {
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
             "particle-lighting" => ViewBuffer::ParticleLighting,
-            "indirect" => ViewBuffer::Indirect,
+            "indirect" => ViewBuffer::Indirect(IndirectView::Irradiance),
+            "probe-cells" => ViewBuffer::Indirect(IndirectView::ProbeCells),
+            "clipmap" => ViewBuffer::Indirect(IndirectView::ClipMap),
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",

@@ -74,7 +74,7 @@ pub(super) fn prepare_view(
         ViewBuffer::Shadow(v) => passes.shadows.view_pipeline(ctx, v, format).map(drop),
         ViewBuffer::Env(v) => passes.env_view.pipeline(ctx, v, format).map(drop),
         ViewBuffer::SkyOcc(v) => passes.skyocc.view_pipeline(ctx, v, format).map(drop),
-        ViewBuffer::Indirect => (passes.debug)
+        ViewBuffer::Indirect(_) => (passes.debug)
             .pipeline(ctx, crate::passes::debug::DebugView::Lighting, format)
             .map(drop),
         ViewBuffer::Final | ViewBuffer::ParticleLighting => Ok(()),

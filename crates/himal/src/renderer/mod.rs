@@ -105,7 +105,7 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,
         // L5 transfers the analytic sky and sun; not under an HDR environment.
         indirect: settings.indirect && !environment,
-        indirect_view: settings.view == crate::settings::ViewBuffer::Indirect,
+        indirect_view: matches!(settings.view, crate::settings::ViewBuffer::Indirect(_)),
     }
 }
 

@@ -25,7 +25,8 @@ struct IndirectParams {
     grid: vec4i,
     // The flat ground bounce of the sky SH, which the probes replace.
     ground: Sh9,
-    // x: probes in the pool (slots x 64).
+    // x: probes in the pool (slots x 64); y: what --view shows (0 irradiance,
+    // 1 probe cells, 2 clip-map cascades).
     counts: vec4u,
 }
 
@@ -75,6 +76,37 @@ fn indirect_sample_cascade(
         textureSampleLevel(clip_g, clip_sampler, uv, c, 0.0),
         textureSampleLevel(clip_b, clip_sampler, uv, c, 0.0),
     );
+}
+
+// `--view probe-cells` / `clipmap` over the irradiance e at p (lighting
+// view display; auto exposure brings either to the screen).
+fn indirect_debug_view(params: IndirectParams, p: vec3f, e: vec3f) -> vec3f {
+    let cw = indirect_cascade(params.origin_camera.zw, p.xz);
+    if (cw.x < 0.0) {
+        return vec3f(0.0);
+    }
+    let c = i32(cw.x);
+    let level = max(dot(e, vec3f(0.2126, 0.7152, 0.0722)), 1e-3);
+    if (params.counts.y == 2u) {
+        var hues = array<vec3f, 5>(vec3f(1.0, 0.25, 0.2), vec3f(1.0, 0.8, 0.2), vec3f(0.3, 1.0, 0.3), vec3f(0.2, 0.7, 1.0), vec3f(0.8, 0.35, 1.0));
+        let next = hues[min(c + 1, INDIRECT_CASCADES - 1)];
+        return mix(hues[c], next, cw.y) * level;
+    }
+    // Probe cells: probes of cascade C (its mip's spacing) as dots, the
+    // borders of their 8 x 8 cells as lines, over the irradiance.
+    let s = indirect_texel_size(c);
+    let f = (p.xz - params.origin_camera.xy) / s;
+    let to_probe = length((fract(f) - 0.5) * s);
+    let g = fract(f / 8.0);
+    let to_border = min(min(g.x, 1.0 - g.x), min(g.y, 1.0 - g.y)) * 8.0 * s;
+    let width = 0.06 * s;
+    if (to_probe < 1.5 * width) {
+        return vec3f(4.0 * level);
+    }
+    if (to_border < 0.5 * width) {
+        return vec3f(2.0, 0.4, 0.2) * level;
+    }
+    return e;
 }
 
 // Indirect irradiance at world p for normal n (rgb, klux); a = 1 where the

@@ -117,6 +117,8 @@ pub struct IndirectPass {
     store: Option<Arc<ProbeStore>>,
     light: Option<IndirectLight>,
     camera: Vec2,
+    /// `--view indirect|probe-cells|clipmap` as `IndirectView`'s number.
+    pub view: u32,
 }
 
 impl IndirectPass {
@@ -150,6 +152,7 @@ impl IndirectPass {
             store: None,
             light: None,
             camera: Vec2::ZERO,
+            view: 0,
         })
     }
 
@@ -215,7 +218,7 @@ impl IndirectPass {
             base: bases.map(|b| [b.x, b.y, 0, 0]),
             grid: [GRID_SECTORS, 0, 0, 0],
             ground: Sh9Gpu::from(&light.ground),
-            counts: [POOL_PROBES as u32, 0, 0, 0],
+            counts: [POOL_PROBES as u32, self.view, 0, 0],
         }
     }
 

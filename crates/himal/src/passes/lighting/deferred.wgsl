@@ -255,7 +255,10 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (INDIRECT) {
         indirect = indirect_irradiance(indirect_params, indirect_r, indirect_g, indirect_b, indirect_sampler, p, tbn[2]);
         if (INDIRECT_VIEW) {
-            return vec4f(indirect.rgb, 1.0);
+            if (indirect_params.counts.y == 0u) {
+                return vec4f(indirect.rgb, 1.0);
+            }
+            return vec4f(indirect_debug_view(indirect_params, p, indirect.rgb), 1.0);
         }
     }
     var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p), indirect);
