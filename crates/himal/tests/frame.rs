@@ -207,11 +207,22 @@ fn same_command_gives_same_bytes() {
 fn every_debug_view_renders() {
     let (scene, camera) = scene_and_camera("lit_sphere", "front");
     let mut r = renderer(&scene);
+    // L5's views need probes: the cells under the sphere, baked quickly.
+    let rays = himal::scene::raycast::RayScene::from_scene(&scene, None);
+    let quick = himal::passes::indirect::BakeSettings {
+        rays: 16,
+        visibility_rays: 4,
+        ..Default::default()
+    };
+    let (store, _) = himal::passes::indirect::ProbeStore::bake(&rays, &quick, None, &mut |_, _| {})
+        .expect("bake");
+    r.set_probe_cells(Some(std::sync::Arc::new(store)));
     for name in ViewBuffer::NAMES {
         for raw in [false, true] {
             let mut s = FrameSettings::new(32, 32, scene.sun.clone());
             s.view = name.parse().expect("view");
             s.raw = raw;
+            s.indirect = matches!(s.view, ViewBuffer::Indirect(_));
             let img = r
                 .render(&camera, &s)
                 .unwrap_or_else(|e| panic!("{name} raw={raw}: {e}"))

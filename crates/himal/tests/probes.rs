@@ -423,12 +423,66 @@ fn village_store() -> (Scene, RayScene, std::sync::Arc<ProbeStore>) {
     (scene, rs, store)
 }
 
+/// The CPU twins' clip map for a camera at `cam` (x, z): the cells the GPU
+/// pool streams there, their SH probes under `light`, injected.
+fn twin_clip_map(
+    store: &ProbeStore,
+    light: &himal::passes::indirect::IndirectLight,
+    cam: Vec2,
+) -> ClipMap {
+    let mut pool = CellPool::default();
+    pool.stream(ORIGIN, cam, |k| store.cell(k).is_some());
+    let sh: Vec<(CellKey, Vec<Sh4>)> = pool
+        .resident()
+        .filter_map(|(_, k)| {
+            store
+                .cell(k)
+                .map(|c| (k, transfer_cell(c, &light.lighting)))
+        })
+        .collect();
+    ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
+        sh.iter()
+            .find(|(key, _)| *key == k)
+            .map(|(_, p)| p.as_slice())
+    })
+}
+
+/// Pixels of `camera` whose ray meets a surface within 50 m of the origin
+/// (the baked cells) away from silhouettes (the four neighbours' rays meet
+/// a surface with the same normal): (pixel index, point, hit).
+fn interior_pixels(
+    rs: &RayScene,
+    camera: &himal::scene::Camera,
+    size: (u32, u32),
+) -> Vec<(usize, Vec3, himal::scene::raycast::SurfaceHit)> {
+    let hit = |x: i32, y: i32| {
+        let (x, y) = (
+            x.clamp(0, size.0 as i32 - 1) as u32,
+            y.clamp(0, size.1 as i32 - 1) as u32,
+        );
+        let (o, d) = common::pixel_ray_from(camera, size, x, y);
+        rs.trace(o, d, 0.0, 1e4).map(|h| (o + d * h.t, h))
+    };
+    let mut out = Vec::new();
+    for y in 0..size.1 as i32 {
+        for x in 0..size.0 as i32 {
+            let Some((p, h)) = hit(x, y) else { continue };
+            let same = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                .iter()
+                .all(|&(a, b)| hit(x + a, y + b).map(|n| n.1.normal) == Some(h.normal));
+            if p.x.abs().max(p.z.abs()) <= 50.0 && same {
+                out.push(((y as u32 * size.0 + x as u32) as usize, p, h));
+            }
+        }
+    }
+    out
+}
+
 /// `--view indirect` (transfer, injection and clip-map sampling on the GPU)
 /// against the CPU twins at every pixel whose surface the baked cells cover.
 #[test]
 fn gpu_indirect_matches_the_cpu_twins() {
     use himal::passes::indirect::IndirectLight;
-    use himal::passes::indirect::pool::wanted_cells;
     use himal::passes::sky::SkyModel;
 
     let (scene, rs, store) = village_store();
@@ -443,58 +497,15 @@ fn gpu_indirect_matches_the_cpu_twins() {
 
     let light = IndirectLight::of_sky(&SkyLight::of_sun(&scene.sun));
     let cam = Vec2::new(camera.position.x, camera.position.z);
-    let wanted = wanted_cells(ORIGIN, cam);
-    let sh: Vec<(CellKey, Vec<Sh4>)> = wanted
-        .iter()
-        .filter_map(|k| {
-            store
-                .cell(*k)
-                .map(|c| (*k, transfer_cell(c, &light.lighting)))
-        })
-        .collect();
-    let mut pool = CellPool::default();
-    pool.stream(ORIGIN, cam, |k| store.cell(k).is_some());
-    let map = ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
-        sh.iter()
-            .find(|(key, _)| *key == k)
-            .map(|(_, p)| p.as_slice())
-    });
+    let map = twin_clip_map(&store, &light, cam);
     let mut errors = Vec::new();
-    for y in 0..size.1 {
-        for x in 0..size.0 {
-            let (o, d) = common::pixel_ray_from(&camera, size, x, y);
-            let Some(h) = rs.trace(o, d, 0.0, 1e4) else {
-                continue;
-            };
-            let p = o + d * h.t;
-            if p.x.abs().max(p.z.abs()) > 50.0 {
-                continue;
-            }
-            // Silhouettes: the pixel's G-buffer sample and the ray may see different surfaces.
-            let side = |dx: i32, dy: i32| {
-                let (o, d) = common::pixel_ray_from(
-                    &camera,
-                    size,
-                    (x as i32 + dx).clamp(0, size.0 as i32 - 1) as u32,
-                    (y as i32 + dy).clamp(0, size.1 as i32 - 1) as u32,
-                );
-                rs.trace(o, d, 0.0, 1e4).map(|n| n.normal)
-            };
-            if [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                .iter()
-                .any(|&(a, b)| side(a, b) != Some(h.normal))
-            {
-                continue;
-            }
-            let Some(cpu) = map.irradiance(cam, p, h.normal) else {
-                continue;
-            };
-            let g = gpu[(y * size.0 + x) as usize];
-            let g = Vec3::new(g[0], g[1], g[2]);
-            let scale = cpu.max_element().max(0.05);
-            let e = (g - cpu).abs().max_element() / scale;
-            errors.push(e);
-        }
+    for (i, p, h) in interior_pixels(&rs, &camera, size) {
+        let Some(cpu) = map.irradiance(cam, p, h.normal) else {
+            continue;
+        };
+        let g = Vec3::from_slice(&gpu[i][..3]);
+        let scale = cpu.max_element().max(0.05);
+        errors.push((g - cpu).abs().max_element() / scale);
     }
     errors.sort_by(f32::total_cmp);
     let compared = errors.len();
@@ -519,7 +530,6 @@ fn gpu_indirect_matches_the_cpu_twins() {
 fn lighting_swaps_the_flat_ground_for_the_probes() {
     use himal::passes::ao::AoMode;
     use himal::passes::indirect::IndirectLight;
-    use himal::passes::indirect::pool::wanted_cells;
     use himal::passes::sky::SkyModel;
 
     let (scene, rs, store) = village_store();
@@ -541,53 +551,17 @@ fn lighting_swaps_the_flat_ground_for_the_probes() {
     let on = frame(&mut r, true);
     let light = IndirectLight::of_sky(&SkyLight::of_sun(&scene.sun));
     let cam = Vec2::new(camera.position.x, camera.position.z);
-    let sh: Vec<(CellKey, Vec<Sh4>)> = wanted_cells(ORIGIN, cam)
-        .iter()
-        .filter_map(|k| {
-            store
-                .cell(*k)
-                .map(|c| (*k, transfer_cell(c, &light.lighting)))
-        })
-        .collect();
-    let mut pool = CellPool::default();
-    pool.stream(ORIGIN, cam, |k| store.cell(k).is_some());
-    let map = ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
-        sh.iter()
-            .find(|(key, _)| *key == k)
-            .map(|(_, p)| p.as_slice())
-    });
+    let map = twin_clip_map(&store, &light, cam);
     let mut errors = Vec::new();
-    for y in 0..size.1 {
-        for x in 0..size.0 {
-            let (o, d) = common::pixel_ray_from(&camera, size, x, y);
-            let Some(h) = rs.trace(o, d, 0.0, 1e4) else {
-                continue;
-            };
-            let p = o + d * h.t;
-            let interior = [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                .iter()
-                .all(|&(a, b): &(i32, i32)| {
-                    let (o, d) = common::pixel_ray_from(
-                        &camera,
-                        size,
-                        (x as i32 + a).clamp(0, size.0 as i32 - 1) as u32,
-                        (y as i32 + b).clamp(0, size.1 as i32 - 1) as u32,
-                    );
-                    rs.trace(o, d, 0.0, 1e4).map(|n| n.normal) == Some(h.normal)
-                });
-            if p.x.abs().max(p.z.abs()) > 50.0 || !interior {
-                continue;
-            }
-            let Some(e_probes) = map.irradiance(cam, p, h.normal) else {
-                continue;
-            };
-            let e_ground = light.ground.eval(h.normal).max(Vec3::ZERO);
-            let want = h.albedo * (e_probes - e_ground) / std::f32::consts::PI;
-            let i = (y * size.0 + x) as usize;
-            let got = Vec3::from_slice(&on[i][..3]) - Vec3::from_slice(&off[i][..3]);
-            let scale = Vec3::from_slice(&off[i][..3]).max_element().max(1e-3);
-            errors.push((got - want).abs().max_element() / scale);
-        }
+    for (i, p, h) in interior_pixels(&rs, &camera, size) {
+        let Some(e_probes) = map.irradiance(cam, p, h.normal) else {
+            continue;
+        };
+        let e_ground = light.ground.eval(h.normal).max(Vec3::ZERO);
+        let want = h.albedo * (e_probes - e_ground) / std::f32::consts::PI;
+        let got = Vec3::from_slice(&on[i][..3]) - Vec3::from_slice(&off[i][..3]);
+        let scale = Vec3::from_slice(&off[i][..3]).max_element().max(1e-3);
+        errors.push((got - want).abs().max_element() / scale);
     }
     errors.sort_by(f32::total_cmp);
     let n = errors.len();
