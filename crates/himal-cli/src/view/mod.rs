@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use himal::present::{Overlay, Presenter};
 use himal::scene::Camera;
-use himal::{FrameSettings, Renderer};
+use himal::{FrameSettings, Renderer, ViewBuffer};
 use winit::application::ApplicationHandler;
 use winit::event::{DeviceEvent, ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
@@ -276,7 +276,18 @@ impl Viewer {
             self.path_t = (self.path_t + dt) % path.duration().max(1.0);
             self.camera = path.camera_at(self.path_t, self.camera.fov_y_deg);
         }
-        let drawn = self.renderer.draw(&self.camera, &settings)?;
+        // A debug view whose inputs are off (AO views without AO, L5's
+        // without probes) is reported and the final image shown instead.
+        let drawn = match self.renderer.draw(&self.camera, &settings) {
+            Ok(d) => d,
+            Err(e) if settings.view != ViewBuffer::Final => {
+                self.notice = Some(format!("--view {}: {e}", hud::view_name(settings.view)));
+                self.settings.view = ViewBuffer::Final;
+                settings.view = ViewBuffer::Final;
+                self.renderer.draw(&self.camera, &settings)?
+            }
+            Err(e) => return Err(e.into()),
+        };
         // The panel holds the HUD's numbers: one of the two at a time.
         let overlay = (self.hud && !self.panel_shown)
             .then(|| Overlay::hud(&self.hud_text(&settings, &drawn.timings, drawn.world.as_ref())));

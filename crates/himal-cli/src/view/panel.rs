@@ -297,6 +297,13 @@ impl Viewer {
         ui.checkbox(&mut self.settings.ambient_lights, "ambient lights");
         ui.checkbox(&mut self.settings.visibility_remap, "visibility remap (R4)");
         ui.checkbox(&mut self.settings.ao.large_scale, "large-scale AO (O6)");
+        // L5's probes are baked when the viewer starts with --indirect on.
+        let probes = self.renderer.probe_cells().is_some();
+        ui.add_enabled(
+            probes,
+            egui::Checkbox::new(&mut self.settings.indirect, "indirect light (L5)"),
+        )
+        .on_disabled_hover_text("start with --indirect on: the probes are baked (or read) then");
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {

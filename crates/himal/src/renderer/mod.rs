@@ -458,6 +458,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// L5: the probe cells set with [`Renderer::set_probe_cells`].
+    pub fn probe_cells(&self) -> Option<&std::sync::Arc<crate::passes::indirect::ProbeStore>> {
+        self.res.passes.indirect.store()
+    }
+
     /// L5: the baked probe cells to stream indirect light from
     /// (`ProbeStore::bake`); `None` turns it off whatever the settings say.
     pub fn set_probe_cells(
