@@ -536,6 +536,12 @@ pub fn build<'a>(
     let ao_bleed = ao
         .filter(|s| s.bleed || shown == ViewBuffer::Ao(AoView::Bleed))
         .map(|_| (passes.ao_bleed).add(&mut g, size, gbuffer.albedo, gbuffer.depth));
+    // L5: SH probes for this sky and sun, injected around the camera (the
+    // relit environment cube reads them too).
+    let indirect = match lighting_key.indirect {
+        true => passes.indirect.add(&mut g).map(|f| (&passes.indirect, f)),
+        false => None,
+    };
     let env = match probe {
         // L3: the probe's G-buffer cube relit with the lighting and sky
         // passes (sun unshadowed, sky unoccluded), then mipped and filtered.
@@ -555,8 +561,13 @@ pub fn build<'a>(
                     env: env_before,
                     skyocc: &passes.skyocc,
                     skyocc_frame: skyocc,
-                    indirect: None,
-                    key: LightingKey::RELIGHT,
+                    // L3 + L5: the talk's "indirect light from the nearest
+                    // probe" - here the clip map at each cube texel.
+                    indirect,
+                    key: LightingKey {
+                        indirect: indirect.is_some(),
+                        ..LightingKey::RELIGHT
+                    },
                 };
                 let hdr = passes.lighting.add(ctx, g, edge, stored, inputs);
                 passes.sky.add(g, hdr, stored.depth, Some(sky_no_disk))
@@ -574,11 +585,6 @@ pub fn build<'a>(
             passes.envmap.add_mips_and_filter(&mut g, source)
         }
         _ => passes.envmap.add(&mut g, sky_no_disk),
-    };
-    // L5: SH probes for this sky and sun, injected around the camera.
-    let indirect = match lighting_key.indirect {
-        true => passes.indirect.add(&mut g).map(|f| (&passes.indirect, f)),
-        false => None,
     };
     if matches!(shown, ViewBuffer::Indirect(_)) && indirect.is_none() {
         return Err(GpuError::Other(
