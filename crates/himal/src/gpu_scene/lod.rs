@@ -44,7 +44,13 @@ pub(super) fn append_levels(
     indices.extend_from_slice(&mesh.indices);
     // E2: terrain-sized meshes are always near somewhere; no chain.
     if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
-        for lod in crate::scene::lod::lod_chain(mesh) {
+        // Trees bring their own levels (V1); the rest are simplified.
+        let chain = if mesh.levels.is_empty() {
+            crate::scene::lod::lod_chain(mesh)
+        } else {
+            mesh.levels.clone()
+        };
+        for lod in chain {
             histograms.push(area(&lod.indices));
             levels.push(LodRange {
                 first_index: indices.len() as u32,

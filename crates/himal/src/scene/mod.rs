@@ -230,6 +230,7 @@ pub mod noise;
 mod place;
 pub mod primitives;
 mod terrain;
+pub mod tree;
 pub mod vegetation;
 pub mod world;
 
@@ -391,6 +392,9 @@ pub struct Mesh {
     pub indices: Vec<u32>,
     /// Object-space bounds of the vertices (for skinned meshes: over every clip).
     pub bounds: Aabb,
+    /// Precomputed LODs after LOD0, indexing `vertices` (trees: visibility-
+    /// driven leaf clusters, coarser trunks); empty: E2's simplifier makes them.
+    pub levels: Vec<lod::Level>,
 }
 
 impl Mesh {
@@ -408,6 +412,11 @@ impl Mesh {
         m.name = format!("{} (mirrored)", self.name);
         for t in m.indices.chunks_exact_mut(3) {
             t.swap(1, 2);
+        }
+        for l in &mut m.levels {
+            for t in l.indices.chunks_exact_mut(3) {
+                t.swap(1, 2);
+            }
         }
         m
     }
