@@ -473,6 +473,15 @@ impl Object {
             .map_or(self.transform, |m| m.transform_at(t))
     }
 
+    /// Vegetation (`FrameSettings::vegetation`): foliage cards, or a tree's
+    /// trunk (`meshes`: the scene's).
+    pub fn is_vegetation(&self, meshes: &[Mesh]) -> bool {
+        self.foliage.is_some()
+            || meshes
+                .get(self.mesh)
+                .is_some_and(|m| m.name.starts_with(tree::TRUNK_PREFIX))
+    }
+
     /// World bounds over all time: the path swept by a moving object, the
     /// sway of foliage (`mesh_bounds`: the bounds of its mesh).
     pub fn swept_bounds(&self, mesh_bounds: &Aabb) -> Aabb {

@@ -27,6 +27,9 @@ use super::{MaterialDesc, Mesh};
 
 pub use visibility::{DISTANCES, VIEWPOINTS, VisibilityTable};
 
+/// Name prefix of trunk meshes (`--vegetation off` finds trunks by it).
+pub const TRUNK_PREFIX: &str = "tree-trunk/";
+
 /// Levels per tree part: LOD0 and two reductions (impostors are a later part).
 pub const LEVELS: usize = 3;
 
@@ -520,7 +523,7 @@ pub fn meshes(
     };
     let trunk = leveled(
         b,
-        format!("tree-trunk/{name}"),
+        format!("{TRUNK_PREFIX}{name}"),
         trunk_levels.clone(),
         trunk_error,
     );
@@ -563,6 +566,21 @@ pub fn meshes(
         clusters,
         card_scale,
     }
+}
+
+/// The meshes of tree `species` from `seed` at full detail, as scene files
+/// place them: generated, ranked by visibility, meshed.
+pub fn cached(
+    species: Species,
+    seed: u32,
+    name: &str,
+    bark: &MaterialDesc,
+    leaves: &MaterialDesc,
+    tint: Vec3,
+) -> TreeMeshes {
+    let model = generate(species, seed, 1.0);
+    let table = visibility::table(&model);
+    meshes(&model, &table, name, bark, leaves, tint)
 }
 
 /// The builder's mesh with LOD0's indices and the later levels in `levels`.
