@@ -1,6 +1,8 @@
 //! `himal bake`: offline data, computed ahead of rendering with a progress
 //! bar. L1: the Bruneton tables (default and/or Bruneton 2017's reference
 //! sizes) into the table cache that `render`, `view` and `prewarm` read.
+//! V1 (`--trees`): the leaf LODs (visibility scores, card scales) of every
+//! tree a scene places, into the tree cache scene loading reads.
 
 use std::time::Instant;
 
@@ -24,6 +26,12 @@ pub struct BakeArgs {
     /// Recompute tables the cache already holds.
     #[arg(long)]
     pub force: bool,
+    /// V1: bake the leaf LODs of the trees `--scene` places (instead of sky tables).
+    #[arg(long)]
+    pub trees: bool,
+    /// The scene whose trees `--trees` bakes: demo or a scene file.
+    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    pub scene: String,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -35,6 +43,9 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             crate::CACHE_ENV
         );
     };
+    if args.trees {
+        return bake_trees(&dir, args);
+    }
     let names = match args.tables.as_str() {
         "all" => vec!["default", "reference"],
         one @ ("default" | "reference") => vec![one],
@@ -72,5 +83,58 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             path.display()
         );
     }
+    Ok(())
+}
+
+/// `bake --trees`: each (species, seed) of the scene's `tree` objects,
+/// generated and ranked by visibility, written to the tree cache.
+fn bake_trees(dir: &std::path::Path, args: &BakeArgs) -> Result<()> {
+    use himal::scene::tree::{self, bake};
+    let text = if args.scene == "demo" {
+        himal::scene::DEMO_TOML.to_string()
+    } else {
+        std::fs::read_to_string(&args.scene)
+            .map_err(|e| anyhow::anyhow!("--scene {}: {e}", args.scene))?
+    };
+    let trees =
+        bake::trees_in(&text).map_err(|e| anyhow::anyhow!("--scene {}: {e}", args.scene))?;
+    if trees.is_empty() {
+        println!("bake: {} places no trees", args.scene);
+        return Ok(());
+    }
+    let bar = indicatif::ProgressBar::new(trees.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{bar:30}] {pos}/{len} trees, {elapsed} {msg}",
+        )?
+        .progress_chars("=> "),
+    );
+    bar.set_prefix("trees");
+    let start = Instant::now();
+    let (mut baked, mut cached) = (0, 0);
+    for (species, seed) in &trees {
+        bar.set_message(format!("{} seed {seed}", species.name()));
+        let model = tree::generate(*species, *seed, 1.0);
+        let path = bake::cache_file(dir, *species, *seed);
+        if args.force {
+            let _ = std::fs::remove_file(&path);
+        }
+        let (_, read) = bake::load_or_bake_in(dir, &model, *seed);
+        if read {
+            cached += 1;
+        } else {
+            baked += 1;
+            if !path.exists() {
+                bail!("bake: could not write {}", path.display());
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!(
+        "bake: {baked} trees baked, {cached} already baked, in {:.1} s: {}",
+        start.elapsed().as_secs_f64(),
+        dir.join("trees").display()
+    );
     Ok(())
 }

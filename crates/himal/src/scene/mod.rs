@@ -738,7 +738,7 @@ pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
 }
 
 /// Text of the demo world, embedded so the renderer runs from anywhere.
-const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
+pub const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
 impl Scene {
     /// Reads, parses and builds the scene file at `path`; relative paths

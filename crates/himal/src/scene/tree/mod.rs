@@ -13,6 +13,7 @@
 //! tint]`: the cluster's random tint in [0, 1], already mixed into the
 //! vertex colour between the leaf material and the tint colour (V5).
 
+pub mod bake;
 pub mod visibility;
 
 use std::ops::Range;
@@ -25,6 +26,7 @@ use super::primitives::MeshBuilder;
 use super::vegetation::Rng;
 use super::{MaterialDesc, Mesh};
 
+pub use bake::LeafLods;
 pub use visibility::{DISTANCES, VIEWPOINTS, VisibilityTable};
 
 /// Name prefix of trunk meshes (`--vegetation off` finds trunks by it).
@@ -496,10 +498,10 @@ pub struct TreeMeshes {
 /// Meshes `model`: levels over one vertex buffer per part (each level's
 /// vertices appended after the previous one's; `Mesh::levels` index them).
 /// Leaf level `l` keeps the `keep[l]` fraction of clusters ranked by
-/// `table`, scaled so their coverage matches LOD0's ([`visibility::compensation`]).
+/// visibility, scaled by `lods.card_scale[l]` ([`LeafLods::new`]).
 pub fn meshes(
     model: &TreeModel,
-    table: &VisibilityTable,
+    lods: &LeafLods,
     name: &str,
     bark: &MaterialDesc,
     leaves: &MaterialDesc,
@@ -529,8 +531,6 @@ pub fn meshes(
     );
 
     // Leaves.
-    let order = table.ranking();
-    let keep = model.species.keep();
     let mut b = MeshBuilder::new(leaves);
     let colors = (leaves.albedo, tint);
     let alpha = leaves.vertex_color()[3];
@@ -538,15 +538,9 @@ pub fn meshes(
     let mut clusters = [0; LEVELS];
     let mut card_scale = [1.0; LEVELS];
     for level in 0..LEVELS {
-        let n = ((keep[level] * order.len() as f32).round() as usize).clamp(1, order.len());
-        let mut kept: Vec<usize> = order[..n].to_vec();
-        kept.sort_unstable();
-        let s = if level == 0 {
-            1.0
-        } else {
-            visibility::compensation(model, &kept)
-        };
-        clusters[level] = n;
+        let kept = lods.kept(model.species, level);
+        let s = lods.card_scale[level];
+        clusters[level] = kept.len();
         card_scale[level] = s;
         let (v0, i0) = (b.vertex_count(), b.index_count());
         cards_mesh(&mut b, model, &kept, s, colors, alpha);
@@ -569,7 +563,8 @@ pub fn meshes(
 }
 
 /// The meshes of tree `species` from `seed` at full detail, as scene files
-/// place them: generated, ranked by visibility, meshed.
+/// place them: generated, its leaf LODs read from the bake cache (baked
+/// and written there on first use, [`bake::load_or_bake`]), meshed.
 pub fn cached(
     species: Species,
     seed: u32,
@@ -579,8 +574,8 @@ pub fn cached(
     tint: Vec3,
 ) -> TreeMeshes {
     let model = generate(species, seed, 1.0);
-    let table = visibility::table(&model);
-    meshes(&model, &table, name, bark, leaves, tint)
+    let lods = bake::load_or_bake(&model, seed);
+    meshes(&model, &lods, name, bark, leaves, tint)
 }
 
 /// The builder's mesh with LOD0's indices and the later levels in `levels`.
@@ -638,11 +633,12 @@ mod tests {
             let model = generate(s, 1, 1.0);
             let t1 = std::time::Instant::now();
             let table = visibility::table(&model);
+            let lods = LeafLods::new(&model, &table);
             let t2 = std::time::Instant::now();
-            let meshes = meshes(&model, &table, s.name(), &m, &m, Vec3::ONE);
+            let meshes = meshes(&model, &lods, s.name(), &m, &m, Vec3::ONE);
             println!(
                 "{}: {} clusters, {} cards; trunk vertices {:?}, leaf vertices {:?}, clusters {:?}, \
-                 card scale {:?}; generate {:.2} s, visibility {:.2} s, meshes {:.2} s",
+                 card scale {:?}; generate {:.2} s, visibility and scales {:.2} s, meshes {:.2} s",
                 s.name(),
                 model.clusters.len(),
                 model.cards.len(),

@@ -57,10 +57,15 @@ pub struct VisibilityTable {
 impl VisibilityTable {
     /// Cluster indices, most visible first (ties by index: deterministic).
     pub fn ranking(&self) -> Vec<usize> {
-        let mut order: Vec<usize> = (0..self.clusters).collect();
-        order.sort_by(|&a, &b| self.score[b].total_cmp(&self.score[a]).then(a.cmp(&b)));
-        order
+        rank(&self.score)
     }
+}
+
+/// Indices of `score`, highest first (ties by index: deterministic).
+pub fn rank(score: &[f32]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..score.len()).collect();
+    order.sort_by(|&a, &b| score[b].total_cmp(&score[a]).then(a.cmp(&b)));
+    order
 }
 
 /// One view: crown centre `c`, radius `r`, seen from direction `dir` at
