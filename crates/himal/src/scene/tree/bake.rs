@@ -181,10 +181,10 @@ pub fn trees_in(text: &str) -> Result<Vec<(Species, u32)>, String> {
             .and_then(|s| s.as_str())
             .and_then(Species::parse);
         let seed = o.get("seed").and_then(|s| s.as_integer()).unwrap_or(0);
-        if let (Some(species), Ok(seed)) = (species, u32::try_from(seed)) {
-            if !out.contains(&(species, seed)) {
-                out.push((species, seed));
-            }
+        if let (Some(species), Ok(seed)) = (species, u32::try_from(seed))
+            && !out.contains(&(species, seed))
+        {
+            out.push((species, seed));
         }
     }
     Ok(out)

@@ -546,10 +546,14 @@ pub fn meshes(
         cards_mesh(&mut b, model, &kept, s, colors, alpha);
         leaf_levels.push((b.indices_from(i0), (b.vertex_count() - v0) as usize));
     }
-    let card = model.cards.first().map_or(0.3, |c| c.size);
-    let leaves_mesh = leveled(b, format!("tree-leaves/{name}"), leaf_levels.clone(), |l| {
-        card * card_scale[l] * l as f32
-    });
+    // Visibility, not a geometric error, chooses what a leaf level drops:
+    // no error guard, the levels switch at E2's distances l d_1 alone.
+    let leaves_mesh = leveled(
+        b,
+        format!("tree-leaves/{name}"),
+        leaf_levels.clone(),
+        |_| 0.0,
+    );
     TreeMeshes {
         trunk,
         leaves: leaves_mesh,
@@ -649,6 +653,17 @@ mod tests {
                 (t1 - t0).as_secs_f32(),
                 (t2 - t1).as_secs_f32(),
                 t2.elapsed().as_secs_f32(),
+            );
+            // E2's first switch at 1280 x 720, 60 degrees, T = 4 px: d_1 = size f / sqrt(T).
+            let f = crate::scene::lod::focal_px(60.0, 720);
+            let d1 = |m: &Mesh| {
+                crate::scene::lod::geometric_mean_area(&m.vertices, &m.indices).sqrt() * f / 2.0
+            };
+            println!(
+                "{}: d_1 at 720p: trunk {:.0} m, leaves {:.0} m",
+                s.name(),
+                d1(&meshes.trunk),
+                d1(&meshes.leaves)
             );
             for part in meshes.vertices {
                 assert!(part[0] > part[1] && part[1] > part[2], "{part:?}");
