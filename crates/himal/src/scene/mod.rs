@@ -31,7 +31,7 @@
 //!
 //! [[object]]
 //! name = "house"               # unique
-//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield | grass | bush
+//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield | grass | bush | tree
 //! material = "plaster"
 //! position = [0, 0, 0]         # default origin
 //! rotation = [0, 30, 0]        # Euler degrees [x, y, z], R = Ry * Rx * Rz (roll, then pitch, then yaw)
@@ -73,6 +73,15 @@
 //!   `seed`, `sway` (default 0.03).
 //!   Vegetation is drawn double-sided with a procedural alpha pattern and
 //!   sway (`docs/techniques/vegetation.md`; card UVs in [`vegetation`]).
+//! - `tree` (V1, [`tree`], `docs/techniques/V1.md`): `species = "larch" |
+//!   "rosewood"`, `material` (leaves), `bark_material` (default grey-brown
+//!   bark), `tint` (sRGB second leaf colour; each leaf cluster mixes the two
+//!   at random), `seed` (default 0), `sway` (default 0.03). One tree at
+//!   `position`, or `count` trees scattered over `size = [x, z]` around it,
+//!   or `positions = [[x, y, z], ...]` (offsets from `position`); each yawed
+//!   and scaled 0.85..1.15 at random from the seed; `snap_to_ground` stands
+//!   each on the ground under its trunk. Objects `name#k/trunk` and
+//!   `name#k/leaves` (`name/trunk` for one tree). Not `repeat`, `rest_on`, `orbit`.
 //!
 //! Moving objects: `orbit = { radius, period, phase, turn }` moves the object
 //! on a horizontal circle around its placed position at constant speed:

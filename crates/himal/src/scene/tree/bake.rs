@@ -16,7 +16,7 @@ use std::sync::Mutex;
 use super::{LEVELS, Species, TreeModel, VisibilityTable, visibility};
 
 const MAGIC: &[u8; 4] = b"HTRE";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 static CACHE_DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
 

@@ -21,7 +21,7 @@ const SIDE_ELEVATION_DEG: f32 = 15.0;
 /// Nearest distance (crown radii) and the ratio between distances: 2 R to 2 R * 1.4^11 = 81 R.
 const NEAREST: f32 = 2.0;
 const RATIO: f32 = 1.4;
-/// The distance index whose coverage LODs match (about 7.5 crown radii, 30 px across).
+/// The distance index whose coverage LODs match (7.7 crown radii, ~33 px across).
 const COVERAGE_DISTANCE: usize = 4;
 
 /// Unit directions from the crown toward the 9 viewpoints.
@@ -285,13 +285,16 @@ pub fn coverage(model: &TreeModel, clusters: &[usize], s: f32) -> usize {
         .sum()
 }
 
-/// The scale (1..=3) of the kept clusters (about their centres) at which
+/// Largest compensation scale: the larch's LOD2 keeps 2 % of its clusters.
+pub const MAX_CARD_SCALE: f32 = 6.0;
+
+/// The scale (1..=[`MAX_CARD_SCALE`]) of the kept clusters (about their centres) at which
 /// they cover what every cluster covers at scale 1 (bisection, 8 steps):
 /// the dropped clusters' area goes to the kept ones.
 pub fn compensation(model: &TreeModel, kept: &[usize]) -> f32 {
     let all: Vec<usize> = (0..model.clusters.len()).collect();
     let target = coverage(model, &all, 1.0);
-    let (mut lo, mut hi) = (1.0f32, 3.0f32);
+    let (mut lo, mut hi) = (1.0f32, MAX_CARD_SCALE);
     if coverage(model, kept, hi) <= target {
         return hi;
     }
@@ -372,6 +375,6 @@ mod tests {
         // Fewer clusters need a larger scale to cover the same pixels.
         let kept: Vec<usize> = t.ranking()[..8].to_vec();
         let s = compensation(&model, &kept);
-        assert!(s > 1.05 && s <= 3.0, "{s}");
+        assert!(s > 1.05 && s <= MAX_CARD_SCALE, "{s}");
     }
 }
