@@ -16,7 +16,7 @@ use std::sync::Mutex;
 use super::{LEVELS, Species, TreeModel, VisibilityTable, visibility};
 
 const MAGIC: &[u8; 4] = b"HTRE";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 static CACHE_DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
 
@@ -51,7 +51,7 @@ impl LeafLods {
             card_scale: [1.0; LEVELS],
         };
         for level in 1..LEVELS {
-            let kept = lods.kept(model.species, level);
+            let kept = lods.kept(model, level);
             lods.card_scale[level] = visibility::compensation(model, &kept);
         }
         lods
@@ -62,16 +62,57 @@ impl LeafLods {
         visibility::rank(&self.score)
     }
 
-    /// The clusters level `level` keeps (the most visible
-    /// [`Species::keep`] fraction, at least one), in index order.
-    pub fn kept(&self, species: Species, level: usize) -> Vec<usize> {
+    /// The clusters level `level` keeps, in index order: the
+    /// [`Species::keep`] fraction (at least one), the most visible of each
+    /// of [`HEIGHT_BANDS`] bands of the crown in proportion to the band's
+    /// clusters, so a far level keeps the crown's outline (a larch's long
+    /// lower branches are the most visible from every view, and a global
+    /// ranking would leave its top bare).
+    pub fn kept(&self, model: &TreeModel, level: usize) -> Vec<usize> {
         let order = self.ranking();
-        let keep = species.keep()[level.min(LEVELS - 1)];
+        let keep = model.species.keep()[level.min(LEVELS - 1)];
         let n = ((keep * order.len() as f32).round() as usize).clamp(1, order.len().max(1));
-        let mut kept: Vec<usize> = order.into_iter().take(n).collect();
+        let band = height_bands(model);
+        let mut in_band = [0usize; HEIGHT_BANDS];
+        for &b in &band {
+            in_band[b] += 1;
+        }
+        let total = band.len().max(1) as f32;
+        let mut quota = in_band.map(|c| (c as f32 * n as f32 / total).round() as usize);
+        let mut kept = Vec::with_capacity(n);
+        for &c in &order {
+            if kept.len() < n && band.get(c).is_some_and(|&b| quota[b] > 0) {
+                quota[band[c]] -= 1;
+                kept.push(c);
+            }
+        }
+        // Rounding may leave places: the most visible of the rest fill them.
+        for &c in &order {
+            if kept.len() >= n {
+                break;
+            }
+            if !kept.contains(&c) {
+                kept.push(c);
+            }
+        }
         kept.sort_unstable();
         kept
     }
+}
+
+/// Height bands of the crown a level's clusters are spread over.
+pub const HEIGHT_BANDS: usize = 6;
+
+/// Each cluster's band: its centre's height between the lowest and the
+/// highest cluster centre, in [`HEIGHT_BANDS`] equal steps.
+pub fn height_bands(model: &TreeModel) -> Vec<usize> {
+    let ys = model.clusters.iter().map(|c| c.centre.y);
+    let lo = ys.clone().fold(f32::INFINITY, f32::min);
+    let hi = ys.fold(f32::NEG_INFINITY, f32::max);
+    let span = (hi - lo).max(1e-3);
+    (model.clusters.iter())
+        .map(|c| (((c.centre.y - lo) / span * HEIGHT_BANDS as f32) as usize).min(HEIGHT_BANDS - 1))
+        .collect()
 }
 
 /// FNV-1a over the cards' centres, sizes and clusters.

@@ -538,7 +538,7 @@ pub fn meshes(
     let mut clusters = [0; LEVELS];
     let mut card_scale = [1.0; LEVELS];
     for level in 0..LEVELS {
-        let kept = lods.kept(model.species, level);
+        let kept = lods.kept(model, level);
         let s = lods.card_scale[level];
         clusters[level] = kept.len();
         card_scale[level] = s;
@@ -670,12 +670,27 @@ mod tests {
             }
             assert_eq!(meshes.leaves.levels.len(), LEVELS - 1);
             assert!(meshes.card_scale[1] >= 1.0 && meshes.card_scale[2] >= meshes.card_scale[1]);
-            // Kept clusters score at least as high as every dropped one.
-            let order = table.ranking();
-            for n in &meshes.clusters[1..] {
-                let worst_kept = table.score[order[n - 1]];
-                let best_dropped = order.get(*n).map_or(0.0, |&c| table.score[c]);
-                assert!(worst_kept >= best_dropped);
+            // Within each height band, kept clusters score at least as high
+            // as every dropped one; every band keeps some at LOD1.
+            let bands = bake::height_bands(&model);
+            for level in 1..LEVELS {
+                let kept = lods.kept(&model, level);
+                assert_eq!(kept.len(), meshes.clusters[level]);
+                for b in 0..bake::HEIGHT_BANDS {
+                    let of = |keep: bool| -> Vec<usize> {
+                        (0..model.clusters.len())
+                            .filter(|&c| bands[c] == b && kept.contains(&c) == keep)
+                            .collect()
+                    };
+                    let (k, d) = (of(true), of(false));
+                    let worst_kept = k
+                        .iter()
+                        .map(|&c| table.score[c])
+                        .fold(f32::INFINITY, f32::min);
+                    let best_dropped = d.iter().map(|&c| table.score[c]).fold(0.0, f32::max);
+                    assert!(k.is_empty() || worst_kept >= best_dropped, "band {b}");
+                    assert!(level > 1 || !k.is_empty(), "band {b} empty at LOD1");
+                }
             }
             // Every level indexes its own vertices only.
             let nv = meshes.leaves.vertices.len() as u32;

@@ -1,9 +1,10 @@
 //! V1's offline leaf-cluster visibility (the talk's method): the crown is
 //! rasterised on the CPU, a z-buffer of cluster ids with the cards' alpha
 //! pattern, from 9 viewpoints (8 around, 15 degrees up, and the top) at 12
-//! distances. A cluster's visibility from one view is the fraction of its
-//! alpha-passing fragments that win the depth test; its score is the mean
-//! over the 108 views. LODs keep the highest scores. Deterministic: same
+//! distances. A cluster's visibility from one view is the fraction of the
+//! pixels its alpha-passing fragments touch where it wins the depth test
+//! (hidden by other clusters only: its own overlapping cards count once);
+//! its score is the mean over the 108 views. LODs keep the highest scores. Deterministic: same
 //! model, same table, on any thread count.
 
 use glam::Vec3;
@@ -111,6 +112,9 @@ impl View {
 struct Raster {
     depth: Vec<f32>,
     id: Vec<u32>,
+    /// The last cluster whose fragment touched each pixel: a cluster's
+    /// pixels count once, so its own overlapping cards do not hide it.
+    stamp: Vec<u32>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -120,12 +124,13 @@ impl Raster {
         Raster {
             depth: vec![f32::INFINITY; RESOLUTION * RESOLUTION],
             id: vec![NONE; RESOLUTION * RESOLUTION],
+            stamp: vec![NONE; RESOLUTION * RESOLUTION],
         }
     }
 
     /// Draws `clusters`' cards (scaled by `s` about each cluster's centre)
-    /// under `m`, alpha-tested, both faces; counts each cluster's fragments
-    /// in `fragments` (indexed like `clusters`).
+    /// under `m`, alpha-tested, both faces; counts the pixels each cluster's
+    /// fragments touch in `fragments` (indexed like `clusters`).
     fn draw(
         &mut self,
         model: &TreeModel,
@@ -146,7 +151,8 @@ impl Raster {
         }
     }
 
-    /// Rasterises one triangle at pixel centres; returns its alpha-passing fragments.
+    /// Rasterises one triangle of cluster `id` at pixel centres; returns the
+    /// pixels its alpha-passing fragments touch that the cluster had not yet.
     fn triangle(
         &mut self,
         (a, ua): (Vec3, [f32; 2]),
@@ -184,8 +190,11 @@ impl Raster {
                 if crate::scene::vegetation::leaves_alpha([pattern + u, v]) < 0.5 {
                     continue;
                 }
-                count += 1;
                 let i = py * RESOLUTION + px;
+                if self.stamp[i] != id {
+                    self.stamp[i] = id;
+                    count += 1;
+                }
                 if z < self.depth[i] {
                     self.depth[i] = z;
                     self.id[i] = id;
