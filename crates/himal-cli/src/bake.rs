@@ -3,6 +3,8 @@
 //! sizes) into the table cache that `render`, `view` and `prewarm` read.
 //! L5 (`--probes`): a scene's radiance-transfer probe cells, resumable
 //! (cells already in the cache are kept).
+//! V1 (`--trees`): the leaf LODs (visibility scores, card scales) of every
+//! tree a scene places, into the tree cache scene loading reads.
 
 use std::time::Instant;
 
@@ -16,18 +18,22 @@ use crate::render::parse_table_sizes;
 #[derive(Args, Debug)]
 pub struct BakeArgs {
     /// Bruneton table sizes to bake (`--sky-tables` picks them when
-    /// rendering); default: `default`, none with `--probes`.
+    /// rendering); default: `default`, none with `--probes` or `--trees`.
     #[arg(long, value_name = "default|reference|all", allow_hyphen_values = true)]
     pub tables: Option<String>,
     /// L5: bake the radiance-transfer probe cells of `--scene`.
     #[arg(long)]
     pub probes: bool,
-    /// The scene whose probes `--probes` bakes: `demo` or a scene file.
-    #[arg(long, default_value = "demo")]
-    pub scene: String,
     /// Recompute tables (and, with `--probes`, cells) the cache already holds.
     #[arg(long)]
     pub force: bool,
+    /// V1: bake the leaf LODs of the trees `--scene` places (instead of sky tables).
+    #[arg(long)]
+    pub trees: bool,
+    /// The scene whose probes (`--probes`) or trees (`--trees`) are baked:
+    /// demo or a scene file.
+    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    pub scene: String,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -54,7 +60,10 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             dir.join("probes").display()
         );
     }
-    let tables = match (&args.tables, args.probes) {
+    if args.trees {
+        bake_trees(&dir, args)?;
+    }
+    let tables = match (&args.tables, args.probes || args.trees) {
         (Some(t), _) => t.as_str(),
         (None, true) => return Ok(()),
         (None, false) => "default",
@@ -96,5 +105,58 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             path.display()
         );
     }
+    Ok(())
+}
+
+/// `bake --trees`: each (species, seed) of the scene's `tree` objects,
+/// generated and ranked by visibility, written to the tree cache.
+fn bake_trees(dir: &std::path::Path, args: &BakeArgs) -> Result<()> {
+    use himal::scene::tree::{self, bake};
+    let text = if args.scene == "demo" {
+        himal::scene::DEMO_TOML.to_string()
+    } else {
+        std::fs::read_to_string(&args.scene)
+            .map_err(|e| anyhow::anyhow!("--scene {}: {e}", args.scene))?
+    };
+    let trees =
+        bake::trees_in(&text).map_err(|e| anyhow::anyhow!("--scene {}: {e}", args.scene))?;
+    if trees.is_empty() {
+        println!("bake: {} places no trees", args.scene);
+        return Ok(());
+    }
+    let bar = indicatif::ProgressBar::new(trees.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{bar:30}] {pos}/{len} trees, {elapsed} {msg}",
+        )?
+        .progress_chars("=> "),
+    );
+    bar.set_prefix("trees");
+    let start = Instant::now();
+    let (mut baked, mut cached) = (0, 0);
+    for (species, seed) in &trees {
+        bar.set_message(format!("{} seed {seed}", species.name()));
+        let model = tree::generate(*species, *seed, 1.0);
+        let path = bake::cache_file(dir, *species, *seed);
+        if args.force {
+            let _ = std::fs::remove_file(&path);
+        }
+        let (_, read) = bake::load_or_bake_in(dir, &model, *seed);
+        if read {
+            cached += 1;
+        } else {
+            baked += 1;
+            if !path.exists() {
+                bail!("bake: could not write {}", path.display());
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!(
+        "bake: {baked} trees baked, {cached} already baked, in {:.1} s: {}",
+        start.elapsed().as_secs_f64(),
+        dir.join("trees").display()
+    );
     Ok(())
 }

@@ -200,6 +200,17 @@ fn main() -> Result<()> {
         // thread exists yet.
         unsafe { std::env::set_var(himal::budget::MEMORY_BUDGET_ENV, b) };
     }
+    // V1: scene loading reads baked trees from (and bakes missing ones into) the cache.
+    let gpu = match &cli.command {
+        Command::Render(a) => Some(&a.gpu),
+        Command::View(a) => Some(&a.render.gpu),
+        Command::Soak(a) => Some(&a.render.gpu),
+        Command::Bench(a) => Some(&a.gpu),
+        Command::Prewarm(a) => Some(&a.gpu),
+        Command::Bake(a) => Some(&a.gpu),
+        _ => None,
+    };
+    himal::scene::tree::bake::set_cache_dir(gpu.and_then(|g| g.cache_dir()));
     match cli.command {
         Command::Render(a) => render::run(&a),
         Command::View(a) => view::run(&a),

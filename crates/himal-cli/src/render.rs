@@ -237,6 +237,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub specular_aa: String,
+    /// V1 vegetation: trees, bushes and grass drawn (off: skipped in every
+    /// pass; the frame then culls on the CPU).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub vegetation: String,
     /// R4: Burley's remapped roughness in the visibility term of the sun
     /// and local lights (less specular on rough surfaces at grazing light).
     #[arg(
@@ -490,6 +499,7 @@ impl PostArgs {
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
+        settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         if !(0.0..=1.0).contains(&self.wetness) {

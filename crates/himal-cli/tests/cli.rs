@@ -560,6 +560,18 @@ fn bad_shadow_mask_switches_are_rejected() {
 }
 
 #[test]
+fn bad_vegetation_switch_is_rejected() {
+    fails_with(
+        &["render", "--vegetation", "maybe", "--size", "8x8"],
+        "--vegetation",
+    );
+    fails_with(
+        &["bench", "--vegetation", "some", "--size", "8x8"],
+        "--vegetation",
+    );
+}
+
+#[test]
 fn bad_ao_bleed_ambient_lights_and_wetness_are_rejected() {
     fails_with(
         &["render", "--ao-bleed", "maybe", "--size", "8x8"],

@@ -220,6 +220,11 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     scene
         .instancing
         .store(settings.instancing, std::sync::atomic::Ordering::Relaxed);
+    scene
+        .vegetation
+        .store(settings.vegetation, std::sync::atomic::Ordering::Relaxed);
+    // The GPU culling's lists hold every object: without vegetation the CPU culls.
+    let hide_vegetation = !settings.vegetation && scene.vegetation_objects.contains(&true);
     let size = (settings.width, settings.height);
     let aspect = size.0 as f32 / size.1 as f32;
     // V6: the G-buffer's objects inside the camera's frustum, culled on the
@@ -230,8 +235,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     if let Ok(mut l) = scene.lod.lock() {
         *l = lod;
     }
-    let gpu_cull =
-        settings.culling == Culling::Gpu && settings.instancing && passes.cull.supported().is_ok();
+    let gpu_cull = settings.culling == Culling::Gpu
+        && settings.instancing
+        && !hide_vegetation
+        && passes.cull.supported().is_ok();
     let layout = &passes.cull.layout;
     let gpu_calls = gpu_cull.then(|| (layout.draw_calls(true), layout.draw_calls(false)));
     // The streamed world's pool is culled per view on every path: on the

@@ -267,6 +267,10 @@ pub struct FrameSettings {
     /// mip (Ryse) instead of the sky irradiance the world's surfaces get
     /// (off by default: the world's own term keeps particles consistent).
     pub particles_probe_ambient: bool,
+    /// V1 vegetation drawn: trees (trunks and leaves), bushes and grass
+    /// (off: their draws are skipped in every pass; the frame culls on the
+    /// CPU then, as the GPU culling's lists hold every object).
+    pub vegetation: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -349,6 +353,7 @@ impl FrameSettings {
             particles_reactive: true,
             particles_sort: true,
             particles_probe_ambient: false,
+            vegetation: true,
         }
     }
 }

@@ -44,7 +44,13 @@ pub(super) fn append_levels(
     indices.extend_from_slice(&mesh.indices);
     // E2: terrain-sized meshes are always near somewhere; no chain.
     if mesh.bounds.extent().max_element() <= crate::scene::lod::MAX_EXTENT {
-        for lod in crate::scene::lod::lod_chain(mesh) {
+        // Trees bring their own levels (V1); the rest are simplified.
+        let chain = if mesh.levels.is_empty() {
+            crate::scene::lod::lod_chain(mesh)
+        } else {
+            mesh.levels.clone()
+        };
+        for lod in chain {
             histograms.push(area(&lod.indices));
             levels.push(LodRange {
                 first_index: indices.len() as u32,
@@ -97,10 +103,23 @@ impl SceneGpu {
     /// mesh has a chain.
     pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        if !lod.selection.enabled() || !self.has_lods {
+        let leveled = lod.selection.enabled() && self.has_lods;
+        // `--vegetation off`: the draws of foliage and trunks go.
+        let hide = !self.vegetation.load(std::sync::atomic::Ordering::Relaxed)
+            && self.vegetation_objects.contains(&true);
+        if !leveled && !hide {
             return std::borrow::Cow::Borrowed(draws);
         }
+        let shown = |d: &&Draw| {
+            !hide
+                || !(self.vegetation_objects.get(d.object as usize))
+                    .copied()
+                    .unwrap_or(false)
+        };
         let at = |d: &Draw| {
+            if !leveled {
+                return d.clone();
+            }
             let level = self.lod_level(d.object, &lod) as usize;
             let range = (self.object_mesh.get(d.object as usize))
                 .and_then(|&m| self.lods.get(m as usize)?.get(level));
@@ -113,7 +132,7 @@ impl SceneGpu {
                 _ => d.clone(),
             }
         };
-        std::borrow::Cow::Owned(draws.iter().map(at).collect())
+        std::borrow::Cow::Owned(draws.iter().filter(shown).map(at).collect())
     }
 
     /// `draws` by the level [`Self::draw_list`] draws each at this frame

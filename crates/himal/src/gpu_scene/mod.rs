@@ -206,6 +206,11 @@ pub struct SceneGpu {
     /// V6: merge runs of consecutive objects into instanced draws
     /// (`FrameSettings::instancing`, set per frame).
     pub instancing: AtomicBool,
+    /// Whether vegetation draws (`FrameSettings::vegetation`, set per frame).
+    pub vegetation: AtomicBool,
+    /// Per object (GPU order): foliage or a tree trunk, what
+    /// `--vegetation off` skips.
+    pub vegetation_objects: Vec<bool>,
     /// Skinned meshes (`passes/skin`); `None` without any.
     pub skins: Option<skin::SkinGpu>,
     /// Unique per upload: what caches of scene resources are keyed by
@@ -314,6 +319,7 @@ impl SceneGpu {
         let mut bounds = Vec::with_capacity(scene.objects.len());
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
         let mut object_mesh = Vec::with_capacity(scene.objects.len());
+        let mut vegetation_objects = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
         for (i, object) in gpu_order(scene)
             .into_iter()
@@ -349,6 +355,7 @@ impl SceneGpu {
             cull_bounds.push(ObjectBounds::new(&b, size, scale));
             bounds.push(b);
             object_mesh.push(object.mesh as u32);
+            vegetation_objects.push(object.is_vegetation(&scene.meshes));
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
@@ -442,6 +449,8 @@ impl SceneGpu {
                 triangles,
                 bytes,
                 instancing: AtomicBool::new(true),
+                vegetation: AtomicBool::new(true),
+                vegetation_objects,
                 skins,
                 id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             }

@@ -17,7 +17,7 @@ use crate::budget::MemoryBudget;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
-const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield, grass, bush";
+const PRIMITIVES: &str = "plane, box, sphere, cylinder, prism, heightfield, grass, bush, tree";
 
 /// Range checks that point at the offending value.
 pub(crate) struct Checker<'a> {
@@ -133,7 +133,7 @@ impl Checker<'_> {
     }
 }
 
-fn srgb_to_linear(c: f32) -> f32 {
+pub(crate) fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
@@ -509,6 +509,16 @@ fn allowed_keys(primitive: &str) -> Option<&'static [&'static str]> {
             "size", "density", "height", "width", "seed", "cards", "sway",
         ],
         "bush" => &["radius", "size", "width", "seed", "cards", "sway"],
+        "tree" => &[
+            "species",
+            "bark_material",
+            "tint",
+            "seed",
+            "count",
+            "size",
+            "positions",
+            "sway",
+        ],
         _ => return None,
     })
 }

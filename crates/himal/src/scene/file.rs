@@ -282,6 +282,13 @@ pub(crate) struct FileObject {
     pub seed: Option<Spanned<i64>>,
     pub cards: Option<Spanned<i64>>,
     pub sway: Option<Spanned<f32>>,
+    // Trees (V1).
+    pub species: Option<Spanned<String>>,
+    pub bark_material: Option<Spanned<String>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
+    pub tint: Option<Spanned<[f32; 3]>>,
+    pub count: Option<Spanned<i64>>,
+    pub positions: Option<Spanned<Vec<[f32; 3]>>>,
 }
 
 impl FileObject {
@@ -312,7 +319,12 @@ impl FileObject {
             width,
             seed,
             cards,
-            sway
+            sway,
+            species,
+            bark_material,
+            tint,
+            count,
+            positions
         );
         keys
     }

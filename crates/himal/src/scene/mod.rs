@@ -31,7 +31,7 @@
 //!
 //! [[object]]
 //! name = "house"               # unique
-//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield | grass | bush
+//! primitive = "box"            # plane | box | sphere | cylinder | prism | heightfield | grass | bush | tree
 //! material = "plaster"
 //! position = [0, 0, 0]         # default origin
 //! rotation = [0, 30, 0]        # Euler degrees [x, y, z], R = Ry * Rx * Rz (roll, then pitch, then yaw)
@@ -73,6 +73,15 @@
 //!   `seed`, `sway` (default 0.03).
 //!   Vegetation is drawn double-sided with a procedural alpha pattern and
 //!   sway (`docs/techniques/vegetation.md`; card UVs in [`vegetation`]).
+//! - `tree` (V1, [`tree`], `docs/techniques/V1.md`): `species = "larch" |
+//!   "rosewood"`, `material` (leaves), `bark_material` (default grey-brown
+//!   bark), `tint` (sRGB second leaf colour; each leaf cluster mixes the two
+//!   at random), `seed` (default 0), `sway` (default 0.03). One tree at
+//!   `position`, or `count` trees scattered over `size = [x, z]` around it,
+//!   or `positions = [[x, y, z], ...]` (offsets from `position`); each yawed
+//!   and scaled 0.85..1.15 at random from the seed; `snap_to_ground` stands
+//!   each on the ground under its trunk. Objects `name#k/trunk` and
+//!   `name#k/leaves` (`name/trunk` for one tree). Not `repeat`, `rest_on`, `orbit`.
 //!
 //! Moving objects: `orbit = { radius, period, phase, turn }` moves the object
 //! on a horizontal circle around its placed position at constant speed:
@@ -231,6 +240,7 @@ mod place;
 pub mod primitives;
 pub mod raycast;
 mod terrain;
+pub mod tree;
 pub mod vegetation;
 pub mod world;
 
@@ -392,6 +402,9 @@ pub struct Mesh {
     pub indices: Vec<u32>,
     /// Object-space bounds of the vertices (for skinned meshes: over every clip).
     pub bounds: Aabb,
+    /// Precomputed LODs after LOD0, indexing `vertices` (trees: visibility-
+    /// driven leaf clusters, coarser trunks); empty: E2's simplifier makes them.
+    pub levels: Vec<lod::Level>,
 }
 
 impl Mesh {
@@ -409,6 +422,11 @@ impl Mesh {
         m.name = format!("{} (mirrored)", self.name);
         for t in m.indices.chunks_exact_mut(3) {
             t.swap(1, 2);
+        }
+        for l in &mut m.levels {
+            for t in l.indices.chunks_exact_mut(3) {
+                t.swap(1, 2);
+            }
         }
         m
     }
@@ -463,6 +481,15 @@ impl Object {
         self.motion
             .as_ref()
             .map_or(self.transform, |m| m.transform_at(t))
+    }
+
+    /// Vegetation (`FrameSettings::vegetation`): foliage cards, or a tree's
+    /// trunk (`meshes`: the scene's).
+    pub fn is_vegetation(&self, meshes: &[Mesh]) -> bool {
+        self.foliage.is_some()
+            || meshes
+                .get(self.mesh)
+                .is_some_and(|m| m.name.starts_with(tree::TRUNK_PREFIX))
     }
 
     /// World bounds over all time: the path swept by a moving object, the
@@ -721,7 +748,7 @@ pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
 }
 
 /// Text of the demo world, embedded so the renderer runs from anywhere.
-const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
+pub const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
 impl Scene {
     /// Reads, parses and builds the scene file at `path`; relative paths

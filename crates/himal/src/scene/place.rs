@@ -113,6 +113,11 @@ impl Placer {
                 continue;
             }
             let prim = o.primitive.get_ref().as_str();
+            if prim == "tree" {
+                let bounds = place_trees(world, o, &grounds, &mut out)?;
+                placed.insert(name, bounds);
+                continue;
+            }
             let orbit = match &o.orbit {
                 Some(r) if prim == "grass" || prim == "bush" => {
                     return Err(ck.err(&r.span(), format!("`orbit` does not apply to {prim}")));
@@ -262,6 +267,91 @@ impl Placer {
         }
         Ok(out)
     }
+}
+
+/// How far a snapped tree's trunk sinks below the ground at its centre (m):
+/// on a slope its uphill side stays buried.
+const TREE_SINK: f32 = 0.15;
+
+/// Places a `tree` object's trees (V1): per tree a trunk object
+/// (`name#k/trunk`, opaque) and a leaves object (`name#k/leaves`,
+/// alpha-tested), yawed and scaled (0.85..1.15) at random from the seed;
+/// snapped trees stand on the ground under their trunk. Returns their bounds.
+fn place_trees(
+    world: &mut World,
+    o: &FileObject,
+    grounds: &[Ground],
+    out: &mut Vec<Object>,
+) -> Result<Aabb> {
+    let ck = world.ck;
+    let name = o.name.get_ref();
+    for (key, span) in [
+        ("orbit", o.orbit.as_ref().map(|s| s.span())),
+        ("rest_on", o.rest_on.as_ref().map(|s| s.span())),
+        ("repeat", o.repeat.as_ref().map(|s| s.span())),
+    ] {
+        if let Some(span) = span {
+            return Err(ck.err(
+                &span,
+                format!("`{key}` does not apply to trees (use count and size, or positions)"),
+            ));
+        }
+    }
+    world.check_keys(o)?;
+    let (trunk, leaves) = world.tree_meshes(o)?;
+    let foliage = world.foliage(o, leaves)?;
+    let rotation = rotation_from_euler_deg(
+        ck.finite3_or(&o.rotation, "rotation", Vec3::ZERO)?
+            .to_array(),
+    );
+    let scale = scale(world, o)?;
+    let position = ck.finite3_or(&o.position, "position", Vec3::ZERO)?;
+    let bases = world.tree_bases(o, position)?;
+    let snap = o.snap_to_ground.as_ref().filter(|s| *s.get_ref());
+    let seed = o.seed.as_ref().map_or(0, |s| *s.get_ref() as u32);
+    let local = world.meshes[trunk]
+        .bounds
+        .union(&world.meshes[leaves].bounds);
+    let mut bounds = Aabb::EMPTY;
+    for (k, base) in bases.iter().enumerate() {
+        let mut rng = super::vegetation::Rng::new(seed, k as i32 + 1);
+        let yaw = glam::Quat::from_rotation_y(rng.next() * std::f32::consts::TAU);
+        let size = 0.85 + 0.3 * rng.next();
+        let y = match snap {
+            Some(snap) => {
+                let ground = grounds.iter().find_map(|g| g.height(base.x, base.z));
+                let ground = ground.ok_or_else(|| {
+                    ck.err(
+                        &snap.span(),
+                        format!(
+                            "object \"{name}\": tree at ({:.1}, {:.1}) is not over any height field",
+                            base.x, base.z
+                        ),
+                    )
+                })?;
+                ground - TREE_SINK + base.y
+            }
+            None => base.y,
+        };
+        let transform = trs(Vec3::new(base.x, y, base.z), yaw * rotation, scale * size);
+        let copy = if bases.len() > 1 {
+            format!("{name}#{k}")
+        } else {
+            name.to_string()
+        };
+        for (part, mesh, foliage) in [("trunk", trunk, None), ("leaves", leaves, foliage)] {
+            out.push(Object {
+                name: format!("{copy}/{part}"),
+                mesh,
+                transform,
+                motion: None,
+                foliage,
+                ground: false,
+            });
+        }
+        bounds = bounds.union(&local.transform(&transform));
+    }
+    Ok(bounds)
 }
 
 /// Checked `orbit = { radius, period, phase, turn }`; the centre is set at placement.

@@ -60,6 +60,31 @@ impl MeshBuilder {
         v.surface = surface;
     }
 
+    /// Vertices so far (the next vertex's index).
+    pub fn vertex_count(&self) -> u32 {
+        self.vertices.len() as u32
+    }
+
+    /// Indices so far.
+    pub fn index_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// A copy of the indices from `start` on (one level of a tree part).
+    pub fn indices_from(&self, start: usize) -> Vec<u32> {
+        self.indices[start.min(self.indices.len())..].to_vec()
+    }
+
+    /// Overrides the second UV set of vertex `index` (tree cards: cluster id, tint).
+    pub fn set_uv1(&mut self, index: u32, uv1: [f32; 2]) {
+        self.vertices[index as usize].uv1 = uv1;
+    }
+
+    /// Overrides the colour of vertex `index` (tree cards: the cluster's tint).
+    pub fn set_color(&mut self, index: u32, color: [f32; 4]) {
+        self.vertices[index as usize].color = color;
+    }
+
     pub fn triangle(&mut self, a: u32, b: u32, c: u32) {
         self.indices.extend_from_slice(&[a, b, c]);
     }
@@ -85,6 +110,7 @@ impl MeshBuilder {
             vertices: self.vertices,
             indices: self.indices,
             bounds,
+            levels: Vec::new(),
         }
     }
 }

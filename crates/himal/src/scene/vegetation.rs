@@ -28,25 +28,25 @@ const EDGE_RAGGEDNESS: f32 = 0.3;
 pub const MAX_CLUMPS: u32 = 200_000;
 
 /// Deterministic stream of uniform numbers in [0, 1) (hash of seed and counter).
-struct Rng {
+pub(crate) struct Rng {
     seed: u32,
     n: i32,
 }
 
 impl Rng {
-    fn new(seed: u32, stream: i32) -> Self {
+    pub(crate) fn new(seed: u32, stream: i32) -> Self {
         Rng {
             seed: hash_lattice(seed, stream, 0x5eed),
             n: 0,
         }
     }
 
-    fn next(&mut self) -> f32 {
+    pub(crate) fn next(&mut self) -> f32 {
         self.n += 1;
         hash_to_unit(hash_lattice(self.seed, self.n, 0))
     }
 
-    fn pattern_seed(&mut self) -> f32 {
+    pub(crate) fn pattern_seed(&mut self) -> f32 {
         (self.next() * PATTERN_SEEDS as f32).floor()
     }
 }

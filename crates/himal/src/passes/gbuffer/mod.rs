@@ -127,8 +127,8 @@ impl GBufferKey {
         Self::for_view(scene, mip_bias, specular_aa, false)
     }
 
-    /// [`Self::for_scene`], with `lod_view`: the per-vertex and textured
-    /// permutations at every level instead (`--view lod`).
+    /// [`Self::for_scene`], with `lod_view`: every permutation at every
+    /// level instead (`--view lod`; vegetation too, V1's leaf levels).
     pub fn for_view(
         scene: &SceneGpu,
         mip_bias: bool,
@@ -140,10 +140,7 @@ impl GBufferKey {
             let levels = if scene.has_lods { MAX_LODS as u8 } else { 1 };
             keys = keys
                 .into_iter()
-                .flat_map(|k| match k.material {
-                    MaterialType::Vegetation => vec![k],
-                    _ => (0..levels).map(|l| k.at_level(l)).collect(),
-                })
+                .flat_map(|k| (0..levels).map(move |l| k.at_level(l)))
                 .collect();
         }
         keys
@@ -259,7 +256,11 @@ impl GBufferPass {
                 .render_pipeline(ctx, &spec("gbuffer", cull, &with_lod(&[]))),
             MaterialType::Vegetation => self.program.render_pipeline(
                 ctx,
-                &spec("gbuffer.vegetation", cull, &[("VEGETATION", 1.0)]),
+                &spec(
+                    "gbuffer.vegetation",
+                    cull,
+                    &with_lod(&[("VEGETATION", 1.0)]),
+                ),
             ),
             MaterialType::Textured => {
                 let bias = if key.mip_bias {
@@ -407,15 +408,26 @@ impl GBufferPass {
                         }
                     }
                 }
-                if !vegetation.is_empty() {
-                    rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    scene.draw_list(rp, vegetation);
-                }
-                if let Some((c, view)) = culled
-                    && !scene.draws_vegetation.is_empty()
-                {
-                    rp.set_pipeline(pipeline(GBufferKey::VEGETATION)?);
-                    c.draw(rp, ctx, view, List::Vegetation, ALL);
+                // Vegetation, per level under `--view lod` as the opaque draws.
+                let by_level = lod_view.then(|| scene.split_levels(vegetation));
+                for &level in &levels {
+                    let key = at(GBufferKey::VEGETATION, level);
+                    if !vegetation.is_empty() {
+                        rp.set_pipeline(pipeline(key)?);
+                        match (&by_level, level) {
+                            (Some(split), Some(l)) => scene.draw_list(rp, &split[l as usize]),
+                            _ => scene.draw_list(rp, vegetation),
+                        }
+                    }
+                    if let Some((c, view)) = culled
+                        && !scene.draws_vegetation.is_empty()
+                    {
+                        rp.set_pipeline(pipeline(key)?);
+                        match level {
+                            Some(l) => c.draw_level(rp, ctx, view, List::Vegetation, ALL, l.into()),
+                            None => c.draw(rp, ctx, view, List::Vegetation, ALL),
+                        };
+                    }
                 }
                 Ok(())
             });

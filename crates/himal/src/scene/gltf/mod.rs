@@ -1099,6 +1099,7 @@ fn primitive<'a>(
             vertices,
             indices,
             bounds,
+            levels: Vec::new(),
         },
         skin,
     ))
