@@ -85,6 +85,14 @@ pub fn attach_probes(renderer: &mut Renderer, scene: &Scene, cache: Option<&Path
              use the demo or a scene file"
         );
     }
+    if scene.environment.is_some() {
+        // Said, not silently dropped: the lighting key leaves L5 out there.
+        eprintln!(
+            "note: --indirect on has no effect under an HDR environment (L5 transfers the \
+             analytic sky and sun); not baking probes"
+        );
+        return Ok(());
+    }
     renderer.set_probe_cells(Some(probe_cells(scene, cache, false)?));
     Ok(())
 }
