@@ -766,3 +766,39 @@ fn particles_draw_far_to_near_inside_each_emitter() {
         "sort off: ring order"
     );
 }
+
+#[test]
+fn particle_buffers_are_listed_in_memory() {
+    let scene = common::scene("particles_smoke");
+    let r = common::renderer(&scene);
+    let rows: Vec<(String, u64)> = (r.memory().into_iter())
+        .filter(|(k, _)| k.starts_with("particles."))
+        .collect();
+    for (k, b) in &rows {
+        println!("{k}: {b} B");
+    }
+    // 384 slots: state and light 32 B each, order 4 B; params: the uniform
+    // (32 B), 2 emitter records (112 B), 121 pre-warm steps of 2 emitters
+    // (32 B), 2 counter pairs (8 B).
+    let slots = 384u64;
+    let want = [
+        ("particles.state", slots * 32),
+        ("particles.light", slots * 32),
+        ("particles.order", slots * 4),
+        ("particles.params", 32 + 2 * 112 + 121 * 2 * 32 + 2 * 8),
+    ];
+    assert_eq!(rows.len(), want.len(), "{rows:?}");
+    for ((k, b), (name, bytes)) in rows.iter().zip(want) {
+        assert!(k.starts_with(name), "{k} is not {name}");
+        assert_eq!(*b, bytes, "{k}");
+    }
+    // Particle slots are what the scene file's budget charges (64 B each).
+    let total: u64 = rows.iter().take(2).map(|(_, b)| b).sum();
+    assert_eq!(total, slots * himal::scene::SLOT_BYTES);
+    // Without emitters: no particle buffer, no row.
+    let plain = common::renderer(&common::scene("shadow_local"));
+    let none: Vec<_> = (plain.memory().into_iter())
+        .filter(|(k, _)| k.starts_with("particles."))
+        .collect();
+    assert!(none.is_empty(), "{none:?}");
+}

@@ -244,7 +244,7 @@ pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIEN
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use emitters::{
     DEFAULT_EMITTER_CAPACITY, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS, MAX_LIFETIME_S,
-    MAX_PARTICLE_SLOTS,
+    MAX_PARTICLE_SLOTS, SLOT_BYTES,
 };
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;

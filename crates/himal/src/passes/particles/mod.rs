@@ -418,6 +418,30 @@ impl ParticlesPass {
         self.order = ranges.into_iter().map(|(_, r)| r).collect();
     }
 
+    /// GPU bytes that outlive a frame, by buffer group (none without
+    /// emitters): state and light 32 B a slot, the draw order 4 B a slot,
+    /// and the emitter records, a frame's steps (pre-warm: every 30 Hz
+    /// step of the longest lifetime), counters and parameters.
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        let Some(b) = &self.buffers else {
+            return Vec::new();
+        };
+        let (slots, ne) = (self.sim.slots(), self.sim.emitters.len());
+        let params = [&b.params, &b.emitters, &b.steps, &b.counters];
+        vec![
+            (
+                format!("particles.state ({slots} slots)"),
+                b.particles.size(),
+            ),
+            ("particles.light".to_string(), b.light.size()),
+            ("particles.order".to_string(), b.order.size()),
+            (
+                format!("particles.params ({ne} emitters, steps, counters)"),
+                params.iter().map(|x| x.size()).sum(),
+            ),
+        ]
+    }
+
     /// The emitters' slot ranges in this frame's draw order.
     pub fn draw_order(&self) -> &[std::ops::Range<u32>] {
         &self.order
