@@ -223,6 +223,7 @@ pub(crate) fn build_scene(
         Some(o.swept_bounds(&meshes[o.mesh].bounds))
     };
     let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
+    let wind = super::emitters::build_wind(&ck, file.wind.as_ref())?;
     // E4: every particle slot holds its state and its light on the GPU.
     if let Some(first) = file.emitter.first() {
         let slots: u64 = emitters.iter().map(|e| e.capacity as u64).sum();
@@ -241,6 +242,7 @@ pub(crate) fn build_scene(
         lights,
         ambient_lights,
         emitters,
+        wind,
         bounds,
         pbr,
         probes,

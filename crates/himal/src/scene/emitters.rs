@@ -5,7 +5,7 @@ use glam::{Vec3, Vec4};
 
 use super::SceneError;
 use super::build::Checker;
-use super::file::FileEmitter;
+use super::file::{FileEmitter, FileWind};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -23,6 +23,55 @@ pub const MAX_PARTICLE_SLOTS: u32 = 1 << 18;
 pub const SLOT_BYTES: u64 = 64;
 /// Highest emission rate (particles per second).
 pub const MAX_RATE: f32 = 100_000.0;
+/// The wind of a scene without `[wind]` (m/s): a light breeze toward +x
+/// and a little +z (1.58 m/s), what particles drifted in before scenes
+/// carried wind.
+pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
+/// Fastest wind (m/s): `speed`, and each axis of `velocity`.
+pub const MAX_WIND: f32 = 100.0;
+
+/// `[wind]`: its velocity (m/s). `speed` toward `direction` degrees about
+/// +Y from +X (the `orbit` angle's convention: 90 blows toward -z), or
+/// `velocity` (which may rise or fall); no table: [`DEFAULT_WIND`].
+pub(crate) fn build_wind(ck: &Checker, wind: Option<&toml::Spanned<FileWind>>) -> Result<Vec3> {
+    let Some(w) = wind else {
+        return Ok(DEFAULT_WIND);
+    };
+    let table = w.span();
+    let w = w.get_ref();
+    match (&w.speed, &w.velocity) {
+        (Some(_), Some(v)) => Err(ck.err(
+            &v.span(),
+            "wind: give speed (with direction) or velocity, not both",
+        )),
+        (None, None) => Err(ck.err(
+            &table,
+            "[wind]: speed (m/s, with direction in degrees) or velocity ([x, y, z] m/s) is missing",
+        )),
+        (None, Some(v)) => {
+            if let Some(d) = &w.direction {
+                return Err(ck.err(&d.span(), "wind direction goes with speed, not velocity"));
+            }
+            let x = ck.finite3(v, "wind velocity")?;
+            if x.abs().max_element() > MAX_WIND {
+                return Err(ck.err(
+                    &v.span(),
+                    format!("wind velocity {x}: each axis in [-{MAX_WIND}, {MAX_WIND}] m/s"),
+                ));
+            }
+            Ok(x)
+        }
+        (Some(s), None) => {
+            let speed = ck.range(s, "wind speed", 0.0, MAX_WIND)?;
+            let deg = match &w.direction {
+                Some(d) => ck.range(d, "wind direction", -360.0, 360.0)?,
+                None => 0.0,
+            };
+            let a = deg.to_radians();
+            Ok(speed * Vec3::new(a.cos(), 0.0, -a.sin()))
+        }
+    }
+}
 
 /// A particle emitter: particles are born at `rate` per second at
 /// `position`, move with `velocity` plus a random spread, fall with

@@ -154,12 +154,24 @@
 //! capacity = 4096                  # particle slots, [1, 65536]; births beyond replace the oldest
 //! ```
 //!
+//! `[wind]` (optional): the wind particles relax toward (each emitter's
+//! `wind` is the rate). Without the table: [`DEFAULT_WIND`], (1.5, 0, 0.5) m/s.
+//!
+//! ```toml
+//! [wind]
+//! speed = 3.0                      # m/s, [0, 100]
+//! direction = 90.0                 # degrees about +Y from +X that it blows toward, as
+//!                                  # orbit angles: (cos a, 0, -sin a); 90 = toward -z; default 0
+//! # velocity = [0.0, 0.5, -3.0]    # or the velocity itself (m/s, each axis in [-100, 100]);
+//!                                  # give speed (and direction) or velocity, not both
+//! ```
+//!
 //! `[world]`: instead of objects, the file describes a streamed open world
 //! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
 //! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
 //! cameras come first (the default view), then the world's own (`air`,
 //! `river`, `village`, `peak`, `grazing`, `top`) except those they rename;
-//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[emitter]]`, `[[gltf]]` and
+//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[emitter]]`, `[wind]`, `[[gltf]]` and
 //! `[environment]` are errors. An empty `[world]` is the built-in world.
 //! Every key is optional except `height_map.file` and `.max`; defaults shown:
 //!
@@ -243,8 +255,8 @@ use crate::budget::MemoryBudget;
 pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use emitters::{
-    DEFAULT_EMITTER_CAPACITY, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS, MAX_LIFETIME_S,
-    MAX_PARTICLE_SLOTS, SLOT_BYTES,
+    DEFAULT_EMITTER_CAPACITY, DEFAULT_WIND, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS,
+    MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES,
 };
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
@@ -673,6 +685,8 @@ pub struct Scene {
     pub ambient_lights: Vec<AmbientLightDesc>,
     /// Particle emitters (`[[emitter]]`, E4).
     pub emitters: Vec<EmitterDesc>,
+    /// The wind particles drift in (m/s; `[wind]`, else [`DEFAULT_WIND`]).
+    pub wind: Vec3,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -803,6 +817,7 @@ impl Scene {
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
             ambient_lights: Vec::new(),
             emitters: Vec::new(),
+            wind: DEFAULT_WIND,
             probes: Vec::new(),
             environment: None,
         })

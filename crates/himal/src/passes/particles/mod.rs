@@ -35,14 +35,12 @@ use crate::graph::{BufferHandle, Fallback, FrameGraph, TextureHandle};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::lighting::HDR_FORMAT;
 use crate::passes::shadows::SunMaps;
-use crate::scene::EmitterDesc;
+use crate::scene::{EmitterDesc, Scene};
 
 /// The simulation's step when it pre-warms (s): the CLI's frame clock.
 pub const TICK_S: f64 = 1.0 / 30.0;
 /// Standard gravity (m/s²): an emitter's `gravity` multiplies it.
 pub const GRAVITY: f32 = 9.81;
-/// The wind particles relax toward (m/s), until the scene has wind of its own.
-pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
 
 /// Largest ring `particles.sort` orders (one workgroup's memory).
 pub const SORT_MAX: u32 = 1024;
@@ -198,13 +196,13 @@ pub struct Simulation {
     records: Vec<EmitterGpu>,
     /// The clock of the last simulated frame (`None`: the next resets).
     pub last: Option<f64>,
-    /// Wind velocity (m/s).
+    /// Wind velocity (m/s): the scene's `[wind]`.
     pub wind: Vec3,
 }
 
 impl Simulation {
-    /// The emitters' rings laid out one after another.
-    pub fn new(emitters: &[EmitterDesc]) -> Self {
+    /// The emitters' rings laid out one after another, in `wind` (m/s).
+    pub fn new(emitters: &[EmitterDesc], wind: Vec3) -> Self {
         let mut first = 0u32;
         let records = emitters
             .iter()
@@ -218,7 +216,7 @@ impl Simulation {
             emitters: emitters.to_vec(),
             records,
             last: None,
-            wind: DEFAULT_WIND,
+            wind,
         }
     }
 
@@ -352,8 +350,10 @@ pub struct ParticlesPass {
 }
 
 impl ParticlesPass {
-    /// Programs, and the buffers of `emitters` (none without emitters).
-    pub fn new(ctx: &GpuContext, emitters: &[EmitterDesc]) -> Result<Self, GpuError> {
+    /// Programs, and the buffers of the scene's emitters (none without);
+    /// particles drift in the scene's wind.
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let emitters = &scene.emitters;
         let simulate = Program::new(ctx, "passes/particles/simulate.wgsl")?;
         let simulate_pipeline = simulate.compute_pipeline(ctx, "cs_main", &[])?;
         let light = Program::new(ctx, "passes/particles/light.wgsl")?;
@@ -364,7 +364,7 @@ impl ParticlesPass {
             sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 0.0)])?,
             sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 1.0)])?,
         ];
-        let sim = Simulation::new(emitters);
+        let sim = Simulation::new(emitters, scene.wind);
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
             let slots = sim.slots() as u64;
