@@ -291,6 +291,7 @@ impl Renderer {
     /// name the caller makes.
     pub fn set_animation(&mut self, name: Option<&str>) {
         self.res.scene.set_animation(name);
+        self.res.passes.particles.sim.set_animation(name);
     }
 
     /// Forgets the previous frame (camera cut): motion vectors become zero,

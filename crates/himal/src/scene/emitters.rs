@@ -1,7 +1,7 @@
 //! `[[emitter]]` tables: particle emitters (TECHNIQUES E4), checked like
 //! the rest of the scene file. The simulation is `passes/particles/`.
 
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 use super::SceneError;
 use super::build::Checker;
@@ -81,8 +81,10 @@ pub(crate) fn build_wind(ck: &Checker, wind: Option<&toml::Spanned<FileWind>>) -
 pub struct EmitterDesc {
     /// The table's `name` (default `emitterN`), unique.
     pub name: String,
-    /// Where particles are born (m).
+    /// Where particles are born (m); on a moving object, at time 0.
     pub position: Vec3,
+    /// `on` a moving object: the emitter rides it.
+    pub follow: Option<EmitterFollow>,
     /// Particles per second, (0, [`MAX_RATE`]].
     pub rate: f32,
     /// Seconds a particle lives, (0, [`MAX_LIFETIME_S`]].
@@ -109,6 +111,25 @@ pub struct EmitterDesc {
     pub capacity: u32,
 }
 
+/// An emitter riding a moving object (`on = "object"` with `orbit` or
+/// animation): at time t it is at `Object::transform_at(t)` applied to
+/// `local`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterFollow {
+    /// Index into [`super::Scene::objects`].
+    pub object: usize,
+    /// The birth point in the object's frame.
+    pub local: Vec3,
+}
+
+/// What `on = "name"` finds: the object's index, its world box (at time 0
+/// when it moves) and, when it moves, its transform at time 0.
+pub(crate) struct OnObject {
+    pub index: usize,
+    pub bounds: super::Aabb,
+    pub moving: Option<Mat4>,
+}
+
 fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
     let a = *v.get_ref();
     if a.iter().all(|c| c.is_finite() && *c >= 0.0)
@@ -124,11 +145,11 @@ fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
     }
 }
 
-/// `on`: the world box of a placed object by name (`None`: no such object).
+/// `on`: a placed object by name (`None`: no such object).
 pub(crate) fn build_emitters(
     ck: &Checker,
     file: &[FileEmitter],
-    on: impl Fn(&str) -> Option<super::Aabb>,
+    on: impl Fn(&str) -> Option<OnObject>,
 ) -> Result<Vec<EmitterDesc>> {
     if let Some(e) = file.get(MAX_EMITTERS) {
         return Err(ck.err(
@@ -151,20 +172,38 @@ pub(crate) fn build_emitters(
             None => format!("emitter{k}"),
         };
         let mut position = ck.finite3(&e.position, "position")?;
+        let mut follow = None;
         // Attached: `position` is an offset from the top centre of the object's box.
         if let Some(name) = &e.on {
-            let b = on(name.get_ref()).ok_or_else(|| {
+            let o = on(name.get_ref()).ok_or_else(|| {
                 ck.err(
                     &name.span(),
                     format!("on = \"{}\": no [[object]] of that name", name.get_ref()),
                 )
             })?;
+            let b = o.bounds;
             let top = Vec3::new(
                 0.5 * (b.min.x + b.max.x),
                 b.max.y,
                 0.5 * (b.min.z + b.max.z),
             );
             position += top;
+            // Moving: the point rides the object (turns with it when it turns).
+            if let Some(m) = o.moving {
+                if m.determinant().abs() < 1e-12 {
+                    return Err(ck.err(
+                        &name.span(),
+                        format!(
+                            "on = \"{}\": the object's transform at time 0 is singular",
+                            name.get_ref()
+                        ),
+                    ));
+                }
+                follow = Some(EmitterFollow {
+                    object: o.index,
+                    local: m.inverse().transform_point3(position),
+                });
+            }
         }
         let rate = ck.range(&e.rate, "rate", f32::MIN_POSITIVE, MAX_RATE)?;
         let lifetime = ck.range(&e.lifetime, "lifetime", 1e-3, MAX_LIFETIME_S)?;
@@ -219,6 +258,7 @@ pub(crate) fn build_emitters(
         out.push(EmitterDesc {
             name,
             position,
+            follow,
             rate,
             lifetime,
             velocity,

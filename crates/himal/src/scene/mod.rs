@@ -140,7 +140,9 @@
 //! [[emitter]]
 //! name = "chimney"                 # optional, default emitterN; unique
 //! on = "house1_chimney"            # optional: position is then an offset from the
-//!                                  # top centre of this [[object]]'s box
+//!                                  # top centre of this [[object]]'s box; on a moving
+//!                                  # object (orbit, animation) its box at time 0, and
+//!                                  # the emitter rides the object from there
 //! position = [0.0, 6.0, 0.0]       # where particles are born (m)
 //! rate = 40.0                      # particles per second, (0, 100000]
 //! lifetime = 6.0                   # seconds, (0, 30]
@@ -255,8 +257,8 @@ use crate::budget::MemoryBudget;
 pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use emitters::{
-    DEFAULT_EMITTER_CAPACITY, DEFAULT_WIND, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS,
-    MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES,
+    DEFAULT_EMITTER_CAPACITY, DEFAULT_WIND, EmitterDesc, EmitterFollow, MAX_EMITTER_CAPACITY,
+    MAX_EMITTERS, MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES,
 };
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
