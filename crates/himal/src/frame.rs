@@ -133,7 +133,7 @@ impl Passes {
             skyocc: SkyOccPass::new(ctx, scene)?,
             indirect: crate::passes::indirect::IndirectPass::new(ctx)?,
             forward: ForwardPass::new(ctx)?,
-            particles: crate::passes::particles::ParticlesPass::new(ctx, &scene.emitters)?,
+            particles: crate::passes::particles::ParticlesPass::new(ctx, scene)?,
             luminance: LuminancePass::new(ctx)?,
             adapt: AdaptPass::new(ctx)?,
             bloom: BloomPass::new(ctx)?,

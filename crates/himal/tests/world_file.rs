@@ -469,6 +469,11 @@ fn bad_input_is_an_error_at_the_key() {
         "[[object]] cannot be used with [world]",
     );
     fails(
+        "[world]\n[wind]\nspeed = 2.0\n",
+        "2:1",
+        "[wind] cannot be used with [world]",
+    );
+    fails(
         "[world]\n[[camera]]\nname = \"c\"\nposition = [0, 0, 0]\n",
         "3:8",
         "exactly one of target or forward",

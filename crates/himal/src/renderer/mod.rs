@@ -265,8 +265,9 @@ impl Renderer {
         self.res.scene.triangles
     }
 
-    /// Bytes held by the scene's buffers, the transient texture pool and
-    /// each history ring (by its name).
+    /// Bytes held by the scene's buffers, the transient texture pool,
+    /// each history ring (by its name), the probes' and the particles'
+    /// persistent buffers.
     pub fn memory(&self) -> Vec<(String, u64)> {
         let mut rows = vec![
             ("scene buffers".to_string(), self.res.scene.bytes),
@@ -281,6 +282,7 @@ impl Renderer {
             rows.push(("cull.hiz (2 pyramids)".to_string(), hiz));
         }
         rows.extend(self.res.passes.indirect.memory());
+        rows.extend(self.res.passes.particles.memory());
         rows
     }
 
@@ -289,6 +291,7 @@ impl Renderer {
     /// name the caller makes.
     pub fn set_animation(&mut self, name: Option<&str>) {
         self.res.scene.set_animation(name);
+        self.res.passes.particles.sim.set_animation(name);
     }
 
     /// Forgets the previous frame (camera cut): motion vectors become zero,

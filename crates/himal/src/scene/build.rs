@@ -219,10 +219,27 @@ pub(crate) fn build_scene(
         .map(|f| build_cinematic_shadows(&ck, f))
         .transpose()?;
     let object_box = |name: &str| {
-        let o = objects.iter().find(|o| o.name == name)?;
-        Some(o.swept_bounds(&meshes[o.mesh].bounds))
+        let index = objects.iter().position(|o| o.name == name)?;
+        let o = &objects[index];
+        let mesh = &meshes[o.mesh].bounds;
+        Some(match &o.motion {
+            Some(m) => {
+                let t0 = m.transform_at(0.0);
+                super::emitters::OnObject {
+                    index,
+                    bounds: mesh.transform(&t0),
+                    moving: Some(t0),
+                }
+            }
+            None => super::emitters::OnObject {
+                index,
+                bounds: o.swept_bounds(mesh),
+                moving: None,
+            },
+        })
     };
     let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
+    let wind = super::emitters::build_wind(&ck, file.wind.as_ref())?;
     // E4: every particle slot holds its state and its light on the GPU.
     if let Some(first) = file.emitter.first() {
         let slots: u64 = emitters.iter().map(|e| e.capacity as u64).sum();
@@ -241,6 +258,7 @@ pub(crate) fn build_scene(
         lights,
         ambient_lights,
         emitters,
+        wind,
         bounds,
         pbr,
         probes,

@@ -1,11 +1,11 @@
 //! `[[emitter]]` tables: particle emitters (TECHNIQUES E4), checked like
 //! the rest of the scene file. The simulation is `passes/particles/`.
 
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 use super::SceneError;
 use super::build::Checker;
-use super::file::FileEmitter;
+use super::file::{FileEmitter, FileWind};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -23,6 +23,55 @@ pub const MAX_PARTICLE_SLOTS: u32 = 1 << 18;
 pub const SLOT_BYTES: u64 = 64;
 /// Highest emission rate (particles per second).
 pub const MAX_RATE: f32 = 100_000.0;
+/// The wind of a scene without `[wind]` (m/s): a light breeze toward +x
+/// and a little +z (1.58 m/s), what particles drifted in before scenes
+/// carried wind.
+pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
+/// Fastest wind (m/s): `speed`, and each axis of `velocity`.
+pub const MAX_WIND: f32 = 100.0;
+
+/// `[wind]`: its velocity (m/s). `speed` toward `direction` degrees about
+/// +Y from +X (the `orbit` angle's convention: 90 blows toward -z), or
+/// `velocity` (which may rise or fall); no table: [`DEFAULT_WIND`].
+pub(crate) fn build_wind(ck: &Checker, wind: Option<&toml::Spanned<FileWind>>) -> Result<Vec3> {
+    let Some(w) = wind else {
+        return Ok(DEFAULT_WIND);
+    };
+    let table = w.span();
+    let w = w.get_ref();
+    match (&w.speed, &w.velocity) {
+        (Some(_), Some(v)) => Err(ck.err(
+            &v.span(),
+            "wind: give speed (with direction) or velocity, not both",
+        )),
+        (None, None) => Err(ck.err(
+            &table,
+            "[wind]: speed (m/s, with direction in degrees) or velocity ([x, y, z] m/s) is missing",
+        )),
+        (None, Some(v)) => {
+            if let Some(d) = &w.direction {
+                return Err(ck.err(&d.span(), "wind direction goes with speed, not velocity"));
+            }
+            let x = ck.finite3(v, "wind velocity")?;
+            if x.abs().max_element() > MAX_WIND {
+                return Err(ck.err(
+                    &v.span(),
+                    format!("wind velocity {x}: each axis in [-{MAX_WIND}, {MAX_WIND}] m/s"),
+                ));
+            }
+            Ok(x)
+        }
+        (Some(s), None) => {
+            let speed = ck.range(s, "wind speed", 0.0, MAX_WIND)?;
+            let deg = match &w.direction {
+                Some(d) => ck.range(d, "wind direction", -360.0, 360.0)?,
+                None => 0.0,
+            };
+            let a = deg.to_radians();
+            Ok(speed * Vec3::new(a.cos(), 0.0, -a.sin()))
+        }
+    }
+}
 
 /// A particle emitter: particles are born at `rate` per second at
 /// `position`, move with `velocity` plus a random spread, fall with
@@ -32,8 +81,10 @@ pub const MAX_RATE: f32 = 100_000.0;
 pub struct EmitterDesc {
     /// The table's `name` (default `emitterN`), unique.
     pub name: String,
-    /// Where particles are born (m).
+    /// Where particles are born (m); on a moving object, at time 0.
     pub position: Vec3,
+    /// `on` a moving object: the emitter rides it.
+    pub follow: Option<EmitterFollow>,
     /// Particles per second, (0, [`MAX_RATE`]].
     pub rate: f32,
     /// Seconds a particle lives, (0, [`MAX_LIFETIME_S`]].
@@ -60,6 +111,25 @@ pub struct EmitterDesc {
     pub capacity: u32,
 }
 
+/// An emitter riding a moving object (`on = "object"` with `orbit` or
+/// animation): at time t it is at `Object::transform_at(t)` applied to
+/// `local`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterFollow {
+    /// Index into [`super::Scene::objects`].
+    pub object: usize,
+    /// The birth point in the object's frame.
+    pub local: Vec3,
+}
+
+/// What `on = "name"` finds: the object's index, its world box (at time 0
+/// when it moves) and, when it moves, its transform at time 0.
+pub(crate) struct OnObject {
+    pub index: usize,
+    pub bounds: super::Aabb,
+    pub moving: Option<Mat4>,
+}
+
 fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
     let a = *v.get_ref();
     if a.iter().all(|c| c.is_finite() && *c >= 0.0)
@@ -75,11 +145,11 @@ fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
     }
 }
 
-/// `on`: the world box of a placed object by name (`None`: no such object).
+/// `on`: a placed object by name (`None`: no such object).
 pub(crate) fn build_emitters(
     ck: &Checker,
     file: &[FileEmitter],
-    on: impl Fn(&str) -> Option<super::Aabb>,
+    on: impl Fn(&str) -> Option<OnObject>,
 ) -> Result<Vec<EmitterDesc>> {
     if let Some(e) = file.get(MAX_EMITTERS) {
         return Err(ck.err(
@@ -102,20 +172,38 @@ pub(crate) fn build_emitters(
             None => format!("emitter{k}"),
         };
         let mut position = ck.finite3(&e.position, "position")?;
+        let mut follow = None;
         // Attached: `position` is an offset from the top centre of the object's box.
         if let Some(name) = &e.on {
-            let b = on(name.get_ref()).ok_or_else(|| {
+            let o = on(name.get_ref()).ok_or_else(|| {
                 ck.err(
                     &name.span(),
                     format!("on = \"{}\": no [[object]] of that name", name.get_ref()),
                 )
             })?;
+            let b = o.bounds;
             let top = Vec3::new(
                 0.5 * (b.min.x + b.max.x),
                 b.max.y,
                 0.5 * (b.min.z + b.max.z),
             );
             position += top;
+            // Moving: the point rides the object (turns with it when it turns).
+            if let Some(m) = o.moving {
+                if m.determinant().abs() < 1e-12 {
+                    return Err(ck.err(
+                        &name.span(),
+                        format!(
+                            "on = \"{}\": the object's transform at time 0 is singular",
+                            name.get_ref()
+                        ),
+                    ));
+                }
+                follow = Some(EmitterFollow {
+                    object: o.index,
+                    local: m.inverse().transform_point3(position),
+                });
+            }
         }
         let rate = ck.range(&e.rate, "rate", f32::MIN_POSITIVE, MAX_RATE)?;
         let lifetime = ck.range(&e.lifetime, "lifetime", 1e-3, MAX_LIFETIME_S)?;
@@ -170,6 +258,7 @@ pub(crate) fn build_emitters(
         out.push(EmitterDesc {
             name,
             position,
+            follow,
             rate,
             lifetime,
             velocity,

@@ -26,6 +26,7 @@ pub(crate) struct FileScene {
     pub probe: Vec<FileProbe>,
     #[serde(default)]
     pub emitter: Vec<FileEmitter>,
+    pub wind: Option<Spanned<FileWind>>,
     pub environment: Option<FileEnvironment>,
     pub cinematic_shadows: Option<FileCinematicShadows>,
     #[serde(default)]
@@ -199,6 +200,17 @@ pub(crate) struct FileEmitter {
     #[serde(default, deserialize_with = "exact_opt")]
     pub color_end: Option<Spanned<[f32; 4]>>,
     pub capacity: Option<Spanned<i64>>,
+}
+
+/// `[wind]`: the wind particles drift in (E4): `speed` and `direction`,
+/// or `velocity`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileWind {
+    pub speed: Option<Spanned<f32>>,
+    pub direction: Option<Spanned<f32>>,
+    #[serde(default, deserialize_with = "exact3_opt")]
+    pub velocity: Option<Spanned<[f32; 3]>>,
 }
 
 /// `[[ambient_light]]`: a multiplier on the ambient light inside a box or

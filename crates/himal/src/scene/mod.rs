@@ -149,7 +149,9 @@
 //! [[emitter]]
 //! name = "chimney"                 # optional, default emitterN; unique
 //! on = "house1_chimney"            # optional: position is then an offset from the
-//!                                  # top centre of this [[object]]'s box
+//!                                  # top centre of this [[object]]'s box; on a moving
+//!                                  # object (orbit, animation) its box at time 0, and
+//!                                  # the emitter rides the object from there
 //! position = [0.0, 6.0, 0.0]       # where particles are born (m)
 //! rate = 40.0                      # particles per second, (0, 100000]
 //! lifetime = 6.0                   # seconds, (0, 30]
@@ -163,12 +165,24 @@
 //! capacity = 4096                  # particle slots, [1, 65536]; births beyond replace the oldest
 //! ```
 //!
+//! `[wind]` (optional): the wind particles relax toward (each emitter's
+//! `wind` is the rate). Without the table: [`DEFAULT_WIND`], (1.5, 0, 0.5) m/s.
+//!
+//! ```toml
+//! [wind]
+//! speed = 3.0                      # m/s, [0, 100]
+//! direction = 90.0                 # degrees about +Y from +X that it blows toward, as
+//!                                  # orbit angles: (cos a, 0, -sin a); 90 = toward -z; default 0
+//! # velocity = [0.0, 0.5, -3.0]    # or the velocity itself (m/s, each axis in [-100, 100]);
+//!                                  # give speed (and direction) or velocity, not both
+//! ```
+//!
 //! `[world]`: instead of objects, the file describes a streamed open world
 //! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
 //! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
 //! cameras come first (the default view), then the world's own (`air`,
 //! `river`, `village`, `peak`, `grazing`, `top`) except those they rename;
-//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[emitter]]`, `[[gltf]]` and
+//! `[[object]]`, `[[material]]`, `[[light]]`, `[[ambient_light]]`, `[[probe]]`, `[[emitter]]`, `[wind]`, `[[gltf]]` and
 //! `[environment]` are errors. An empty `[world]` is the built-in world.
 //! Every key is optional except `height_map.file` and `.max`; defaults shown:
 //!
@@ -253,8 +267,8 @@ use crate::budget::MemoryBudget;
 pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIENT_LIGHTS};
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use emitters::{
-    DEFAULT_EMITTER_CAPACITY, EmitterDesc, MAX_EMITTER_CAPACITY, MAX_EMITTERS, MAX_LIFETIME_S,
-    MAX_PARTICLE_SLOTS,
+    DEFAULT_EMITTER_CAPACITY, DEFAULT_WIND, EmitterDesc, EmitterFollow, MAX_EMITTER_CAPACITY,
+    MAX_EMITTERS, MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES,
 };
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;
@@ -700,6 +714,8 @@ pub struct Scene {
     pub ambient_lights: Vec<AmbientLightDesc>,
     /// Particle emitters (`[[emitter]]`, E4).
     pub emitters: Vec<EmitterDesc>,
+    /// The wind particles drift in (m/s; `[wind]`, else [`DEFAULT_WIND`]).
+    pub wind: Vec3,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -830,6 +846,7 @@ impl Scene {
             lights: asset.lights.iter().filter_map(gltf::local_light).collect(),
             ambient_lights: Vec::new(),
             emitters: Vec::new(),
+            wind: DEFAULT_WIND,
             probes: Vec::new(),
             environment: None,
         })

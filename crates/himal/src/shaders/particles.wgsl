@@ -17,7 +17,7 @@ struct Particle {
 
 // One emitter (twin: `EmitterGpu`).
 struct ParticleEmitter {
-    // xyz: birth position (m), w: births per second
+    // xyz: position at time 0 (m; ParticleStep.origin: where it is), w: births per second
     position_rate: vec4f,
     // xyz: initial velocity (m/s), w: spread (m/s per axis)
     velocity_spread: vec4f,
@@ -39,6 +39,10 @@ struct ParticleStep {
     // x: age of the first birth at the step's end (s), y: step length (s),
     // zw: unused
     time: vec4f,
+    // xyz: the emitter's position at the step's end (m)
+    origin: vec4f,
+    // xyz: its mean velocity over the step (m/s; riding a moving object)
+    drift: vec4f,
 }
 
 // PCG hash (Jarzynski and Olano 2020).
@@ -79,7 +83,8 @@ fn particle_step(p_in: Particle, e: ParticleEmitter, ei: u32, r: u32, s: Particl
         let age = s.time.x - f32(k) / e.position_rate.w;
         let rnd = particle_random(ei, n, s.spawn.w);
         let v = e.velocity_spread.xyz + e.velocity_spread.w * (2.0 * rnd - 1.0);
-        out.p.pos_age = vec4f(e.position_rate.xyz + v * age, age);
+        // Born where the emitter was `age` ago (on the step's chord).
+        out.p.pos_age = vec4f(s.origin.xyz + (v - s.drift.xyz) * age, age);
         out.p.vel_alive = vec4f(v, select(0.0, 1.0, age < lifetime));
         out.born = true;
         return out;

@@ -35,14 +35,12 @@ use crate::graph::{BufferHandle, Fallback, FrameGraph, TextureHandle};
 use crate::passes::envmap::EnvMapPass;
 use crate::passes::lighting::HDR_FORMAT;
 use crate::passes::shadows::SunMaps;
-use crate::scene::EmitterDesc;
+use crate::scene::{EmitterDesc, Motion, Object, Scene};
 
 /// The simulation's step when it pre-warms (s): the CLI's frame clock.
 pub const TICK_S: f64 = 1.0 / 30.0;
 /// Standard gravity (m/s²): an emitter's `gravity` multiplies it.
 pub const GRAVITY: f32 = 9.81;
-/// The wind particles relax toward (m/s), until the scene has wind of its own.
-pub const DEFAULT_WIND: Vec3 = Vec3::new(1.5, 0.0, 0.5);
 
 /// Largest ring `particles.sort` orders (one workgroup's memory).
 pub const SORT_MAX: u32 = 1024;
@@ -65,7 +63,8 @@ pub struct ParticleGpu {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct EmitterGpu {
-    /// Birth position (m), births per second.
+    /// Position at time 0 (m; the steps carry where it is), births per
+    /// second.
     pub position_rate: [f32; 4],
     /// Initial velocity (m/s), spread (m/s per axis).
     pub velocity_spread: [f32; 4],
@@ -105,6 +104,12 @@ pub struct StepGpu {
     pub spawn: [u32; 4],
     /// Age of the first birth at the step's end (s), step length (s).
     pub time: [f32; 4],
+    /// The emitter's position at the step's end (m): a birth of age a
+    /// starts at `origin - drift * a`.
+    pub origin: [f32; 4],
+    /// The emitter's mean velocity over the step (m/s; 0 unless it rides
+    /// a moving object).
+    pub drift: [f32; 4],
 }
 
 /// One particle's light (`ParticleLight`, written by `particles.light`).
@@ -128,7 +133,8 @@ struct SimParamsGpu {
 
 /// The births of emitter `e` (ring of `capacity`) in the step (t_a, t_b]:
 /// numbers n with t_a < n / rate <= t_b; a burst larger than the ring
-/// keeps its last `capacity` births.
+/// keeps its last `capacity` births. Born at `e.position` (a moving
+/// emitter's: [`Simulation::advance`]).
 pub fn births(e: &EmitterDesc, t_a: f64, t_b: f64) -> StepGpu {
     let rate = e.rate as f64;
     let (na, nb) = ((rate * t_a).floor() as i64, (rate * t_b).floor() as i64);
@@ -148,6 +154,8 @@ pub fn births(e: &EmitterDesc, t_a: f64, t_b: f64) -> StepGpu {
             0.0,
             0.0,
         ],
+        origin: e.position.extend(0.0).to_array(),
+        drift: [0.0; 4],
     }
 }
 
@@ -198,13 +206,23 @@ pub struct Simulation {
     records: Vec<EmitterGpu>,
     /// The clock of the last simulated frame (`None`: the next resets).
     pub last: Option<f64>,
-    /// Wind velocity (m/s).
+    /// Wind velocity (m/s): the scene's `[wind]`.
     pub wind: Vec3,
+    /// Per emitter riding a moving object: the object's motion (a copy,
+    /// as `SceneGpu::animated` keeps one) and the point in its frame.
+    paths: Vec<Option<(Motion, Vec3)>>,
 }
 
 impl Simulation {
-    /// The emitters' rings laid out one after another.
-    pub fn new(emitters: &[EmitterDesc]) -> Self {
+    /// The emitters' rings laid out one after another, in `wind` (m/s);
+    /// `objects`: the scene's, which emitters may ride.
+    pub fn new(emitters: &[EmitterDesc], wind: Vec3, objects: &[Object]) -> Self {
+        let paths = (emitters.iter())
+            .map(|e| {
+                let f = e.follow?;
+                Some((objects.get(f.object)?.motion.clone()?, f.local))
+            })
+            .collect();
         let mut first = 0u32;
         let records = emitters
             .iter()
@@ -218,7 +236,27 @@ impl Simulation {
             emitters: emitters.to_vec(),
             records,
             last: None,
-            wind: DEFAULT_WIND,
+            wind,
+            paths,
+        }
+    }
+
+    /// Where emitter `i` is at clock `t` (s): its position, or the point it
+    /// rides on its moving object.
+    pub fn position_at(&self, i: usize, t: f64) -> Vec3 {
+        match &self.paths[i] {
+            Some((m, local)) => m.transform_at(t as f32).transform_point3(*local),
+            None => self.emitters[i].position,
+        }
+    }
+
+    /// Plays glTF animation `name` on the objects emitters ride (as
+    /// `Scene::set_animation` does on the scene's).
+    pub fn set_animation(&mut self, name: Option<&str>) {
+        for (m, _) in self.paths.iter_mut().flatten() {
+            if let Some(a) = &mut m.animated {
+                a.play(name);
+            }
         }
     }
 
@@ -241,10 +279,21 @@ impl Simulation {
     pub fn advance(&mut self, t: f64) -> SimFrame {
         let (reset, times) = step_times(self.last, t, self.lifetime());
         self.last = Some(t);
-        let steps = times
-            .iter()
-            .flat_map(|&(a, b)| self.emitters.iter().map(move |e| births(e, a, b)))
-            .collect();
+        let mut steps = Vec::with_capacity(times.len() * self.emitters.len());
+        for &(a, b) in &times {
+            for (i, e) in self.emitters.iter().enumerate() {
+                let mut s = births(e, a, b);
+                // Riding: born along the chord of the step (frames are short).
+                if self.paths[i].is_some() {
+                    let (pa, pb) = (self.position_at(i, a), self.position_at(i, b));
+                    s.origin = pb.extend(0.0).to_array();
+                    if b > a {
+                        s.drift = ((pb - pa) / (b - a) as f32).extend(0.0).to_array();
+                    }
+                }
+                steps.push(s);
+            }
+        }
         SimFrame {
             emitters: self.records.clone(),
             steps,
@@ -352,8 +401,10 @@ pub struct ParticlesPass {
 }
 
 impl ParticlesPass {
-    /// Programs, and the buffers of `emitters` (none without emitters).
-    pub fn new(ctx: &GpuContext, emitters: &[EmitterDesc]) -> Result<Self, GpuError> {
+    /// Programs, and the buffers of the scene's emitters (none without);
+    /// particles drift in the scene's wind.
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let emitters = &scene.emitters;
         let simulate = Program::new(ctx, "passes/particles/simulate.wgsl")?;
         let simulate_pipeline = simulate.compute_pipeline(ctx, "cs_main", &[])?;
         let light = Program::new(ctx, "passes/particles/light.wgsl")?;
@@ -364,11 +415,12 @@ impl ParticlesPass {
             sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 0.0)])?,
             sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 1.0)])?,
         ];
-        let sim = Simulation::new(emitters);
+        let sim = Simulation::new(emitters, scene.wind, &scene.objects);
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
             let slots = sim.slots() as u64;
             let steps = max_steps(sim.lifetime()) as u64 * ne;
+            let step_bytes = std::mem::size_of::<StepGpu>() as u64;
             let none = wgpu::BufferUsages::empty();
             let src = wgpu::BufferUsages::COPY_SRC;
             let emitters_buf = storage(ctx, "particles.emitters", ne * 112, none);
@@ -377,7 +429,7 @@ impl ParticlesPass {
             Buffers {
                 params: uniform_buffer(ctx, "particles.params", &SimParamsGpu::default()),
                 emitters: emitters_buf,
-                steps: storage(ctx, "particles.steps", steps * 32, none),
+                steps: storage(ctx, "particles.steps", steps * step_bytes, none),
                 particles: storage(ctx, "particles.state", slots * 32, src),
                 counters: storage(ctx, "particles.counters", ne * 8, src),
                 light: storage(ctx, "particles.light", slots * 32, src),
@@ -404,18 +456,45 @@ impl ParticlesPass {
     }
 
     /// Orders the emitters far to near from `eye` (premultiplied "over"
-    /// composes back to front; inside an emitter the ring's order stays).
+    /// composes back to front; inside an emitter the ring's order stays),
+    /// each where it is at the last planned clock.
     pub fn sort(&mut self, eye: Vec3) {
         let mut first = 0u32;
+        let t = self.sim.last.unwrap_or(0.0);
         let mut ranges: Vec<(f32, std::ops::Range<u32>)> = (self.sim.emitters.iter())
-            .map(|e| {
+            .enumerate()
+            .map(|(i, e)| {
                 let r = first..first + e.capacity;
                 first += e.capacity;
-                (e.position.distance_squared(eye), r)
+                (self.sim.position_at(i, t).distance_squared(eye), r)
             })
             .collect();
         ranges.sort_by(|a, b| b.0.total_cmp(&a.0));
         self.order = ranges.into_iter().map(|(_, r)| r).collect();
+    }
+
+    /// GPU bytes that outlive a frame, by buffer group (none without
+    /// emitters): state and light 32 B a slot, the draw order 4 B a slot,
+    /// and the emitter records, a frame's steps (pre-warm: every 30 Hz
+    /// step of the longest lifetime), counters and parameters.
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        let Some(b) = &self.buffers else {
+            return Vec::new();
+        };
+        let (slots, ne) = (self.sim.slots(), self.sim.emitters.len());
+        let params = [&b.params, &b.emitters, &b.steps, &b.counters];
+        vec![
+            (
+                format!("particles.state ({slots} slots)"),
+                b.particles.size(),
+            ),
+            ("particles.light".to_string(), b.light.size()),
+            ("particles.order".to_string(), b.order.size()),
+            (
+                format!("particles.params ({ne} emitters, steps, counters)"),
+                params.iter().map(|x| x.size()).sum(),
+            ),
+        ]
     }
 
     /// The emitters' slot ranges in this frame's draw order.

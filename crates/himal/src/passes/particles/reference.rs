@@ -47,7 +47,7 @@ pub fn step_slot(
         let rnd = spawn_random(ei, n, s.spawn[3]);
         let vs = Vec4::from(e.velocity_spread);
         let v = vs.truncate() + vs.w * (2.0 * rnd - Vec3::ONE);
-        let pos = Vec3::from_slice(&e.position_rate[..3]) + v * age;
+        let pos = Vec3::from_slice(&s.origin[..3]) + (v - Vec3::from_slice(&s.drift[..3])) * age;
         let alive = if age < lifetime { 1.0 } else { 0.0 };
         return (
             ParticleGpu {

@@ -260,6 +260,7 @@ impl World {
             lights: Vec::new(),
             ambient_lights: Vec::new(),
             emitters: Vec::new(),
+            wind: crate::scene::DEFAULT_WIND,
             bounds: Aabb::new(Vec3::new(-half, bottom, -half), Vec3::new(half, top, half)),
             pbr: Default::default(),
             probes: Vec::new(),
