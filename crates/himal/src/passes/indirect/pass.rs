@@ -116,7 +116,6 @@ pub struct IndirectPass {
     pool: CellPool,
     store: Option<Arc<ProbeStore>>,
     light: Option<IndirectLight>,
-    camera: Vec2,
     /// `--view indirect|probe-cells|clipmap` as `IndirectView`'s number.
     pub view: u32,
 }
@@ -151,7 +150,6 @@ impl IndirectPass {
             pool: CellPool::default(),
             store: None,
             light: None,
-            camera: Vec2::ZERO,
             view: 0,
         })
     }
@@ -172,11 +170,6 @@ impl IndirectPass {
         self.store.as_ref()
     }
 
-    /// The pool (for views, statistics and tests).
-    pub fn pool(&self) -> &CellPool {
-        &self.pool
-    }
-
     /// Streams the cells the camera (x, z) wants into the pool
     /// ([`CellPool::stream`]), uploads them and the page tables, and writes
     /// this frame's parameters.
@@ -185,7 +178,6 @@ impl IndirectPass {
         let (Some(store), Some(light)) = (self.store.clone(), self.light) else {
             return stats;
         };
-        self.camera = camera;
         let origin = store.origin;
         let step = self
             .pool
@@ -274,25 +266,4 @@ impl IndirectPass {
             ("probes.params".to_string(), self.params.size()),
         ]
     }
-
-    /// The camera (x, z) of the last update.
-    pub fn camera(&self) -> Vec2 {
-        self.camera
-    }
-}
-
-/// The CPU twin's probes for `pool` and `store` under `lighting`: what
-/// `probes.transfer` leaves for the cells resident now.
-pub fn resident_sh(
-    pool: &CellPool,
-    store: &ProbeStore,
-    lighting: &Sh4,
-) -> Vec<(super::cell::CellKey, Vec<Sh4>)> {
-    pool.resident()
-        .filter_map(|(_, k)| {
-            store
-                .cell(k)
-                .map(|c| (k, super::reference::transfer_cell(c, lighting)))
-        })
-        .collect()
 }
