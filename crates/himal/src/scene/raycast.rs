@@ -39,7 +39,9 @@ pub struct RayScene {
     outward: Vec<Vec3>,
     albedo: Vec<Vec3>,
     ground: Vec<bool>,
-    bvh: Option<CwBvh>,
+    /// Built on the first ray: a bake whose cells are all cached only
+    /// hashes the triangles.
+    bvh: std::sync::OnceLock<Option<CwBvh>>,
     bounds: Aabb,
 }
 
@@ -124,21 +126,28 @@ impl RayScene {
     ) -> RayScene {
         let bounds =
             Aabb::from_points(tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(Vec3::from));
-        let bvh = (!tris.is_empty()).then(|| {
-            build_cwbvh_from_tris(
-                &tris,
-                BvhBuildParams::medium_build(),
-                &mut std::time::Duration::default(),
-            )
-        });
         RayScene {
             tris,
             outward,
             albedo,
             ground,
-            bvh,
+            bvh: std::sync::OnceLock::new(),
             bounds,
         }
+    }
+
+    fn bvh(&self) -> Option<&CwBvh> {
+        self.bvh
+            .get_or_init(|| {
+                (!self.tris.is_empty()).then(|| {
+                    build_cwbvh_from_tris(
+                        &self.tris,
+                        BvhBuildParams::medium_build(),
+                        &mut std::time::Duration::default(),
+                    )
+                })
+            })
+            .as_ref()
     }
 
     /// Number of triangles.
@@ -187,7 +196,7 @@ impl RayScene {
         t_max: f32,
         keep: impl Fn(usize) -> bool,
     ) -> Option<SurfaceHit> {
-        let bvh = self.bvh.as_ref()?;
+        let bvh = self.bvh()?;
         let ray = Ray::new(Vec3A::from(origin), off_axis(dir), t_min, t_max);
         let mut hit = RayHit::none();
         let found = bvh.ray_traverse(ray, &mut hit, |ray, id| {
@@ -214,7 +223,7 @@ impl RayScene {
 
     /// True where nothing lies along `dir` within (t_min, t_max).
     pub fn unoccluded(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
-        let Some(bvh) = &self.bvh else {
+        let Some(bvh) = self.bvh() else {
             return true;
         };
         let ray = Ray::new(Vec3A::from(origin), off_axis(dir), t_min, t_max);
