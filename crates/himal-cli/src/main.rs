@@ -10,6 +10,7 @@ mod bench_compare;
 mod bench_envmap;
 mod bench_path;
 mod camera;
+mod options;
 mod orbit;
 mod prewarm;
 mod render;
