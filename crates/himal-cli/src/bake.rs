@@ -31,11 +31,65 @@ pub struct BakeArgs {
     #[arg(long)]
     pub trees: bool,
     /// The scene whose probes (`--probes`) or trees (`--trees`) are baked:
-    /// demo or a scene file.
-    #[arg(long, default_value = "demo", value_name = "FILE|demo")]
+    /// demo, world or a scene file.
+    #[arg(long, default_value = "demo", value_name = "FILE|demo|world")]
     pub scene: String,
+    /// L5 in a streamed world: bake the blocks within this many metres of
+    /// each of the world's cameras (the whole 10 km world is 1,600 blocks).
+    #[arg(
+        long,
+        default_value_t = 1000.0,
+        value_name = "METRES",
+        allow_hyphen_values = true
+    )]
+    pub radius: f32,
     #[command(flatten)]
     pub gpu: GpuArgs,
+}
+
+/// L5: the world's blocks around its cameras, with a progress bar.
+fn bake_world_probes(
+    world: std::sync::Arc<himal::scene::world::World>,
+    dir: &std::path::Path,
+    args: &BakeArgs,
+) -> Result<()> {
+    use himal::passes::indirect::world::world_bake_settings;
+    if !(args.radius.is_finite() && args.radius >= 0.0) {
+        bail!(
+            "--radius {}: give a distance in metres, 0 or more",
+            args.radius
+        );
+    }
+    let settings = world_bake_settings();
+    let folder = himal::passes::indirect::world::world_cache_folder(dir, &world, &settings);
+    if args.force && folder.exists() {
+        std::fs::remove_dir_all(&folder)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", folder.display()))?;
+    }
+    let centres: Vec<glam::Vec2> = world
+        .cameras
+        .iter()
+        .map(|c| glam::Vec2::new(c.camera.position.x, c.camera.position.z))
+        .collect();
+    let start = Instant::now();
+    let (bar, progress) = crate::scene_source::probe_progress("L5 world", "blocks");
+    let probes =
+        himal::passes::indirect::WorldProbes::new(world, settings, Some(dir), Some(progress))
+            .map_err(|e| anyhow::anyhow!("probe bake: {e}"))?;
+    let report = probes
+        .bake_around(&centres, args.radius)
+        .map_err(|e| anyhow::anyhow!("probe bake: {e}"))?;
+    bar.finish_and_clear();
+    println!(
+        "bake: {} world probe cells baked, {} from the cache, within {} m of {} cameras in {:.1} s, under {}",
+        report.baked,
+        report.cached,
+        args.radius,
+        centres.len(),
+        start.elapsed().as_secs_f64(),
+        folder.display()
+    );
+    Ok(())
 }
 
 pub fn run(args: &BakeArgs) -> Result<()> {
@@ -46,8 +100,8 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         );
     };
     if args.probes {
-        if crate::scene_source::world_of(&args.scene)?.is_some() {
-            bail!("bake --probes: the streamed world's cells are not baked yet (issue #19)");
+        if let Some(world) = crate::scene_source::world_of(&args.scene)? {
+            return bake_world_probes(world, &dir, args);
         }
         let scene = crate::scene_source::load_scene(&args.scene)?;
         let start = Instant::now();

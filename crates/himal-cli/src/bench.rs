@@ -364,7 +364,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut renderer = open_renderer(&args.scene, args.gpu.context()?, &scene)?;
     world_haze(&renderer, &mut settings);
     if settings.indirect {
-        crate::scene_source::attach_probes(&mut renderer, &scene, args.gpu.cache_dir().as_deref())?;
+        let cache = args.gpu.cache_dir();
+        crate::scene_source::attach_probes(&mut renderer, &scene, cache.as_deref(), false)?;
     }
     if let Some(name) = &args.path {
         renderer.set_sky_table_sizes(args.post.table_sizes()?);

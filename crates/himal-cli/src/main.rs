@@ -73,7 +73,8 @@ enum Command {
     /// Compile every pipeline permutation the renderer can use and write the pipeline cache.
     Prewarm(prewarm::PrewarmArgs),
     /// Compute offline data into the cache with a progress bar: the L1 sky
-    /// tables (default and/or reference sizes).
+    /// tables (default and/or reference sizes), L5 probe cells (a scene's,
+    /// or a streamed world's around its cameras) and V1 tree LODs.
     Bake(bake::BakeArgs),
     /// List adapters, the chosen one, its features and limits.
     Info(GpuArgs),

@@ -299,8 +299,31 @@ impl PostArgs {
         gpu: &crate::GpuArgs,
         scene: &Scene,
     ) -> Result<()> {
+        self.configure_for(renderer, gpu, scene, false)
+    }
+
+    /// [`Self::configure`] for the viewer: the world's probe cells bake on
+    /// a background thread (frames never wait; unbaked ground keeps the
+    /// flat bounce until its cells arrive).
+    pub fn configure_live(
+        &self,
+        renderer: &mut Renderer,
+        gpu: &crate::GpuArgs,
+        scene: &Scene,
+    ) -> Result<()> {
+        self.configure_for(renderer, gpu, scene, true)
+    }
+
+    fn configure_for(
+        &self,
+        renderer: &mut Renderer,
+        gpu: &crate::GpuArgs,
+        scene: &Scene,
+        background: bool,
+    ) -> Result<()> {
         if on_off("--indirect", &self.indirect)? {
-            crate::scene_source::attach_probes(renderer, scene, gpu.cache_dir().as_deref())?;
+            let cache = gpu.cache_dir();
+            crate::scene_source::attach_probes(renderer, scene, cache.as_deref(), background)?;
         }
         let sizes = self.table_sizes()?;
         let config = himal::passes::sky::bruneton::AtmosphereConfig::earth(sizes);

@@ -76,14 +76,58 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     })
 }
 
-/// L5: hands `renderer` its scene's probe cells ([`probe_cells`]); the
-/// streamed world's are not baked yet (an error, not a silent dark frame).
-pub fn attach_probes(renderer: &mut Renderer, scene: &Scene, cache: Option<&Path>) -> Result<()> {
-    if renderer.world().is_some() {
-        anyhow::bail!(
-            "--indirect on: the streamed world's probe cells are not baked yet (issue #19); \
-             use the demo or a scene file"
-        );
+/// A progress bar on stderr and the callback a bake drives it with.
+pub fn probe_progress(
+    prefix: &'static str,
+    unit: &'static str,
+) -> (
+    indicatif::ProgressBar,
+    himal::passes::indirect::world::Progress,
+) {
+    let bar = indicatif::ProgressBar::new(0);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{prefix}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{elapsed}} (eta {{eta}})"
+    )) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(prefix);
+    let b = bar.clone();
+    (
+        bar,
+        Box::new(move |done, total| {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+            if done == total {
+                b.finish_and_clear();
+            }
+        }),
+    )
+}
+
+/// L5: hands `renderer` its probe cells: a scene's ([`probe_cells`]), or
+/// the streamed world's, baked per block around the camera as it goes
+/// (before each frame that needs them, or on a background thread with
+/// `background`, the viewer's choice).
+pub fn attach_probes(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    cache: Option<&Path>,
+    background: bool,
+) -> Result<()> {
+    if let Some(world) = renderer.shared_world() {
+        let (_bar, progress) = probe_progress("L5 world probes", "blocks");
+        let probes = himal::passes::indirect::WorldProbes::new(
+            world,
+            himal::passes::indirect::world::world_bake_settings(),
+            cache,
+            Some(progress),
+        )
+        .map_err(|e| anyhow::anyhow!("L5 world probes: {e}"))?;
+        if background {
+            probes.start();
+        }
+        renderer.set_probe_cells(Some(Arc::new(probes)));
+        return Ok(());
     }
     if scene.environment.is_some() {
         // Said, not silently dropped: the lighting key leaves L5 out there.

@@ -1,13 +1,20 @@
 //! L5 from the command line: `himal bake --probes` bakes a scene's cells
 //! into the cache (resumable: a second run reads them), `render --indirect
-//! on` uses them and `--view indirect` shows them; the streamed world is
-//! refused with a reason (issue #19).
+//! on` uses them and `--view indirect` shows them; in a streamed world
+//! `bake --probes --radius` bakes blocks around its cameras and `render
+//! --indirect on` bakes what its camera still needs, the same bytes twice.
 
 mod common;
 
 const VILLAGE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../himal/tests/scenes/l5_village.toml"
+);
+
+/// A 1 km streamed world (16 x 16 sectors, 4 x 4 bake blocks).
+const WORLD: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../himal/tests/scenes/world_heightmap.toml"
 );
 
 fn himal(cache: &std::path::Path, args: &[&str]) -> (bool, String, String) {
@@ -82,7 +89,7 @@ fn bake_then_render_with_probes_and_their_view() {
 }
 
 #[test]
-fn the_indirect_view_needs_the_probes_and_the_world_is_refused() {
+fn the_indirect_view_needs_the_probes_and_bad_switches_are_refused() {
     let dir = common::temp_path("indirect-cli-errors");
     let cache = dir.join("cache");
     let out = dir.join("x.png");
@@ -92,19 +99,9 @@ fn the_indirect_view_needs_the_probes_and_the_world_is_refused() {
     ];
     let r = himal(&cache, &args);
     common::assert_fails_with(&args, &r, "need --indirect on");
-    let args = [
-        "render",
-        "--scene",
-        "world",
-        "--size",
-        "32x18",
-        "--indirect",
-        "on",
-        "--out",
-        out,
-    ];
+    let args = ["bake", "--probes", "--scene", WORLD, "--radius", "-5"];
     let r = himal(&cache, &args);
-    common::assert_fails_with(&args, &r, "streamed world's probe cells are not baked yet");
+    common::assert_fails_with(&args, &r, "--radius -5");
     let args = [
         "render",
         "--scene",
@@ -116,5 +113,48 @@ fn the_indirect_view_needs_the_probes_and_the_world_is_refused() {
     ];
     let r = himal(&cache, &args);
     common::assert_fails_with(&args, &r, "--indirect");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_streamed_world_bakes_blocks_around_its_cameras_and_renders_with_them() {
+    let dir = common::temp_path("indirect-cli-world");
+    let cache = dir.join("cache");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (ok, out, err) = himal(
+        &cache,
+        &["bake", "--probes", "--scene", WORLD, "--radius", "0"],
+    );
+    assert!(ok, "bake: {err}");
+    assert!(out.contains("world probe cells baked"), "{out}");
+    let (ok, out2, err) = himal(
+        &cache,
+        &["bake", "--probes", "--scene", WORLD, "--radius", "0"],
+    );
+    assert!(
+        ok && out2.contains(" 0 world probe cells baked"),
+        "{out2} {err}"
+    );
+    let mut frames = Vec::new();
+    for name in ["a.png", "b.png"] {
+        let path = dir.join(name);
+        let (ok, _, err) = himal(
+            &cache,
+            &[
+                "render",
+                "--scene",
+                WORLD,
+                "--size",
+                "48x27",
+                "--indirect",
+                "on",
+                "--out",
+                path.to_str().unwrap(),
+            ],
+        );
+        assert!(ok, "render: {err}");
+        frames.push(std::fs::read(&path).unwrap());
+    }
+    assert_eq!(frames[0], frames[1], "same command, same bytes");
     let _ = std::fs::remove_dir_all(&dir);
 }

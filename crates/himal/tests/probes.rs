@@ -252,12 +252,19 @@ fn accuracy(name: &str) -> Vec<Row> {
         for c in &cells {
             pool.admit(c.key, ORIGIN, Vec2::ZERO);
         }
-        let map = ClipMap::inject_resident(ORIGIN, Vec2::ZERO, &pool, |k| {
-            probes
-                .iter()
-                .find(|(key, _)| *key == k)
-                .map(|(_, p)| p.as_slice())
-        });
+        // Every point lies over the baked cells: no fallback, so a gap would show.
+        let map = ClipMap::inject_resident(
+            ORIGIN,
+            Vec2::ZERO,
+            &pool,
+            |k| {
+                probes
+                    .iter()
+                    .find(|(key, _)| *key == k)
+                    .map(|(_, p)| p.as_slice())
+            },
+            None,
+        );
         let (mut ground, mut other) = (Vec::new(), Vec::new());
         for (q, e) in points.iter().zip(&truth) {
             let got = map
@@ -440,11 +447,17 @@ fn twin_clip_map(
                 .map(|c| (k, transfer_cell(c, &light.lighting)))
         })
         .collect();
-    ClipMap::inject_resident(ORIGIN, cam, &pool, |k| {
-        sh.iter()
-            .find(|(key, _)| *key == k)
-            .map(|(_, p)| p.as_slice())
-    })
+    ClipMap::inject_resident(
+        ORIGIN,
+        cam,
+        &pool,
+        |k| {
+            sh.iter()
+                .find(|(key, _)| *key == k)
+                .map(|(_, p)| p.as_slice())
+        },
+        Some(light.fallback()),
+    )
 }
 
 /// Pixels of `camera` whose ray meets a surface within 50 m of the origin

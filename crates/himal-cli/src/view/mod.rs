@@ -177,7 +177,7 @@ impl Viewer {
         };
         self.args
             .post
-            .configure(&mut renderer, &self.args.gpu, &self.scene)?;
+            .configure_live(&mut renderer, &self.args.gpu, &self.scene)?;
         self.renderer = renderer;
         if let Some(window) = window {
             let presentation = self.presentation(&window)?;
@@ -650,7 +650,7 @@ pub fn run(view: &ViewArgs) -> Result<()> {
     let (scene, camera, mut settings) = crate::render::setup(args)?;
     let mut renderer = args.open_renderer(args.gpu.context()?, &scene)?;
     crate::render::world_haze(&renderer, &mut settings);
-    args.post.configure(&mut renderer, &args.gpu, &scene)?;
+    args.post.configure_live(&mut renderer, &args.gpu, &scene)?;
     let paths = renderer
         .world()
         .map(|w| w.paths.clone())

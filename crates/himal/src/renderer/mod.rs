@@ -462,15 +462,16 @@ impl Renderer {
     }
 
     /// L5: the probe cells set with [`Renderer::set_probe_cells`].
-    pub fn probe_cells(&self) -> Option<&std::sync::Arc<crate::passes::indirect::ProbeStore>> {
+    pub fn probe_cells(&self) -> Option<&std::sync::Arc<dyn crate::passes::indirect::CellSource>> {
         self.res.passes.indirect.store()
     }
 
-    /// L5: the baked probe cells to stream indirect light from
-    /// (`ProbeStore::bake`); `None` turns it off whatever the settings say.
+    /// L5: the probe cells to stream indirect light from (a scene's
+    /// `ProbeStore::bake`, or the world's `WorldProbes`); `None` turns it
+    /// off whatever the settings say.
     pub fn set_probe_cells(
         &mut self,
-        store: Option<std::sync::Arc<crate::passes::indirect::ProbeStore>>,
+        store: Option<std::sync::Arc<dyn crate::passes::indirect::CellSource>>,
     ) {
         self.res.passes.indirect.set_store(store);
     }

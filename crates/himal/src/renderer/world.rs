@@ -13,7 +13,7 @@ use super::*;
 use crate::clock::{Span, Stopwatch};
 use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
 use crate::passes::cull::CullPass;
-use crate::passes::terrain::{DetailKind, TerrainDesc, TerrainLayerDesc, TerrainPass};
+use crate::passes::terrain::{TerrainDesc, TerrainLayerDesc, TerrainPass};
 use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
 use crate::scene::world::{Instance, InstanceKind, World};
 use crate::scene::{Aabb, lod};
@@ -161,20 +161,6 @@ impl WorldState {
     }
 }
 
-/// The terrain's material layers for `world`: meadow, soil on slopes,
-/// rock on cliffs, snow above the snow line on what is not a cliff.
-fn terrain_layers(world: &World) -> Vec<TerrainLayerDesc> {
-    let mut layers = TerrainLayerDesc::alpine();
-    for l in &mut layers {
-        if l.detail == DetailKind::Snow {
-            l.height = [world.desc.shape.snow_line, f32::INFINITY];
-            l.height_blend = 60.0;
-            l.jitter = 50.0;
-        }
-    }
-    layers
-}
-
 /// The CDLOD terrain of `world`: its whole coarse grid (computed here on
 /// the machine's cores), an empty tile pool of the scene file's size.
 fn terrain_desc(world: &World) -> TerrainDesc {
@@ -187,7 +173,7 @@ fn terrain_desc(world: &World) -> TerrainDesc {
         coarse_spacing: world.desc.coarse_spacing,
         coarse: world.coarse_grid(threads, &|_| {}),
         fine_slots: world.desc.pools.tiles,
-        layers: terrain_layers(world),
+        layers: TerrainLayerDesc::for_world(world),
     }
 }
 
@@ -305,6 +291,11 @@ impl Renderer {
     /// The last frame's streaming figures (`None`: not a world).
     pub fn world_stats(&self) -> Option<StreamStats> {
         self.world.as_ref().map(|w| w.stats)
+    }
+
+    /// The streamed world, shared (`None`: a plain scene).
+    pub fn shared_world(&self) -> Option<Arc<World>> {
+        self.world.as_ref().map(|w| w.streamer.shared_world())
     }
 
     /// The streamed world (`None`: a plain scene).

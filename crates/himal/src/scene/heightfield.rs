@@ -175,7 +175,7 @@ impl TerrainLayer {
 }
 
 /// 1 inside [lo, hi], 0 outside, with smoothstep edges `width` wide.
-fn band(x: f32, lo: f32, hi: f32, width: f32) -> f32 {
+pub(crate) fn band(x: f32, lo: f32, hi: f32, width: f32) -> f32 {
     let w = width * 0.5;
     let above_lo = if lo.is_finite() {
         smoothstep(lo - w, lo + w, x)

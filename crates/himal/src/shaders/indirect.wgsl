@@ -28,6 +28,9 @@ struct IndirectParams {
     // x: probes in the pool (slots x 64); y: what --view shows (0 irradiance,
     // 1 probe cells, 2 clip-map cascades).
     counts: vec4u,
+    // The flat ground bounce as SH2 radiance per channel (r, g, b): what a
+    // texel with no baked cell holds.
+    fallback: array<vec4f, 3>,
 }
 
 fn indirect_texel_size(c: i32) -> f32 {

@@ -3,7 +3,7 @@
 // finest resident cell over the texel centre's sector, and in it the probe
 // nearest the centre. Cascade c's texels are mip c's probes, so where mip c
 // is the finest resident this is a copy. Three textures hold the r, g, b
-// channels' SH2. CPU twin: passes/indirect/reference.rs `ClipMap::inject`.
+// channels' SH2; a texel with no cell takes the flat ground's SH2. CPU twin: passes/indirect/reference.rs `ClipMap::inject`.
 #import indirect
 
 @group(0) @binding(0) var<storage, read> params: IndirectParams;
@@ -35,7 +35,8 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     let g = params.base[c].xy + t;
     // The texel centre in metres from the grid origin.
     let x = (vec2f(g) + 0.5) * indirect_texel_size(c);
-    var sh = array<vec4f, 3>(vec4f(0.0), vec4f(0.0), vec4f(0.0));
+    // No baked cell: the flat ground bounce, as before L5.
+    var sh = params.fallback;
     let slot = slot_of(vec2i(floor(x / (INDIRECT_SPACING * 8.0))));
     if (slot >= 0) {
         // Slots are per mip, 16 each: the slot names the cell's mip.

@@ -9,6 +9,7 @@
 //! - [`pass`]: the GPU pool and the `probes.transfer` / `probes.inject` nodes.
 //! - [`pool`]: 16 cells per mip on the GPU, farthest-first eviction, page tables.
 //! - [`store`]: a scene's cells of every mip, baked or read from the cache.
+//! - [`world`]: the streamed world's cells, baked per block of sectors as the camera goes.
 //! - [`reference`]: CPU twins of transfer, injection and clip-map sampling.
 
 pub mod bake;
@@ -17,9 +18,11 @@ pub mod pass;
 pub mod pool;
 pub mod reference;
 pub mod store;
+pub mod world;
 
 pub use bake::{BakeSettings, bake_cell, bake_probe, ground_height};
 pub use cell::{Cell, CellKey, Transfer};
 pub use pass::{IndirectFrame, IndirectLight, IndirectPass, IndirectStats};
 pub use pool::{Admit, CellPool};
-pub use store::{BakeReport, ProbeStore};
+pub use store::{BakeReport, CellSource, ProbeStore};
+pub use world::WorldProbes;

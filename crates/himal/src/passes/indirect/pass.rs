@@ -9,8 +9,10 @@ use half::f16;
 
 use super::cell::{Cell, GRID_SECTORS, PROBES_PER_CELL, TRANSFER_FLOATS};
 use super::pool::{CellPool, NO_CELL, POOL_CELLS};
-use super::reference::{CASCADES, CLIP_RES, ClipMap, Sh4, lighting_sh, sky_radiance_sh};
-use super::store::ProbeStore;
+use super::reference::{
+    CASCADES, CLIP_RES, ClipMap, Sh4, ground_sh2, lighting_sh, sky_radiance_sh,
+};
+use super::store::CellSource;
 use crate::gpu::pipeline::{Program, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::{BufferDesc, FrameGraph, TextureDesc, TextureHandle};
@@ -41,6 +43,8 @@ pub struct IndirectParams {
     pub ground: Sh9Gpu,
     /// x: probes in the pool.
     pub counts: [u32; 4],
+    /// The flat ground bounce as SH2 radiance, per channel (r, g, b).
+    pub fallback: [[f32; 4]; 3],
 }
 
 /// The sky and sun the probes transfer, and the ground they replace.
@@ -63,6 +67,19 @@ impl IndirectLight {
             lighting: lighting_sh(&sky, light.sun_direction, light.sun_illuminance),
             ground: with_ground.add(&sky_irradiance_sh(&light.sky).scale(-1.0)),
         }
+    }
+}
+
+impl IndirectLight {
+    /// [`ground_sh2`] of the flat ground, the clip map's texel where no cell is.
+    pub fn fallback(&self) -> Sh4 {
+        ground_sh2(&self.ground)
+    }
+
+    /// [`Self::fallback`] per colour channel, as the clip map's textures hold it.
+    fn fallback_channels(&self) -> [[f32; 4]; 3] {
+        let f = self.fallback();
+        std::array::from_fn(|c| [f[0][c], f[1][c], f[2][c], f[3][c]])
     }
 }
 
@@ -114,7 +131,7 @@ pub struct IndirectPass {
     /// `IndirectParams`.
     pub params: wgpu::Buffer,
     pool: CellPool,
-    store: Option<Arc<ProbeStore>>,
+    store: Option<Arc<dyn CellSource>>,
     light: Option<IndirectLight>,
     /// `--view indirect|probe-cells|clipmap` as `IndirectView`'s number.
     pub view: u32,
@@ -154,8 +171,8 @@ impl IndirectPass {
         })
     }
 
-    /// The baked cells to stream from (`None`: no indirect light); the pool empties.
-    pub fn set_store(&mut self, store: Option<Arc<ProbeStore>>) {
+    /// The cells to stream from (`None`: no indirect light); the pool empties.
+    pub fn set_store(&mut self, store: Option<Arc<dyn CellSource>>) {
         self.store = store;
         self.pool = CellPool::default();
     }
@@ -165,8 +182,8 @@ impl IndirectPass {
         self.light = Some(light);
     }
 
-    /// The baked cells, if any.
-    pub fn store(&self) -> Option<&Arc<ProbeStore>> {
+    /// The cells streamed from, if any.
+    pub fn store(&self) -> Option<&Arc<dyn CellSource>> {
         self.store.as_ref()
     }
 
@@ -178,14 +195,18 @@ impl IndirectPass {
         let (Some(store), Some(light)) = (self.store.clone(), self.light) else {
             return stats;
         };
-        let origin = store.origin;
-        let step = self
-            .pool
-            .stream(origin, camera, |k| store.cell(k).is_some());
+        let origin = store.origin();
+        store.follow(camera);
+        let step = self.pool.stream(origin, camera, |k| store.contains(k));
         stats.released = step.released;
         let changed = step.released > 0 || !step.uploads.is_empty();
         for (slot, k) in step.uploads {
-            let words = pack_cell(store.cell(k).expect("streamed cells are baked"));
+            let Some(cell) = store.fetch(k) else {
+                // Dropped by the source since `contains` (a world source trims far cells).
+                self.pool.release(k);
+                continue;
+            };
+            let words = pack_cell(&cell);
             let offset = slot as u64 * (PROBES_PER_CELL * PROBE_WORDS * 4) as u64;
             ctx.queue
                 .write_buffer(&self.cells, offset, bytemuck::cast_slice(&words));
@@ -211,6 +232,7 @@ impl IndirectPass {
             grid: [GRID_SECTORS, 0, 0, 0],
             ground: Sh9Gpu::from(&light.ground),
             counts: [POOL_PROBES as u32, self.view, 0, 0],
+            fallback: light.fallback_channels(),
         }
     }
 

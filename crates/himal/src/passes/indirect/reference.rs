@@ -5,7 +5,7 @@
 use glam::{IVec2, Vec2, Vec3};
 
 use super::cell::{CELL_PROBES, Cell, CellKey, MIPS, Transfer};
-use crate::math::sh::{SH4_COUNT, Sh9Rgb, sh4_basis, sh4_irradiance};
+use crate::math::sh::{SH4_COUNT, SH9_COSINE_BAND_FACTORS, Sh9Rgb, sh4_basis, sh4_irradiance};
 
 /// Second-order SH, rgb per coefficient.
 pub type Sh4 = [Vec3; SH4_COUNT];
@@ -37,6 +37,21 @@ pub fn lighting_sh(sky_radiance: &Sh9Rgb, sun_direction: Vec3, sun_illuminance: 
         }
     }
     s
+}
+
+/// The flat ground bounce as SH2 radiance, what a clip-map texel with no
+/// baked cell holds (so unbaked ground keeps the bounce it had without
+/// L5): bands 0 and 1 of its irradiance SH over the cosine lobe's factors
+/// (A0 = pi, A1 = 2 pi / 3). Band 2 of a uniformly lit plane below the
+/// horizon is zero, so nothing is lost but the sky SH's own truncation.
+pub fn ground_sh2(ground: &Sh9Rgb) -> Sh4 {
+    let [a0, a1, _] = SH9_COSINE_BAND_FACTORS;
+    [
+        ground.c[0] / a0,
+        ground.c[1] / a1,
+        ground.c[2] / a1,
+        ground.c[3] / a1,
+    ]
 }
 
 /// The sky's radiance above the horizon in SH (zero below), from a radiance function.
@@ -71,7 +86,8 @@ pub struct ClipMap {
     pub origin: Vec2,
     /// Per cascade, the global probe index of texel (0, 0).
     pub base: [IVec2; CASCADES],
-    /// `texels[c][(v * 32 + u)]`; `None` where no cell was resident.
+    /// `texels[c][(v * 32 + u)]`: the probe, or the fallback where no cell
+    /// was resident (`None` only where the fallback is).
     pub texels: Vec<Vec<Option<Sh4>>>,
 }
 
@@ -96,12 +112,14 @@ impl ClipMap {
     /// `probes.inject` through the combined page table `table` (one byte
     /// per sector, [`super::pool::CellPool::combined_table`]): the finest
     /// resident cell over the texel centre's sector and its probe nearest
-    /// the centre; `probes(slot)` gives that slot's SH probes.
+    /// the centre; `probes(slot)` gives that slot's SH probes. Texels
+    /// without a cell take `fallback` ([`ground_sh2`] in the frame).
     pub fn inject<'a>(
         origin: Vec2,
         camera: Vec2,
         table: &[u8],
         probes: impl Fn(u32) -> Option<&'a [Sh4]>,
+        fallback: Option<Sh4>,
     ) -> ClipMap {
         let base = Self::bases(origin, camera);
         let n = CELL_PROBES as i32;
@@ -114,11 +132,11 @@ impl ClipMap {
                         let x = (g.as_vec2() + 0.5) * texel_size(c);
                         let s = (x / texel_size(0) / n as f32).floor().as_ivec2();
                         if s.min_element() < 0 || s.max_element() >= sectors {
-                            return None;
+                            return fallback;
                         }
                         let slot = table[(s.y * sectors + s.x) as usize];
                         if slot == super::pool::NO_CELL {
-                            return None;
+                            return fallback;
                         }
                         // Slots are per mip, 16 each: the slot names the cell's mip.
                         let m = slot as usize / super::pool::CELLS_PER_MIP;
@@ -139,17 +157,22 @@ impl ClipMap {
     }
 
     /// [`ClipMap::inject`] for the cells resident in `pool`, their SH
-    /// probes from `probes(key)`.
+    /// probes from `probes(key)`, `fallback` elsewhere.
     pub fn inject_resident<'a>(
         origin: Vec2,
         camera: Vec2,
         pool: &super::pool::CellPool,
         probes: impl Fn(CellKey) -> Option<&'a [Sh4]>,
+        fallback: Option<Sh4>,
     ) -> ClipMap {
         let table = pool.combined_table();
-        Self::inject(origin, camera, &table, |slot| {
-            pool.cell(slot).and_then(&probes)
-        })
+        Self::inject(
+            origin,
+            camera,
+            &table,
+            |slot| pool.cell(slot).and_then(&probes),
+            fallback,
+        )
     }
 
     fn texel(&self, c: usize, t: IVec2) -> Option<Sh4> {
@@ -250,16 +273,46 @@ mod tests {
         let camera = key.corner(O) + 32.0;
         let mut pool = crate::passes::indirect::pool::CellPool::default();
         pool.admit(key, O, camera);
-        let map =
-            ClipMap::inject_resident(O, camera, &pool, |k| (k == key).then_some(sh.as_slice()));
+        let ground = [Vec3::splat(0.5), Vec3::ZERO, Vec3::splat(-0.25), Vec3::ZERO];
+        let map = ClipMap::inject_resident(
+            O,
+            camera,
+            &pool,
+            |k| (k == key).then_some(sh.as_slice()),
+            Some(ground),
+        );
         let at = |i: usize, j: usize| Cell::probe_xz(key, O, i, j);
         let s = map.sample_cascade(0, at(3, 4)).unwrap();
         assert!((s[0].x - 35.0).abs() < 1e-4, "{}", s[0].x);
         let mid = (at(3, 4) + at(4, 5)) * 0.5;
         let s = map.sample_cascade(0, mid).unwrap();
         assert!((s[0].x - (35.0 + 36.0 + 43.0 + 44.0) / 4.0).abs() < 1e-4);
-        // Outside the resident cell the texels are empty.
-        assert!(map.sample_cascade(0, key.corner(O) - 20.0).is_none());
+        // Outside the resident cell the texels hold the flat ground's SH2.
+        assert_eq!(map.sample_cascade(0, key.corner(O) - 20.0), Some(ground));
+    }
+
+    #[test]
+    fn the_ground_fallback_gives_the_flat_ground_bounce() {
+        // A plane of albedo 0.3 under 10 klux: radiance 0.3 * 10 / pi below the horizon.
+        let l = 0.3 * 10.0 / std::f32::consts::PI;
+        let radiance = Sh9Rgb::project(|d| Vec3::splat(if d.y < 0.0 { l } else { 0.0 }), 64);
+        let ground = radiance.radiance_to_irradiance_coeffs();
+        let sh2 = ground_sh2(&ground);
+        for n in [
+            Vec3::Y,
+            -Vec3::Y,
+            Vec3::X,
+            Vec3::new(0.6, 0.8, 0.0),
+            Vec3::new(0.0, -0.6, 0.8),
+        ] {
+            let exact = l * std::f32::consts::PI * (1.0 - n.y) * 0.5;
+            let got = sh4_irradiance(&sh2, n).x;
+            // Measured: 0.020 of pi * l at worst (the SH9 projection's ringing).
+            assert!(
+                (got - exact).abs() < 0.03 * l * std::f32::consts::PI,
+                "{n}: {got} vs {exact}"
+            );
+        }
     }
 
     #[test]

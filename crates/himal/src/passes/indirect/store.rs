@@ -16,6 +16,41 @@ use crate::scene::world::SECTOR_SIZE;
 /// The grid origin of plain scenes: the world's 160 x 160 sectors, centred on (0, 0).
 pub const SCENE_ORIGIN: Vec2 = Vec2::splat(-(GRID_SECTORS as f32) * SECTOR_SIZE * 0.5);
 
+/// Where the GPU pool's cells come from: a scene's finished bake
+/// ([`ProbeStore`]) or the streamed world's cells, loaded and baked as the
+/// camera moves ([`super::world::WorldProbes`]).
+pub trait CellSource: Send + Sync {
+    /// Min corner (x, z) of sector (0, 0).
+    fn origin(&self) -> Vec2;
+    /// Whether cell `key` can be streamed now.
+    fn contains(&self, key: CellKey) -> bool;
+    /// Cell `key` for an upload (cloned or shared; at most a few per frame).
+    fn fetch(&self, key: CellKey) -> Option<std::sync::Arc<Cell>>;
+    /// The camera is at (x, z) this frame: a source that loads or bakes as
+    /// the camera moves starts on what is near it.
+    fn follow(&self, _camera: Vec2) {}
+    /// Cells of every mip held now.
+    fn held(&self) -> usize;
+}
+
+impl CellSource for ProbeStore {
+    fn origin(&self) -> Vec2 {
+        self.origin
+    }
+
+    fn contains(&self, key: CellKey) -> bool {
+        self.cells.contains_key(&key)
+    }
+
+    fn fetch(&self, key: CellKey) -> Option<std::sync::Arc<Cell>> {
+        self.cells.get(&key).cloned().map(std::sync::Arc::new)
+    }
+
+    fn held(&self) -> usize {
+        self.cells.len()
+    }
+}
+
 /// Baked cells of every mip, by key.
 #[derive(Clone, Debug, Default)]
 pub struct ProbeStore {

@@ -44,6 +44,47 @@ pub struct TerrainLayerDesc {
 }
 
 impl TerrainLayerDesc {
+    /// The streamed world's layers: meadow, soil on slopes, rock on
+    /// cliffs, snow above the world's snow line on what is not a cliff.
+    pub fn for_world(world: &crate::scene::world::World) -> Vec<Self> {
+        let mut layers = Self::alpine();
+        for l in &mut layers {
+            if l.detail == DetailKind::Snow {
+                l.height = [world.desc.shape.snow_line, f32::INFINITY];
+                l.height_blend = 60.0;
+                l.jitter = 50.0;
+            }
+        }
+        layers
+    }
+
+    /// The mean linear albedo `layers` paint at `height` and slope (degrees):
+    /// `terrain.wgsl`'s layer weights w_i = c_i prod_{j > i} (1 - c_j)
+    /// without the border noise, the detail textures at their mean (x 1)
+    /// and the large-scale variation at its mean (0.94). For bakes (L5).
+    pub fn mean_albedo(layers: &[Self], height: f32, slope_deg: f32) -> Vec3 {
+        use crate::scene::heightfield::band;
+        let open = |v: f32, at: f32, no_limit: f32| if v == at { no_limit } else { v };
+        let mut weight = Vec::with_capacity(layers.len());
+        for (i, l) in layers.iter().enumerate() {
+            let c = if i == 0 {
+                1.0
+            } else {
+                band(height, l.height[0], l.height[1], l.height_blend)
+                    * band(
+                        slope_deg,
+                        open(l.slope_deg[0], 0.0, f32::NEG_INFINITY),
+                        open(l.slope_deg[1], 90.0, f32::INFINITY),
+                        l.slope_blend,
+                    )
+            };
+            weight.iter_mut().for_each(|w| *w *= 1.0 - c);
+            weight.push(c);
+        }
+        let albedo: Vec3 = layers.iter().zip(&weight).map(|(l, w)| l.albedo * *w).sum();
+        albedo * 0.94
+    }
+
     /// Grass everywhere, soil on gentle slopes, rock on steep ones, snow high up.
     pub fn alpine() -> Vec<Self> {
         let any = Self {

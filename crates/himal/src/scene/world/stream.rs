@@ -21,7 +21,7 @@ use super::{Instance, InstanceKind, SECTOR_SIZE, SectorCoord, SectorData, World}
 /// Runs the calling thread at the lowest scheduling priority (Linux: a
 /// thread's nice value is its own), so sector generation never takes the
 /// render thread's core; elsewhere a no-op.
-fn lower_priority() {
+pub(crate) fn lower_priority() {
     #[cfg(target_os = "linux")]
     // SAFETY: setpriority with PRIO_PROCESS and who = 0 changes only the
     // calling thread's nice value; a failure leaves it unchanged.
@@ -221,6 +221,11 @@ impl Streamer {
                 l.loaded(&up.data);
             }
         }
+    }
+
+    /// The world being streamed, shared (L5's bake generates its sectors too).
+    pub fn shared_world(&self) -> Arc<World> {
+        self.world.clone()
     }
 
     /// The world being streamed.
