@@ -129,14 +129,6 @@ pub fn attach_probes(
         renderer.set_probe_cells(Some(Arc::new(probes)));
         return Ok(());
     }
-    if scene.environment.is_some() {
-        // Said, not silently dropped: the lighting key leaves L5 out there.
-        eprintln!(
-            "note: --indirect on has no effect under an HDR environment (L5 transfers the \
-             analytic sky and sun); not baking probes"
-        );
-        return Ok(());
-    }
     renderer.set_probe_cells(Some(probe_cells(scene, cache, false)?));
     Ok(())
 }

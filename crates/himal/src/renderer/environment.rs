@@ -19,6 +19,11 @@ pub struct EnvironmentGpu {
     pub sampler: wgpu::Sampler,
     /// Irradiance E(n) as SH9 (what `Lighting::sky_irradiance` holds).
     pub irradiance_sh: Sh9Rgb,
+    /// L5: the image's radiance above the horizon (what the probes
+    /// transfer) and the irradiance of its part below (the ground they replace).
+    pub above_horizon: Sh9Rgb,
+    /// See [`Self::above_horizon`].
+    pub ground_irradiance: Sh9Rgb,
     /// Keep the analytic sun (`sun = true` in the scene): otherwise its
     /// illuminance is zero, as the image holds its own sun.
     pub sun: bool,
@@ -61,7 +66,14 @@ impl EnvironmentGpu {
         );
         envmap.filter_faces(ctx, &env.cube_faces(envmap.size as usize))?;
         envmap.fixed_source = true;
+        let radiance = env.radiance_sh();
+        let above_horizon = crate::passes::indirect::reference::sky_radiance_sh(|d| env.sample(d));
+        let ground_irradiance = radiance
+            .add(&above_horizon.scale(-1.0))
+            .radiance_to_irradiance_coeffs();
         Ok(Self {
+            above_horizon,
+            ground_irradiance,
             view: image.create_view(&Default::default()),
             image,
             sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -72,7 +84,7 @@ impl EnvironmentGpu {
                 min_filter: wgpu::FilterMode::Linear,
                 ..Default::default()
             }),
-            irradiance_sh: env.radiance_sh().radiance_to_irradiance_coeffs(),
+            irradiance_sh: radiance.radiance_to_irradiance_coeffs(),
             sun: desc.sun,
             rotation: env.rotation,
         })

@@ -103,8 +103,8 @@ fn lighting_key(settings: &FrameSettings, environment: bool) -> LightingKey {
         ssdo: settings.ao.mode.directional(),
         reflection_occlusion: settings.ao.reflection_occlusion,
         ao_bleed: settings.ao.mode != AoMode::Off && settings.ao.bleed,
-        // L5 transfers the analytic sky and sun; not under an HDR environment.
-        indirect: settings.indirect && !environment,
+        // L5 transfers the analytic sky and sun, or an HDR environment's upper half.
+        indirect: settings.indirect,
         indirect_view: matches!(settings.view, crate::settings::ViewBuffer::Indirect(_)),
     }
 }
@@ -453,8 +453,20 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&no_disk),
         );
-        // L5: the sky and sun the probes transfer, and the ground they replace.
-        let indirect = crate::passes::indirect::IndirectLight::of_sky(&light);
+        // L5: the sky (or the environment) and sun the probes transfer, and the ground they replace.
+        let indirect = match &self.res.environment {
+            Some(env) => crate::passes::indirect::IndirectLight::of_environment(
+                &env.above_horizon,
+                &env.ground_irradiance,
+                light.sun_direction,
+                if env.sun {
+                    light.sun_illuminance
+                } else {
+                    glam::Vec3::ZERO
+                },
+            ),
+            None => crate::passes::indirect::IndirectLight::of_sky(&light),
+        };
         self.res.passes.indirect.set_light(indirect);
         self.sky_light = Some((sun.clone(), model, light));
         self.res.passes.envmap.dirty = true;

@@ -71,6 +71,24 @@ impl IndirectLight {
 }
 
 impl IndirectLight {
+    /// Under an HDR environment: its radiance above the horizon
+    /// (`above_horizon`, SH9 of radiance) plus the analytic sun where the
+    /// scene keeps it (zero illuminance otherwise: the image holds its
+    /// sun), and the irradiance of the image below the horizon
+    /// (`ground_irradiance`), which the probes replace as they replace the
+    /// sky's flat ground.
+    pub fn of_environment(
+        above_horizon: &Sh9Rgb,
+        ground_irradiance: &Sh9Rgb,
+        sun_direction: glam::Vec3,
+        sun_illuminance: glam::Vec3,
+    ) -> IndirectLight {
+        IndirectLight {
+            lighting: lighting_sh(above_horizon, sun_direction, sun_illuminance),
+            ground: *ground_irradiance,
+        }
+    }
+
     /// [`ground_sh2`] of the flat ground, the clip map's texel where no cell is.
     pub fn fallback(&self) -> Sh4 {
         ground_sh2(&self.ground)
