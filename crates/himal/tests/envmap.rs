@@ -8,7 +8,6 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use himal::gpu::testing::{run_compute, shared_context};
-use himal::gpu::{GpuContext, read_texture};
 use himal::passes::envmap::reference::{
     CubeMip, box_mips, cube_face_direction, dfg, filter_fis, filter_reference,
     m4_reflection_normal, mip_alpha,
@@ -24,21 +23,11 @@ const DFG_REFERENCE: &str = concat!(
     "/../../../shared/assets/reference/dfg_reference.txt"
 );
 
-fn read_rgb(ctx: &GpuContext, texture: &wgpu::Texture, mip: u32, layer: u32) -> Vec<Vec3> {
-    read_texture(ctx, texture, mip, layer)
-        .expect("read back")
-        .to_rgba_f32()
-        .expect("float texels")
-        .iter()
-        .map(|t| Vec3::new(t[0], t[1], t[2]))
-        .collect()
-}
-
 #[test]
 fn dfg_table_matches_cpu_twin_and_reference() {
     let ctx = shared_context().expect("GPU");
     let env = EnvMapPass::new(ctx, 32).expect("envmap");
-    let gpu = read_rgb(ctx, &env.dfg, 0, 0);
+    let gpu = common::read_rgb(ctx, &env.dfg, 0, 0);
     let n = DFG_SIZE as usize;
     let mut worst_twin = 0.0f32;
     for y in (0..n).step_by(7) {
@@ -126,7 +115,7 @@ fn filtered_mips_match_brute_force_reference() {
         let s = (size >> mip) as usize;
         let (mut err_ref, mut err_twin, mut energy) = (0.0f64, 0.0f64, 0.0f64);
         for face in 0..6 {
-            let gpu = read_rgb(ctx, env.filtered(), mip, face as u32);
+            let gpu = common::read_rgb(ctx, env.filtered(), mip, face as u32);
             for (i, g) in gpu.iter().enumerate() {
                 let uv = (Vec2::new((i % s) as f32, (i / s) as f32) + 0.5) / s as f32;
                 let n = cube_face_direction(face, uv);
@@ -245,7 +234,7 @@ fn relit_probe_faces_equal_the_lighting_pass_seen_from_the_probe() {
     let mut texels = 0usize;
     // Side faces: the noon sun (and its disk, which the probe leaves out) is in +Y.
     for face in [0usize, 1, 4, 5] {
-        let relit = read_rgb(r.context(), r.envmap().source(), 0, face as u32);
+        let relit = common::read_rgb(r.context(), r.envmap().source(), 0, face as u32);
         // The same lighting permutation, rendered directly from the probe.
         let mut direct_renderer = new_renderer();
         let mut s = base(size, size);
@@ -304,7 +293,7 @@ fn environment_views_read_the_filtered_cube_like_lighting() {
             CubeMip {
                 size,
                 faces: std::array::from_fn(|f| {
-                    read_rgb(r.context(), r.envmap().filtered(), mip, f as u32)
+                    common::read_rgb(r.context(), r.envmap().filtered(), mip, f as u32)
                 }),
             }
         })

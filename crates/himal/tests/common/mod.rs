@@ -558,3 +558,19 @@ pub fn run_depth_map_kernel(
     ctx.queue.submit([encoder.finish()]);
     himal::gpu::read_buffer(ctx, &output).expect("read back")
 }
+
+/// Mip `mip`, layer `layer` of a float texture, rgb per texel.
+pub fn read_rgb(
+    ctx: &himal::gpu::GpuContext,
+    texture: &wgpu::Texture,
+    mip: u32,
+    layer: u32,
+) -> Vec<Vec3> {
+    himal::gpu::read_texture(ctx, texture, mip, layer)
+        .expect("read back")
+        .to_rgba_f32()
+        .expect("float texels")
+        .iter()
+        .map(|t| Vec3::new(t[0], t[1], t[2]))
+        .collect()
+}
