@@ -343,9 +343,9 @@ fn l5_probes_against_path_traced_one_bounce_village_and_valley() {
                 "{name} time {t}: no indirect light to compare"
             );
             // Measured (L5.md): on open ground the probes' error is at most
-            // 0.75 of the flat ground's (village 12h: 0.750 vs 1.000).
+            // 0.62 of the flat ground's (village 12h: 0.617 vs 1.000).
             assert!(
-                r.ground < 0.8 * r.flat_ground,
+                r.ground < 0.65 * r.flat_ground,
                 "{name} time {t}: open ground {} vs flat {}",
                 r.ground,
                 r.flat_ground
@@ -353,12 +353,17 @@ fn l5_probes_against_path_traced_one_bounce_village_and_valley() {
         }
     }
     // The issue's goal, 0.20 on open ground, is met in the valley at noon
-    // (measured 0.091); the village's near-wall bounce and low suns are
-    // beyond 8 m spacing and SH2 (explained in L5.md).
+    // and 17:00 (measured 0.098 and 0.199); the village's near-wall bounce
+    // and the 08:00 sun are beyond 8 m spacing and SH2 (explained in L5.md).
     assert!(
         all[1].1[1].ground <= 0.12,
         "valley at noon: {}",
         all[1].1[1].ground
+    );
+    assert!(
+        all[1].1[2].ground <= 0.22,
+        "valley at 17:00: {}",
+        all[1].1[2].ground
     );
 }
 
@@ -399,9 +404,9 @@ fn the_bake_is_deterministic_and_its_files_round_trip() {
         two.encode(),
         "same bytes for any thread count"
     );
-    // Probes stand 2 m above the meadow, and on it, not on the roofs.
+    // Probes stand 3 m above the meadow, and on it, not on the roofs.
     assert!(
-        one.heights.iter().all(|h| (h - 2.0).abs() < 1e-3),
+        one.heights.iter().all(|h| (h - 3.0).abs() < 1e-3),
         "{:?}",
         one.heights
     );
@@ -529,11 +534,11 @@ fn gpu_indirect_matches_the_cpu_twins() {
         "indirect GPU vs twin: {compared} px, mean rel. {mean:.5}, p99 {p99:.4}, worst {worst:.4}"
     );
     assert!(compared > 1000, "{compared} pixels compared");
-    // Measured: mean 0.0073, p99 0.041, worst 0.053 (f16 clip textures,
+    // Measured: mean 0.0091, p99 0.051, worst 0.053 (f16 clip textures,
     // lavapipe's 8-bit bilinear weights across steep probe gradients, and
     // positions rebuilt from depth).
     assert!(mean < 0.012, "mean {mean}");
-    assert!(p99 < 0.06, "p99 {p99}");
+    assert!(p99 < 0.065, "p99 {p99}");
 }
 
 /// Deferred lighting with L5 on minus off, against its formula on the
@@ -628,7 +633,7 @@ fn check_swap(
         errors[n * 99 / 100]
     );
     assert!(n > 1000, "{n} pixels");
-    // Measured: 350 (sky) and 304 (studio) of 3,159: the sunlit and
+    // Measured: 248 (sky) and 232 (studio) of 3,159: the sunlit and
     // sky-lit pixels barely change, the shaded ones do.
     assert!(moved > n / 20, "{moved} of {n} pixels changed");
     assert!(mean < max_mean, "{mean}");
@@ -757,7 +762,7 @@ fn relit_environment_faces_take_the_probes_indirect_light() {
         "relit with L5 vs direct lighting: {texels} texels, worst relative error {worst:.2e}; \
          {changed} changed by over 1 % against the relight without"
     );
-    // Measured: worst 0 (the same permutation and clip map); 9,254 of
+    // Measured: worst 0 (the same permutation and clip map); 6,297 of
     // 81,920 texels changed by over 1 %: the probes reach the cube.
     assert!(worst < 1e-3, "{worst}");
     assert!(changed > texels / 20, "{changed} of {texels}");

@@ -33,12 +33,14 @@ pub struct BakeSettings {
 
 impl Default for BakeSettings {
     /// 256 x 64 rays: the transfer's Monte Carlo noise is below 3 % of its
-    /// band-0 term on the test scenes (docs/techniques/L5.md).
+    /// band-0 term on the test scenes. Probes 3 m up: of 2, 2.5, 3 and
+    /// 3.5 m, the least mean error against the path tracer on open ground
+    /// (docs/techniques/L5.md "Probe height").
     fn default() -> Self {
         BakeSettings {
             rays: 256,
             visibility_rays: 64,
-            probe_height: 2.0,
+            probe_height: 3.0,
             threads: 0,
         }
     }
