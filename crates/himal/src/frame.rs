@@ -637,6 +637,7 @@ pub fn build<'a>(
     // each, drawn over the HDR after the forward surfaces.
     let particle_inputs = crate::passes::particles::ParticleInputs {
         lights: &passes.shadows.local_lights,
+        light_tiles: passes.shadows.light_tiles(),
         shadow_params: passes.shadows.mask_params(),
         shadow_sampler: &passes.shadows.sampler,
         sun_maps,

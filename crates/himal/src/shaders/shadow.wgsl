@@ -284,6 +284,19 @@ fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     return smoothstep(cos_outer, cos_inner, cos_angle);
 }
 
+// A point without a normal (a particle, E4) seen by local light `l`
+// through its atlas tile `t` (from shadow_local_tile): the 4 x 4 gather of
+// the sun's particle shadow (R2), 1 off the tile. Twin:
+// passes/shadows/reference.rs `local_point_visibility`.
+fn shadow_local_point_visibility(l: LocalLight, t: ShadowTile, p: vec3f,
+                                 atlas: texture_depth_2d_array, cmp: sampler_comparison) -> f32 {
+    let k = shadow_local_lookup(l, t, p, vec3f(0.0), vec2f(textureDimensions(atlas)));
+    if (!k.inside) {
+        return 1.0;
+    }
+    return shadow_gather_4x4(atlas, cmp, 0, k.uv, k.depth_ref);
+}
+
 // Cube face of direction `d` (light to point): 0..5 = +X, -X, +Y, -Y, +Z, -Z.
 fn shadow_cube_face(d: vec3f) -> u32 {
     let a = abs(d);

@@ -1,7 +1,8 @@
 // particles.light (E4, Ryse "Particle Shading"): once per particle, the
 // sun (its shadow from the static map, else its cascade, through a 4 x 4
-// gather filter: R2) and every local light accumulated as illuminance and
-// the intensity-weighted mean direction. forward.particles shades the
+// gather filter: R2) and every local light (a shadowed one through its
+// atlas tile, the same gather) accumulated as illuminance and the
+// intensity-weighted mean direction. forward.particles shades the
 // quad with it and a per-pixel normal. CPU twin:
 // passes/particles/reference.rs `light_particle`.
 #import particles
@@ -18,6 +19,8 @@
 @group(0) @binding(6) var shadow_sampler: sampler_comparison;
 @group(0) @binding(7) var<storage, read_write> particle_light: array<ParticleLight>;
 @group(0) @binding(8) var<uniform> view: View;
+@group(0) @binding(9) var atlas: texture_depth_2d_array;
+@group(0) @binding(10) var<storage, read> light_tiles: array<ShadowTile>;
 
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) id: vec3u) {
@@ -34,9 +37,15 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         acc = particle_light_add(acc, lighting.sun_illuminance.rgb * vis, lighting.sun_direction.xyz);
         acc.d.w = vis;
         for (var k = 0u; k < lights.count.x; k++) {
-            let li = local_light_illuminance(lights.lights[k], x);
+            let l = lights.lights[k];
+            let li = local_light_illuminance(l, x);
             if (li.lit) {
-                acc = particle_light_add(acc, li.e, li.dir);
+                var v = 1.0;
+                let tile = shadow_local_tile(l, x);
+                if (u32(l.params.y) > 0u && tile >= 0) {
+                    v = shadow_local_point_visibility(l, light_tiles[tile], x, atlas, shadow_sampler);
+                }
+                acc = particle_light_add(acc, li.e * v, li.dir);
             }
         }
     }

@@ -319,6 +319,8 @@ struct Buffers {
 pub struct ParticleInputs<'a> {
     /// The local lights (`ShadowPass::local_lights`).
     pub lights: &'a wgpu::Buffer,
+    /// Their atlas tiles (`ShadowPass::light_tiles`), read with `sun_maps`' atlas.
+    pub light_tiles: &'a wgpu::Buffer,
     /// The sun maps' matrices (`ShadowPass::mask_params`).
     pub shadow_params: &'a wgpu::Buffer,
     /// The maps' comparison sampler.
@@ -578,6 +580,8 @@ impl ParticlesPass {
             .uniform("shadow_params", inputs.shadow_params)
             .optional_array("cascades", maps.and_then(|m| m.cascades), far)
             .optional_array("static_map", maps.and_then(|m| m.static_map), far)
+            .optional_array("atlas", maps.and_then(|m| m.atlas), far)
+            .uniform("light_tiles", inputs.light_tiles)
             .sampler("shadow_sampler", inputs.shadow_sampler)
             .write_buffer("particle_light", light)
             .dispatch([self.sim.slots().div_ceil(64), 1, 1]);

@@ -149,13 +149,16 @@ pub fn exact_diffuse(lights: &[(Vec3, Vec3)], n: Vec3) -> Vec3 {
 }
 
 /// `particles.light` for one slot: the sun (`sun_e` klux toward
-/// `sun_dir`, visibility `vis`, the shadow filter's result) and `lights`.
+/// `sun_dir`, visibility `vis`, the shadow filter's result) and `lights`,
+/// light k seen with visibility `local_vis(k, x)` (its atlas lookup,
+/// `shadows::reference::local_point_visibility`; 1 unshadowed).
 pub fn light_particle(
     p: &ParticleGpu,
     sun_dir: Vec3,
     sun_e: Vec3,
     vis: f32,
     lights: &[LocalLightGpu],
+    local_vis: impl Fn(usize, Vec3) -> f32,
 ) -> ParticleLightGpu {
     let mut acc = ParticleLightGpu::default();
     if p.vel_alive[3] < 0.5 {
@@ -164,9 +167,9 @@ pub fn light_particle(
     let x = Vec3::from_slice(&p.pos_age[..3]);
     acc = light_add(acc, sun_e * vis, sun_dir);
     acc.d[3] = vis;
-    for l in lights {
+    for (k, l) in lights.iter().enumerate() {
         if let Some((e, dir)) = local_illuminance(l, x) {
-            acc = light_add(acc, e, dir);
+            acc = light_add(acc, e * local_vis(k, x), dir);
         }
     }
     acc

@@ -339,6 +339,12 @@ impl ShadowPass {
         view_pipeline(ctx, &self.view_program, "shadows.view", view.id(), format)
     }
 
+    /// Each shadowed local light's atlas tiles (`ShadowTileGpu`, six per
+    /// point light), what the mask and particles read the atlas through.
+    pub fn light_tiles(&self) -> &wgpu::Buffer {
+        &self.light_tiles
+    }
+
     /// The mask's parameters (`ShadowMaskParams`: every sun map's
     /// matrix and the filter), written by [`Self::update`].
     pub fn mask_params(&self) -> &wgpu::Buffer {

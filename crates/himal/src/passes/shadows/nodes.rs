@@ -36,6 +36,9 @@ pub struct SunMaps {
     pub cascades: Option<TextureHandle>,
     /// The static map shown (S2), when there is one.
     pub static_map: Option<TextureHandle>,
+    /// The local lights' atlas (S3), when any projector was rendered
+    /// (particles read it; the mask has it in its channels).
+    pub atlas: Option<TextureHandle>,
 }
 
 /// Graph names of the two static maps.
@@ -245,6 +248,7 @@ impl ShadowPass {
             mask: written.colors.first().copied(),
             cascades,
             static_map,
+            atlas: atlas_map,
         })
     }
 

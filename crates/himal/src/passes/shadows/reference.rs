@@ -3,7 +3,9 @@
 //! GPU-versus-CPU test on a tiny depth map (`tests/shadows_filter.rs`).
 //! The whole chain is checked against CPU ray casting in `tests/shadows.rs`.
 
-use glam::Vec2;
+use glam::{Mat4, Vec2, Vec3};
+
+use super::local::{LocalLightGpu, ShadowTileGpu};
 
 /// `SHADOW_POISSON_16` of shadow.wgsl.
 #[allow(clippy::excessive_precision)] // digits as in shadow.wgsl
@@ -30,6 +32,70 @@ pub const POISSON_16: [[f32; 2]; 16] = [
 pub fn rotation_angle(cell: Vec2) -> f32 {
     let f = |x: f32| x - x.floor();
     std::f32::consts::TAU * f(52.982_918 * f(cell.dot(Vec2::new(0.067_110_56, 0.005_837_15))))
+}
+
+/// `shadow_cube_face`: the cube face of direction `d` (light to point),
+/// 0..5 = +X, -X, +Y, -Y, +Z, -Z.
+pub fn cube_face(d: Vec3) -> u32 {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        return if d.x > 0.0 { 0 } else { 1 };
+    }
+    if a.y >= a.z {
+        return if d.y > 0.0 { 2 } else { 3 };
+    }
+    if d.z > 0.0 { 4 } else { 5 }
+}
+
+/// `shadow_local_tile`: the atlas tile local light `l` reads at `p` (its
+/// cube face's for a point light), `None` beyond its range.
+pub fn local_tile(l: &LocalLightGpu, p: Vec3) -> Option<u32> {
+    let to_p = p - Vec3::from_slice(&l.position_range[..3]);
+    if to_p.length() >= l.position_range[3] {
+        return None;
+    }
+    let first = l.params[2] as u32;
+    Some(if l.color_kind[3] < 0.5 {
+        first + cube_face(to_p)
+    } else {
+        first
+    })
+}
+
+/// `shadow_local_lookup` without the disk rotation: where `p` (normal `n`)
+/// reads tile `t`: (atlas uv, compare depth), `None` off the tile.
+pub fn local_lookup(l: &LocalLightGpu, t: &ShadowTileGpu, p: Vec3, n: Vec3) -> Option<(Vec2, f32)> {
+    let to_p = p - Vec3::from_slice(&l.position_range[..3]);
+    let d = to_p.length();
+    let texel = t.info[0] * d;
+    let q = p + n * (1.5 * texel) - (to_p / d) * (2.0 * texel);
+    let c = Mat4::from_cols_array_2d(&t.view_proj) * q.extend(1.0);
+    if c.w <= 0.0 {
+        return None;
+    }
+    let ndc = c.truncate() / c.w;
+    let uv_tile = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let inside = uv_tile.cmpge(Vec2::ZERO).all() && uv_tile.cmple(Vec2::ONE).all() && ndc.z <= 1.0;
+    inside.then(|| {
+        (
+            Vec2::new(t.rect[0], t.rect[1]) + uv_tile * Vec2::new(t.rect[2], t.rect[3]),
+            ndc.z,
+        )
+    })
+}
+
+/// `shadow_local_point_visibility`: a particle at `p` seen by local light
+/// `l` through tile `t` of `atlas`, the 4 x 4 gather; 1 off the tile.
+pub fn local_point_visibility(
+    l: &LocalLightGpu,
+    t: &ShadowTileGpu,
+    p: Vec3,
+    atlas: &DepthMap,
+) -> f32 {
+    match local_lookup(l, t, p, Vec3::ZERO) {
+        Some((uv, depth_ref)) => atlas.gather_4x4(uv, depth_ref),
+        None => 1.0,
+    }
 }
 
 /// A depth map on the CPU (row-major, texel (x, y) at `depth[y * width + x]`).
