@@ -9,7 +9,7 @@
 // Output RG: edge on the left, edge on the top (0/1). CPU twin: smaa/reference.rs.
 // EDGE_MASK (#23, the reference's stencil): pixels without an edge are
 // discarded, so only edge pixels write the mask's depth and
-// aa.smaa.weights (depth test Equal) shades only them.
+// aa.smaa.weights (depth test GreaterEqual) shades only them.
 #import view
 #import color
 #import tangent_frame

@@ -18,8 +18,9 @@ pub const WEIGHTS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// The edge mask (#23, `FrameSettings::smaa_edge_mask`; the reference
 /// implementation's stencil): `aa.smaa.edges` writes depth 0 where a pixel
-/// has an edge (cleared to 1), and `aa.smaa.weights` tests Equal, so only
-/// edge pixels run the searches. Both full-screen triangles are at depth 0.
+/// has an edge (cleared to 1), and `aa.smaa.weights` tests 0 >= mask, so
+/// only edge pixels run the searches. Both full-screen triangles are at
+/// depth 0 (GreaterEqual, not Equal: no reliance on invariant positions).
 pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth16Unorm;
 
 fn mask_state(write: bool) -> wgpu::DepthStencilState {
@@ -29,7 +30,7 @@ fn mask_state(write: bool) -> wgpu::DepthStencilState {
         depth_compare: Some(if write {
             wgpu::CompareFunction::Always
         } else {
-            wgpu::CompareFunction::Equal
+            wgpu::CompareFunction::GreaterEqual
         }),
         stencil: Default::default(),
         bias: Default::default(),
