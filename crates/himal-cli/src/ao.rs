@@ -34,6 +34,16 @@ pub struct AoArgs {
         allow_hyphen_values = true
     )]
     pub ao_blur: String,
+    /// How ao.pack + ao.blur_x run: two full-screen passes (the blur fetching
+    /// every tap), or one compute pass packing a shared-memory row tile
+    /// once and reading its taps from it (#23; same taps and weights).
+    #[arg(
+        long,
+        default_value = "fragment",
+        value_name = "fragment|compute",
+        allow_hyphen_values = true
+    )]
+    pub ao_blur_pass: String,
     /// Blur kernel radius in pixels.
     #[arg(long, value_name = "PIXELS", allow_hyphen_values = true, value_parser = crate::whole_number)]
     pub ao_blur_radius: Option<u32>,
@@ -89,6 +99,11 @@ impl AoArgs {
             "adaptive" => true,
             "brute" => false,
             other => bail!("--ao-blur {other}: expected adaptive or brute"),
+        };
+        s.compute_blur = match self.ao_blur_pass.as_str() {
+            "fragment" => false,
+            "compute" => true,
+            other => bail!("--ao-blur-pass {other}: expected fragment or compute"),
         };
         if let Some(r) = self.ao_radius {
             if !(r.is_finite() && r > 0.0 && r <= 100.0) {

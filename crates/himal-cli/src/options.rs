@@ -113,6 +113,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub aa_buffers: String,
+    /// SMAA blending weights only on edge pixels (#23: a depth mask from
+    /// the edge pass, as the reference's stencil; the same image).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub smaa_edge_mask: String,
     /// V6: draw runs of one mesh's consecutive objects as one instanced draw
     /// (off: one draw per object, for comparisons).
     #[arg(
@@ -416,6 +425,7 @@ impl PostArgs {
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
+        settings.smaa_edge_mask = on_off("--smaa-edge-mask", &self.smaa_edge_mask)?;
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;

@@ -410,6 +410,8 @@ pub struct FrameAa {
     pub mode: AaMode,
     /// SMAA T2x: which of the two subsamples this frame renders.
     pub subsample: u32,
+    /// SMAA blending weights only on edge pixels (`FrameSettings::smaa_edge_mask`).
+    pub edge_mask: bool,
     /// Buffers with their own TAA (`None`: none).
     pub buffers: Option<AaBuffers>,
 }
@@ -691,6 +693,7 @@ pub fn build<'a>(
             let chain = AaFrame {
                 mode: aa.mode,
                 subsample: aa.subsample,
+                edge_mask: aa.edge_mask,
                 history,
                 smaa: &passes.smaa,
                 temporal: &passes.temporal,

@@ -10,7 +10,7 @@ use himal::passes::aa::smaa::reference::{
     EdgeSettings, Luts, Plane, WeightSettings, blending_weights, detect_edges, linear_to_srgb,
     neighbourhood_blend, srgb_to_linear,
 };
-use himal::passes::aa::smaa::{EDGES_FORMAT, SmaaInputs, SmaaPass, WEIGHTS_FORMAT};
+use himal::passes::aa::smaa::{EDGES_FORMAT, MASK_FORMAT, SmaaInputs, SmaaPass, WEIGHTS_FORMAT};
 
 const W: usize = 48;
 const H: usize = 40;
@@ -187,6 +187,17 @@ struct GpuRun {
 }
 
 fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32], frames: &[u32]) -> GpuRun {
+    run_gpu_masked(size, color, depth, frames, false)
+}
+
+/// `masked`: the weights only on edge pixels (`--smaa-edge-mask on`).
+fn run_gpu_masked(
+    size: (usize, usize),
+    color: &[[u8; 4]],
+    depth: &[f32],
+    frames: &[u32],
+    masked: bool,
+) -> GpuRun {
     let (w, h) = size;
     let ctx = shared_context().expect("GPU (lavapipe)");
     let smaa = SmaaPass::new(ctx, wgpu::TextureFormat::Rgba8UnormSrgb).expect("pipelines");
@@ -210,9 +221,13 @@ fn run_gpu(size: (usize, usize), color: &[[u8; 4]], depth: &[f32], frames: &[u32
         normals: g.import_texture("frame", &frame_t),
     };
     let e = g.import_texture("edges", &edges_t);
-    let e = smaa.add_edges(&mut g, inputs, e);
+    let mask = masked.then(|| {
+        let desc = himal::graph::TextureDesc::new_2d(w as u32, h as u32, MASK_FORMAT);
+        g.create_texture("mask", desc)
+    });
+    let (e, mask) = smaa.add_edges(&mut g, inputs, e, mask);
     let wt = g.import_texture("weights", &weights_t);
-    let wt = smaa.add_weights(&mut g, e, wt, 0);
+    let wt = smaa.add_weights(&mut g, e, mask, wt, 0);
     let o = g.import_texture("out", &out_t);
     let o = smaa.add_blend(&mut g, inputs.color, wt, o);
     g.mark_output(o);
@@ -265,6 +280,27 @@ fn max_diff<const N: usize>(a: &Plane<N>, b: &Plane<N>) -> (f32, usize) {
         }
     }
     worst
+}
+
+/// `--smaa-edge-mask on` skips the weights of pixels without edges, which
+/// the unmasked pass writes as 0: every texture must be the same bytes.
+#[test]
+fn edge_mask_changes_nothing_but_the_work() {
+    let (color, depth, frames) = scene();
+    let plain = run_gpu_masked((W, H), &color, &depth, &frames, false);
+    let masked = run_gpu_masked((W, H), &color, &depth, &frames, true);
+    let edge_pixels = plain
+        .edges
+        .texels
+        .iter()
+        .filter(|e| e[0] + e[1] > 0.0)
+        .count();
+    println!("edge pixels: {edge_pixels} of {}", W * H);
+    assert!(edge_pixels > 0);
+    // Exact: the same shader on the same pixels, zero elsewhere.
+    assert_eq!(max_diff(&plain.edges, &masked.edges).0, 0.0);
+    assert_eq!(max_diff(&plain.weights, &masked.weights).0, 0.0);
+    assert_eq!(max_diff(&plain.output, &masked.output).0, 0.0);
 }
 
 #[test]

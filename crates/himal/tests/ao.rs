@@ -179,19 +179,20 @@ fn stability_mask_is_the_dilated_continuity_mask() {
     assert_eq!(cpu.get(IVec2::new(4, ah as i32 - 4)), 1.0);
 }
 
-fn check_blur(adaptive: bool) -> (f32, f32) {
+/// The blurred AO (no temporal filter) on the GPU, and its twin.
+fn blurred(adaptive: bool, compute: bool, size: (u32, u32)) -> (Vec<[f32; 4]>, Image<[f32; 2]>) {
     let (scene, camera) = load("ao_sphere_on_plane");
     let mut r = renderer(&scene);
-    let size = (96, 64);
     let ao = AoSettings {
         adaptive_blur: adaptive,
+        compute_blur: compute,
         ..ao_settings(AoMode::Hbao)
     };
     let mut s = frame_settings(&scene, size, ao, ViewBuffer::Ao(AoView::Raw));
     let depth = depth_image(&mut r, &camera, &s);
     let raw_full: Image<[f32; 4]> = channel(&render(&mut r, &camera, &s), size);
     s.view = ViewBuffer::Ao(AoView::Ao);
-    let gpu: Image<[f32; 4]> = channel(&render(&mut r, &camera, &s), size);
+    let gpu = render(&mut r, &camera, &s);
     let p = uniform(&s, &camera);
     let (aw, ah) = (p.ao_size[0] as u32, p.ao_size[1] as u32);
     let raw = Image::from_fn(aw, ah, |q| {
@@ -200,8 +201,12 @@ fn check_blur(adaptive: bool) -> (f32, f32) {
     });
     let packed = twin::pack(&p, &depth, &raw);
     let bx = twin::blur(&p, &packed, IVec2::X);
-    let cpu = twin::blur(&p, &bx, IVec2::Y);
-    diff_stats(cpu.data.iter().zip(&gpu.data).map(|(c, g)| (c[0], g[0])))
+    (gpu, twin::blur(&p, &bx, IVec2::Y))
+}
+
+fn check_blur(adaptive: bool) -> (f32, f32) {
+    let (gpu, cpu) = blurred(adaptive, false, (96, 64));
+    diff_stats(cpu.data.iter().zip(&gpu).map(|(c, g)| (c[0], g[0])))
 }
 
 #[test]
@@ -214,6 +219,35 @@ fn pack_and_blur_match_the_cpu_twin() {
             mean < 1.5e-3 && p99 < 4e-3,
             "adaptive {adaptive}: mean {mean}, p99 {p99}"
         );
+    }
+}
+
+/// `--ao-blur-pass compute`: 288 pixels wide, so rows span three
+/// workgroup tiles (128 pixels), the last one partial.
+#[test]
+fn compute_blur_matches_the_cpu_twin_and_the_fragment_blur() {
+    let size = (288, 48);
+    for adaptive in [true, false] {
+        let (compute, cpu) = blurred(adaptive, true, size);
+        let (mean, p99) = diff_stats(cpu.data.iter().zip(&compute).map(|(c, g)| (c[0], g[0])));
+        eprintln!("compute blur, adaptive {adaptive}: twin mean {mean:.2e}, p99 {p99:.2e}");
+        // Measured 2026-12-06 (lavapipe): mean 4.8e-4, p99 8.6e-4 both ways
+        // (the tile keeps the packed values in f32); the fragment blur's thresholds.
+        assert!(
+            mean < 1.5e-3 && p99 < 4e-3,
+            "adaptive {adaptive}: mean {mean}, p99 {p99}"
+        );
+        let (fragment, _) = blurred(adaptive, false, size);
+        let max = fragment
+            .iter()
+            .zip(&compute)
+            .map(|(f, c)| (f[0] - c[0]).abs())
+            .fold(0.0f32, f32::max);
+        eprintln!("compute vs fragment blur, adaptive {adaptive}: max |AO difference| {max:.2e}");
+        // Measured 2026-12-06 (lavapipe): 4.9e-4 both ways, one f16 step at
+        // AO 0.5: the fragment path rounds the packed (AO, Z) to f16, the
+        // tile does not (with the packed texture kept: 0.0). Margin: one step at AO 1.
+        assert!(max < 1e-3, "adaptive {adaptive}: max {max}");
     }
 }
 
@@ -477,6 +511,48 @@ fn ssdo_lookups_match_the_cpu_twin() {
 
 fn ssdo_settings() -> AoSettings {
     ao_settings(AoMode::Ssdo)
+}
+
+/// `--ao ssdo --ao-blur-pass compute`: the tile carries the O4
+/// coefficients (c1, c2) with the AO's weights, as the fragment blur.
+#[test]
+fn compute_blur_carries_the_ssdo_coefficients() {
+    let (scene, camera) = load("ao_box_corner");
+    let size = (160, 64);
+    let ao = AoSettings {
+        compute_blur: true,
+        ..ssdo_settings()
+    };
+    let view = |v| frame_settings(&scene, size, ao.clone(), v);
+    let mut r = renderer(&scene);
+    let depth = depth_image(&mut r, &camera, &view(ViewBuffer::Final));
+    let p = uniform(&view(ViewBuffer::Final), &camera);
+    r.reset_history();
+    let raw_full: Image<[f32; 4]> = channel(
+        &render(&mut r, &camera, &view(ViewBuffer::Ao(AoView::Raw))),
+        size,
+    );
+    let raw = Image::from_fn(p.ao_size[0] as u32, p.ao_size[1] as u32, |q| {
+        raw_full.get(q * 2)
+    });
+    // The first frame: no history, the STF passes the blur through.
+    r.reset_history();
+    let gpu: Image<[f32; 4]> = channel(
+        &render(&mut r, &camera, &view(ViewBuffer::Ao(AoView::Directional))),
+        size,
+    );
+    let packed = twin::pack_ssdo(&p, &depth, &raw);
+    let cpu = twin::blur(&p, &twin::blur(&p, &packed, IVec2::X), IVec2::Y);
+    let pairs = cpu
+        .data
+        .iter()
+        .zip(&gpu.data)
+        .flat_map(|(c, g)| [(c[0], g[0]), (c[2], g[1]), (c[3], g[2])]);
+    let (mean, p99) = diff_stats(pairs);
+    eprintln!("ssdo compute blur: mean {mean:.2e}, p99 {p99:.2e}");
+    // Measured 2026-12-06 (lavapipe): mean 1.8e-4, p99 7.8e-4; the fragment
+    // path's thresholds (ssdo_passes_match_the_cpu_twin).
+    assert!(mean < 1.5e-3 && p99 < 4e-3, "{mean} {p99}");
 }
 
 #[test]

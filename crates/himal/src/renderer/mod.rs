@@ -84,6 +84,7 @@ impl Resources {
             aa: crate::frame::FrameAa {
                 mode: settings.aa,
                 subsample: settings.aa.smaa_subsample(frame_index),
+                edge_mask: settings.smaa_edge_mask,
                 buffers: settings.aa_buffers.any().then_some(settings.aa_buffers),
             },
         })

@@ -42,6 +42,17 @@ fn ao_linear_depth(p: AoParams, d: f32) -> f32 {
     return min(-z_v, AO_SKY_DEPTH);
 }
 
+// ao.pack at full-resolution pixel px: (AO upsampled bilinearly from the AO
+// resolution, linear depth Z, the O4 coefficients c1, c2 alike; (0, 1) for
+// a two-channel hbao). AO texel q holds full-res pixel q * scale, so px
+// sits at q = px / scale. Twin: passes/ao/reference.rs `pack`.
+fn ao_pack(p: AoParams, depth: texture_depth_2d, hbao: texture_2d<f32>, linear_sampler: sampler, px: vec2i) -> vec4f {
+    let z = ao_linear_depth(p, textureLoad(depth, px, 0));
+    let uv = (vec2f(px) / p.hbao_steps.z + 0.5) * p.ao_size.zw;
+    let ao = textureSampleLevel(hbao, linear_sampler, uv, 0.0);
+    return vec4f(ao.x, z, ao.zw);
+}
+
 // Clip w at linear depth z: z (perspective) or 1 (orthographic).
 fn ao_clip_w(p: AoParams, z: f32) -> f32 {
     return p.depth.w - p.depth.z * z;

@@ -22,6 +22,8 @@ pub struct AaFrame<'a> {
     pub mode: AaMode,
     /// SMAA area-table subsample index of this frame.
     pub subsample: u32,
+    /// SMAA blending weights only on edge pixels ([`smaa::MASK_FORMAT`]).
+    pub edge_mask: bool,
     /// Holds the temporal modes' rings ([`temporal::declare_history`]).
     pub history: &'a History,
     /// SMAA pipelines (the `smaa`, `smaa-t2x` and `hraa` modes).
@@ -85,7 +87,8 @@ pub fn add_chain<'a>(
             depth: aa.depth,
             normals: aa.normals,
         };
-        aa.smaa.add(g, inputs, size, aa.subsample, stage)
+        aa.smaa
+            .add(g, inputs, size, aa.subsample, aa.edge_mask, stage)
     } else {
         tonemap(g, stage)
     };

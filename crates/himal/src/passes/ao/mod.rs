@@ -33,6 +33,11 @@ pub const RAW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 pub const STABILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 /// ao.pack and ao.blur_x output: (AO, linear depth).
 pub const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// ao.blur_x's output as a compute pass ([`AoSettings::compute_blur`], ao.pack merged in):
+/// (AO, linear depth, c1, c2); Rg16Float is no core storage format.
+pub const BLURRED_X_STORAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Pixels per `ao.blur_x` compute workgroup (`TILE` in blur_x_cs.wgsl).
+const BLUR_TILE: u32 = 128;
 /// ao.blur_y output and history: (AO, linear depth, N).
 pub const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// SSDO (O4): ao.hbao (AO, continuity, c1, c2), ao.pack / ao.blur_x (AO, Z, c1, c2).
@@ -101,6 +106,9 @@ pub struct AoPass {
     stability: Step,
     pack: Step,
     blur_x: Step,
+    /// `ao.pack` + `ao.blur_x` as one compute pass (both AO modes: it
+    /// reads and writes four channels).
+    blur_x_cs: (Program, wgpu::ComputePipeline),
     blur_y: Step,
     blur_y_stf: Step,
     /// Compiled on the first SSDO frame.
@@ -143,7 +151,10 @@ impl AoPass {
             ..Default::default()
         });
         let stf_off = [("STF", 0.0)];
+        let blur_x_cs = Program::new(ctx, "passes/ao/blur_x_cs.wgsl")?;
+        let blur_x_cs_pipeline = blur_x_cs.compute_pipeline(ctx, "cs_main", &[])?;
         Ok(Self {
+            blur_x_cs: (blur_x_cs, blur_x_cs_pipeline),
             large_scale: large_scale::LargeScalePass::new(ctx)?,
             hbao: Step::new(ctx, "passes/ao/hbao.wgsl", "ao.hbao", RAW_FORMAT, &[])?,
             stability: Step::new(
@@ -288,24 +299,41 @@ impl AoPass {
             .read("hbao_load", raw)
             .color(stability, white)
             .draw();
-        let full = TextureDesc::new_2d(size.0, size.1, packed_format);
-        let packed = graph.create_texture("ao.packed", full.clone());
-        let packed = pack
-            .node(graph, "ao.pack")
-            .uniform("params", params)
-            .read("depth", depth)
-            .read("hbao", raw)
-            .sampler("linear_sampler", sampler)
-            .color(packed, white)
-            .draw();
-        let blurred_x = graph.create_texture("ao.blurred_x", full);
-        let blurred_x = blur_x
-            .node(graph, "ao.blur_x")
-            .uniform("params", params)
-            .read("packed", packed)
-            .sampler("linear_sampler", sampler)
-            .color(blurred_x, white)
-            .draw();
+        let blurred_x = if settings.compute_blur {
+            // ao.pack runs inside the compute blur's tile loads.
+            let desc = TextureDesc::new_2d(size.0, size.1, BLURRED_X_STORAGE_FORMAT);
+            let out = graph.create_texture("ao.blurred_x", desc);
+            let (program, pipeline) = &self.blur_x_cs;
+            let written = graph
+                .compute("ao.blur_x", program)
+                .compute_pipeline(Ok(pipeline.clone()))
+                .uniform("params", params)
+                .read("depth", depth)
+                .read("hbao", raw)
+                .sampler("linear_sampler", sampler)
+                .storage("blurred", out)
+                .dispatch([size.0.div_ceil(BLUR_TILE), size.1, 1]);
+            written.storage.first().copied().unwrap_or(out)
+        } else {
+            let full = TextureDesc::new_2d(size.0, size.1, packed_format);
+            let packed = graph.create_texture("ao.packed", full.clone());
+            let packed = pack
+                .node(graph, "ao.pack")
+                .uniform("params", params)
+                .read("depth", depth)
+                .read("hbao", raw)
+                .sampler("linear_sampler", sampler)
+                .color(packed, white)
+                .draw();
+            let blurred_x = graph.create_texture("ao.blurred_x", full);
+            blur_x
+                .node(graph, "ao.blur_x")
+                .uniform("params", params)
+                .read("packed", packed)
+                .sampler("linear_sampler", sampler)
+                .color(blurred_x, white)
+                .draw()
+        };
         let ring = (settings.mode.temporal())
             .then(|| history.import(graph, HISTORY))
             .flatten();

@@ -16,13 +16,9 @@ override SSDO: bool = false;
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let px = vec2i(frag.xy);
-    let z = ao_linear_depth(params, textureLoad(depth, px, 0));
-    // AO texel q holds the full-res pixel q * scale, so pixel px sits at q = px / scale.
-    let uv = (vec2f(px) / params.hbao_steps.z + 0.5) * params.ao_size.zw;
-    let ao = textureSampleLevel(hbao, linear_sampler, uv, 0.0);
+    let v = ao_pack(params, depth, hbao, linear_sampler, vec2i(frag.xy));
     if (SSDO) {
-        return vec4f(ao.x, z, ao.zw);
+        return v;
     }
-    return vec4f(ao.x, z, 0.0, 1.0);
+    return vec4f(v.xy, 0.0, 1.0);
 }

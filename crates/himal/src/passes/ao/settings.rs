@@ -79,6 +79,12 @@ pub struct AoSettings {
     pub blur_sharpness: f32,
     /// Adaptive sampling (inner half point taps, outer half bilinear step 2) vs brute force.
     pub adaptive_blur: bool,
+    /// `ao.pack` and `ao.blur_x` as one compute pass that packs a
+    /// shared-memory row tile once and reads its taps from it
+    /// (`--ao-blur-pass compute`, #23), instead of a packed texture written
+    /// by one full-screen pass and fetched per tap by another; the same taps
+    /// and weights (the tile keeps f32 where the packed texture was f16).
+    pub compute_blur: bool,
     /// Disocclusion threshold epsilon on |1 - w_i / w_(i-1)| (>= 0).
     pub epsilon: f32,
     /// N_max, the most frames accumulated (>= 1).
@@ -136,6 +142,7 @@ impl Default for AoSettings {
             blur_radius: 8,
             blur_sharpness: 16.0,
             adaptive_blur: true,
+            compute_blur: false,
             epsilon: 0.1,
             n_max: 8.0,
             continuity: 0.1,

@@ -7,6 +7,9 @@
 //   pixels geometry) normals from the quaternion G-buffer apart by more than
 //   acos(NORMAL_COS)
 // Output RG: edge on the left, edge on the top (0/1). CPU twin: smaa/reference.rs.
+// EDGE_MASK (#23, the reference's stencil): pixels without an edge are
+// discarded, so only edge pixels write the mask's depth and
+// aa.smaa.weights (depth test GreaterEqual) shades only them.
 #import view
 #import color
 #import tangent_frame
@@ -21,6 +24,7 @@ override PREDICATION_STRENGTH: f32 = 0.4;
 override NORMAL_PREDICATION: bool = true;
 // cos 25 degrees: creases sharper than that count as geometric edges.
 override NORMAL_COS: f32 = 0.906;
+override EDGE_MASK: bool = false;
 const LOCAL_CONTRAST_ADAPTATION: f32 = 2.0;
 
 @group(0) @binding(0) var color: texture_2d<f32>;
@@ -48,7 +52,15 @@ fn smaa_depth_step(a: f32, b: f32) -> f32 {
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let p = vec2i(frag.xy);
+    let e = smaa_edges(vec2i(frag.xy));
+    if (EDGE_MASK && e.x + e.y == 0.0) {
+        discard;
+    }
+    return vec4f(e, 0.0, 0.0);
+}
+
+// (left, top) edges of pixel p.
+fn smaa_edges(p: vec2i) -> vec2f {
     let l = smaa_luma(p);
     let l_left = smaa_luma(p + vec2i(-1, 0));
     let l_top = smaa_luma(p + vec2i(0, -1));
@@ -71,7 +83,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let delta = abs(vec2f(l) - vec2f(l_left, l_top));
     var edges = step(threshold, delta);
     if (edges.x + edges.y == 0.0) {
-        return vec4f(0.0);
+        return vec2f(0.0);
     }
     let l_right = smaa_luma(p + vec2i(1, 0));
     let l_bottom = smaa_luma(p + vec2i(0, 1));
@@ -81,5 +93,5 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     max_delta = max(max_delta, abs(vec2f(l_left, l_top) - vec2f(l_left_left, l_top_top)));
     let final_delta = max(max_delta.x, max_delta.y);
     edges *= step(vec2f(final_delta), LOCAL_CONTRAST_ADAPTATION * delta);
-    return vec4f(edges, 0.0, 0.0);
+    return edges;
 }

@@ -16,6 +16,27 @@ pub const EDGES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
 /// Blending-weight texture format (RG: top edge, BA: left edge).
 pub const WEIGHTS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
+/// The edge mask (#23, `FrameSettings::smaa_edge_mask`; the reference
+/// implementation's stencil): `aa.smaa.edges` writes depth 0 where a pixel
+/// has an edge (cleared to 1), and `aa.smaa.weights` tests 0 >= mask, so
+/// only edge pixels run the searches. Both full-screen triangles are at
+/// depth 0 (GreaterEqual, not Equal: no reliance on invariant positions).
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth16Unorm;
+
+fn mask_state(write: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: MASK_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(if write {
+            wgpu::CompareFunction::Always
+        } else {
+            wgpu::CompareFunction::GreaterEqual
+        }),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
 /// What the SMAA chain reads.
 #[derive(Clone, Copy)]
 pub struct SmaaInputs {
@@ -33,8 +54,12 @@ pub struct SmaaPass {
     weights_program: Program,
     blend_program: Program,
     edges: wgpu::RenderPipeline,
+    /// `EDGE_MASK`: discards pixels without edges, writes the mask.
+    edges_masked: wgpu::RenderPipeline,
     /// By area-table subsample index (0 = 1x; 1, 2 = T2x frames).
     weights: [wgpu::RenderPipeline; 3],
+    /// The same, depth-tested against the edge mask.
+    weights_masked: [wgpu::RenderPipeline; 3],
     blend: wgpu::RenderPipeline,
     area: wgpu::TextureView,
     search: wgpu::TextureView,
@@ -80,10 +105,15 @@ impl SmaaPass {
         let t = [target(EDGES_FORMAT)];
         let edges =
             edges_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.edges", &t))?;
+        let mut spec = RenderSpec::fullscreen("aa.smaa.edges_masked", &t);
+        spec.constants = &[("EDGE_MASK", 1.0)];
+        spec.depth_stencil = Some(mask_state(true));
+        let edges_masked = edges_program.render_pipeline(ctx, &spec)?;
         let t = [target(WEIGHTS_FORMAT)];
         let w = reference::WeightSettings::default();
-        let weights_for = |index: u32| {
+        let weights_for = |index: u32, masked: bool| {
             let mut spec = RenderSpec::fullscreen("aa.smaa.weights", &t);
+            spec.depth_stencil = masked.then(|| mask_state(false));
             // SMAA T2x's subsample indices: (i, i, i, 0).
             let constants = [
                 ("SUBSAMPLE_H", index as f64),
@@ -96,7 +126,16 @@ impl SmaaPass {
             spec.constants = &constants;
             weights_program.render_pipeline(ctx, &spec)
         };
-        let weights = [weights_for(0)?, weights_for(1)?, weights_for(2)?];
+        let weights = [
+            weights_for(0, false)?,
+            weights_for(1, false)?,
+            weights_for(2, false)?,
+        ];
+        let weights_masked = [
+            weights_for(0, true)?,
+            weights_for(1, true)?,
+            weights_for(2, true)?,
+        ];
         let t = [target(output_format)];
         let blend =
             blend_program.render_pipeline(ctx, &RenderSpec::fullscreen("aa.smaa.blend", &t))?;
@@ -131,7 +170,9 @@ impl SmaaPass {
             weights_program,
             blend_program,
             edges,
+            edges_masked,
             weights,
+            weights_masked,
             blend,
             area,
             search,
@@ -140,34 +181,57 @@ impl SmaaPass {
         })
     }
 
-    /// `aa.smaa.edges` into `out` ([`EDGES_FORMAT`]); returns its new version.
+    /// `aa.smaa.edges` into `out` ([`EDGES_FORMAT`]) and, given one, the
+    /// edge mask ([`MASK_FORMAT`]); returns their new versions.
     pub fn add_edges<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         inputs: SmaaInputs,
         out: TextureHandle,
-    ) -> TextureHandle {
-        graph
+        mask: Option<TextureHandle>,
+    ) -> (TextureHandle, Option<TextureHandle>) {
+        let pipeline = if mask.is_some() {
+            &self.edges_masked
+        } else {
+            &self.edges
+        };
+        let mut node = graph
             .fullscreen("aa.smaa.edges", &self.edges_program)
-            .pipeline(Ok(self.edges.clone()))
+            .pipeline(Ok(pipeline.clone()))
             .read("color", inputs.color)
             .read("depth", inputs.depth)
             .read("gbuffer_frame", inputs.normals)
-            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
-            .draw()
+            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
+        if let Some(m) = mask {
+            let ops = wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            };
+            node = node.depth(m, None, ops);
+        }
+        let written = node.draw_targets();
+        (written.colors[0], written.depth)
     }
 
     /// `aa.smaa.weights` into `out` ([`WEIGHTS_FORMAT`]) with area-table
-    /// `subsample` index (0 for 1x; T2x frames use 1 and 2); returns its new version.
+    /// `subsample` index (0 for 1x; T2x frames use 1 and 2), only where
+    /// `mask` (from [`Self::add_edges`]) marks an edge when given; returns
+    /// its new version (0 where masked off, as the unmasked pass writes there).
     pub fn add_weights<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         edges: TextureHandle,
+        mask: Option<TextureHandle>,
         out: TextureHandle,
         subsample: u32,
     ) -> TextureHandle {
-        let pipeline = &self.weights[(subsample as usize).min(2)];
-        graph
+        let set = if mask.is_some() {
+            &self.weights_masked
+        } else {
+            &self.weights
+        };
+        let pipeline = &set[(subsample as usize).min(2)];
+        let node = graph
             .fullscreen("aa.smaa.weights", &self.weights_program)
             .pipeline(Ok(pipeline.clone()))
             .read("edges_tex", edges)
@@ -175,8 +239,11 @@ impl SmaaPass {
             .external("search_tex", &self.search)
             .sampler("linear_sampler", &self.linear)
             .sampler("point_sampler", &self.point)
-            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
-            .draw()
+            .color(out, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
+        match mask {
+            Some(m) => node.depth_test(m).draw(),
+            None => node.draw(),
+        }
     }
 
     /// `aa.smaa.blend` into `output`; returns its new version.
@@ -197,21 +264,25 @@ impl SmaaPass {
             .draw()
     }
 
-    /// The whole chain: edges → weights (area table `subsample`) → blend into `output`.
+    /// The whole chain: edges → weights (area table `subsample`; only on
+    /// edge pixels with `edge_mask`) → blend into `output`.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         inputs: SmaaInputs,
         size: (u32, u32),
         subsample: u32,
+        edge_mask: bool,
         output: TextureHandle,
     ) -> TextureHandle {
         let (w, h) = size;
         let edges = graph.create_texture("aa.smaa.edges", TextureDesc::new_2d(w, h, EDGES_FORMAT));
-        let edges = self.add_edges(graph, inputs, edges);
+        let mask = edge_mask
+            .then(|| graph.create_texture("aa.smaa.mask", TextureDesc::new_2d(w, h, MASK_FORMAT)));
+        let (edges, mask) = self.add_edges(graph, inputs, edges, mask);
         let weights =
             graph.create_texture("aa.smaa.weights", TextureDesc::new_2d(w, h, WEIGHTS_FORMAT));
-        let weights = self.add_weights(graph, edges, weights, subsample);
+        let weights = self.add_weights(graph, edges, mask, weights, subsample);
         self.add_blend(graph, inputs.color, weights, output)
     }
 }
