@@ -152,3 +152,29 @@ fn a_probe_over_flat_open_ground_sees_the_ground_the_terrain_shader_paints() {
         assert!((0.9..1.3).contains(&ratio[c]), "channel {c}: {ratio}");
     }
 }
+
+#[test]
+fn the_background_baker_fills_the_near_blocks_then_the_coarse_mips() {
+    // The 1 km world has one mip-4 cell: the background thread bakes the
+    // near blocks, then the rest, until the mip-4 cell exists.
+    let world = small_world();
+    let probes = WorldProbes::new(world.clone(), quick(), None, None).unwrap();
+    probes.start();
+    let camera = world.origin + 100.0;
+    let start = std::time::Instant::now();
+    let top = CellKey { mip: 4, x: 0, z: 0 };
+    while !probes.contains(top) {
+        probes.follow(camera);
+        assert!(
+            start.elapsed().as_secs() < 300,
+            "not done in 5 min: {} cells held",
+            probes.held()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    println!(
+        "background: all 341 cells in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    assert_eq!(probes.held(), 341);
+}

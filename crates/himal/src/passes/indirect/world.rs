@@ -16,7 +16,8 @@
 //! cell is, the clip map holds the flat ground's bounce. Synchronously
 //! ([`WorldProbes::follow`] bakes before the frame: headless renders stay
 //! deterministic) or on a background thread ([`WorldProbes::start`]: the
-//! viewer never waits). Cells farther than [`KEEP_RADIUS`] leave memory.
+//! viewer never waits, and the far blocks under mips 3 and 4 are baked
+//! too, nearest first). Cells farther than [`KEEP_RADIUS`] leave memory.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -539,8 +540,17 @@ impl Shared {
                 .any(|b| !self.has_block(*b))
     }
 
-    /// The background thread: waits for a camera, prepares around it, and
-    /// again whenever [`Self::needs`] says so.
+    /// The nearest block under the wanted mip-3/4 cells that is not held.
+    fn next_far(&self, camera: Vec2) -> Option<IVec2> {
+        self.wanted_blocks(camera)
+            .1
+            .into_iter()
+            .find(|b| !self.has_block(*b))
+    }
+
+    /// The background thread: waits for a camera, prepares around it
+    /// whenever [`Self::needs`] says so, and in between bakes the far
+    /// blocks one at a time (nearest first), so mips 3 and 4 fill in.
     fn serve(&self) {
         crate::scene::world::stream::lower_priority();
         let mut done_for: Option<IVec2> = None;
@@ -554,7 +564,7 @@ impl Shared {
                         return;
                     }
                     if let Some(c) = *cam
-                        && self.needs(c, done_for)
+                        && (self.needs(c, done_for) || self.next_far(c).is_some())
                     {
                         break c;
                     }
@@ -564,8 +574,12 @@ impl Shared {
                     };
                 }
             };
-            done_for = Some(self.block_of(camera));
-            self.prepare(camera, true);
+            if self.needs(camera, done_for) {
+                done_for = Some(self.block_of(camera));
+                self.prepare(camera, true);
+            } else if let Some(b) = self.next_far(camera) {
+                self.load_block(b, true, &mut BakeReport::default());
+            }
         }
     }
 
