@@ -542,16 +542,21 @@ fn resolve(linear: &[Vec3], size: usize, ss: usize) -> Vec<[f32; 3]> {
                     c += linear[(y * ss + sy) * m + x * ss + sx];
                 }
             }
-            (c / (ss * ss) as f32).to_array().map(|v| {
-                let v = v.clamp(0.0, 1.0);
-                if v <= 0.003_130_8 {
-                    12.92 * v
-                } else {
-                    1.055 * v.powf(1.0 / 2.4) - 0.055
-                }
-            })
+            encode_srgb(c / (ss * ss) as f32)
         })
         .collect()
+}
+
+/// sRGB encoding of a linear colour, clamped to [0, 1].
+fn encode_srgb(c: Vec3) -> [f32; 3] {
+    c.to_array().map(|v| {
+        let v = v.clamp(0.0, 1.0);
+        if v <= 0.003_130_8 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        }
+    })
 }
 
 /// The full tree (LOD0) seen orthographically along `-dir`, `size`² pixels
@@ -916,6 +921,36 @@ mod fidelity {
                 {
                     worst.2 = views[i].1;
                 }
+                // The atlas: shaded colour over the sky (left), depth (right).
+                let n = ATLAS_SIZE;
+                let mut atlas = vec![[0.0f32; 3]; 2 * n * n];
+                for i in 0..n * n {
+                    let (c, nm) = (imp.color[i], imp.normal[i]);
+                    let a = f32::from(c[3]) / 255.0;
+                    let normal = Vec3::from(
+                        nm.map(|v| f32::from(v) / 127.5 - 1.0)[..3]
+                            .try_into()
+                            .unwrap_or([0.0; 3]),
+                    );
+                    let lit = look.shade(f32::from(c[0]) / 255.0, f32::from(c[1]) / 255.0, normal);
+                    let (x, y) = (i % n, i / n);
+                    atlas[y * 2 * n + x] = encode_srgb(look.sky.lerp(lit, a));
+                    let d = imp.depth_at(i) * 0.5 + 0.5;
+                    atlas[y * 2 * n + n + x] = [d, d, d];
+                }
+                let bytes: Vec<u8> = atlas
+                    .iter()
+                    .flat_map(|c| c.map(|v| (v * 255.0).round() as u8))
+                    .collect();
+                let path = Path::new(&dir).join(format!("V3-{}-atlas.png", species.name()));
+                image::save_buffer(
+                    &path,
+                    &bytes,
+                    2 * n as u32,
+                    n as u32,
+                    image::ColorType::Rgb8,
+                )
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
                 for (kind, img) in [
                     ("mesh", render_mesh(&model, worst.2, SIZE * big, SS, &look)),
                     (
