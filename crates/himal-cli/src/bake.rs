@@ -4,7 +4,8 @@
 //! L5 (`--probes`): a scene's radiance-transfer probe cells, resumable
 //! (cells already in the cache are kept).
 //! V1 (`--trees`): the leaf LODs (visibility scores, card scales) of every
-//! tree a scene places, into the tree cache scene loading reads.
+//! tree a scene places, into the tree cache scene loading reads, and V3's
+//! impostor atlases (nine captures per tree) beside them.
 
 use std::time::Instant;
 
@@ -27,7 +28,7 @@ pub struct BakeArgs {
     /// Recompute tables (and, with `--probes`, cells) the cache already holds.
     #[arg(long)]
     pub force: bool,
-    /// V1: bake the leaf LODs of the trees `--scene` places (instead of sky tables).
+    /// V1/V3: bake the leaf LODs and impostor atlases of the trees `--scene` places (instead of sky tables).
     #[arg(long)]
     pub trees: bool,
     /// The scene whose probes (`--probes`) or trees (`--trees`) are baked:
@@ -195,13 +196,21 @@ fn bake_trees(dir: &std::path::Path, args: &BakeArgs) -> Result<()> {
         if args.force {
             let _ = std::fs::remove_file(&path);
         }
+        let imp_path = tree::impostor::cache_file(dir, *species, *seed);
+        if args.force {
+            let _ = std::fs::remove_file(&imp_path);
+        }
         let (_, read) = bake::load_or_bake_in(dir, &model, *seed);
-        if read {
+        // V3: the nine impostor captures beside the leaf LODs.
+        let (_, imp_read) = tree::impostor::load_or_bake_in(dir, &model, *seed);
+        if read && imp_read {
             cached += 1;
         } else {
             baked += 1;
-            if !path.exists() {
-                bail!("bake: could not write {}", path.display());
+            for p in [&path, &imp_path] {
+                if !p.exists() {
+                    bail!("bake: could not write {}", p.display());
+                }
             }
         }
         bar.inc(1);

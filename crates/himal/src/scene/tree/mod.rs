@@ -14,6 +14,7 @@
 //! vertex colour between the leaf material and the tint colour (V5).
 
 pub mod bake;
+pub mod impostor;
 pub mod visibility;
 
 use std::ops::Range;
