@@ -511,6 +511,15 @@ pub struct ShadowArgs {
         allow_hyphen_values = true
     )]
     pub shadow_mask_tiles: String,
+    /// glTF MASK and BLEND shadow casters alpha-tested (a leaf card casts
+    /// its holes; BLEND as a mask at 0.5), or cast as opaque cards.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub shadow_alpha_test: String,
 }
 
 impl ShadowArgs {
@@ -555,6 +564,11 @@ impl ShadowArgs {
             "on" => true,
             "off" => false,
             other => bail!("--shadow-mask-tiles {other}: expected on or off"),
+        };
+        s.alpha_test = match self.shadow_alpha_test.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--shadow-alpha-test {other}: expected on or off"),
         };
         s.validate()?;
         Ok(())

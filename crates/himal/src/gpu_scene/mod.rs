@@ -176,6 +176,10 @@ pub struct SceneGpu {
     pub draws_unlit: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
     pub materials: Option<textures::MaterialTextures>,
+    /// Per object (GPU order): the material of a glTF MASK or BLEND (not
+    /// transmissive) object, which casts shadows alpha-tested
+    /// (`passes/shadows/depth_masked.wgsl`); `None` for the rest.
+    pub alpha_casters: Vec<Option<usize>>,
     /// Moving objects with their index into `objects`, rewritten per frame.
     pub animated: Vec<(u32, Object)>,
     /// World bounds of each object over all time (GPU order): culling.
@@ -320,6 +324,7 @@ impl SceneGpu {
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
         let mut object_mesh = Vec::with_capacity(scene.objects.len());
         let mut vegetation_objects = Vec::with_capacity(scene.objects.len());
+        let mut alpha_casters = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
         for (i, object) in gpu_order(scene)
             .into_iter()
@@ -356,6 +361,7 @@ impl SceneGpu {
             bounds.push(b);
             object_mesh.push(object.mesh as u32);
             vegetation_objects.push(object.is_vegetation(&scene.meshes));
+            alpha_casters.push(alpha_caster(scene, object));
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
@@ -436,6 +442,7 @@ impl SceneGpu {
                 draws_layered: lists.layered,
                 draws_unlit: lists.unlit,
                 materials,
+                alpha_casters,
                 animated,
                 bounds,
                 cull_bounds,
@@ -488,6 +495,16 @@ impl SceneGpu {
             job.animated.play(name);
         }
     }
+}
+
+/// The material of `object` when it casts shadows alpha-tested: a glTF
+/// MASK or BLEND material that does not transmit (transmissive surfaces cast
+/// nothing, docs/gltf.md).
+fn alpha_caster(scene: &Scene, object: &Object) -> Option<usize> {
+    let material = scene.pbr.material_of(object.mesh)?;
+    let m = scene.pbr.materials.get(material)?;
+    let alpha = !matches!(m.alpha_mode, crate::scene::gltf::AlphaMode::Opaque);
+    (alpha && !m.transmits()).then_some(material)
 }
 
 /// `ObjectGpu::params` of an object: its foliage, zero for opaque objects.

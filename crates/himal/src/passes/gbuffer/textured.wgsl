@@ -65,7 +65,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let emissive = textureSampleBias(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv), MIP_BIAS).rgb;
     let spec_a = textureSampleBias(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv), MIP_BIAS).a;
     let spec_rgb = textureSampleBias(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv), MIP_BIAS).rgb;
-    if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
+    if (gltf_cut_out(alpha, false)) {
         discard;
     }
     let facing = gltf_facing(in.normal, in.tangent, front);
