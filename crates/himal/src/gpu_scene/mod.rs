@@ -14,6 +14,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
+pub mod morph;
 pub mod skin;
 pub mod textures;
 pub mod uniforms;
@@ -217,6 +218,8 @@ pub struct SceneGpu {
     pub vegetation_objects: Vec<bool>,
     /// Skinned meshes (`passes/skin`); `None` without any.
     pub skins: Option<skin::SkinGpu>,
+    /// Meshes with animated morph weights, morphed by `update_objects`.
+    pub morphs: Vec<morph::MorphJob>,
     /// Unique per upload: what caches of scene resources are keyed by
     /// ([`textures::MaterialGroups`]).
     pub id: u64,
@@ -317,6 +320,25 @@ impl SceneGpu {
             }
             skin::SkinGpu::new(&ctx.device, jobs, &sources, &vertices[..sources.len()], 0)
         });
+        // Morphed meshes: the first object animating each.
+        let mut morphs: Vec<morph::MorphJob> = Vec::new();
+        for o in &scene.objects {
+            let Some(a) = o.motion.as_ref().and_then(|m| m.animated.as_ref()) else {
+                continue;
+            };
+            let Some(&(_, _, first_vertex)) = ranges.get(o.mesh) else {
+                continue;
+            };
+            if a.morph.is_none() || morphs.iter().any(|j| j.first_vertex == first_vertex as u32) {
+                continue;
+            }
+            morphs.push(morph::MorphJob {
+                animated: a.clone(),
+                first_vertex: first_vertex as u32,
+                rest: scene.meshes[o.mesh].vertices.clone(),
+                written: std::sync::Mutex::new(None),
+            });
+        }
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut lists = draws::DrawLists::default();
         let mut animated = Vec::new();
@@ -459,6 +481,7 @@ impl SceneGpu {
                 vegetation: AtomicBool::new(true),
                 vegetation_objects,
                 skins,
+                morphs,
                 id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             }
         })
@@ -480,6 +503,9 @@ impl SceneGpu {
         if let Some(skins) = &self.skins {
             skins.update(queue, time);
         }
+        for job in &self.morphs {
+            job.update(queue, &self.vertices, time);
+        }
     }
 
     /// Plays glTF animation `name` on the uploaded objects whose file has
@@ -492,6 +518,9 @@ impl SceneGpu {
             }
         }
         for job in self.skins.iter_mut().flat_map(|s| &mut s.jobs) {
+            job.animated.play(name);
+        }
+        for job in &mut self.morphs {
             job.animated.play(name);
         }
     }
