@@ -131,6 +131,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub specular_aa: String,
+    /// Motion vectors of skinned glTF vertices from their previous frame's
+    /// pose (off: from the object's transform only, as before issue #22).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub deform_motion: String,
     /// V1 vegetation: trees, bushes and grass drawn (off: skipped in every
     /// pass; the frame then culls on the CPU).
     #[arg(
@@ -393,6 +402,7 @@ impl PostArgs {
         settings.bent_normals = on_off("--bent-normals", &self.bent_normals)?;
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
+        settings.deform_motion = on_off("--deform-motion", &self.deform_motion)?;
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;

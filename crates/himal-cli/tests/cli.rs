@@ -564,6 +564,14 @@ fn bad_shadow_mask_switches_are_rejected() {
 }
 
 #[test]
+fn bad_deform_motion_switch_is_rejected() {
+    fails_with(
+        &["render", "--deform-motion", "maybe", "--size", "8x8"],
+        "--deform-motion",
+    );
+}
+
+#[test]
 fn bad_vegetation_switch_is_rejected() {
     fails_with(
         &["render", "--vegetation", "maybe", "--size", "8x8"],

@@ -236,6 +236,10 @@ pub struct FrameSettings {
     /// E3 specular anti-aliasing: glTF roughness widened by the normal
     /// variance baked into normal-map mips (Toksvig; on by default).
     pub specular_aa: bool,
+    /// Motion vectors of skinned vertices from their previous frame's pose
+    /// (`passes/skin`, `shaders/deform.wgsl`); off: from the object's
+    /// transform only (TAA then smears moving limbs).
+    pub deform_motion: bool,
     /// R4: Burley's remapped roughness ((1 + r) / 2)^2 in the visibility
     /// term of the sun and local lights, less specular gain on rough
     /// surfaces at grazing light (off by default; docs/techniques/R4.md).
@@ -344,6 +348,7 @@ impl FrameSettings {
             envmap_every_frame: false,
             sky_model: Default::default(),
             specular_aa: true,
+            deform_motion: true,
             visibility_remap: false,
             ambient_lights: true,
             wetness: 0.0,

@@ -220,6 +220,9 @@ pub struct SceneGpu {
     pub skins: Option<skin::SkinGpu>,
     /// Meshes with animated morph weights, morphed by `update_objects`.
     pub morphs: Vec<morph::MorphJob>,
+    /// A `deform_prev` header of count 0 (`shaders/deform.wgsl`): bound
+    /// without skins or with `--deform-motion off`.
+    pub no_deform: wgpu::Buffer,
     /// Unique per upload: what caches of scene resources are keyed by
     /// ([`textures::MaterialGroups`]).
     pub id: u64,
@@ -482,6 +485,11 @@ impl SceneGpu {
                 vegetation_objects,
                 skins,
                 morphs,
+                no_deform: init(
+                    "scene.no_deform",
+                    bytemuck::cast_slice(&[skin::deform_header(0, 0)]),
+                    wgpu::BufferUsages::STORAGE,
+                ),
                 id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             }
         })
@@ -501,10 +509,20 @@ impl SceneGpu {
             queue.write_buffer(&self.objects, offset, bytemuck::bytes_of(&gpu));
         }
         if let Some(skins) = &self.skins {
-            skins.update(queue, time);
+            skins.update(queue, time, prev_time);
         }
         for job in &self.morphs {
             job.update(queue, &self.vertices, time);
+        }
+    }
+
+    /// The `deform_prev` buffer the G-buffer binds: the skin pass's
+    /// previous-frame positions (with `on` and skinned meshes), else a
+    /// header of count 0.
+    pub fn deform_prev(&self, on: bool) -> &wgpu::Buffer {
+        match (&self.skins, on) {
+            (Some(s), true) => &s.prev,
+            _ => &self.no_deform,
         }
     }
 
