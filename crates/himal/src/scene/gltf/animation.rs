@@ -591,7 +591,7 @@ pub(super) fn read_rig(
                 // value, out-tangent for cubic splines) of target k is
                 // output (j · per_key + s) · n + k.
                 let per = times.len() * per_key;
-                let n = if per > 0 { values.len() / per } else { 0 };
+                let n = values.len().checked_div(per).unwrap_or(0);
                 if n == 0 || n * per != values.len() || n > MAX_KEYS {
                     return Err(bad(format!(
                         "a weights channel has {} values for {} keys",
