@@ -218,7 +218,7 @@ fn skinning_on_the_gpu_matches_its_cpu_twin() {
     );
     // The previous frame's pose (motion vectors): header, then each
     // vertex under the joints at t_prev.
-    let bytes = himal::gpu::read_buffer(&ctx, &skins.prev).expect("read back");
+    let bytes = himal::gpu::read_buffer(&ctx, &gpu.deform).expect("read back");
     let prev: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
     assert_eq!(prev[0][0].to_bits(), skins.first_vertex);
     assert_eq!(prev[0][1].to_bits(), 1728);
@@ -403,42 +403,33 @@ fn the_frame_draws_the_morph_at_its_time() {
     assert!(moved > 5e-3, "the morph changed the image: {moved}");
 }
 
-/// Issue #22: skinned vertices' motion vectors carry the deformation. The
-/// Fox walking in place (its transform still, the camera still), frames at
-/// t0 then t1: per pixel the CPU twin ray-casts the CPU-skinned pose at t1,
-/// takes the hit's barycentric mix of the same vertices skinned at t0, and
-/// projects both: motion = previous − current pixel position. With
-/// `deform_motion` off (the object's transform only, as before) the fox's
-/// pixels have no motion.
-#[test]
-fn skinned_motion_vectors_match_the_previous_pose() {
+/// Motion vectors of a deforming mesh against the CPU twin: frames at t0
+/// then t1 (the camera still); per pixel the twin ray-casts the shape at t1
+/// (`posed(t1)`, world positions of `indices`' vertices), takes the hit's
+/// barycentric mix of the same vertices at t0, and projects both: motion =
+/// previous − current pixel position. Returns (pixels hit, of them moving >
+/// 0.5 px, median and 90th percentile |GPU − CPU| in px, share within
+/// 0.05 px, the largest motion with `deform_motion` off).
+fn deformation_motion(
+    scene: &Scene,
+    camera: &himal::scene::Camera,
+    (t0, t1): (f32, f32),
+    indices: &[u32],
+    posed: impl Fn(f32) -> Vec<Vec3>,
+) -> (usize, usize, f32, f32, f32, f32) {
     use glam::Vec2;
-    let mut scene = Scene::from_gltf(&common::gltf_sample("Fox")).unwrap();
-    scene.set_animation(Some("Walk")).unwrap();
-    let camera = gltf::orbit_camera(&scene.bounds, 90.0, 10.0, None, 40.0);
     let size = (128u32, 96u32);
-    let (t0, t1) = (0.4f32, 0.4 + 1.0 / 15.0);
     let frames = |deform: bool| {
-        let mut r = common::renderer(&scene);
-        let mut s = common::raw_settings(&scene, size, "motion");
+        let mut r = common::renderer(scene);
+        let mut s = common::raw_settings(scene, size, "motion");
         s.aa = himal::passes::aa::AaMode::None;
         s.deform_motion = deform;
         s.time_s = t0;
-        common::render_rgba(&mut r, &camera, &s);
+        common::render_rgba(&mut r, camera, &s);
         s.time_s = t1;
-        common::render_rgba(&mut r, &camera, &s)
+        common::render_rgba(&mut r, camera, &s)
     };
     let (on, off) = (frames(true), frames(false));
-    let a = animated(&scene)[0].clone();
-    let object = &scene.objects[0];
-    let mesh = &scene.meshes[object.mesh];
-    let sources = &a.skin.as_ref().unwrap().1;
-    let posed = |t: f32| -> Vec<Vec3> {
-        let (joints, model) = (a.joints_at(t), object.transform_at(t));
-        (sources.iter())
-            .map(|v| model.transform_point3(Vec3::from(skin_vertex(v, &joints).0)))
-            .collect()
-    };
     let (now, before) = (posed(t1), posed(t0));
     let project = |p: Vec3| {
         let (w, h) = (size.0 as f32, size.1 as f32);
@@ -449,8 +440,8 @@ fn skinned_motion_vectors_match_the_previous_pose() {
     let (mut errors, mut moving, mut off_max) = (Vec::new(), 0usize, 0.0f32);
     for y in 0..size.1 {
         for x in 0..size.0 {
-            let d = common::pixel_ray(&camera, size, x, y);
-            let hit = (mesh.indices.chunks_exact(3))
+            let d = common::pixel_ray(camera, size, x, y);
+            let hit = (indices.chunks_exact(3))
                 .filter_map(|tri| {
                     let i = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
                     let (t, b) = common::ray_triangle(camera.position, d, i.map(|k| now[k]))?;
@@ -469,9 +460,40 @@ fn skinned_motion_vectors_match_the_previous_pose() {
         }
     }
     errors.sort_by(f32::total_cmp);
-    let n = errors.len();
-    let (median, p90) = (errors[n / 2], errors[n * 9 / 10]);
+    let n = errors.len().max(1);
     let within = errors.iter().filter(|&&e| e < 0.05).count() as f32 / n as f32;
+    let at = |q: usize| errors.get(q).copied().unwrap_or(f32::INFINITY);
+    (
+        errors.len(),
+        moving,
+        at(n / 2),
+        at(n * 9 / 10),
+        within,
+        off_max,
+    )
+}
+
+/// Issue #22: skinned vertices' motion vectors carry the deformation: the
+/// Fox walking in place (its transform still) against the CPU twin
+/// ([`deformation_motion`]). With `deform_motion` off (the object's
+/// transform only, as before) the fox's pixels have no motion.
+#[test]
+fn skinned_motion_vectors_match_the_previous_pose() {
+    let mut scene = Scene::from_gltf(&common::gltf_sample("Fox")).unwrap();
+    scene.set_animation(Some("Walk")).unwrap();
+    let camera = gltf::orbit_camera(&scene.bounds, 90.0, 10.0, None, 40.0);
+    let a = animated(&scene)[0].clone();
+    let object = &scene.objects[0];
+    let sources = &a.skin.as_ref().unwrap().1;
+    let posed = |t: f32| -> Vec<Vec3> {
+        let (joints, model) = (a.joints_at(t), object.transform_at(t));
+        (sources.iter())
+            .map(|v| model.transform_point3(Vec3::from(skin_vertex(v, &joints).0)))
+            .collect()
+    };
+    let indices = &scene.meshes[object.mesh].indices;
+    let (n, moving, median, p90, within, off_max) =
+        deformation_motion(&scene, &camera, (0.4, 0.4 + 1.0 / 15.0), indices, posed);
     eprintln!(
         "fox: {n} px, {moving} moving > 0.5 px; |GPU - CPU| median {median:.4} px, 90th percentile {p90:.4} px, {:.1}% within 0.05 px; deform motion off: max {off_max:.4} px",
         100.0 * within
@@ -487,5 +509,39 @@ fn skinned_motion_vectors_match_the_previous_pose() {
     assert!(
         off_max < 1e-3,
         "without deformation motion the fox is still: {off_max}"
+    );
+}
+
+/// Morphed vertices likewise: SimpleMorph between two of its keys (the
+/// node still) against the CPU morph at t0 and t1.
+#[test]
+fn morphed_motion_vectors_match_the_previous_shape() {
+    let scene = Scene::from_gltf(&common::gltf_sample("SimpleMorph")).unwrap();
+    let camera = gltf::orbit_camera(&scene.bounds, 0.0, 0.0, None, 40.0);
+    let a = animated(&scene)[0].clone();
+    let object = &scene.objects[0];
+    let mesh = &scene.meshes[object.mesh];
+    let posed = |t: f32| -> Vec<Vec3> {
+        let mut v = mesh.vertices.clone();
+        a.morph.as_ref().unwrap().apply(&mut v, &a.weights_at(t));
+        let model = object.transform_at(t);
+        v.iter()
+            .map(|v| model.transform_point3(Vec3::from(v.position)))
+            .collect()
+    };
+    let (n, moving, median, p90, within, off_max) =
+        deformation_motion(&scene, &camera, (1.4, 1.5), &mesh.indices, posed);
+    eprintln!(
+        "SimpleMorph: {n} px, {moving} moving > 0.5 px; |GPU - CPU| median {median:.4} px, 90th percentile {p90:.4} px, {:.1}% within 0.05 px; deform motion off: max {off_max:.4} px",
+        100.0 * within
+    );
+    assert!(n > 500 && moving > 100, "{n} px, {moving} moving");
+    assert!(
+        median < 0.01 && within > 0.97,
+        "median {median}, within {within}"
+    );
+    assert!(
+        off_max < 1e-3,
+        "without deformation motion the shape is still: {off_max}"
     );
 }

@@ -220,8 +220,11 @@ pub struct SceneGpu {
     pub skins: Option<skin::SkinGpu>,
     /// Meshes with animated morph weights, morphed by `update_objects`.
     pub morphs: Vec<morph::MorphJob>,
-    /// A `deform_prev` header of count 0 (`shaders/deform.wgsl`): bound
-    /// without skins or with `--deform-motion off`.
+    /// The deformed vertices' previous-frame positions (`shaders/deform.wgsl`:
+    /// header, then the skinned meshes' (written by `passes/skin`) and the
+    /// morphed meshes' (written by `update_objects`), from vertex 0).
+    pub deform: wgpu::Buffer,
+    /// A `deform_prev` header of count 0: bound with `--deform-motion off`.
     pub no_deform: wgpu::Buffer,
     /// Unique per upload: what caches of scene resources are keyed by
     /// ([`textures::MaterialGroups`]).
@@ -247,6 +250,20 @@ fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
             continue;
         }
         out.push((o.mesh, a.clone()));
+    }
+    out
+}
+
+/// The meshes of `scene` whose morph weights a clip animates (each once).
+fn morph_meshes(scene: &Scene) -> Vec<usize> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let morphed = (o.motion.as_ref())
+            .and_then(|m| m.animated.as_ref())
+            .is_some_and(|a| a.morph.is_some());
+        if morphed && o.mesh < scene.meshes.len() && !out.contains(&o.mesh) {
+            out.push(o.mesh);
+        }
     }
     out
 }
@@ -286,10 +303,30 @@ impl SceneGpu {
         let mut lods = vec![Vec::new(); n];
         let mut mean_area = vec![0.0; n];
         let mut area_histograms = vec![Vec::new(); n];
-        // Skinned meshes first: one range the skin pass copies into.
+        // Skinned meshes first: one range the skin pass copies into; then
+        // the morphed ones: together the deformed range (`deform`).
         let skinned = skin_jobs(scene);
-        let mut order: Vec<usize> = skinned.iter().map(|(mesh, _)| *mesh).collect();
-        order.extend((0..n).filter(|m| !skinned.iter().any(|(s, _)| s == m)));
+        let morphed = morph_meshes(scene);
+        let mut placed = vec![false; n];
+        let mut order: Vec<usize> = Vec::with_capacity(n);
+        let deformed_meshes =
+            (skinned.iter().map(|(mesh, _)| *mesh)).chain(morphed.iter().copied());
+        for m in deformed_meshes.chain(0..n) {
+            if m < n && !placed[m] {
+                placed[m] = true;
+                order.push(m);
+            }
+        }
+        let deformed_count: usize = (order.iter())
+            .take(
+                skinned.len()
+                    + morphed
+                        .iter()
+                        .filter(|m| !skinned.iter().any(|(s, _)| s == *m))
+                        .count(),
+            )
+            .map(|&m| scene.meshes[m].vertices.len())
+            .sum();
         for mi in order {
             let mesh = &scene.meshes[mi];
             ranges[mi] = (
@@ -339,9 +376,16 @@ impl SceneGpu {
                 animated: a.clone(),
                 first_vertex: first_vertex as u32,
                 rest: scene.meshes[o.mesh].vertices.clone(),
-                written: std::sync::Mutex::new(None),
+                written: Default::default(),
             });
         }
+        // The deformed range: the skinned and morphed meshes, from vertex 0.
+        let deformed = deformed_count.min(vertices.len());
+        let mut deform: Vec<[f32; 4]> = vertices[..deformed]
+            .iter()
+            .map(|v| [v.position[0], v.position[1], v.position[2], 1.0])
+            .collect();
+        deform.insert(0, skin::deform_header(0, deformed as u32));
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut lists = draws::DrawLists::default();
         let mut animated = Vec::new();
@@ -485,6 +529,13 @@ impl SceneGpu {
                 vegetation_objects,
                 skins,
                 morphs,
+                deform: init(
+                    "scene.deform",
+                    bytemuck::cast_slice(&deform),
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                ),
                 no_deform: init(
                     "scene.no_deform",
                     bytemuck::cast_slice(&[skin::deform_header(0, 0)]),
@@ -512,17 +563,16 @@ impl SceneGpu {
             skins.update(queue, time, prev_time);
         }
         for job in &self.morphs {
-            job.update(queue, &self.vertices, time);
+            job.update(queue, (&self.vertices, &self.deform), (time, prev_time));
         }
     }
 
-    /// The `deform_prev` buffer the G-buffer binds: the skin pass's
-    /// previous-frame positions (with `on` and skinned meshes), else a
-    /// header of count 0.
+    /// The `deform_prev` buffer the G-buffer binds: the deformed vertices'
+    /// previous-frame positions (`on`), else a header of count 0.
     pub fn deform_prev(&self, on: bool) -> &wgpu::Buffer {
-        match (&self.skins, on) {
-            (Some(s), true) => &s.prev,
-            _ => &self.no_deform,
+        match on {
+            true => &self.deform,
+            false => &self.no_deform,
         }
     }
 

@@ -30,11 +30,9 @@ pub struct SkinGpu {
     pub skinned: wgpu::Buffer,
     /// Uniform: (vertex count, 0, 0, 0).
     pub params: wgpu::Buffer,
-    /// The joint matrices at the previous frame's time.
+    /// The joint matrices at the previous frame's time (the skin pass
+    /// writes the previous positions into `SceneGpu::deform`).
     pub prev_joints: wgpu::Buffer,
-    /// Header (first vertex, count as u32 bits), then each skinned
-    /// vertex's position at the previous frame's time (`shaders/deform.wgsl`).
-    pub prev: wgpu::Buffer,
     /// Skinned vertices of all jobs.
     pub vertex_count: u32,
     /// The first skinned vertex in the scene's vertex buffer.
@@ -64,20 +62,10 @@ impl SkinGpu {
         let count = [sources.len() as u32, 0, 0, 0];
         use wgpu::BufferUsages as U;
         let joint_bytes = vec![0u8; joint_count.max(1) as usize * 64];
-        let mut prev: Vec<[f32; 4]> = rest
-            .iter()
-            .map(|v| [v.position[0], v.position[1], v.position[2], 1.0])
-            .collect();
-        prev.insert(0, deform_header(first_vertex, sources.len() as u32));
         SkinGpu {
             sources: init("skin.sources", bytemuck::cast_slice(sources), U::STORAGE),
             joints: init("skin.joints", &joint_bytes, U::STORAGE | U::COPY_DST),
             prev_joints: init("skin.prev_joints", &joint_bytes, U::STORAGE | U::COPY_DST),
-            prev: init(
-                "skin.prev",
-                bytemuck::cast_slice(&prev),
-                U::STORAGE | U::COPY_SRC,
-            ),
             skinned: init(
                 "skin.skinned",
                 bytemuck::cast_slice(rest),

@@ -37,7 +37,7 @@ fn vs_main(in: GBufferVertexIn, @builtin(vertex_index) vertex: u32) -> VertexOut
     var out: VertexOut;
     out.uv = vec4f(in.uv, in.uv1);
     out.curr_clip = v.clip;
-    // Skinned vertices: the previous frame's pose, not only its transform.
+    // Skinned and morphed vertices: the previous frame's shape, not only its transform.
     let prev = deform_prev_position(vertex, in.position);
     out.prev_clip = view.prev_view_proj * (o.prev_model * vec4f(prev, 1.0));
     out.clip = v.clip;

@@ -28,7 +28,8 @@ struct SkinParams {
 @group(0) @binding(2) var<storage, read> joints: array<mat4x4f>;
 @group(0) @binding(3) var<storage, read_write> skinned: array<f32>;
 @group(0) @binding(4) var<storage, read> prev_joints: array<mat4x4f>;
-// Element 0 is the header deform.wgsl reads (written at upload).
+// SceneGpu::deform: element 0 is the header deform.wgsl reads (written at
+// upload); the skinned vertices are the first of the deformed range.
 @group(0) @binding(5) var<storage, read_write> prev: array<vec4f>;
 
 fn normalize_or(v: vec3f, fallback: vec3f) -> vec3f {
