@@ -693,3 +693,41 @@ fn transmission_and_volume_load() {
         assert!(e.contains("odd") && e.contains(key), "{e}");
     }
 }
+
+/// A node's own `weights` replace its mesh's defaults (glTF 2.0 3.7.2.2):
+/// one triangle with one target (vertex 2 moves up by 1), mesh weights [0],
+/// drawn by a node with weights [1] and by one without. Before, both drew
+/// the mesh's weights and the first was named in a warning.
+#[test]
+fn a_nodes_own_morph_weights_replace_the_meshs() {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let delta: [f32; 9] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let bin: Vec<u8> = positions
+        .iter()
+        .chain(&delta)
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
+"nodes":[{{"mesh":0,"weights":[1.0],"name":"own"}},{{"mesh":0,"translation":[2,0,0],"name":"plain"}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"targets":[{{"POSITION":1}}]}}],"weights":[0.0]}}],
+"buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,1,0]}}]}}"#,
+        common::base64(&bin)
+    );
+    let path = common::temp_dir("node-weights").join("weights.gltf");
+    std::fs::write(&path, json).unwrap();
+    let a = gltf::load(&path).expect("loads");
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("weights")),
+        "{:?}",
+        a.warnings
+    );
+    let top = |name: &str| {
+        let o = a.objects.iter().find(|o| o.name == name).expect("object");
+        a.meshes[o.mesh].vertices[2].position[1]
+    };
+    assert_eq!((top("own"), top("plain")), (2.0, 1.0));
+}

@@ -490,14 +490,19 @@ pub fn load_from_bytes_with(
             .name()
             .map_or_else(|| format!("node{}", node.index()), str::to_string);
         if let Some(m) = node.mesh() {
-            if node.weights().is_some_and(|w| Some(w) != m.weights()) {
-                reweighted.push(name.clone());
-            }
             let drawn = &primitive_mesh[m.index()];
             let count = drawn.len();
             // EXT_mesh_gpu_instancing: one object per instance, the
             // instance's transform before the node's.
             let instances = instancing::node_instances(&cx, &doc, &node, &buffers)?;
+            // A node's own weights replace its mesh's defaults (glTF 2.0
+            // 3.7.2.2): each such node draws its own copy (not instanced ones).
+            let own = node.weights().filter(|w| Some(*w) != m.weights());
+            let targets = drawn.iter().flatten().any(|&p| mesh_morph[p].is_some());
+            if own.is_some() && (instances.is_some() || !targets) {
+                reweighted.push(name.clone());
+            }
+            let own = own.filter(|_| instances.is_none());
             let placements = instances.as_deref().unwrap_or(&[Mat4::IDENTITY]);
             let drawn_objects = out.objects.len() + placements.len() * count;
             if drawn_objects as u64 > buffers::MAX_NODE_INSTANCES {
@@ -515,6 +520,15 @@ pub fn load_from_bytes_with(
                 };
                 for (k, mesh) in drawn.iter().enumerate() {
                     let Some(mut mesh) = *mesh else { continue };
+                    if let (Some(w), Some(t)) = (own, mesh_morph[mesh].clone()) {
+                        mesh = reweighted_copy(
+                            w,
+                            &t,
+                            mesh,
+                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
+                            &mut out.pbr,
+                        );
+                    }
                     let rig = rig.as_ref().filter(|_| instances.is_none());
                     let skin = node.skin().map(|s| s.index());
                     if skin.is_some() && mesh_skin[mesh].is_none() {
@@ -636,7 +650,7 @@ pub fn load_from_bytes_with(
     }
     if !reweighted.is_empty() {
         out.warnings.push(format!(
-            "nodes with their own morph weights are drawn with their mesh's default weights: {}",
+            "instanced nodes, or nodes whose mesh has no targets, with their own morph weights are drawn with their mesh's default weights: {}",
             reweighted.join(", ")
         ));
     }
@@ -672,6 +686,54 @@ fn skinned(
         swept,
         morph: None,
     }
+}
+
+/// The loader's per-mesh lists: meshes, their skins, their morph targets.
+type MeshLists<'a> = (
+    &'a mut Vec<Mesh>,
+    &'a mut Vec<Option<Vec<SkinVertex>>>,
+    &'a mut Vec<Option<std::sync::Arc<MorphTargets>>>,
+);
+
+/// A copy of mesh `mesh` (with its skin and morph targets) at a node's own
+/// weights `weights` (missing ones 0), which become the copy's defaults;
+/// returns the copy's index.
+fn reweighted_copy(
+    weights: &[f32],
+    targets: &MorphTargets,
+    mesh: usize,
+    (meshes, skins, morphs): MeshLists<'_>,
+    pbr: &mut PbrSet,
+) -> usize {
+    let mut t = targets.clone();
+    t.defaults = (0..t.targets.len())
+        .map(|k| {
+            weights
+                .get(k)
+                .copied()
+                .filter(|w| w.is_finite())
+                .unwrap_or(0.0)
+        })
+        .collect();
+    let mut copy = meshes[mesh].clone();
+    t.apply(&mut copy.vertices, &t.defaults);
+    copy.bounds = Aabb::from_points(copy.vertices.iter().map(|v| Vec3::from(v.position)));
+    // A skinned copy's bind pose is the reweighted shape.
+    let skin = skins[mesh].clone().map(|mut s| {
+        for (s, v) in s.iter_mut().zip(&copy.vertices) {
+            s.position[..3].copy_from_slice(&v.position);
+            s.normal[..3].copy_from_slice(&v.normal);
+            s.tangent = v.tangent;
+        }
+        s
+    });
+    if let Some(m) = pbr.material_of(mesh) {
+        pbr.mesh_material.push((meshes.len(), m));
+    }
+    meshes.push(copy);
+    skins.push(skin);
+    morphs.push(Some(std::sync::Arc::new(t)));
+    meshes.len() - 1
 }
 
 /// Morphed mesh `mesh` on node `node`: its vertices become the shape at
