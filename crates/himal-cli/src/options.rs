@@ -140,6 +140,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub specular_aa: String,
+    /// Motion vectors of skinned glTF vertices from their previous frame's
+    /// pose (off: from the object's transform only, as before issue #22).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub deform_motion: String,
     /// V1 vegetation: trees, bushes and grass drawn (off: skipped in every
     /// pass; the frame then culls on the CPU).
     #[arg(
@@ -426,6 +435,7 @@ impl PostArgs {
         settings.instancing = on_off("--instancing", &self.instancing)?;
         settings.specular_aa = on_off("--specular-aa", &self.specular_aa)?;
         settings.smaa_edge_mask = on_off("--smaa-edge-mask", &self.smaa_edge_mask)?;
+        settings.deform_motion = on_off("--deform-motion", &self.deform_motion)?;
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
@@ -544,6 +554,15 @@ pub struct ShadowArgs {
         allow_hyphen_values = true
     )]
     pub shadow_mask_tiles: String,
+    /// glTF MASK and BLEND shadow casters alpha-tested (a leaf card casts
+    /// its holes; BLEND as a mask at 0.5), or cast as opaque cards.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub shadow_alpha_test: String,
 }
 
 impl ShadowArgs {
@@ -588,6 +607,11 @@ impl ShadowArgs {
             "on" => true,
             "off" => false,
             other => bail!("--shadow-mask-tiles {other}: expected on or off"),
+        };
+        s.alpha_test = match self.shadow_alpha_test.as_str() {
+            "on" => true,
+            "off" => false,
+            other => bail!("--shadow-alpha-test {other}: expected on or off"),
         };
         s.validate()?;
         Ok(())

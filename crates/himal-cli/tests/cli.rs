@@ -557,6 +557,18 @@ fn bad_shadow_mask_switches_are_rejected() {
         &["render", "--shadow-mask-tiles", "2", "--size", "8x8"],
         "--shadow-mask-tiles 2",
     );
+    fails_with(
+        &["render", "--shadow-alpha-test", "maybe", "--size", "8x8"],
+        "--shadow-alpha-test maybe",
+    );
+}
+
+#[test]
+fn bad_deform_motion_switch_is_rejected() {
+    fails_with(
+        &["render", "--deform-motion", "maybe", "--size", "8x8"],
+        "--deform-motion",
+    );
 }
 
 #[test]

@@ -240,6 +240,10 @@ pub struct FrameSettings {
     /// stencil as a depth mask written by the edge pass; the same image;
     /// on by default).
     pub smaa_edge_mask: bool,
+    /// Motion vectors of skinned vertices from their previous frame's pose
+    /// (`passes/skin`, `shaders/deform.wgsl`); off: from the object's
+    /// transform only (TAA then smears moving limbs).
+    pub deform_motion: bool,
     /// R4: Burley's remapped roughness ((1 + r) / 2)^2 in the visibility
     /// term of the sun and local lights, less specular gain on rough
     /// surfaces at grazing light (off by default; docs/techniques/R4.md).
@@ -349,6 +353,7 @@ impl FrameSettings {
             sky_model: Default::default(),
             specular_aa: true,
             smaa_edge_mask: true,
+            deform_motion: true,
             visibility_remap: false,
             ambient_lights: true,
             wetness: 0.0,

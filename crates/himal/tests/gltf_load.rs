@@ -396,14 +396,21 @@ fn triangle_strips_and_fans_load_and_points_and_lines_are_named() {
 
 /// Morph targets were ignored: SimpleMorph drew its base shape. The mesh's
 /// default weights (0.5, 0.5) now morph the positions: P0 + 0.5 dP0 +
-/// 0.5 dP1, read here from the file's accessors by hand.
+/// 0.5 dP1, read here from the file's accessors by hand. (SimpleMorph's
+/// clip animates the weights, so its drawn mesh starts at the clip's first
+/// key; the rest pose, `--animation none`, is the defaults' shape.)
 #[test]
 fn morph_targets_apply_the_default_weights() {
     let path = common::gltf_sample("SimpleMorph");
     let a = gltf::load(&path).expect("loads");
     let file = common::GltfFile::open(&path);
     let vec3 = |accessor: usize, i: usize| file.vec3(accessor, i);
-    let m = &a.meshes[0];
+    let morph = (a.objects[0].motion.as_ref())
+        .and_then(|m| m.animated.as_ref()?.morph.clone())
+        .expect("animated weights keep the targets");
+    assert_eq!(morph.defaults, [0.5, 0.5]);
+    let mut m = a.meshes[0].clone();
+    morph.apply(&mut m.vertices, &morph.defaults);
     let n = file.count(1);
     assert_eq!(m.vertices.len(), n);
     let mut moved = 0;
@@ -685,4 +692,42 @@ fn transmission_and_volume_load() {
             .to_string();
         assert!(e.contains("odd") && e.contains(key), "{e}");
     }
+}
+
+/// A node's own `weights` replace its mesh's defaults (glTF 2.0 3.7.2.2):
+/// one triangle with one target (vertex 2 moves up by 1), mesh weights [0],
+/// drawn by a node with weights [1] and by one without. Before, both drew
+/// the mesh's weights and the first was named in a warning.
+#[test]
+fn a_nodes_own_morph_weights_replace_the_meshs() {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let delta: [f32; 9] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let bin: Vec<u8> = positions
+        .iter()
+        .chain(&delta)
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
+"nodes":[{{"mesh":0,"weights":[1.0],"name":"own"}},{{"mesh":0,"translation":[2,0,0],"name":"plain"}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"targets":[{{"POSITION":1}}]}}],"weights":[0.0]}}],
+"buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,1,0]}}]}}"#,
+        common::base64(&bin)
+    );
+    let path = common::temp_dir("node-weights").join("weights.gltf");
+    std::fs::write(&path, json).unwrap();
+    let a = gltf::load(&path).expect("loads");
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("weights")),
+        "{:?}",
+        a.warnings
+    );
+    let top = |name: &str| {
+        let o = a.objects.iter().find(|o| o.name == name).expect("object");
+        a.meshes[o.mesh].vertices[2].position[1]
+    };
+    assert_eq!((top("own"), top("plain")), (2.0, 1.0));
 }

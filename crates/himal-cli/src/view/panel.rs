@@ -305,6 +305,11 @@ impl Viewer {
             egui::Checkbox::new(&mut self.settings.indirect, "indirect light (L5)"),
         )
         .on_disabled_hover_text("start with --indirect on: the probes are baked (or read) then");
+        ui.checkbox(&mut self.settings.deform_motion, "skinned motion vectors");
+        ui.checkbox(
+            &mut self.settings.shadows.alpha_test,
+            "alpha-tested glTF shadows",
+        );
         ui.separator();
         self.environment_ui(ui);
         if !self.animations.is_empty() {

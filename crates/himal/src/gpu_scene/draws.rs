@@ -255,6 +255,20 @@ impl SceneGpu {
         }
     }
 
+    /// The glTF draws that cast sun and local-light shadows: the textured
+    /// (opaque and MASK) and the BLEND ones (alpha-tested as casters,
+    /// [`SceneGpu::alpha_casters`]); transmissive surfaces cast none.
+    pub fn textured_casters(&self) -> impl Iterator<Item = &Draw> + '_ {
+        (self.draws_textured.iter().map(|(d, _)| d))
+            .chain(self.draws_blend.iter().map(|(d, _, _)| d))
+    }
+
+    /// The material of object `object` when its shadow is alpha-tested
+    /// ([`SceneGpu::alpha_casters`]).
+    pub fn alpha_caster(&self, object: u32) -> Option<usize> {
+        self.alpha_casters.get(object as usize).copied().flatten()
+    }
+
     /// Binds the geometry and records the opaque objects, glTF ones
     /// included (shadow casters; their alpha is not tested there).
     pub fn draw_opaque(&self, rp: &mut wgpu::RenderPass<'_>) {

@@ -14,6 +14,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
+pub mod morph;
 pub mod skin;
 pub mod textures;
 pub mod uniforms;
@@ -176,6 +177,10 @@ pub struct SceneGpu {
     pub draws_unlit: Vec<(Draw, usize)>,
     /// Their textures and material uniforms; `None` without glTF materials.
     pub materials: Option<textures::MaterialTextures>,
+    /// Per object (GPU order): the material of a glTF MASK or BLEND (not
+    /// transmissive) object, which casts shadows alpha-tested
+    /// (`passes/shadows/depth_masked.wgsl`); `None` for the rest.
+    pub alpha_casters: Vec<Option<usize>>,
     /// Moving objects with their index into `objects`, rewritten per frame.
     pub animated: Vec<(u32, Object)>,
     /// World bounds of each object over all time (GPU order): culling.
@@ -213,6 +218,14 @@ pub struct SceneGpu {
     pub vegetation_objects: Vec<bool>,
     /// Skinned meshes (`passes/skin`); `None` without any.
     pub skins: Option<skin::SkinGpu>,
+    /// Meshes with animated morph weights, morphed by `update_objects`.
+    pub morphs: Vec<morph::MorphJob>,
+    /// The deformed vertices' previous-frame positions (`shaders/deform.wgsl`:
+    /// header, then the skinned meshes' (written by `passes/skin`) and the
+    /// morphed meshes' (written by `update_objects`), from vertex 0).
+    pub deform: wgpu::Buffer,
+    /// A `deform_prev` header of count 0: bound with `--deform-motion off`.
+    pub no_deform: wgpu::Buffer,
     /// Unique per upload: what caches of scene resources are keyed by
     /// ([`textures::MaterialGroups`]).
     pub id: u64,
@@ -237,6 +250,20 @@ fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
             continue;
         }
         out.push((o.mesh, a.clone()));
+    }
+    out
+}
+
+/// The meshes of `scene` whose morph weights a clip animates (each once).
+fn morph_meshes(scene: &Scene) -> Vec<usize> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let morphed = (o.motion.as_ref())
+            .and_then(|m| m.animated.as_ref())
+            .is_some_and(|a| a.morph.is_some());
+        if morphed && o.mesh < scene.meshes.len() && !out.contains(&o.mesh) {
+            out.push(o.mesh);
+        }
     }
     out
 }
@@ -276,10 +303,30 @@ impl SceneGpu {
         let mut lods = vec![Vec::new(); n];
         let mut mean_area = vec![0.0; n];
         let mut area_histograms = vec![Vec::new(); n];
-        // Skinned meshes first: one range the skin pass copies into.
+        // Skinned meshes first: one range the skin pass copies into; then
+        // the morphed ones: together the deformed range (`deform`).
         let skinned = skin_jobs(scene);
-        let mut order: Vec<usize> = skinned.iter().map(|(mesh, _)| *mesh).collect();
-        order.extend((0..n).filter(|m| !skinned.iter().any(|(s, _)| s == m)));
+        let morphed = morph_meshes(scene);
+        let mut placed = vec![false; n];
+        let mut order: Vec<usize> = Vec::with_capacity(n);
+        let deformed_meshes =
+            (skinned.iter().map(|(mesh, _)| *mesh)).chain(morphed.iter().copied());
+        for m in deformed_meshes.chain(0..n) {
+            if m < n && !placed[m] {
+                placed[m] = true;
+                order.push(m);
+            }
+        }
+        let deformed_count: usize = (order.iter())
+            .take(
+                skinned.len()
+                    + morphed
+                        .iter()
+                        .filter(|m| !skinned.iter().any(|(s, _)| s == *m))
+                        .count(),
+            )
+            .map(|&m| scene.meshes[m].vertices.len())
+            .sum();
         for mi in order {
             let mesh = &scene.meshes[mi];
             ranges[mi] = (
@@ -313,6 +360,32 @@ impl SceneGpu {
             }
             skin::SkinGpu::new(&ctx.device, jobs, &sources, &vertices[..sources.len()], 0)
         });
+        // Morphed meshes: the first object animating each.
+        let mut morphs: Vec<morph::MorphJob> = Vec::new();
+        for o in &scene.objects {
+            let Some(a) = o.motion.as_ref().and_then(|m| m.animated.as_ref()) else {
+                continue;
+            };
+            let Some(&(_, _, first_vertex)) = ranges.get(o.mesh) else {
+                continue;
+            };
+            if a.morph.is_none() || morphs.iter().any(|j| j.first_vertex == first_vertex as u32) {
+                continue;
+            }
+            morphs.push(morph::MorphJob {
+                animated: a.clone(),
+                first_vertex: first_vertex as u32,
+                rest: scene.meshes[o.mesh].vertices.clone(),
+                written: Default::default(),
+            });
+        }
+        // The deformed range: the skinned and morphed meshes, from vertex 0.
+        let deformed = deformed_count.min(vertices.len());
+        let mut deform: Vec<[f32; 4]> = vertices[..deformed]
+            .iter()
+            .map(|v| [v.position[0], v.position[1], v.position[2], 1.0])
+            .collect();
+        deform.insert(0, skin::deform_header(0, deformed as u32));
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut lists = draws::DrawLists::default();
         let mut animated = Vec::new();
@@ -320,6 +393,7 @@ impl SceneGpu {
         let mut cull_bounds = Vec::with_capacity(scene.objects.len());
         let mut object_mesh = Vec::with_capacity(scene.objects.len());
         let mut vegetation_objects = Vec::with_capacity(scene.objects.len());
+        let mut alpha_casters = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
         for (i, object) in gpu_order(scene)
             .into_iter()
@@ -356,6 +430,7 @@ impl SceneGpu {
             bounds.push(b);
             object_mesh.push(object.mesh as u32);
             vegetation_objects.push(object.is_vegetation(&scene.meshes));
+            alpha_casters.push(alpha_caster(scene, object));
             if object.motion.is_some() {
                 animated.push((i as u32, object.clone()));
             }
@@ -436,6 +511,7 @@ impl SceneGpu {
                 draws_layered: lists.layered,
                 draws_unlit: lists.unlit,
                 materials,
+                alpha_casters,
                 animated,
                 bounds,
                 cull_bounds,
@@ -452,6 +528,19 @@ impl SceneGpu {
                 vegetation: AtomicBool::new(true),
                 vegetation_objects,
                 skins,
+                morphs,
+                deform: init(
+                    "scene.deform",
+                    bytemuck::cast_slice(&deform),
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                ),
+                no_deform: init(
+                    "scene.no_deform",
+                    bytemuck::cast_slice(&[skin::deform_header(0, 0)]),
+                    wgpu::BufferUsages::STORAGE,
+                ),
                 id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             }
         })
@@ -471,7 +560,19 @@ impl SceneGpu {
             queue.write_buffer(&self.objects, offset, bytemuck::bytes_of(&gpu));
         }
         if let Some(skins) = &self.skins {
-            skins.update(queue, time);
+            skins.update(queue, time, prev_time);
+        }
+        for job in &self.morphs {
+            job.update(queue, (&self.vertices, &self.deform), (time, prev_time));
+        }
+    }
+
+    /// The `deform_prev` buffer the G-buffer binds: the deformed vertices'
+    /// previous-frame positions (`on`), else a header of count 0.
+    pub fn deform_prev(&self, on: bool) -> &wgpu::Buffer {
+        match on {
+            true => &self.deform,
+            false => &self.no_deform,
         }
     }
 
@@ -487,7 +588,20 @@ impl SceneGpu {
         for job in self.skins.iter_mut().flat_map(|s| &mut s.jobs) {
             job.animated.play(name);
         }
+        for job in &mut self.morphs {
+            job.animated.play(name);
+        }
     }
+}
+
+/// The material of `object` when it casts shadows alpha-tested: a glTF
+/// MASK or BLEND material that does not transmit (transmissive surfaces cast
+/// nothing, docs/gltf.md).
+fn alpha_caster(scene: &Scene, object: &Object) -> Option<usize> {
+    let material = scene.pbr.material_of(object.mesh)?;
+    let m = scene.pbr.materials.get(material)?;
+    let alpha = !matches!(m.alpha_mode, crate::scene::gltf::AlphaMode::Opaque);
+    (alpha && !m.transmits()).then_some(material)
 }
 
 /// `ObjectGpu::params` of an object: its foliage, zero for opaque objects.

@@ -30,6 +30,9 @@ pub struct SkinGpu {
     pub skinned: wgpu::Buffer,
     /// Uniform: (vertex count, 0, 0, 0).
     pub params: wgpu::Buffer,
+    /// The joint matrices at the previous frame's time (the skin pass
+    /// writes the previous positions into `SceneGpu::deform`).
+    pub prev_joints: wgpu::Buffer,
     /// Skinned vertices of all jobs.
     pub vertex_count: u32,
     /// The first skinned vertex in the scene's vertex buffer.
@@ -58,13 +61,11 @@ impl SkinGpu {
         };
         let count = [sources.len() as u32, 0, 0, 0];
         use wgpu::BufferUsages as U;
+        let joint_bytes = vec![0u8; joint_count.max(1) as usize * 64];
         SkinGpu {
             sources: init("skin.sources", bytemuck::cast_slice(sources), U::STORAGE),
-            joints: init(
-                "skin.joints",
-                &vec![0u8; joint_count.max(1) as usize * 64],
-                U::STORAGE | U::COPY_DST,
-            ),
+            joints: init("skin.joints", &joint_bytes, U::STORAGE | U::COPY_DST),
+            prev_joints: init("skin.prev_joints", &joint_bytes, U::STORAGE | U::COPY_DST),
             skinned: init(
                 "skin.skinned",
                 bytemuck::cast_slice(rest),
@@ -84,9 +85,22 @@ impl SkinGpu {
             .collect()
     }
 
-    /// Writes the joint matrices at `time`.
-    pub fn update(&self, queue: &wgpu::Queue, time: f32) {
+    /// Writes the joint matrices at `time` and at the previous frame's `prev_time`.
+    pub fn update(&self, queue: &wgpu::Queue, time: f32, prev_time: f32) {
         let m = self.joint_matrices(time);
         queue.write_buffer(&self.joints, 0, bytemuck::cast_slice(&m));
+        let m = self.joint_matrices(prev_time);
+        queue.write_buffer(&self.prev_joints, 0, bytemuck::cast_slice(&m));
     }
+}
+
+/// Element 0 of a `deform_prev` buffer (`shaders/deform.wgsl`): the first
+/// deformed vertex and their count, as u32 bits.
+pub fn deform_header(first_vertex: u32, count: u32) -> [f32; 4] {
+    [
+        f32::from_bits(first_vertex),
+        f32::from_bits(count),
+        0.0,
+        0.0,
+    ]
 }

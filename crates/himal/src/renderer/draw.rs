@@ -360,6 +360,7 @@ impl Renderer {
         let sun_direction = light.sun_direction;
         // E3: the permutations the G-buffer and forward draws pick.
         self.res.passes.gbuffer.specular_aa = settings.specular_aa;
+        self.res.passes.gbuffer.deform_motion = settings.deform_motion;
         self.res.passes.forward.specular_aa = settings.specular_aa;
         self.res.passes.wet.amount = settings.wetness;
         self.res.passes.wet.specular_aa = settings.specular_aa;

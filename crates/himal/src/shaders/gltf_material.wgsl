@@ -99,6 +99,16 @@ fn gltf_grey_reflectance(dielectric_f0: vec3f) -> f32 {
     return luminance(dielectric_f0);
 }
 
+// Whether a fragment of coverage `alpha` (base colour factor x texture
+// alpha) is cut away: MASK below its cut-off; as a shadow caster
+// (`caster`) BLEND below 0.5 as well (docs/gltf.md "Alpha in shadows").
+// CPU twin: scene::gltf::AlphaMode::cuts.
+fn gltf_cut_out(alpha: f32, caster: bool) -> bool {
+    let mode = material.alpha.x;
+    let mask = mode > 0.5 && mode < 1.5 && alpha < material.alpha.y;
+    return mask || (caster && mode > 1.5 && alpha < 0.5);
+}
+
 // The UV a slot samples at: its set of `uvs` (TEXCOORD_0 in xy, _1 in zw)
 // with its KHR_texture_transform applied (CPU twin:
 // scene::gltf::UvTransform::apply).

@@ -12,6 +12,9 @@
 #import tangent_frame
 #import scene
 #import object_vertex
+// Group 0 binding 3 (deform_prev): declared for the layout gbuffer.textured
+// shares; these objects are never skinned.
+#import deform
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;

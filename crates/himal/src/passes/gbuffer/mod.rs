@@ -177,6 +177,9 @@ pub struct GBufferPass {
     /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`,
     /// set by the renderer before planning).
     pub specular_aa: bool,
+    /// Skinned vertices' motion vectors from their previous pose
+    /// (`FrameSettings::deform_motion`, set by the renderer before planning).
+    pub deform_motion: bool,
     program: Program,
     /// glTF materials (`textured.wgsl`).
     textured: Program,
@@ -191,6 +194,7 @@ impl GBufferPass {
             visible: VisibleLists::default(),
             lod_view: false,
             specular_aa: true,
+            deform_motion: true,
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
             textured: Program::new(ctx, "passes/gbuffer/textured.wgsl")?,
             material_groups: Default::default(),
@@ -326,7 +330,8 @@ impl GBufferPass {
         let (lod_view, specular_aa) = (self.lod_view, self.specular_aa);
         let node = graph
             .raster("gbuffer", &self.program)
-            .uniform("objects", &scene.objects);
+            .uniform("objects", &scene.objects)
+            .uniform("deform_prev", scene.deform_prev(self.deform_motion));
         let node = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances);
         let written = node
             .color(albedo, clear)

@@ -11,6 +11,7 @@
 #import scene
 #import gltf_material
 #import object_vertex
+#import deform
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -30,13 +31,15 @@ struct VertexOut {
 }
 
 @vertex
-fn vs_main(in: GBufferVertexIn) -> VertexOut {
+fn vs_main(in: GBufferVertexIn, @builtin(vertex_index) vertex: u32) -> VertexOut {
     let o = objects[instance_object(instances[in.instance])];
     let v = object_vertex(o, in, view.view_proj, view.prev_view_proj, false, view.time.xy);
     var out: VertexOut;
     out.uv = vec4f(in.uv, in.uv1);
     out.curr_clip = v.clip;
-    out.prev_clip = v.prev_clip;
+    // Skinned and morphed vertices: the previous frame's shape, not only its transform.
+    let prev = deform_prev_position(vertex, in.position);
+    out.prev_clip = view.prev_view_proj * (o.prev_model * vec4f(prev, 1.0));
     out.clip = v.clip;
     out.normal = v.normal;
     out.tangent = gltf_world_tangent(o, v.tangent, in.tangent.w);
@@ -65,7 +68,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let emissive = textureSampleBias(emissive_texture, emissive_sampler, material_uv(SLOT_EMISSIVE, in.uv), MIP_BIAS).rgb;
     let spec_a = textureSampleBias(specular_texture, specular_sampler, material_uv(SLOT_SPECULAR, in.uv), MIP_BIAS).a;
     let spec_rgb = textureSampleBias(specular_color_texture, specular_color_sampler, material_uv(SLOT_SPECULAR_COLOR, in.uv), MIP_BIAS).rgb;
-    if (material.alpha.x > 0.5 && material.alpha.x < 1.5 && alpha < material.alpha.y) {
+    if (gltf_cut_out(alpha, false)) {
         discard;
     }
     let facing = gltf_facing(in.normal, in.tangent, front);

@@ -108,9 +108,9 @@ impl Casters {
     }
 
     /// Appends to `out` the draws of `scene` that may cast into `fit` and
-    /// pass `keep` (`true` = static object): its glTF draws (opaque and
-    /// mask materials, drawn with the opaque depth pipeline: a mask's alpha
-    /// is not tested) and, with `objects`, its opaque and vegetation draws
+    /// pass `keep` (`true` = static object): its glTF draws (opaque, MASK
+    /// and BLEND materials; the depth pass alpha-tests MASK and BLEND ones,
+    /// [`SceneGpu::alpha_caster`]) and, with `objects`, its opaque and vegetation draws
     /// (`false`: the GPU culls those for this map).
     pub fn cull_into(
         &self,
@@ -127,7 +127,7 @@ impl Casters {
             out.vegetation
                 .extend(cull(&scene.draws_vegetation, &self.bounds, take));
         }
-        let textured = scene.draws_textured.iter().map(|(d, _)| d);
+        let textured = scene.textured_casters();
         out.opaque.extend(cull(textured, &self.bounds, take));
     }
 
@@ -143,7 +143,7 @@ impl Casters {
     ) {
         let take =
             |_: usize, b: &Aabb| b.overlaps(region) && b.extent().max_element() <= max_extent;
-        let textured = scene.draws_textured.iter().map(|(d, _)| d);
+        let textured = scene.textured_casters();
         out.opaque.extend(cull(
             scene.draws_opaque.iter().chain(textured),
             &self.bounds,

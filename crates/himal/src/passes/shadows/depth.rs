@@ -1,13 +1,41 @@
 //! Depth rendering of one sun view (cascade, static map, hero map):
 //! pipelines per depth format and the recording of a draw list.
 
+use std::sync::Arc;
+
 use glam::Mat4;
 
 use super::casters::DrawLists;
 use crate::gpu::pipeline::{Program, RenderSpec, uniform_buffer};
 use crate::gpu::{GpuContext, GpuError};
-use crate::gpu_scene::{SceneGpu, vertex_layout};
+use crate::gpu_scene::textures::MaterialGroups;
+use crate::gpu_scene::{Draw, SceneGpu, VERTEX_ATTRIBUTES, material_runs, vertex_layout};
 use crate::passes::cull::{Culled, List, SHADOW};
+
+/// Position, uv and uv1 of [`crate::scene::Vertex`]: what an alpha-tested
+/// glTF caster samples its base colour with.
+const MASKED_ATTRIBUTES: [wgpu::VertexAttribute; 3] = [
+    VERTEX_ATTRIBUTES[0],
+    VERTEX_ATTRIBUTES[3],
+    VERTEX_ATTRIBUTES[6],
+];
+
+/// `depth_masked.wgsl` (glTF MASK and BLEND casters, alpha-tested) and its
+/// material bind groups, shared by the pipelines of every depth format.
+pub struct MaskedProgram {
+    program: Program,
+    groups: MaterialGroups,
+}
+
+impl MaskedProgram {
+    /// Compiles `depth_masked.wgsl`.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        Ok(Self {
+            program: Program::new(ctx, "passes/shadows/depth_masked.wgsl")?,
+            groups: MaterialGroups::default(),
+        })
+    }
+}
 
 /// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
 const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
@@ -51,13 +79,17 @@ pub struct DepthPipelines {
     pub vegetation: wgpu::RenderPipeline,
     /// Writes the far plane over the viewport (one tile of a map).
     pub clear: wgpu::RenderPipeline,
+    /// glTF MASK and BLEND casters (`depth_masked.wgsl`), when the scene has any.
+    pub masked: Option<(wgpu::RenderPipeline, Arc<MaskedProgram>)>,
 }
 
 impl DepthPipelines {
-    /// The three pipelines of `program` writing depth of `format` (32-bit cascades or the 16-bit static map).
+    /// The pipelines of `program` writing depth of `format` (32-bit
+    /// cascades or the 16-bit static map), with `masked`'s for alpha-tested glTF casters.
     pub fn new(
         ctx: &GpuContext,
         program: &Program,
+        masked: Option<&Arc<MaskedProgram>>,
         format: wgpu::TextureFormat,
     ) -> Result<Self, GpuError> {
         let mut layout = vertex_layout();
@@ -115,17 +147,47 @@ impl DepthPipelines {
                 constants: &[],
             },
         )?;
+        let masked = match masked {
+            Some(m) => {
+                let layout = wgpu::VertexBufferLayout {
+                    attributes: &MASKED_ATTRIBUTES,
+                    ..vertex_layout()
+                };
+                let pipeline = m.program.render_pipeline(
+                    ctx,
+                    &RenderSpec {
+                        label: "shadows.depth.masked",
+                        vertex_entry: "vs_masked",
+                        fragment_entry: Some("fs_masked"),
+                        vertex_buffers: &[Some(layout)],
+                        targets: &[],
+                        depth_stencil: Some(caster_depth(format)),
+                        primitive,
+                        constants: &[],
+                    },
+                )?;
+                Some((pipeline, m.clone()))
+            }
+            None => None,
+        };
         Ok(Self {
             opaque,
             vegetation,
             clear,
+            masked,
         })
     }
 
     /// Draws `lists` (the pass's view group is set).
-    pub fn draw(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SceneGpu, lists: &DrawLists) {
+    pub fn draw(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        scene: &SceneGpu,
+        lists: &DrawLists,
+        device: (&wgpu::Device, bool),
+    ) -> Result<(), GpuError> {
         scene.bind_geometry(rp);
-        self.draw_pipelines(rp, scene, lists);
+        self.draw_pipelines(rp, scene, lists, device)
     }
 
     /// Draws `lists` and, with `culled` (and the pass recording it), the GPU-culled
@@ -136,8 +198,9 @@ impl DepthPipelines {
         scene: &SceneGpu,
         lists: &DrawLists,
         culled: Option<(&Culled<'_>, &crate::graph::PassContext<'_>)>,
-    ) {
-        self.draw(rp, scene, lists);
+        device: (&wgpu::Device, bool),
+    ) -> Result<(), GpuError> {
+        self.draw(rp, scene, lists, device)?;
         if let (Some((view, _)), Some((c, ctx))) = (lists.gpu_view, culled) {
             rp.set_pipeline(&self.opaque);
             c.draw(rp, ctx, view, List::Opaque, SHADOW);
@@ -148,6 +211,7 @@ impl DepthPipelines {
             rp.set_pipeline(&self.opaque);
             c.draw_pool(rp, ctx, view, SHADOW);
         }
+        Ok(())
     }
 
     /// Clears texel rectangle `rect` (x, y, w, h) to the far plane and
@@ -158,14 +222,30 @@ impl DepthPipelines {
         rp.draw(0..3, 0..1);
     }
 
-    /// Draws `lists` with the geometry already bound.
+    /// Draws `lists` with the geometry already bound: the opaque list's
+    /// alpha-tested glTF objects ([`SceneGpu::alpha_caster`]) last, a
+    /// material bind group per run. `(device, alpha_test)`: without
+    /// `alpha_test` they draw as opaque ([`super::ShadowSettings::alpha_test`]).
     pub fn draw_pipelines(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
         scene: &SceneGpu,
         lists: &DrawLists,
-    ) {
-        if !lists.opaque.is_empty() {
+        (device, alpha_test): (&wgpu::Device, bool),
+    ) -> Result<(), GpuError> {
+        let on = alpha_test && self.masked.is_some();
+        let alpha = |d: &Draw| scene.alpha_caster(d.object).filter(|_| on);
+        let any_alpha = lists.opaque.iter().any(|d| alpha(d).is_some());
+        if any_alpha {
+            let plain: Vec<Draw> = (lists.opaque.iter())
+                .filter(|d| alpha(d).is_none())
+                .cloned()
+                .collect();
+            if !plain.is_empty() {
+                rp.set_pipeline(&self.opaque);
+                scene.draw_list(rp, &plain);
+            }
+        } else if !lists.opaque.is_empty() {
             rp.set_pipeline(&self.opaque);
             scene.draw_list(rp, &lists.opaque);
         }
@@ -173,6 +253,22 @@ impl DepthPipelines {
             rp.set_pipeline(&self.vegetation);
             scene.draw_list(rp, &lists.vegetation);
         }
+        if let (true, Some((pipeline, m)), Some(materials)) =
+            (any_alpha, &self.masked, &scene.materials)
+        {
+            let masked: Vec<(Draw, usize)> = (lists.opaque.iter())
+                .filter_map(|d| alpha(d).map(|material| (d.clone(), material)))
+                .collect();
+            let groups = m.groups.get(scene.id, materials, &m.program, device)?;
+            rp.set_pipeline(pipeline);
+            for (material, draws) in material_runs(&masked) {
+                if let Some(group) = groups.get(material) {
+                    rp.set_bind_group(1, group, &[]);
+                    scene.draw_list(rp, &draws);
+                }
+            }
+        }
+        Ok(())
     }
 }
 

@@ -1,24 +1,15 @@
 // shadows.cascade0..3, shadows.static, shadows.hero: depth of the casters seen
 // from the sun (orthographic), one map per draw of this shader (TECHNIQUES S1, S2, S4).
-// Bindings: shadow (uniform ShadowView: light view-projection, time), objects (as gbuffer).
+// Bindings (shaders/shadow_caster.wgsl): shadow (light view-projection, time), objects, instances.
 // Standard depth here (0 near .. 1 far, compare LessEqual), unlike the camera's reverse-Z.
 // Vegetation (vs_vegetation / fs_vegetation) sways and alpha-tests as in the
-// G-buffer, so grass casts blades, not cards.
+// G-buffer, so grass casts blades, not cards; glTF MASK and BLEND materials
+// are alpha-tested by depth_masked.wgsl.
 
 #import scene
 #import object_vertex
 #import view
-
-struct ShadowView {
-    light_view_proj: mat4x4f,
-    // x: animation time (s), as View.time.x
-    time: vec4f,
-}
-
-@group(0) @binding(0) var<uniform> shadow: ShadowView;
-@group(0) @binding(1) var<storage, read> objects: array<Object>;
-// Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
-@group(0) @binding(2) var<storage, read> instances: array<u32>;
+#import shadow_caster
 
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {

@@ -115,6 +115,8 @@ struct FramePlan {
     hero_rect: Option<Option<[f32; 4]>>,
     /// `ShadowSettings::mask_tiles`: classify the mask's tiles first.
     mask_tiles: bool,
+    /// `ShadowSettings::alpha_test`: MASK and BLEND glTF casters alpha-tested.
+    alpha_test: bool,
     /// S3 projectors into the atlas.
     projectors: Vec<Projector>,
 }
@@ -244,8 +246,18 @@ impl ShadowPass {
     /// Compiles the depth, mask and view pipelines, makes the sun view uniforms and takes `scene`'s casters.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
         let depth_program = Program::new(ctx, "passes/shadows/depth.wgsl")?;
-        let depth32 = DepthPipelines::new(ctx, &depth_program, SHADOW_FORMAT)?;
-        let depth16 = DepthPipelines::new(ctx, &depth_program, STATIC_FORMAT)?;
+        // Alpha-tested glTF casters: compiled only for scenes that have some.
+        let alpha = scene
+            .pbr
+            .materials
+            .iter()
+            .any(|m| m.alpha_mode != crate::scene::gltf::AlphaMode::Opaque && !m.transmits());
+        let masked = match alpha {
+            true => Some(std::sync::Arc::new(depth::MaskedProgram::new(ctx)?)),
+            false => None,
+        };
+        let depth32 = DepthPipelines::new(ctx, &depth_program, masked.as_ref(), SHADOW_FORMAT)?;
+        let depth16 = DepthPipelines::new(ctx, &depth_program, masked.as_ref(), STATIC_FORMAT)?;
         let views = (0..CASCADES + 2)
             .map(|i| depth::view_buffer(ctx, &format!("shadows.view{i}")))
             .collect();
@@ -477,6 +489,7 @@ impl ShadowPass {
         let mut plan = FramePlan {
             projectors: local.projectors,
             mask_tiles: s.mask_tiles,
+            alpha_test: s.alpha_test,
             ..FramePlan::default()
         };
         stats.atlas_tiles = plan.projectors.len() as u32;
@@ -638,7 +651,10 @@ impl ShadowPass {
             );
             let of_hero = |draws| crate::gpu_scene::draws_of(draws, h as u32).to_vec();
             let textured = crate::gpu_scene::entries_of(&scene.draws_textured, h as u32, |e| &e.0);
-            let textured: Vec<_> = textured.iter().map(|(d, _)| d.clone()).collect();
+            let blend = crate::gpu_scene::entries_of(&scene.draws_blend, h as u32, |e| &e.0);
+            let textured: Vec<_> = (textured.iter().map(|(d, _)| d.clone()))
+                .chain(blend.iter().map(|(d, _, _)| d.clone()))
+                .collect();
             let lists = DrawLists {
                 opaque: [of_hero(&scene.draws_opaque), textured].concat(),
                 vegetation: of_hero(&scene.draws_vegetation),
@@ -779,8 +795,7 @@ fn static_draws(casters: &Casters, scene: &SceneGpu) -> Vec<(crate::gpu_scene::D
             .copied()
             .unwrap_or(true)
     };
-    let textured = scene.draws_textured.iter().map(|(d, _)| d);
-    let opaque = (scene.draws_opaque.iter().chain(textured))
+    let opaque = (scene.draws_opaque.iter().chain(scene.textured_casters()))
         .filter(|d| keep(d))
         .map(|d| (d.clone(), false));
     let veg = scene

@@ -271,6 +271,7 @@ impl ShadowPass {
             clear_rect,
         } = node;
         let culled = culled.filter(|_| lists.gpu_view.is_some() || lists.pool_view.is_some());
+        let alpha_test = self.plan.as_ref().is_some_and(|p| p.alpha_test);
         let (map, layer, clear) = target;
         let ops = wgpu::Operations {
             load: if clear {
@@ -298,9 +299,9 @@ impl ShadowPass {
                 Some(r) => super::depth::set_rect(rp, r),
                 None => {}
             }
+            let device = (ctx.device, alpha_test);
             let culled = culled.as_ref().map(|c| (c, ctx));
-            pipelines.draw_culled(rp, scene, lists, culled);
-            Ok(())
+            pipelines.draw_culled(rp, scene, lists, culled, device)
         })
         .depth
         .unwrap_or(map)
@@ -341,7 +342,12 @@ impl ShadowPass {
                     let (x, y, edge) = (t.x as f32, t.y as f32, t.size as f32);
                     rp.set_viewport(x, y, edge, edge, 0.0, 1.0);
                     rp.set_bind_group(0, &bg, &[]);
-                    self.depth32.draw_pipelines(rp, scene, &p.draws);
+                    self.depth32.draw_pipelines(
+                        rp,
+                        scene,
+                        &p.draws,
+                        (ctx.device, plan.alpha_test),
+                    )?;
                 }
                 Ok(())
             })

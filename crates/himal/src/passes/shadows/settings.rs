@@ -70,6 +70,10 @@ pub struct ShadowSettings {
     /// (exact). Off by default: on lavapipe the pass costs more than the
     /// taps it saves (docs/performance.md, #23).
     pub mask_tiles: bool,
+    /// glTF MASK and BLEND casters alpha-tested in every sun map and the
+    /// atlas (`depth_masked.wgsl`: a leaf card casts its holes); off: cast
+    /// as opaque cards (as before issue #22), to compare.
+    pub alpha_test: bool,
 }
 
 impl Default for ShadowSettings {
@@ -89,6 +93,7 @@ impl Default for ShadowSettings {
             skip_casterless: true,
             hero_scissor: true,
             mask_tiles: false,
+            alpha_test: true,
         }
     }
 }

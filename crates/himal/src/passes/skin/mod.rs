@@ -45,6 +45,8 @@ impl SkinPass {
             .uniform("params", &skins.params)
             .uniform("sources", &skins.sources)
             .uniform("joints", &skins.joints)
+            .uniform("prev_joints", &skins.prev_joints)
+            .uniform("prev", &scene.deform)
             .write_buffer("skinned", skinned)
             .dispatch([skins.vertex_count.div_ceil(GROUP), 1, 1])
             .buffer(skinned);

@@ -57,6 +57,8 @@ pub enum Target {
     Rotation,
     /// The node's scale (a vector key).
     Scale,
+    /// The weight of morph target k of the node's mesh (a scalar key in x).
+    Weight(u32),
 }
 
 /// Keyframe interpolation (glTF 2.0 3.11.2).
@@ -220,12 +222,16 @@ impl Rig {
         };
         let mut trs: Vec<Option<Trs>> = vec![None; self.nodes.len()];
         for ch in &clip.channels {
+            if let Target::Weight(_) = ch.target {
+                continue;
+            }
             let v = ch.sample(t);
             let n = trs[ch.node].get_or_insert(self.nodes[ch.node].rest_trs);
             match ch.target {
                 Target::Translation => n.translation = v.truncate(),
                 Target::Rotation => n.rotation = Quat::from_vec4(v).normalize(),
                 Target::Scale => n.scale = v.truncate(),
+                Target::Weight(_) => {}
             }
         }
         for (l, trs) in locals.iter_mut().zip(trs) {
@@ -234,6 +240,52 @@ impl Rig {
             }
         }
         locals
+    }
+
+    /// The morph weights of node `node`'s mesh under `clip` at `t` (looped
+    /// as the pose): `defaults` with the clip's weight channels on the node
+    /// sampled over them.
+    pub fn weights(&self, clip: Option<usize>, t: f32, node: usize, defaults: &[f32]) -> Vec<f32> {
+        let mut w = defaults.to_vec();
+        let Some(clip) = clip.and_then(|c| self.clips.get(c)) else {
+            return w;
+        };
+        let t = if clip.duration > 0.0 {
+            t.rem_euclid(clip.duration)
+        } else {
+            0.0
+        };
+        for ch in clip.channels.iter().filter(|c| c.node == node) {
+            if let Target::Weight(k) = ch.target
+                && let Some(slot) = w.get_mut(k as usize)
+            {
+                *slot = ch.sample(t).x;
+            }
+        }
+        w
+    }
+
+    /// Whether a clip animates the morph weights of node `node`.
+    pub fn animates_weights(&self, node: usize) -> bool {
+        (self.clips.iter().flat_map(|c| &c.channels))
+            .any(|ch| ch.node == node && matches!(ch.target, Target::Weight(_)))
+    }
+
+    /// Per morph target of node `node` (`defaults` gives their count and
+    /// the values of unanimated ones): the least and greatest weight of any
+    /// key value of any clip, with the default (the rest pose).
+    pub fn weight_ranges(&self, node: usize, defaults: &[f32]) -> Vec<(f32, f32)> {
+        let mut r: Vec<(f32, f32)> = defaults.iter().map(|&d| (d, d)).collect();
+        for ch in self.clips.iter().flat_map(|c| &c.channels) {
+            if let (true, Target::Weight(k)) = (ch.node == node, ch.target)
+                && let Some((lo, hi)) = r.get_mut(k as usize)
+            {
+                for v in &ch.values {
+                    (*lo, *hi) = (lo.min(v.x), hi.max(v.x));
+                }
+            }
+        }
+        r
     }
 
     /// World (file space) transforms of every node under `clip` at `t`.
@@ -360,6 +412,9 @@ pub struct Animated {
     pub clip: Option<usize>,
     /// Bounds of the object's mesh over every clip, in file space.
     pub swept: Aabb,
+    /// Morph targets whose weights a clip animates (unskinned meshes): the
+    /// mesh is morphed each frame to [`Animated::weights_at`].
+    pub morph: Option<Arc<super::MorphTargets>>,
 }
 
 impl Animated {
@@ -380,6 +435,14 @@ impl Animated {
             return Mat4::IDENTITY;
         }
         self.rig.pose_shared(self.clip, t)[self.node]
+    }
+
+    /// The morph weights at `t` (morphed objects; empty otherwise).
+    pub fn weights_at(&self, t: f32) -> Vec<f32> {
+        match &self.morph {
+            Some(m) => self.rig.weights(self.clip, t, self.node, &m.defaults),
+            None => Vec::new(),
+        }
     }
 
     /// Joint matrices at `t` (skinned objects; empty otherwise).
@@ -416,13 +479,12 @@ pub(super) fn swept_skinned(rig: &Rig, skin: usize, vertices: &[SkinVertex]) -> 
 }
 
 /// Reads the file's node tree, skins and clips; `None` when the file has
-/// neither skins nor animations. Channels on morph weights are named in
-/// `warnings` (the weights stay the mesh's defaults).
+/// neither skins nor animations. A weights channel becomes one channel per
+/// morph target ([`Target::Weight`]).
 pub(super) fn read_rig(
     cx: &GltfContext,
     doc: &gltf::Document,
     buffers: &[Vec<u8>],
-    warnings: &mut Vec<String>,
 ) -> Result<Option<Rig>, SceneError> {
     if doc.skins().len() == 0 && doc.animations().len() == 0 {
         return Ok(None);
@@ -481,7 +543,6 @@ pub(super) fn read_rig(
     }
 
     let mut clips = Vec::new();
-    let mut morph_channels = Vec::new();
     for a in doc.animations() {
         let name = a
             .name()
@@ -494,10 +555,7 @@ pub(super) fn read_rig(
                 Property::Translation => Target::Translation,
                 Property::Rotation => Target::Rotation,
                 Property::Scale => Target::Scale,
-                Property::MorphTargetWeights => {
-                    morph_channels.push(name.clone());
-                    continue;
-                }
+                Property::MorphTargetWeights => Target::Weight(0),
             };
             let reader = ch.reader(data);
             let times: Vec<f32> = match reader.read_inputs() {
@@ -510,7 +568,10 @@ pub(super) fn read_rig(
                     v.map(v3).collect()
                 }
                 Some(ReadOutputs::Rotations(r)) => r.into_f32().map(Vec4::from).collect(),
-                _ => return Err(bad("a sampler's output cannot be read".into())),
+                Some(ReadOutputs::MorphTargetWeights(w)) => {
+                    w.into_f32().map(|w| Vec4::new(w, 0.0, 0.0, 0.0)).collect()
+                }
+                None => return Err(bad("a sampler's output cannot be read".into())),
             };
             let interpolation = match ch.sampler().interpolation() {
                 gltf::animation::Interpolation::Step => Interpolation::Step,
@@ -524,6 +585,36 @@ pub(super) fn read_rig(
             };
             if times.is_empty() || times.len() > MAX_KEYS {
                 return Err(bad(format!("a channel has {} keys", times.len())));
+            }
+            if target == Target::Weight(0) {
+                // One channel per morph target: key j's value s (in-tangent,
+                // value, out-tangent for cubic splines) of target k is
+                // output (j · per_key + s) · n + k.
+                let per = times.len() * per_key;
+                let n = values.len().checked_div(per).unwrap_or(0);
+                if n == 0 || n * per != values.len() || n > MAX_KEYS {
+                    return Err(bad(format!(
+                        "a weights channel has {} values for {} keys",
+                        values.len(),
+                        times.len()
+                    )));
+                }
+                if !values.iter().all(|v| v.is_finite()) {
+                    return Err(bad("non-finite key values".into()));
+                }
+                if !times.iter().all(|t| t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+                    return Err(bad("key times must be finite and ascending".into()));
+                }
+                for k in 0..n {
+                    channels.push(Channel {
+                        node: ch.target().node().index(),
+                        target: Target::Weight(k as u32),
+                        interpolation,
+                        times: times.clone(),
+                        values: values.iter().skip(k).step_by(n).copied().collect(),
+                    });
+                }
+                continue;
             }
             if values.len() != times.len() * per_key {
                 return Err(bad(format!(
@@ -554,13 +645,6 @@ pub(super) fn read_rig(
             duration,
             channels,
         });
-    }
-    if !morph_channels.is_empty() {
-        morph_channels.dedup();
-        warnings.push(format!(
-            "does not animate morph weights (drawn at the mesh's default weights): {}",
-            morph_channels.join(", ")
-        ));
     }
     Ok(Some(Rig {
         nodes,

@@ -30,8 +30,28 @@ pub enum AlphaMode {
     Opaque,
     /// Alpha test: fragments with alpha < cutoff are discarded.
     Mask(f32),
-    /// Drawn with an ordered-dither alpha test (docs/gltf.md: the deferred fallback).
+    /// Blended over the opaque scene by `forward.blend`; as a shadow caster
+    /// a mask at [`AlphaMode::BLEND_CASTER_CUTOFF`].
     Blend,
+}
+
+impl AlphaMode {
+    /// The cut-off BLEND surfaces cast shadows with (docs/gltf.md "Alpha in
+    /// shadows"): a pane mostly see-through casts nothing, a mostly opaque
+    /// one casts as if opaque.
+    pub const BLEND_CASTER_CUTOFF: f32 = 0.5;
+
+    /// Whether a fragment of coverage `alpha` (base colour factor × texture
+    /// alpha) is cut away: MASK below its cut-off; as a shadow caster
+    /// (`caster`) BLEND below [`Self::BLEND_CASTER_CUTOFF`] too. CPU twin of
+    /// `gltf_cut_out` (`shaders/gltf_material.wgsl`).
+    pub fn cuts(self, alpha: f32, caster: bool) -> bool {
+        match self {
+            AlphaMode::Opaque => false,
+            AlphaMode::Mask(cutoff) => alpha < cutoff,
+            AlphaMode::Blend => caster && alpha < Self::BLEND_CASTER_CUTOFF,
+        }
+    }
 }
 
 /// A texture used by a material slot and the UV set it reads.

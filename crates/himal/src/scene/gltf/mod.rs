@@ -13,6 +13,7 @@ mod animation;
 mod buffers;
 mod instancing;
 mod material;
+mod morph;
 pub(crate) mod placement;
 mod tangents;
 
@@ -35,6 +36,7 @@ use buffers::{
     check_accessors, check_attribute_types, check_document, check_image_sources, check_nodes,
     check_position_accessors,
 };
+pub use morph::{MorphTarget, MorphTargets};
 
 use super::{Aabb, Camera, Mesh, NamedCamera, Object, SceneError, Vertex};
 use crate::budget::MemoryBudget;
@@ -338,6 +340,8 @@ pub fn load_from_bytes_with(
     let mut primitive_mesh: Vec<Vec<Option<usize>>> = Vec::new();
     let mut meshes = Vec::new();
     let mut mesh_skin: Vec<Option<Vec<SkinVertex>>> = Vec::new();
+    // Morph targets of each mesh (those with targets), for animated weights.
+    let mut mesh_morph: Vec<Option<std::sync::Arc<MorphTargets>>> = Vec::new();
     let mut gltf_primitives = 0;
     let mut not_drawn = Vec::new();
     for m in doc.meshes() {
@@ -358,11 +362,12 @@ pub fn load_from_bytes_with(
             }
             let material = mapped.or(p.material().index()).unwrap_or(default_material);
             let desc = pbr.materials.get(material).unwrap_or(&fallback);
-            let (mesh, skin) = primitive(&cx, &m, &p, &buffers, desc)?;
+            let (mesh, skin, morph) = primitive(&cx, &m, &p, &buffers, desc)?;
             pbr.mesh_material.push((meshes.len(), material));
             of_mesh.push(Some(meshes.len()));
             meshes.push(mesh);
             mesh_skin.push(skin);
+            mesh_morph.push(morph.map(std::sync::Arc::new));
         }
         primitive_mesh.push(of_mesh);
     }
@@ -374,7 +379,7 @@ pub fn load_from_bytes_with(
         ));
     }
     let names = |v: Vec<String>| v.join(", ");
-    let rig = animation::read_rig(&cx, &doc, &buffers, &mut warnings)?.map(std::sync::Arc::new);
+    let rig = animation::read_rig(&cx, &doc, &buffers)?.map(std::sync::Arc::new);
     // Nodes an animation moves: targeted by a channel, or below one that is.
     let moved: Vec<bool> = match &rig {
         Some(rig) => {
@@ -404,6 +409,8 @@ pub fn load_from_bytes_with(
         .and_then(|r| (!r.clips.is_empty()).then_some(0));
     let mut unskinned = Vec::new();
     let mut skinned_meshes = std::collections::HashSet::new();
+    let mut morphed_meshes = std::collections::HashSet::new();
+    let mut unmorphed = Vec::new();
     // Two UV sets per vertex (`Vertex::uv`, `uv1`): slots reading a later
     // set read TEXCOORD_0 instead, named here.
     let mut past_second: Vec<String> = Vec::new();
@@ -483,14 +490,19 @@ pub fn load_from_bytes_with(
             .name()
             .map_or_else(|| format!("node{}", node.index()), str::to_string);
         if let Some(m) = node.mesh() {
-            if node.weights().is_some_and(|w| Some(w) != m.weights()) {
-                reweighted.push(name.clone());
-            }
             let drawn = &primitive_mesh[m.index()];
             let count = drawn.len();
             // EXT_mesh_gpu_instancing: one object per instance, the
             // instance's transform before the node's.
             let instances = instancing::node_instances(&cx, &doc, &node, &buffers)?;
+            // A node's own weights replace its mesh's defaults (glTF 2.0
+            // 3.7.2.2): each such node draws its own copy (not instanced ones).
+            let own = node.weights().filter(|w| Some(*w) != m.weights());
+            let targets = drawn.iter().flatten().any(|&p| mesh_morph[p].is_some());
+            if own.is_some() && (instances.is_some() || !targets) {
+                reweighted.push(name.clone());
+            }
+            let own = own.filter(|_| instances.is_none());
             let placements = instances.as_deref().unwrap_or(&[Mat4::IDENTITY]);
             let drawn_objects = out.objects.len() + placements.len() * count;
             if drawn_objects as u64 > buffers::MAX_NODE_INSTANCES {
@@ -508,6 +520,15 @@ pub fn load_from_bytes_with(
                 };
                 for (k, mesh) in drawn.iter().enumerate() {
                     let Some(mut mesh) = *mesh else { continue };
+                    if let (Some(w), Some(t)) = (own, mesh_morph[mesh].clone()) {
+                        mesh = reweighted_copy(
+                            w,
+                            &t,
+                            mesh,
+                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
+                            &mut out.pbr,
+                        );
+                    }
                     let rig = rig.as_ref().filter(|_| instances.is_none());
                     let skin = node.skin().map(|s| s.index());
                     if skin.is_some() && mesh_skin[mesh].is_none() {
@@ -519,6 +540,7 @@ pub fn load_from_bytes_with(
                             if !skinned_meshes.insert(mesh) {
                                 meshes.push(meshes[mesh].clone());
                                 mesh_skin.push(mesh_skin[mesh].clone());
+                                mesh_morph.push(mesh_morph[mesh].clone());
                                 if let Some(m) = out.pbr.material_of(mesh) {
                                     out.pbr.mesh_material.push((meshes.len() - 1, m));
                                 }
@@ -543,15 +565,44 @@ pub fn load_from_bytes_with(
                                 &mut meshes[mesh],
                             ))
                         }
-                        (Some(rig), None) if moved[node.index()] => Some(Animated {
-                            rig: rig.clone(),
-                            node: node.index(),
-                            skin: None,
-                            clip: first_clip,
-                            swept: animation::swept_rigid(rig, node.index(), &meshes[mesh].bounds),
-                        }),
+                        (Some(rig), None) if moved[node.index()] => {
+                            // Animated morph weights: each morphed node
+                            // deforms its own copy of the mesh.
+                            let morph = (mesh_morph[mesh].clone())
+                                .filter(|_| rig.animates_weights(node.index()));
+                            if morph.is_some() && !morphed_meshes.insert(mesh) {
+                                meshes.push(meshes[mesh].clone());
+                                mesh_skin.push(None);
+                                mesh_morph.push(mesh_morph[mesh].clone());
+                                if let Some(m) = out.pbr.material_of(mesh) {
+                                    out.pbr.mesh_material.push((meshes.len() - 1, m));
+                                }
+                                mesh = meshes.len() - 1;
+                            }
+                            if let Some(m) = &morph {
+                                morphed(rig, node.index(), first_clip, m, &mut meshes[mesh]);
+                            }
+                            Some(Animated {
+                                rig: rig.clone(),
+                                node: node.index(),
+                                skin: None,
+                                clip: first_clip,
+                                swept: animation::swept_rigid(
+                                    rig,
+                                    node.index(),
+                                    &meshes[mesh].bounds,
+                                ),
+                                morph,
+                            })
+                        }
                         _ => None,
                     };
+                    if let Some(rig) = rig
+                        && rig.animates_weights(node.index())
+                        && animated.as_ref().is_none_or(|a| a.morph.is_none())
+                    {
+                        unmorphed.push(format!("{name} ({})", meshes[mesh].name));
+                    }
                     let motion = animated.map(|a| crate::scene::Motion {
                         orbit: None,
                         base: Mat4::IDENTITY,
@@ -591,9 +642,15 @@ pub fn load_from_bytes_with(
             unskinned.join(", ")
         ));
     }
+    if !unmorphed.is_empty() {
+        out.warnings.push(format!(
+            "animated morph weights are not applied to skinned meshes or meshes without targets: {}",
+            unmorphed.join(", ")
+        ));
+    }
     if !reweighted.is_empty() {
         out.warnings.push(format!(
-            "nodes with their own morph weights are drawn with their mesh's default weights: {}",
+            "instanced nodes, or nodes whose mesh has no targets, with their own morph weights are drawn with their mesh's default weights: {}",
             reweighted.join(", ")
         ));
     }
@@ -627,7 +684,73 @@ fn skinned(
         skin: Some((skin, std::sync::Arc::new(vertices))),
         clip,
         swept,
+        morph: None,
     }
+}
+
+/// The loader's per-mesh lists: meshes, their skins, their morph targets.
+type MeshLists<'a> = (
+    &'a mut Vec<Mesh>,
+    &'a mut Vec<Option<Vec<SkinVertex>>>,
+    &'a mut Vec<Option<std::sync::Arc<MorphTargets>>>,
+);
+
+/// A copy of mesh `mesh` (with its skin and morph targets) at a node's own
+/// weights `weights` (missing ones 0), which become the copy's defaults;
+/// returns the copy's index.
+fn reweighted_copy(
+    weights: &[f32],
+    targets: &MorphTargets,
+    mesh: usize,
+    (meshes, skins, morphs): MeshLists<'_>,
+    pbr: &mut PbrSet,
+) -> usize {
+    let mut t = targets.clone();
+    t.defaults = (0..t.targets.len())
+        .map(|k| {
+            weights
+                .get(k)
+                .copied()
+                .filter(|w| w.is_finite())
+                .unwrap_or(0.0)
+        })
+        .collect();
+    let mut copy = meshes[mesh].clone();
+    t.apply(&mut copy.vertices, &t.defaults);
+    copy.bounds = Aabb::from_points(copy.vertices.iter().map(|v| Vec3::from(v.position)));
+    // A skinned copy's bind pose is the reweighted shape.
+    let skin = skins[mesh].clone().map(|mut s| {
+        for (s, v) in s.iter_mut().zip(&copy.vertices) {
+            s.position[..3].copy_from_slice(&v.position);
+            s.normal[..3].copy_from_slice(&v.normal);
+            s.tangent = v.tangent;
+        }
+        s
+    });
+    if let Some(m) = pbr.material_of(mesh) {
+        pbr.mesh_material.push((meshes.len(), m));
+    }
+    meshes.push(copy);
+    skins.push(skin);
+    morphs.push(Some(std::sync::Arc::new(t)));
+    meshes.len() - 1
+}
+
+/// Morphed mesh `mesh` on node `node`: its vertices become the shape at
+/// t = 0 of `clip`, its bounds those of every weight between the clips'
+/// key values ([`MorphTargets::bounds`]).
+fn morphed(
+    rig: &std::sync::Arc<Rig>,
+    node: usize,
+    clip: Option<usize>,
+    morph: &MorphTargets,
+    mesh: &mut Mesh,
+) {
+    morph.apply(
+        &mut mesh.vertices,
+        &rig.weights(clip, 0.0, node, &morph.defaults),
+    );
+    mesh.bounds = morph.bounds(&rig.weight_ranges(node, &morph.defaults));
 }
 
 /// The extensions the loader reads (the gltf crate's typed ones and
@@ -872,15 +995,20 @@ fn light(name: &str, l: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Punc
     }
 }
 
+/// A primitive's mesh, its bind-pose skin vertices where it has JOINTS_0
+/// and WEIGHTS_0, and its morph targets where it has any.
+type PrimitiveParts = (Mesh, Option<Vec<SkinVertex>>, Option<MorphTargets>);
+
 /// One primitive as a mesh, with its bind-pose skin vertices where it has
-/// JOINTS_0 and WEIGHTS_0 (else `None`).
+/// JOINTS_0 and WEIGHTS_0 (else `None`) and its morph targets (kept for
+/// animated weights).
 fn primitive<'a>(
     cx: &GltfContext,
     mesh: &gltf::Mesh<'a>,
     p: &gltf::Primitive<'a>,
     buffers: &'a [Vec<u8>],
     material: &PbrMaterial,
-) -> Result<(Mesh, Option<Vec<SkinVertex>>), SceneError> {
+) -> Result<PrimitiveParts, SceneError> {
     let name = primitive_name(mesh, p);
     let reader = p.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     // Attributes read as floats whatever their storage (KHR_mesh_quantization).
@@ -900,11 +1028,10 @@ fn primitive<'a>(
     }
     let mut normal_deltas: Vec<(f32, Vec<[f32; 3]>)> = Vec::new();
     let mut tangent_deltas: Vec<(f32, Vec<[f32; 3]>)> = Vec::new();
+    let base_positions = positions.clone();
+    let mut targets: Vec<MorphTarget> = Vec::new();
     for (k, (dp, dn, dt)) in reader.read_morph_targets().enumerate() {
         let w = weights.get(k).copied().unwrap_or(0.0);
-        if w == 0.0 {
-            continue;
-        }
         let read = |d: Vec<[f32; 3]>, what: &str| {
             if d.len() != n {
                 return Err(cx.invalid(format!(
@@ -914,17 +1041,32 @@ fn primitive<'a>(
             }
             Ok(d)
         };
+        let mut target = MorphTarget::default();
         if let Some(dp) = dp {
-            for (p, d) in positions.iter_mut().zip(read(dp.collect(), "POSITION")?) {
+            target.positions = read(dp.collect(), "POSITION")?;
+            for (p, d) in positions.iter_mut().zip(&target.positions) {
                 (0..3).for_each(|c| p[c] += w * d[c]);
             }
         }
         if let Some(dn) = dn {
-            normal_deltas.push((w, read(dn.collect(), "NORMAL")?));
+            target.normals = read(dn.collect(), "NORMAL")?;
+            normal_deltas.push((w, target.normals.clone()));
         }
         if let Some(dt) = dt {
-            tangent_deltas.push((w, read(dt.collect(), "TANGENT")?));
+            target.tangents = read(dt.collect(), "TANGENT")?;
+            tangent_deltas.push((w, target.tangents.clone()));
         }
+        if (target
+            .positions
+            .iter()
+            .chain(&target.normals)
+            .chain(&target.tangents))
+        .flatten()
+        .any(|c| !c.is_finite())
+        {
+            return Err(cx.invalid(format!("mesh \"{name}\": morph target {k} is not finite")));
+        }
+        targets.push(target);
     }
     let morph = |values: &mut [[f32; 3]], deltas: &[(f32, Vec<[f32; 3]>)]| {
         for (w, d) in deltas {
@@ -988,10 +1130,12 @@ fn primitive<'a>(
             )));
         }
     }
+    let mut base_normals = None;
     let normals: Vec<[f32; 3]> = match attribute(gltf::Semantic::Normals) {
         Some(a) => {
             let mut normals =
                 buffers::read_floats::<3>(&a, data).ok_or_else(|| unreadable("NORMAL"))?;
+            base_normals = Some(normals.clone());
             morph(&mut normals, &normal_deltas);
             normals
         }
@@ -1020,11 +1164,13 @@ fn primitive<'a>(
         .collect();
     let mut indices = indices;
     let mut remap: Option<Vec<u32>> = None;
+    let mut base_tangents = None;
     match attribute(gltf::Semantic::Tangents) {
         Some(a) => {
             let t = buffers::read_floats::<4>(&a, data).ok_or_else(|| unreadable("TANGENT"))?;
             count_ok(t.len(), "TANGENT")?;
             let mut xyz: Vec<[f32; 3]> = t.iter().map(|t| [t[0], t[1], t[2]]).collect();
+            base_tangents = Some(xyz.clone());
             morph(&mut xyz, &tangent_deltas);
             for ((v, t), m) in vertices.iter_mut().zip(&t).zip(xyz) {
                 let w = if t[3] < 0.0 { -1.0 } else { 1.0 };
@@ -1093,6 +1239,31 @@ fn primitive<'a>(
         }
         _ => None,
     };
+    // Indexed like the drawn vertices (MikkTSpace may have split some).
+    let morph = (!targets.is_empty()).then(|| {
+        let origin = |k: usize| remap.as_ref().map_or(k, |r| r[k] as usize);
+        let by_vertex = |v: &[[f32; 3]]| -> Vec<[f32; 3]> {
+            match v.is_empty() {
+                true => Vec::new(),
+                false => (0..vertices.len()).map(|k| v[origin(k)]).collect(),
+            }
+        };
+        MorphTargets {
+            defaults: (0..targets.len())
+                .map(|k| weights.get(k).copied().unwrap_or(0.0))
+                .collect(),
+            positions: by_vertex(&base_positions),
+            normals: base_normals.as_deref().map(by_vertex),
+            tangents: base_tangents.as_deref().map(by_vertex),
+            targets: (targets.iter())
+                .map(|t| MorphTarget {
+                    positions: by_vertex(&t.positions),
+                    normals: by_vertex(&t.normals),
+                    tangents: by_vertex(&t.tangents),
+                })
+                .collect(),
+        }
+    });
     Ok((
         Mesh {
             name,
@@ -1102,6 +1273,7 @@ fn primitive<'a>(
             levels: Vec::new(),
         },
         skin,
+        morph,
     ))
 }
 
