@@ -363,34 +363,7 @@ fn alpha_tested_gltf_cards_cast_their_holes() {
                 counts[class].1 += usize::from((vis > 0.5) == lit);
             }
         }
-        let rate = |(n, ok): (usize, usize)| ok as f64 / n.max(1) as f64;
-        let [shadowed, holes, beside] = counts.map(rate);
-        eprintln!(
-            "{name}: shadowed {:?} {:.1}%, holes {:?} {:.1}%, beside {:?} {:.1}%",
-            counts[0],
-            100.0 * shadowed,
-            counts[1],
-            100.0 * holes,
-            counts[2],
-            100.0 * beside
-        );
-        assert!(
-            counts[0].0 > 200 && counts[1].0 > 200,
-            "{name}: too few pixels {counts:?}"
-        );
-        if alpha_test {
-            // Measured 2026-12-06 on lavapipe: see docs/gltf.md "Alpha in shadows".
-            assert!(
-                shadowed >= 0.97 && holes >= 0.97 && beside >= 0.97,
-                "{name}: {counts:?}"
-            );
-        } else {
-            // The opaque card shadows its holes too.
-            assert!(
-                holes < 0.1,
-                "{name}: holes lit without the alpha test: {counts:?}"
-            );
-        }
+        check_card_counts(name, counts, alpha_test);
     }
 }
 
@@ -463,29 +436,43 @@ fn alpha_tested_gltf_cards_cast_their_holes_under_local_lights() {
                 counts[class].1 += usize::from((mask[(y * w + x) as usize][1] > 0.5) == lit);
             }
         }
-        let rate = |(n, ok): (usize, usize)| ok as f64 / n.max(1) as f64;
-        let [shadowed, holes, beside] = counts.map(rate);
-        eprintln!(
-            "lamp, alpha test {alpha_test}: shadowed {:?} {:.1}%, holes {:?} {:.1}%, beside {:?} {:.1}%",
-            counts[0],
-            100.0 * shadowed,
-            counts[1],
-            100.0 * holes,
-            counts[2],
-            100.0 * beside
+        check_card_counts(
+            &format!("lamp, alpha test {alpha_test}"),
+            counts,
+            alpha_test,
         );
+    }
+}
+
+/// The card tests' verdict: (pixels, agreeing with the ray cast) for the
+/// card's shadow, its holes and beside it.
+fn check_card_counts(name: &str, counts: [(usize, usize); 3], alpha_test: bool) {
+    let rate = |(n, ok): (usize, usize)| ok as f64 / n.max(1) as f64;
+    let [shadowed, holes, beside] = counts.map(rate);
+    eprintln!(
+        "{name}: shadowed {:?} {:.1}%, holes {:?} {:.1}%, beside {:?} {:.1}%",
+        counts[0],
+        100.0 * shadowed,
+        counts[1],
+        100.0 * holes,
+        counts[2],
+        100.0 * beside
+    );
+    assert!(
+        counts[0].0 > 200 && counts[1].0 > 200,
+        "{name}: too few pixels {counts:?}"
+    );
+    if alpha_test {
+        // Measured 2026-12-06 on lavapipe: see docs/gltf.md "Alpha in shadows".
         assert!(
-            counts[0].0 > 200 && counts[1].0 > 200,
-            "too few pixels {counts:?}"
+            shadowed >= 0.97 && holes >= 0.97 && beside >= 0.97,
+            "{name}: {counts:?}"
         );
-        if alpha_test {
-            // Measured 2026-12-06 on lavapipe: docs/gltf.md "Alpha in shadows".
-            assert!(
-                shadowed >= 0.97 && holes >= 0.97 && beside >= 0.97,
-                "{counts:?}"
-            );
-        } else {
-            assert!(holes < 0.1, "holes lit without the alpha test: {counts:?}");
-        }
+    } else {
+        // The opaque card shadows its holes too.
+        assert!(
+            holes < 0.1,
+            "{name}: holes lit without the alpha test: {counts:?}"
+        );
     }
 }
