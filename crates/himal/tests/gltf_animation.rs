@@ -256,21 +256,7 @@ fn the_frame_draws_the_pose_at_its_time() {
         (v.position, v.normal, v.tangent) = skin_vertex(s, &joints);
     }
     o.motion = None;
-    let size = (96, 96);
-    let image = |scene: &Scene, t: f32| {
-        let mut s = common::raw_settings(scene, size, "normal");
-        s.time_s = t;
-        common::render_rgba(&mut common::renderer(scene), &camera, &s)
-    };
-    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
-        let sum: f32 = (a.iter().zip(b))
-            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f32>() / 3.0)
-            .sum();
-        sum / a.len() as f32
-    };
-    let gpu = image(&scene, t);
-    let (cpu, rest) = (image(&posed, t), image(&scene, 0.0));
-    let (same, moved) = (diff(&gpu, &cpu), diff(&gpu, &rest));
+    let (same, moved) = frame_against(&scene, &posed, &camera, t);
     eprintln!("mean difference: CPU pose {same:.4}, t = 0 {moved:.4}");
     assert!(same < 1e-3, "GPU pose vs CPU pose: {same}");
     assert!(moved > 5e-3, "the pose changed the image: {moved}");
@@ -413,21 +399,7 @@ fn the_frame_draws_the_morph_at_its_time() {
     let m = a.morph.as_ref().unwrap();
     m.apply(&mut morphed.meshes[o.mesh].vertices, &a.weights_at(t));
     o.motion = None;
-    let size = (96, 96);
-    let image = |scene: &Scene, t: f32| {
-        let mut s = common::raw_settings(scene, size, "normal");
-        s.time_s = t;
-        common::render_rgba(&mut common::renderer(scene), &camera, &s)
-    };
-    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
-        let sum: f32 = (a.iter().zip(b))
-            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f32>() / 3.0)
-            .sum();
-        sum / a.len() as f32
-    };
-    let gpu = image(&scene, t);
-    let (cpu, rest) = (image(&morphed, t), image(&scene, 0.0));
-    let (same, moved) = (diff(&gpu, &cpu), diff(&gpu, &rest));
+    let (same, moved) = frame_against(&scene, &morphed, &camera, t);
     eprintln!("mean difference: CPU morph {same:.5}, t = 0 {moved:.5}");
     assert!(same < 1e-3, "GPU frame vs CPU morph: {same}");
     assert!(moved > 5e-3, "the morph changed the image: {moved}");
@@ -574,4 +546,31 @@ fn morphed_motion_vectors_match_the_previous_shape() {
         off_max < 1e-3,
         "without deformation motion the shape is still: {off_max}"
     );
+}
+
+/// The animated `scene`'s normals at `t` (96², raw) against `deformed`
+/// (the CPU's shape at `t`, not animated) and against `scene` at t = 0:
+/// mean absolute differences (same shape, moved).
+fn frame_against(
+    scene: &Scene,
+    deformed: &Scene,
+    camera: &himal::scene::Camera,
+    t: f32,
+) -> (f32, f32) {
+    let image = |scene: &Scene, t: f32| {
+        let mut s = common::raw_settings(scene, (96, 96), "normal");
+        s.time_s = t;
+        common::render_rgba(&mut common::renderer(scene), camera, &s)
+    };
+    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        let sum: f32 = (a.iter().zip(b))
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f32>() / 3.0)
+            .sum();
+        sum / a.len() as f32
+    };
+    let gpu = image(scene, t);
+    (
+        diff(&gpu, &image(deformed, t)),
+        diff(&gpu, &image(scene, 0.0)),
+    )
 }
