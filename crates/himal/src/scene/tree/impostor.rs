@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
+use super::visibility::raster;
 use super::{Species, TreeModel, cards_mesh, limb_mesh};
 use crate::scene::primitives::MeshBuilder;
 use crate::scene::{MaterialDesc, Mesh};
@@ -305,35 +306,6 @@ pub fn view(
         }
     }
     out
-}
-
-/// Calls `f(pixel, barycentrics)` for the pixel centres of `size`² inside
-/// the screen-space triangle (either winding; top-left rule not needed:
-/// the depth test keeps one of two equal writes).
-fn raster(size: usize, [a, b, c]: [Vec3; 3], mut f: impl FnMut(usize, [f32; 3])) {
-    let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    if area.abs() < 1e-12 {
-        return;
-    }
-    let n = size as f32;
-    let x0 = (a.x.min(b.x).min(c.x) - 0.5).ceil().max(0.0);
-    let x1 = (a.x.max(b.x).max(c.x) - 0.5).floor().min(n - 1.0);
-    let y0 = (a.y.min(b.y).min(c.y) - 0.5).ceil().max(0.0);
-    let y1 = (a.y.max(b.y).max(c.y) - 0.5).floor().min(n - 1.0);
-    if x0 > x1 || y0 > y1 {
-        return;
-    }
-    for py in y0 as usize..=y1 as usize {
-        for px in x0 as usize..=x1 as usize {
-            let (x, y) = (px as f32 + 0.5, py as f32 + 0.5);
-            let w0 = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
-            let w1 = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
-            let w2 = 1.0 - w0 - w1;
-            if w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0 {
-                f(py * size + px, [w0, w1, w2]);
-            }
-        }
-    }
 }
 
 /// The capture frame of `model`: its LOD0 meshes, the bounding box centre

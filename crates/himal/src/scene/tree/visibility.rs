@@ -160,52 +160,59 @@ impl Raster {
         (c, uc): (Vec3, [f32; 2]),
         id: u32,
     ) -> u32 {
-        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if area.abs() < 1e-12 {
-            return 0;
-        }
-        let n = RESOLUTION as f32;
-        let x0 = (a.x.min(b.x).min(c.x) - 0.5).ceil().max(0.0);
-        let x1 = (a.x.max(b.x).max(c.x) - 0.5).floor().min(n - 1.0);
-        let y0 = (a.y.min(b.y).min(c.y) - 0.5).ceil().max(0.0);
-        let y1 = (a.y.max(b.y).max(c.y) - 0.5).floor().min(n - 1.0);
-        if x0 > x1 || y0 > y1 {
-            return 0;
-        }
         let pattern = ua[0];
         let mut count = 0;
-        for py in y0 as usize..=y1 as usize {
-            for px in x0 as usize..=x1 as usize {
-                let (x, y) = (px as f32 + 0.5, py as f32 + 0.5);
-                let w0 = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
-                let w1 = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
-                let w2 = 1.0 - w0 - w1;
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                // Nearer is larger 1 / depth.
-                let z = -(w0 * a.z + w1 * b.z + w2 * c.z);
-                let u = (w0 * ua[0] + w1 * ub[0] + w2 * uc[0] - pattern).clamp(0.0, 0.9999);
-                let v = w0 * ua[1] + w1 * ub[1] + w2 * uc[1];
-                if crate::scene::vegetation::leaves_alpha([pattern + u, v]) < 0.5 {
-                    continue;
-                }
-                let i = py * RESOLUTION + px;
-                if self.stamp[i] != id {
-                    self.stamp[i] = id;
-                    count += 1;
-                }
-                if z < self.depth[i] {
-                    self.depth[i] = z;
-                    self.id[i] = id;
-                }
+        raster(RESOLUTION, [a, b, c], |i, [w0, w1, w2]| {
+            // Nearer is larger 1 / depth.
+            let z = -(w0 * a.z + w1 * b.z + w2 * c.z);
+            let u = (w0 * ua[0] + w1 * ub[0] + w2 * uc[0] - pattern).clamp(0.0, 0.9999);
+            let v = w0 * ua[1] + w1 * ub[1] + w2 * uc[1];
+            if crate::scene::vegetation::leaves_alpha([pattern + u, v]) < 0.5 {
+                return;
             }
-        }
+            if self.stamp[i] != id {
+                self.stamp[i] = id;
+                count += 1;
+            }
+            if z < self.depth[i] {
+                self.depth[i] = z;
+                self.id[i] = id;
+            }
+        });
         count
     }
 
     fn covered(&self) -> usize {
         self.id.iter().filter(|&&i| i != NONE).count()
+    }
+}
+
+/// Calls `f(pixel, barycentrics)` for the pixel centres of `size`² inside
+/// the screen-space triangle (either winding; top-left rule not needed:
+/// the depth test keeps one of two equal writes).
+pub(super) fn raster(size: usize, [a, b, c]: [Vec3; 3], mut f: impl FnMut(usize, [f32; 3])) {
+    let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    if area.abs() < 1e-12 {
+        return;
+    }
+    let n = size as f32;
+    let x0 = (a.x.min(b.x).min(c.x) - 0.5).ceil().max(0.0);
+    let x1 = (a.x.max(b.x).max(c.x) - 0.5).floor().min(n - 1.0);
+    let y0 = (a.y.min(b.y).min(c.y) - 0.5).ceil().max(0.0);
+    let y1 = (a.y.max(b.y).max(c.y) - 0.5).floor().min(n - 1.0);
+    if x0 > x1 || y0 > y1 {
+        return;
+    }
+    for py in y0 as usize..=y1 as usize {
+        for px in x0 as usize..=x1 as usize {
+            let (x, y) = (px as f32 + 0.5, py as f32 + 0.5);
+            let w0 = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
+            let w1 = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
+            let w2 = 1.0 - w0 - w1;
+            if w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0 {
+                f(py * size + px, [w0, w1, w2]);
+            }
+        }
     }
 }
 
