@@ -334,35 +334,9 @@ fn alpha_tested_gltf_cards_cast_their_holes() {
             Some(t) => (mode.cuts(alphas[t] as f32 / 255.0, true), true),
             None => (true, false),
         };
-        // [shadowed, lit through a hole, lit beside the card] -> (pixels, GPU agrees)
-        let mut counts = [(0usize, 0usize); 3];
-        for y in 0..h {
-            for x in 0..w {
-                let dir = pixel_ray(&camera, (w, h), x, y);
-                let p = camera.position + dir * (-camera.position.y / dir.y);
-                // Off the plane's inner 36 m, or seeing the card (0.1 m margin).
-                let seen = camera.position + dir * ((2.0 - camera.position.y) / dir.y);
-                if p.x.abs() > 18.0
-                    || p.z.abs() > 18.0
-                    || (seen.x.abs() < 3.1 && seen.z.abs() < 3.1)
-                {
-                    continue;
-                }
-                let (lit, under) = cpu(p);
-                // Away from the holes' edges: every point within 0.15 m agrees.
-                if !ring(p, 0.15).all(|o| cpu(o).0 == lit) {
-                    continue;
-                }
-                let vis = sun_visibility(&on, &off, (y * w + x) as usize, &light, dir);
-                let class = match (lit, under) {
-                    (false, _) => 0,
-                    (true, true) => 1,
-                    (true, false) => 2,
-                };
-                counts[class].0 += 1;
-                counts[class].1 += usize::from((vis > 0.5) == lit);
-            }
-        }
+        let counts = card_counts(&camera, (w, h), &cpu, |i, dir| {
+            sun_visibility(&on, &off, i, &light, dir) > 0.5
+        });
         check_card_counts(name, counts, alpha_test);
     }
 }
@@ -410,38 +384,49 @@ fn alpha_tested_gltf_cards_cast_their_holes_under_local_lights() {
         s.shadows.atlas_resolution = 4096;
         s.shadows.alpha_test = alpha_test;
         let mask = render_rgba(&mut r, &camera, &s);
-        // [shadowed, lit through a hole, lit beside the card] -> (pixels, GPU agrees)
-        let mut counts = [(0usize, 0usize); 3];
-        for y in 0..h {
-            for x in 0..w {
-                let dir = pixel_ray(&camera, (w, h), x, y);
-                let p = camera.position + dir * (-camera.position.y / dir.y);
-                let seen = camera.position + dir * ((2.0 - camera.position.y) / dir.y);
-                if p.x.abs() > 18.0
-                    || p.z.abs() > 18.0
-                    || (seen.x.abs() < 3.1 && seen.z.abs() < 3.1)
-                {
-                    continue;
-                }
-                let (lit, under) = cpu(p);
-                if !ring(p, 0.15).all(|o| cpu(o).0 == lit) {
-                    continue;
-                }
-                let class = match (lit, under) {
-                    (false, _) => 0,
-                    (true, true) => 1,
-                    (true, false) => 2,
-                };
-                counts[class].0 += 1;
-                counts[class].1 += usize::from((mask[(y * w + x) as usize][1] > 0.5) == lit);
-            }
-        }
+        let counts = card_counts(&camera, (w, h), &cpu, |i, _| mask[i][1] > 0.5);
         check_card_counts(
             &format!("lamp, alpha test {alpha_test}"),
             counts,
             alpha_test,
         );
     }
+}
+
+/// The card tests' ground pixels, by what the CPU twin `cpu` (lit, under
+/// the card) says: [shadowed, lit through a hole, lit beside the card] ->
+/// (pixels, where `gpu_lit(pixel, ray)` agrees). Pixels off the plane's
+/// inner 36 m, seeing the card (0.1 m margin), or within 0.15 m of a hole's
+/// edge are left out.
+fn card_counts(
+    camera: &himal::scene::Camera,
+    (w, h): (u32, u32),
+    cpu: &dyn Fn(Vec3) -> (bool, bool),
+    gpu_lit: impl Fn(usize, Vec3) -> bool,
+) -> [(usize, usize); 3] {
+    let mut counts = [(0usize, 0usize); 3];
+    for y in 0..h {
+        for x in 0..w {
+            let dir = pixel_ray(camera, (w, h), x, y);
+            let p = camera.position + dir * (-camera.position.y / dir.y);
+            let seen = camera.position + dir * ((2.0 - camera.position.y) / dir.y);
+            if p.x.abs() > 18.0 || p.z.abs() > 18.0 || (seen.x.abs() < 3.1 && seen.z.abs() < 3.1) {
+                continue;
+            }
+            let (lit, under) = cpu(p);
+            if !ring(p, 0.15).all(|o| cpu(o).0 == lit) {
+                continue;
+            }
+            let class = match (lit, under) {
+                (false, _) => 0,
+                (true, true) => 1,
+                (true, false) => 2,
+            };
+            counts[class].0 += 1;
+            counts[class].1 += usize::from(gpu_lit((y * w + x) as usize, dir) == lit);
+        }
+    }
+    counts
 }
 
 /// The card tests' verdict: (pixels, agreeing with the ray cast) for the
