@@ -192,6 +192,22 @@ impl Cell {
         b
     }
 
+    /// Cell `key` from the cache file `path`; `None` where it is missing,
+    /// damaged or another cell's (the caller bakes it again).
+    pub fn read(path: &Path, key: CellKey) -> Option<Cell> {
+        let bytes = std::fs::read(path).ok()?;
+        Cell::decode(&bytes, path).ok().filter(|c| c.key == key)
+    }
+
+    /// Writes the cell to `path` whole, then renames it into place: a killed
+    /// bake leaves no torn file. Errors name the file.
+    pub fn write(&self, path: &Path) -> Result<(), String> {
+        let tmp = path.with_extension("tmp");
+        std::fs::write(&tmp, self.encode())
+            .and_then(|_| std::fs::rename(&tmp, path))
+            .map_err(|e| format!("{}: {e}", path.display()))
+    }
+
     /// A cell from its file's bytes; `path` names the file in errors.
     pub fn decode(bytes: &[u8], path: &Path) -> Result<Cell, String> {
         let bad = |what: &str| format!("{}: {what}", path.display());

@@ -130,11 +130,7 @@ impl ProbeStore {
         let mut report = BakeReport::default();
         for (n, key) in keys.iter().enumerate() {
             let path = folder.as_ref().map(|f| f.join(key.file_name()));
-            let cached = path
-                .as_ref()
-                .and_then(|p| std::fs::read(p).ok().map(|b| (p, b)))
-                .and_then(|(p, b)| Cell::decode(&b, p).ok())
-                .filter(|c| c.key == *key);
+            let cached = path.as_ref().and_then(|p| Cell::read(p, *key));
             let cell = match cached {
                 Some(c) => {
                     report.cached += 1;
@@ -143,11 +139,7 @@ impl ProbeStore {
                 None => {
                     let c = bake_cell(scene, *key, origin, settings);
                     if let Some(p) = &path {
-                        // Written whole, then renamed: a killed bake leaves no torn file.
-                        let tmp = p.with_extension("tmp");
-                        std::fs::write(&tmp, c.encode())
-                            .and_then(|_| std::fs::rename(&tmp, p))
-                            .map_err(|e| format!("{}: {e}", p.display()))?;
+                        c.write(p)?;
                     }
                     report.baked += 1;
                     c

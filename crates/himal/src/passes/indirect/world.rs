@@ -394,9 +394,7 @@ impl Shared {
     }
 
     fn read(&self, key: CellKey) -> Option<Cell> {
-        let path = self.file(key)?;
-        let bytes = std::fs::read(&path).ok()?;
-        Cell::decode(&bytes, &path).ok().filter(|c| c.key == key)
+        Cell::read(&self.file(key)?, key)
     }
 
     /// Reads block `block`'s cells from the cache, baking the missing ones
@@ -416,16 +414,11 @@ impl Shared {
             let geometry = block_geometry(&self.world, &self.meshes, &self.layers, block);
             for key in missing {
                 let c = bake_cell(&geometry, key, self.world.origin, &self.settings);
-                if let Some(p) = self.file(key) {
-                    // Written whole, then renamed: a killed bake leaves no torn file.
-                    let tmp = p.with_extension("tmp");
-                    let written =
-                        std::fs::write(&tmp, c.encode()).and_then(|_| std::fs::rename(&tmp, &p));
-                    if let (Err(e), Ok(mut first)) = (written, self.error.lock())
-                        && first.is_none()
-                    {
-                        *first = Some(format!("{}: {e}", p.display()));
-                    }
+                if let (Some(Err(e)), Ok(mut first)) =
+                    (self.file(key).map(|p| c.write(&p)), self.error.lock())
+                    && first.is_none()
+                {
+                    *first = Some(e);
                 }
                 report.baked += 1;
                 cells.push(c);
