@@ -195,12 +195,14 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub particles: String,
-    /// E4 particle lighting: once per particle (vertex, Ryse's) or at every
-    /// pixel (pixel, the reference it is measured against).
+    /// E4 particle lighting: at the corners of each particle's quad,
+    /// interpolated across it (vertex, Ryse's), once at its centre
+    /// (particle), or at every pixel (pixel, the reference both are
+    /// measured against).
     #[arg(
         long,
         default_value = "vertex",
-        value_name = "vertex|pixel",
+        value_name = "vertex|particle|pixel",
         allow_hyphen_values = true
     )]
     pub particle_lighting: String,
@@ -444,10 +446,14 @@ impl PostArgs {
         }
         settings.wetness = self.wetness;
         settings.particles = on_off("--particles", &self.particles)?;
-        settings.particles_per_pixel = match self.particle_lighting.as_str() {
-            "vertex" => false,
-            "pixel" => true,
-            other => bail!("--particle-lighting {other}: expected vertex or pixel"),
+        (
+            settings.particles_light_corners,
+            settings.particles_per_pixel,
+        ) = match self.particle_lighting.as_str() {
+            "vertex" => (true, false),
+            "particle" => (false, false),
+            "pixel" => (true, true),
+            other => bail!("--particle-lighting {other}: expected vertex, particle or pixel"),
         };
         settings.particles_sort = on_off("--particle-sort", &self.particle_sort)?;
         settings.particles_reactive = on_off("--particle-reactive", &self.particle_reactive)?;

@@ -260,6 +260,10 @@ pub struct FrameSettings {
     /// E4: light the particles at each pixel instead of once per particle
     /// (the reference of the per-particle light; off by default).
     pub particles_per_pixel: bool,
+    /// E4: light the centre and the corners of a particle's quad and
+    /// interpolate across it (Ryse's per-vertex light; on by default)
+    /// instead of once at its centre.
+    pub particles_light_corners: bool,
     /// E4: light the particles at each pixel with the world's sun shadow
     /// (cascades, S1 filter) instead of the static map's 4 x 4 gather per
     /// particle (the reference of Ryse's particle shadows; off by default).
@@ -359,6 +363,7 @@ impl FrameSettings {
             wetness: 0.0,
             particles: true,
             particles_per_pixel: false,
+            particles_light_corners: true,
             particles_cascaded_shadows: false,
             particles_reactive: true,
             particles_sort: true,

@@ -366,6 +366,7 @@ impl Renderer {
         self.res.passes.wet.specular_aa = settings.specular_aa;
         self.res.passes.particles.key = crate::passes::particles::ParticleKey {
             per_pixel: settings.particles_per_pixel,
+            corners: settings.particles_light_corners,
             debug: settings.view == ViewBuffer::ParticleLighting,
             probe_ambient: settings.particles_probe_ambient,
             cascaded_shadows: settings.particles_cascaded_shadows,

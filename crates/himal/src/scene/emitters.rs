@@ -17,10 +17,12 @@ pub const MAX_EMITTER_CAPACITY: u32 = 65536;
 pub const MAX_EMITTERS: usize = 64;
 /// Longest particle lifetime (s): the simulation pre-warms over it.
 pub const MAX_LIFETIME_S: f32 = 30.0;
-/// Most particle slots of all emitters together (32 B each, plus 32 B of light).
+/// Most particle slots of all emitters together ([`SLOT_BYTES`] each).
 pub const MAX_PARTICLE_SLOTS: u32 = 1 << 18;
-/// GPU bytes of one particle slot (state and light, 32 B each).
-pub const SLOT_BYTES: u64 = 64;
+/// GPU bytes of one particle slot: state 32 B, light 5 x 32 B (a record at
+/// the centre and at each corner of its quad), draw order 4 B and sort key
+/// 8 B.
+pub const SLOT_BYTES: u64 = 204;
 /// Highest emission rate (particles per second).
 pub const MAX_RATE: f32 = 100_000.0;
 /// The wind of a scene without `[wind]` (m/s): a light breeze toward +x

@@ -138,6 +138,24 @@ fn particle_light_diffuse(acc: ParticleLight, n: vec3f) -> vec3f {
     return acc.e.rgb * (saturate(dot(n, d)) / PI);
 }
 
+// particles.light's records per slot: the quad's centre, then its corners.
+const PARTICLE_RECORDS: u32 = 5u;
+
+// Corner k (0..3, counter-clockwise from the bottom left) of a particle's
+// quad, in [-1, 1]^2.
+fn particle_corner(k: u32) -> vec2f {
+    let corners = array<vec2f, 4>(vec2f(-1.0, -1.0), vec2f(1.0, -1.0), vec2f(1.0, 1.0), vec2f(-1.0, 1.0));
+    return corners[k];
+}
+
+// Point c in [-1, 1]^2 of the camera-facing quad of a particle at x, `size`
+// metres wide. `view_m`: world -> view (its rows are the camera's axes).
+fn particle_quad_point(view_m: mat4x4f, x: vec3f, size: f32, c: vec2f) -> vec3f {
+    let right = vec3f(view_m[0].x, view_m[1].x, view_m[2].x);
+    let up = vec3f(view_m[0].y, view_m[1].y, view_m[2].y);
+    return x + (right * c.x + up * c.y) * (0.5 * size);
+}
+
 // The sprite's per-pixel normal (world): a hemisphere bulging toward the
 // camera over the quad's disc, corner c in [-1, 1]^2, r2 = |c|^2 < 1.
 // `view_m`: world -> view (its rows are the camera's axes).

@@ -2,9 +2,11 @@
 // the deferred lighting and the forward surfaces, premultiplied over the
 // HDR target (One, OneMinusSrcAlpha), their coverage into a reactive mask
 // for the TAA. One instance per slot (dead slots
-// give a degenerate quad). Shading: the particle's accumulated light
-// (particles.light; PER_PIXEL: the same sums at each pixel, the
-// reference) with a per-pixel sphere-like sprite normal, plus ambient from
+// give a degenerate quad); a quad is four triangles around its centre.
+// Shading: the light particles.light accumulated at the centre and the
+// corners, interpolated across the triangles (Ryse's per vertex, after
+// Persson; CORNERS off: the centre's alone; PER_PIXEL: the same sums at
+// each pixel, the reference) with a per-pixel sphere-like sprite normal, plus ambient from
 // the environment cube's lowest (roughest) specular mip used as diffuse
 // (Ryse); no constant ambient. Soft particles: alpha fades over
 // SOFT_DISTANCE in front of the scene depth. DEBUG (--view
@@ -20,6 +22,7 @@
 #import ambient_lights
 
 override PER_PIXEL: bool = false;
+override CORNERS: bool = true;
 override DEBUG: bool = false;
 override PROBE_AMBIENT: bool = false;
 override CASCADED_SHADOWS: bool = false;
@@ -49,7 +52,9 @@ struct ParticleOut {
     // the quad's corner in [-1, 1]^2
     @location(1) corner: vec2f,
     @location(2) color: vec4f,
-    @location(3) @interpolate(flat) slot: u32,
+    // particles.light's sums at this vertex, interpolated
+    @location(3) light_e: vec4f,
+    @location(4) light_d: vec4f,
 }
 
 @vertex
@@ -57,7 +62,6 @@ fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u32
     var out: ParticleOut;
     let slot = order[instance];
     let p = particles[slot];
-    out.slot = slot;
     if (p.vel_alive.w < 0.5) {
         out.clip = vec4f(2.0, 2.0, 2.0, 1.0);
         return out;
@@ -69,13 +73,21 @@ fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u32
         }
     }
     let e = emitters[ei];
-    let corners = array<vec2f, 6>(vec2f(-1.0, -1.0), vec2f(1.0, -1.0), vec2f(1.0, 1.0),
-                                  vec2f(-1.0, -1.0), vec2f(1.0, 1.0), vec2f(-1.0, 1.0));
-    let c = corners[v];
-    let right = vec3f(view.view[0].x, view.view[1].x, view.view[2].x);
-    let up = vec3f(view.view[0].y, view.view[1].y, view.view[2].y);
-    let half_size = 0.5 * particle_size(e, p.pos_age.w);
-    out.world = p.pos_age.xyz + (right * c.x + up * c.y) * half_size;
+    // Triangle t = v / 3 joins the centre (record 0) and corners t, t + 1
+    // (records 1 + corner).
+    let t = v / 3u;
+    let j = v % 3u;
+    var c = vec2f(0.0);
+    var k = 0u;
+    if (j > 0u) {
+        let corner = (t + j - 1u) % 4u;
+        c = particle_corner(corner);
+        k = 1u + corner;
+    }
+    out.world = particle_quad_point(view.view, p.pos_age.xyz, particle_size(e, p.pos_age.w), c);
+    let l = particle_light[PARTICLE_RECORDS * slot + select(0u, k, CORNERS)];
+    out.light_e = l.e;
+    out.light_d = l.d;
     out.clip = view.view_proj * vec4f(out.world, 1.0);
     out.corner = c;
     out.color = particle_color(e, p.pos_age.w);
@@ -127,7 +139,7 @@ fn fs_main(in: ParticleOut) -> DrawOut {
         discard;
     }
     let n = particle_sprite_normal(view.view, in.corner, r2);
-    var acc = particle_light[in.slot];
+    var acc = ParticleLight(in.light_e, in.light_d);
     if (PER_PIXEL || CASCADED_SHADOWS) {
         acc = light_at(in.world);
     }

@@ -42,8 +42,13 @@ pub const TICK_S: f64 = 1.0 / 30.0;
 /// Standard gravity (m/s²): an emitter's `gravity` multiplies it.
 pub const GRAVITY: f32 = 9.81;
 
-/// Largest ring `particles.sort` orders (one workgroup's memory).
-pub const SORT_MAX: u32 = 1024;
+/// `particles.light`'s records per slot (shaders/particles.wgsl
+/// `PARTICLE_RECORDS`): at the quad's centre, then at its four corners.
+pub const LIGHT_RECORDS: u32 = 5;
+
+/// Slots `particles.sort` orders in one workgroup's memory before it merges
+/// a ring's chunks (sort.wgsl `CHUNK`).
+pub const SORT_CHUNK: u32 = 1024;
 
 /// The particles' coverage (`forward.particles`' second target), the TAA's
 /// reactive mask.
@@ -312,6 +317,8 @@ struct Buffers {
     counters: wgpu::Buffer,
     light: wgpu::Buffer,
     order: wgpu::Buffer,
+    /// Each sort chunk's (key, slot) pairs, sorted (`particles.sort`).
+    sort_keys: wgpu::Buffer,
 }
 
 /// What the lighting and drawing of particles read from the other passes.
@@ -340,6 +347,9 @@ pub struct ParticleInputs<'a> {
 pub struct ParticleKey {
     /// Light each pixel (the reference) instead of each particle.
     pub per_pixel: bool,
+    /// Light the quad's centre and corners and interpolate (Ryse's per
+    /// vertex) instead of once at the particle's centre.
+    pub corners: bool,
     /// White particles (`--view particle-lighting`).
     pub debug: bool,
     /// Ambient from the environment cube's lowest specular mip (Ryse)
@@ -353,11 +363,12 @@ pub struct ParticleKey {
 impl ParticleKey {
     /// Every permutation (pre-warm).
     pub fn all() -> impl Iterator<Item = ParticleKey> {
-        (0..16u32).map(|k| ParticleKey {
+        (0..32u32).map(|k| ParticleKey {
             per_pixel: k & 1 != 0,
             debug: k & 2 != 0,
             probe_ambient: k & 4 != 0,
             cascaded_shadows: k & 8 != 0,
+            corners: k & 16 != 0,
         })
     }
 }
@@ -378,11 +389,12 @@ pub struct ParticlesPass {
     simulate: Program,
     simulate_pipeline: wgpu::ComputePipeline,
     light: Program,
-    light_pipeline: wgpu::ComputePipeline,
+    /// `particles.light` at the centre and at the corners.
+    light_pipelines: [wgpu::ComputePipeline; 2],
     draw: Program,
     sort_program: Program,
-    /// `particles.sort` with SORT off and on.
-    sort_pipelines: [wgpu::ComputePipeline; 2],
+    /// `particles.sort`'s two dispatches (chunks, merge), with SORT off and on.
+    sort_pipelines: [[wgpu::ComputePipeline; 2]; 2],
     buffers: Option<Buffers>,
     /// Steps this frame (0: nothing planned).
     steps: usize,
@@ -410,13 +422,19 @@ impl ParticlesPass {
         let simulate = Program::new(ctx, "passes/particles/simulate.wgsl")?;
         let simulate_pipeline = simulate.compute_pipeline(ctx, "cs_main", &[])?;
         let light = Program::new(ctx, "passes/particles/light.wgsl")?;
-        let light_pipeline = light.compute_pipeline(ctx, "cs_main", &[])?;
+        let light_pipelines = [
+            light.compute_pipeline(ctx, "cs_main", &[("CORNERS", 0.0)])?,
+            light.compute_pipeline(ctx, "cs_main", &[("CORNERS", 1.0)])?,
+        ];
         let draw = Program::new(ctx, "passes/particles/draw.wgsl")?;
         let sort_program = Program::new(ctx, "passes/particles/sort.wgsl")?;
-        let sort_pipelines = [
-            sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 0.0)])?,
-            sort_program.compute_pipeline(ctx, "cs_main", &[("SORT", 1.0)])?,
-        ];
+        let sort_pair = |on: f64| -> Result<_, GpuError> {
+            Ok([
+                sort_program.compute_pipeline(ctx, "cs_chunks", &[("SORT", on)])?,
+                sort_program.compute_pipeline(ctx, "cs_merge", &[("SORT", on)])?,
+            ])
+        };
+        let sort_pipelines = [sort_pair(0.0)?, sort_pair(1.0)?];
         let sim = Simulation::new(emitters, scene.wind, &scene.objects);
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
@@ -434,8 +452,14 @@ impl ParticlesPass {
                 steps: storage(ctx, "particles.steps", steps * step_bytes, none),
                 particles: storage(ctx, "particles.state", slots * 32, src),
                 counters: storage(ctx, "particles.counters", ne * 8, src),
-                light: storage(ctx, "particles.light", slots * 32, src),
+                light: storage(
+                    ctx,
+                    "particles.light",
+                    slots * u64::from(LIGHT_RECORDS) * 32,
+                    src,
+                ),
                 order: storage(ctx, "particles.order", slots * 4, src),
+                sort_keys: storage(ctx, "particles.sort_keys", slots * 8, none),
             }
         });
         Ok(Self {
@@ -443,7 +467,7 @@ impl ParticlesPass {
             simulate,
             simulate_pipeline,
             light,
-            light_pipeline,
+            light_pipelines,
             draw,
             sort_program,
             sort_pipelines,
@@ -477,6 +501,7 @@ impl ParticlesPass {
 
     /// GPU bytes that outlive a frame, by buffer group (none without
     /// emitters): state and light 32 B a slot, the draw order 4 B a slot,
+    /// (and its sort's keys, 8 B a slot),
     /// and the emitter records, a frame's steps (pre-warm: every 30 Hz
     /// step of the longest lifetime), counters and parameters.
     pub fn memory(&self) -> Vec<(String, u64)> {
@@ -491,7 +516,10 @@ impl ParticlesPass {
                 b.particles.size(),
             ),
             ("particles.light".to_string(), b.light.size()),
-            ("particles.order".to_string(), b.order.size()),
+            (
+                "particles.order (and sort keys)".to_string(),
+                b.order.size() + b.sort_keys.size(),
+            ),
             (
                 format!("particles.params ({ne} emitters, steps, counters)"),
                 params.iter().map(|x| x.size()).sum(),
@@ -568,9 +596,12 @@ impl ParticlesPass {
         let light = g.import_buffer("particles.light", &b.light);
         let maps = inputs.sun_maps;
         let far = Fallback::DepthFar;
+        let corners = self.key.corners;
+        let longest = (self.sim.emitters.iter()).map(|e| e.capacity).max()?;
+        let threads = longest * if corners { LIGHT_RECORDS } else { 1 };
         let written = g
             .compute("particles.light", &self.light)
-            .compute_pipeline(Ok(self.light_pipeline.clone()))
+            .compute_pipeline(Ok(self.light_pipelines[usize::from(corners)].clone()))
             .read_buffer(
                 "particles",
                 particles,
@@ -583,14 +614,16 @@ impl ParticlesPass {
             .optional_array("atlas", maps.and_then(|m| m.atlas), far)
             .uniform("light_tiles", inputs.light_tiles)
             .sampler("shadow_sampler", inputs.shadow_sampler)
+            .uniform("emitters", &b.emitters)
             .write_buffer("particle_light", light)
-            .dispatch([self.sim.slots().div_ceil(64), 1, 1]);
+            .dispatch([threads.div_ceil(64), self.sim.emitters.len() as u32, 1]);
         Some(written.buffer(light))
     }
 
     /// `particles.sort`: each emitter's slots far to near along the view
-    /// direction (rings up to [`SORT_MAX`] slots; ring order when
-    /// `sort_particles` is off); returns the order buffer's version.
+    /// direction (ring order when `sort_particles` is off): chunks of
+    /// [`SORT_CHUNK`] sorted in workgroup memory, then every slot's rank
+    /// in its ring; returns the order buffer's version.
     pub fn add_sort<'a>(
         &'a self,
         g: &mut FrameGraph<'a>,
@@ -598,10 +631,13 @@ impl ParticlesPass {
     ) -> Option<BufferHandle> {
         let b = self.buffers.as_ref().filter(|_| self.active)?;
         let order = g.import_buffer("particles.order", &b.order);
-        let pipeline = self.sort_pipelines[usize::from(self.sort_particles)].clone();
+        let keys = g.import_buffer("particles.sort_keys", &b.sort_keys);
+        let [chunks, merge] = &self.sort_pipelines[usize::from(self.sort_particles)];
+        let ne = self.sim.emitters.len() as u32;
+        let longest = (self.sim.emitters.iter()).map(|e| e.capacity).max()?;
         let written = g
             .compute("particles.sort", &self.sort_program)
-            .compute_pipeline(Ok(pipeline))
+            .compute_pipeline(Ok(chunks.clone()))
             .read_buffer(
                 "particles",
                 particles,
@@ -609,7 +645,12 @@ impl ParticlesPass {
             )
             .uniform("emitters", &b.emitters)
             .write_buffer("order", order)
-            .dispatch([self.sim.emitters.len() as u32, 1, 1]);
+            .write_buffer("sorted", keys)
+            .dispatch_with(move |cp| {
+                cp.dispatch_workgroups(longest.div_ceil(SORT_CHUNK), ne, 1);
+                cp.set_pipeline(merge);
+                cp.dispatch_workgroups(longest.div_ceil(256), ne, 1);
+            });
         Some(written.buffer(order))
     }
 
@@ -642,6 +683,7 @@ impl ParticlesPass {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         let constants = [
             ("PER_PIXEL", flag(key.per_pixel)),
+            ("CORNERS", flag(key.corners)),
             ("DEBUG", flag(key.debug)),
             ("PROBE_AMBIENT", flag(key.probe_ambient)),
             ("CASCADED_SHADOWS", flag(key.cascaded_shadows)),
@@ -696,22 +738,27 @@ impl ParticlesPass {
             .color(reactive, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .record(move |_, rp| {
                 for r in order {
-                    rp.draw(0..6, r.clone());
+                    rp.draw(0..12, r.clone());
                 }
                 Ok(())
             });
         (written.colors[0], Some(written.colors[1]))
     }
 
-    /// The light buffer read back (tests).
-    pub fn read_light(&self, ctx: &GpuContext) -> Result<Vec<ParticleLightGpu>, GpuError> {
+    /// The light buffer read back (tests): per slot, the records of its
+    /// quad's centre and corners (`ParticleKey::corners`; else the first
+    /// alone is written).
+    pub fn read_light(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Vec<[ParticleLightGpu; LIGHT_RECORDS as usize]>, GpuError> {
         let b = self
             .buffers
             .as_ref()
             .ok_or_else(|| GpuError::Other("no emitters".into()))?;
         let bytes = crate::gpu::read_buffer(ctx, &b.light)?;
         Ok(bytemuck::pod_collect_to_vec(
-            &bytes[..self.sim.slots() as usize * 32],
+            &bytes[..self.sim.slots() as usize * LIGHT_RECORDS as usize * 32],
         ))
     }
 

@@ -148,10 +148,11 @@ pub fn exact_diffuse(lights: &[(Vec3, Vec3)], n: Vec3) -> Vec3 {
         .sum()
 }
 
-/// `particles.light` for one slot: the sun (`sun_e` klux toward
-/// `sun_dir`, visibility `vis`, the shadow filter's result) and `lights`,
-/// light k seen with visibility `local_vis(k, x)` (its atlas lookup,
-/// `shadows::reference::local_point_visibility`; 1 unshadowed).
+/// `particles.light` for one slot at its centre: the sun (`sun_e` klux
+/// toward `sun_dir`, visibility `vis`, the shadow filter's result) and
+/// `lights`, light k seen with visibility `local_vis(k, x)` (its atlas
+/// lookup, `shadows::reference::local_point_visibility`; 1 unshadowed);
+/// nothing for a dead slot. [`light_point`] lights any point.
 pub fn light_particle(
     p: &ParticleGpu,
     sun_dir: Vec3,
@@ -160,12 +161,24 @@ pub fn light_particle(
     lights: &[LocalLightGpu],
     local_vis: impl Fn(usize, Vec3) -> f32,
 ) -> ParticleLightGpu {
-    let mut acc = ParticleLightGpu::default();
     if p.vel_alive[3] < 0.5 {
-        return acc;
+        return ParticleLightGpu::default();
     }
     let x = Vec3::from_slice(&p.pos_age[..3]);
-    acc = light_add(acc, sun_e * vis, sun_dir);
+    light_point(x, sun_dir, sun_e, vis, lights, local_vis)
+}
+
+/// The light `particles.light` accumulates at `x` (a particle's centre or
+/// a corner of its quad, [`quad_point`]); see [`light_particle`].
+pub fn light_point(
+    x: Vec3,
+    sun_dir: Vec3,
+    sun_e: Vec3,
+    vis: f32,
+    lights: &[LocalLightGpu],
+    local_vis: impl Fn(usize, Vec3) -> f32,
+) -> ParticleLightGpu {
+    let mut acc = light_add(ParticleLightGpu::default(), sun_e * vis, sun_dir);
     acc.d[3] = vis;
     for (k, l) in lights.iter().enumerate() {
         if let Some((e, dir)) = local_illuminance(l, x) {
@@ -173,6 +186,28 @@ pub fn light_particle(
         }
     }
     acc
+}
+
+/// `particle_corner`: the quad's corners in [-1, 1]², counter-clockwise
+/// from the bottom left (the order of `particles.light`'s records).
+pub const CORNERS: [glam::Vec2; 4] = [
+    glam::Vec2::new(-1.0, -1.0),
+    glam::Vec2::new(1.0, -1.0),
+    glam::Vec2::new(1.0, 1.0),
+    glam::Vec2::new(-1.0, 1.0),
+];
+
+/// `particle_quad_point`: point `c` of the camera-facing quad, `size`
+/// metres wide, of a particle at `x` (world-to-view matrix `view`).
+pub fn quad_point(view: glam::Mat4, x: Vec3, size: f32, c: glam::Vec2) -> Vec3 {
+    let row = |k: usize| Vec3::new(view.x_axis[k], view.y_axis[k], view.z_axis[k]);
+    x + (row(0) * c.x + row(1) * c.y) * (0.5 * size)
+}
+
+/// `particle_size`: an emitter's size (m) at `age`, linear over its life.
+pub fn particle_size(e: &EmitterGpu, age: f32) -> f32 {
+    let t = (age / e.motion[0]).clamp(0.0, 1.0);
+    e.size[0] + (e.size[1] - e.size[0]) * t
 }
 
 /// `particle_sprite_normal`: the sprite's normal at corner coordinates
@@ -185,8 +220,7 @@ pub fn sprite_normal(view: glam::Mat4, c: glam::Vec2, r2: f32) -> Vec3 {
 /// Twin of `particles.sort`: the slot drawn at each instance. Inside each
 /// emitter's ring (`slots` = [first, capacity]) the live particles far to
 /// near along `forward` from `eye` (view depth, f32 as on the GPU), then
-/// the dead; ties by slot. Rings over `SORT_MAX` (or `sort` off) keep
-/// ring order.
+/// the dead; ties by slot. `sort` off: ring order.
 pub fn draw_order(
     particles: &[ParticleGpu],
     emitters: &[super::EmitterGpu],
@@ -197,7 +231,7 @@ pub fn draw_order(
     let mut order: Vec<u32> = (0..particles.len() as u32).collect();
     for e in emitters {
         let [first, cap, ..] = e.slots;
-        if !sort || cap > super::SORT_MAX {
+        if !sort {
             continue;
         }
         let key = |s: u32| {
