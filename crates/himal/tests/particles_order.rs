@@ -107,6 +107,8 @@ fn particle_buffers_are_listed_in_memory() {
         ("particles.light", slots * 160),
         ("particles.order", slots * 12),
         ("particles.params", 32 + 2 * 112 + 121 * 2 * 64 + 2 * 8),
+        // The puff's layer, 128^2 RGBA8 and its mips.
+        ("particles.sprites (1 layers)", 87_380),
     ];
     assert_eq!(rows.len(), want.len(), "{rows:?}");
     for ((k, b), (name, bytes)) in rows.iter().zip(want) {

@@ -238,7 +238,7 @@ pub(crate) fn build_scene(
             },
         })
     };
-    let emitters = super::emitters::build_emitters(&ck, &file.emitter, object_box)?;
+    let emitters = super::emitters::build_emitters(&ck, base_dir, &file.emitter, object_box)?;
     let wind = super::emitters::build_wind(&ck, file.wind.as_ref())?;
     // E4: every particle slot holds its state and its light on the GPU.
     if let Some(first) = file.emitter.first() {

@@ -111,6 +111,54 @@ pub struct EmitterDesc {
     /// Particles alive at most: a ring of this many slots; births beyond it
     /// replace the oldest. [1, [`MAX_EMITTER_CAPACITY`]], default 4096.
     pub capacity: u32,
+    /// What a particle looks like (`sprite`, default the disc).
+    pub sprite: Sprite,
+}
+
+/// Texels along a sprite image's edge once loaded (`sprite = "file.png"`).
+pub const SPRITE_SIZE: u32 = 128;
+
+/// An emitter's sprite: its opacity and the normal it is shaded with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sprite {
+    /// `"disc"`: a soft disc, opacity 1 − r², with a hemisphere's normal.
+    Disc,
+    /// `"puff"`: the built-in normal-mapped cloud puff
+    /// (`passes::particles::sprite`).
+    Puff,
+    /// An image file (PNG, any format `image` reads), relative to the
+    /// scene file: RGB its tangent-space normal (green up), A its opacity.
+    Image(std::sync::Arc<SpriteImage>),
+}
+
+/// A sprite image, loaded and resized to [`SPRITE_SIZE`]².
+#[derive(Debug, PartialEq)]
+pub struct SpriteImage {
+    /// The file it was read from.
+    pub path: std::path::PathBuf,
+    /// [`SPRITE_SIZE`]² RGBA8, row 0 at the top.
+    pub rgba: Vec<u8>,
+}
+
+/// Reads `path` as a sprite: resized to [`SPRITE_SIZE`]² (triangle
+/// filter), RGBA8. Errors name the problem (the caller names the file).
+pub fn load_sprite(path: &std::path::Path) -> std::result::Result<SpriteImage, String> {
+    let img = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())?;
+    let rgba = image::imageops::resize(
+        &img.to_rgba8(),
+        SPRITE_SIZE,
+        SPRITE_SIZE,
+        image::imageops::FilterType::Triangle,
+    )
+    .into_raw();
+    Ok(SpriteImage {
+        path: path.to_path_buf(),
+        rgba,
+    })
 }
 
 /// An emitter riding a moving object (`on = "object"` with `orbit` or
@@ -150,6 +198,7 @@ fn rgba(ck: &Checker, v: &toml::Spanned<[f32; 4]>, key: &str) -> Result<Vec4> {
 /// `on`: a placed object by name (`None`: no such object).
 pub(crate) fn build_emitters(
     ck: &Checker,
+    base_dir: &std::path::Path,
     file: &[FileEmitter],
     on: impl Fn(&str) -> Option<OnObject>,
 ) -> Result<Vec<EmitterDesc>> {
@@ -257,6 +306,32 @@ pub(crate) fn build_emitters(
                 ),
             ));
         }
+        let sprite = match e.sprite.as_ref().map(|s| (s, s.get_ref().as_str())) {
+            None | Some((_, "disc")) => Sprite::Disc,
+            Some((_, "puff")) => Sprite::Puff,
+            Some((s, file)) => {
+                // Emitters naming the same file share its layer.
+                let path = base_dir.join(file);
+                let same = out.iter().find_map(|o| match &o.sprite {
+                    Sprite::Image(i) if i.path == path => Some(i.clone()),
+                    _ => None,
+                });
+                match same {
+                    Some(i) => Sprite::Image(i),
+                    None => Sprite::Image(std::sync::Arc::new(load_sprite(&path).map_err(
+                        |m| {
+                            ck.err(
+                                &s.span(),
+                                format!(
+                                    "sprite \"{file}\" ({}): {m} (expected \"disc\", \"puff\" or an image file)",
+                                    path.display()
+                                ),
+                            )
+                        },
+                    )?)),
+                }
+            }
+        };
         out.push(EmitterDesc {
             name,
             position,
@@ -271,6 +346,7 @@ pub(crate) fn build_emitters(
             color_start,
             color_end,
             capacity,
+            sprite,
         });
     }
     Ok(out)

@@ -200,6 +200,7 @@ pub(crate) struct FileEmitter {
     #[serde(default, deserialize_with = "exact_opt")]
     pub color_end: Option<Spanned<[f32; 4]>>,
     pub capacity: Option<Spanned<i64>>,
+    pub sprite: Option<Spanned<String>>,
 }
 
 /// `[wind]`: the wind particles drift in (E4): `speed` and `direction`,

@@ -163,6 +163,8 @@
 //! color_start = [0.5, 0.5, 0.5, 0.6]  # linear RGBA, default white
 //! color_end = [0.6, 0.6, 0.6, 0.0]    # default color_start with alpha 0
 //! capacity = 4096                  # particle slots, [1, 65536]; births beyond replace the oldest
+//! sprite = "puff"                  # "disc" (default), "puff" (built-in normal-mapped cloud) or an
+//!                                  # image relative to this file: RGB tangent normal (green up), A opacity
 //! ```
 //!
 //! `[wind]` (optional): the wind particles relax toward (each emitter's
@@ -268,7 +270,8 @@ pub use ambient::{AmbientLightDesc, AmbientShape, MAX_AMBIENT_FACTOR, MAX_AMBIEN
 pub use camera::{Camera, CinematicShadows, DEFAULT_NEAR, Orthographic};
 pub use emitters::{
     DEFAULT_EMITTER_CAPACITY, DEFAULT_WIND, EmitterDesc, EmitterFollow, MAX_EMITTER_CAPACITY,
-    MAX_EMITTERS, MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES,
+    MAX_EMITTERS, MAX_LIFETIME_S, MAX_PARTICLE_SLOTS, MAX_WIND, SLOT_BYTES, SPRITE_SIZE, Sprite,
+    SpriteImage, load_sprite,
 };
 pub use environment::{EnvironmentDesc, EnvironmentFormat, EnvironmentImage, STUDIO};
 pub use error::SceneError;

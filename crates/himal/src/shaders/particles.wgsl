@@ -156,12 +156,33 @@ fn particle_quad_point(view_m: mat4x4f, x: vec3f, size: f32, c: vec2f) -> vec3f 
     return x + (right * c.x + up * c.y) * (0.5 * size);
 }
 
-// The sprite's per-pixel normal (world): a hemisphere bulging toward the
-// camera over the quad's disc, corner c in [-1, 1]^2, r2 = |c|^2 < 1.
-// `view_m`: world -> view (its rows are the camera's axes).
-fn particle_sprite_normal(view_m: mat4x4f, c: vec2f, r2: f32) -> vec3f {
+// The sprite's angle on its quad, from the slot: (cos, sin), so
+// neighbouring puffs do not repeat one picture.
+fn particle_sprite_angle(slot: u32) -> vec2f {
+    let a = f32(particle_pcg(slot ^ 0x9e3779b9u) >> 8u) / 16777216.0 * 2.0 * PI;
+    return vec2f(cos(a), sin(a));
+}
+
+// Quad point c seen in the sprite, turned by the sprite's angle
+// rot = (cos, sin): R(a) c.
+fn particle_sprite_rotate(c: vec2f, rot: vec2f) -> vec2f {
+    return vec2f(rot.x * c.x - rot.y * c.y, rot.y * c.x + rot.x * c.y);
+}
+
+// The world normal of a sprite-space normal t (x right, y up, z toward
+// the camera) on a quad whose point c shows sprite point R(a) c: t's xy
+// turned back by -a into the quad's axes. `view_m`: world -> view (its
+// rows are the camera's axes).
+fn particle_sprite_normal_mapped(view_m: mat4x4f, t: vec3f, rot: vec2f) -> vec3f {
     let right = vec3f(view_m[0].x, view_m[1].x, view_m[2].x);
     let up = vec3f(view_m[0].y, view_m[1].y, view_m[2].y);
     let back = vec3f(view_m[0].z, view_m[1].z, view_m[2].z);
-    return normalize(right * c.x + up * c.y + back * sqrt(max(1.0 - r2, 0.0)));
+    let q = vec2f(rot.x * t.x + rot.y * t.y, rot.x * t.y - rot.y * t.x);
+    return normalize(right * q.x + up * q.y + back * t.z);
+}
+
+// The disc sprite's per-pixel normal (world): a hemisphere bulging toward
+// the camera over the quad's disc, corner c in [-1, 1]^2, r2 = |c|^2 < 1.
+fn particle_sprite_normal(view_m: mat4x4f, c: vec2f, r2: f32) -> vec3f {
+    return particle_sprite_normal_mapped(view_m, vec3f(c, sqrt(max(1.0 - r2, 0.0))), vec2f(1.0, 0.0));
 }

@@ -6,14 +6,17 @@
 // Shading: the light particles.light accumulated at the centre and the
 // corners, interpolated across the triangles (Ryse's per vertex, after
 // Persson; CORNERS off: the centre's alone; PER_PIXEL: the same sums at
-// each pixel, the reference) with a per-pixel sphere-like sprite normal, plus ambient from
-// the environment cube's lowest (roughest) specular mip used as diffuse
-// (Ryse); no constant ambient. Soft particles: alpha fades over
+// each pixel, the reference) with the sprite's per-pixel normal (the
+// disc's hemisphere, or a normal-mapped sprite: the built-in puff or a
+// scene's image, turned by a per-particle angle), plus the world's diffuse
+// ambient (or the environment cube's lowest specular mip used as diffuse,
+// Ryse); no constant ambient. Soft particles: alpha fades over
 // SOFT_DISTANCE in front of the scene depth. DEBUG (--view
 // particle-lighting): white particles. CASCADED_SHADOWS: per-pixel light
 // with the world's sun shadow (cascades, Poisson filter: shadows.mask's
 // lookup), the reference of the static-map shadow. CPU twin of the shading:
-// passes/particles/reference.rs `light_diffuse`, `sprite_normal`.
+// passes/particles/reference.rs `light_diffuse`, `sprite_normal`,
+// `sprite_normal_mapped`, `sprite_rotate`.
 #import particles
 #import forward
 #import shadow
@@ -45,6 +48,10 @@ const SOFT_DISTANCE: f32 = 0.5;
 @group(0) @binding(12) var shadow_sampler: sampler_comparison;
 // particles.sort: the slot drawn at each instance (far to near per emitter).
 @group(0) @binding(13) var<storage, read> order: array<u32>;
+// Normal-mapped sprites: rgb the tangent-space normal (n/2 + 1/2), a the
+// opacity; layer 0 the built-in puff (passes/particles/sprite.rs).
+@group(0) @binding(14) var sprites: texture_2d_array<f32>;
+@group(0) @binding(15) var sprite_sampler: sampler;
 
 struct ParticleOut {
     @builtin(position) clip: vec4f,
@@ -55,6 +62,8 @@ struct ParticleOut {
     // particles.light's sums at this vertex, interpolated
     @location(3) light_e: vec4f,
     @location(4) light_d: vec4f,
+    // x: sprite layer (-1 the disc), yz: the sprite's angle (cos, sin)
+    @location(5) @interpolate(flat) sprite: vec4f,
 }
 
 @vertex
@@ -91,6 +100,7 @@ fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u32
     out.clip = view.view_proj * vec4f(out.world, 1.0);
     out.corner = c;
     out.color = particle_color(e, p.pos_age.w);
+    out.sprite = vec4f(e.size.z, particle_sprite_angle(slot), 0.0);
     return out;
 }
 
@@ -123,9 +133,22 @@ struct DrawOut {
 
 @fragment
 fn fs_main(in: ParticleOut) -> DrawOut {
+    let layer = i32(in.sprite.x);
+    let rot = in.sprite.yz;
+    let q = particle_sprite_rotate(in.corner, rot);
+    // Sampled before any discard: implicit derivatives need uniform control flow.
+    let texel = textureSample(sprites, sprite_sampler, vec2f(0.5 + 0.5 * q.x, 0.5 - 0.5 * q.y), max(layer, 0));
     let r2 = dot(in.corner, in.corner);
-    if (r2 >= 1.0) {
-        discard;
+    var coverage = 1.0 - r2;
+    var n = vec3f(0.0);
+    if (layer < 0) {
+        if (r2 >= 1.0) {
+            discard;
+        }
+        n = particle_sprite_normal(view.view, in.corner, r2);
+    } else {
+        coverage = texel.a;
+        n = particle_sprite_normal_mapped(view.view, texel.rgb * 2.0 - 1.0, rot);
     }
     // Soft particles: the scene's view distance behind this fragment.
     let scene_depth = textureLoad(depth, vec2i(in.clip.xy), 0);
@@ -134,11 +157,10 @@ fn fs_main(in: ParticleOut) -> DrawOut {
         let behind = view_distance(view, scene_depth) - view_distance(view, in.clip.z);
         fade = saturate(behind / SOFT_DISTANCE);
     }
-    let alpha = in.color.a * (1.0 - r2) * fade;
+    let alpha = in.color.a * coverage * fade;
     if (alpha <= 0.0) {
         discard;
     }
-    let n = particle_sprite_normal(view.view, in.corner, r2);
     var acc = ParticleLight(in.light_e, in.light_d);
     if (PER_PIXEL || CASCADED_SHADOWS) {
         acc = light_at(in.world);

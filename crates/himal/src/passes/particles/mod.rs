@@ -26,6 +26,7 @@
 //! CPU twins: [`reference`]. Math and measurements: `docs/techniques/E4.md`.
 
 pub mod reference;
+pub mod sprite;
 
 use glam::Vec3;
 
@@ -75,7 +76,8 @@ pub struct EmitterGpu {
     pub velocity_spread: [f32; 4],
     /// Lifetime (s), downward acceleration (m/s²), wind response (1/s).
     pub motion: [f32; 4],
-    /// Size at birth and at death (m).
+    /// Size at birth and at death (m), sprite layer (−1: the disc;
+    /// [`sprite::sprite_layers`]).
     pub size: [f32; 4],
     /// Linear RGBA at birth.
     pub color_start: [f32; 4],
@@ -86,13 +88,14 @@ pub struct EmitterGpu {
 }
 
 impl EmitterGpu {
-    /// The record of `e`, its ring starting at slot `first`.
-    pub fn new(e: &EmitterDesc, first: u32) -> Self {
+    /// The record of `e`, its ring starting at slot `first`, its sprite
+    /// in layer `sprite` of the sprite array (−1: the disc).
+    pub fn new(e: &EmitterDesc, first: u32, sprite: i32) -> Self {
         Self {
             position_rate: e.position.extend(e.rate).to_array(),
             velocity_spread: e.velocity.extend(e.spread).to_array(),
             motion: [e.lifetime, e.gravity * GRAVITY, e.wind, 0.0],
-            size: [e.size[0], e.size[1], 0.0, 0.0],
+            size: [e.size[0], e.size[1], sprite as f32, 0.0],
             color_start: e.color_start.to_array(),
             color_end: e.color_end.to_array(),
             slots: [first, e.capacity, 0, 0],
@@ -229,10 +232,10 @@ impl Simulation {
             })
             .collect();
         let mut first = 0u32;
-        let records = emitters
-            .iter()
-            .map(|e| {
-                let r = EmitterGpu::new(e, first);
+        let (layers, _) = sprite::sprite_layers(emitters);
+        let records = (emitters.iter().zip(layers))
+            .map(|(e, layer)| {
+                let r = EmitterGpu::new(e, first, layer);
                 first += e.capacity;
                 r
             })
@@ -319,6 +322,11 @@ struct Buffers {
     order: wgpu::Buffer,
     /// Each sort chunk's (key, slot) pairs, sorted (`particles.sort`).
     sort_keys: wgpu::Buffer,
+    /// The sprite array (layer 0 the puff, then the scene's images) and
+    /// its trilinear sampler.
+    sprites: wgpu::Texture,
+    sprites_view: wgpu::TextureView,
+    sprite_sampler: wgpu::Sampler,
 }
 
 /// What the lighting and drawing of particles read from the other passes.
@@ -444,6 +452,9 @@ impl ParticlesPass {
             let none = wgpu::BufferUsages::empty();
             let src = wgpu::BufferUsages::COPY_SRC;
             let emitters_buf = storage(ctx, "particles.emitters", ne * 112, none);
+            let (_, images) = sprite::sprite_layers(emitters);
+            let images: Vec<&[u8]> = images.iter().map(|i| &i.rgba[..]).collect();
+            let sprites = sprite::create_sprites(ctx, &images);
             ctx.queue
                 .write_buffer(&emitters_buf, 0, bytemuck::cast_slice(sim.records()));
             Buffers {
@@ -460,6 +471,18 @@ impl ParticlesPass {
                 ),
                 order: storage(ctx, "particles.order", slots * 4, src),
                 sort_keys: storage(ctx, "particles.sort_keys", slots * 8, none),
+                sprites_view: sprites.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                }),
+                sprites,
+                sprite_sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("particles.sprites"),
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    ..Default::default()
+                }),
             }
         });
         Ok(Self {
@@ -523,6 +546,13 @@ impl ParticlesPass {
             (
                 format!("particles.params ({ne} emitters, steps, counters)"),
                 params.iter().map(|x| x.size()).sum(),
+            ),
+            (
+                format!(
+                    "particles.sprites ({} layers)",
+                    b.sprites.depth_or_array_layers()
+                ),
+                sprite::sprite_bytes(b.sprites.depth_or_array_layers()),
             ),
         ]
     }
@@ -734,6 +764,8 @@ impl ParticlesPass {
             .optional_array("static_map", maps.and_then(|m| m.static_map), far)
             .sampler("shadow_sampler", inputs.shadow_sampler)
             .uniform("ambient_lights", inputs.ambient_lights)
+            .external("sprites", &b.sprites_view)
+            .sampler("sprite_sampler", &b.sprite_sampler)
             .color(hdr, wgpu::LoadOp::Load)
             .color(reactive, wgpu::LoadOp::Clear(wgpu::Color::BLACK))
             .record(move |_, rp| {

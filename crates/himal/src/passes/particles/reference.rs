@@ -210,11 +210,33 @@ pub fn particle_size(e: &EmitterGpu, age: f32) -> f32 {
     e.size[0] + (e.size[1] - e.size[0]) * t
 }
 
-/// `particle_sprite_normal`: the sprite's normal at corner coordinates
-/// `c` (|c|² = `r2` < 1) under world-to-view matrix `view`.
+/// `particle_sprite_normal`: the disc sprite's normal at corner
+/// coordinates `c` (|c|² = `r2` < 1) under world-to-view matrix `view`.
 pub fn sprite_normal(view: glam::Mat4, c: glam::Vec2, r2: f32) -> Vec3 {
+    let t = c.extend((1.0 - r2).max(0.0).sqrt());
+    sprite_normal_mapped(view, t, glam::Vec2::X)
+}
+
+/// `particle_sprite_rotate`: quad point `c` seen in a sprite turned by
+/// `rot` = (cos a, sin a): R(a) c.
+pub fn sprite_rotate(c: glam::Vec2, rot: glam::Vec2) -> glam::Vec2 {
+    glam::Vec2::new(rot.x * c.x - rot.y * c.y, rot.y * c.x + rot.x * c.y)
+}
+
+/// `particle_sprite_normal_mapped`: the world normal of sprite-space
+/// normal `t` (x right, y up, z toward the camera) on a quad turned by
+/// `rot` against its sprite (t's xy turned back by −a).
+pub fn sprite_normal_mapped(view: glam::Mat4, t: Vec3, rot: glam::Vec2) -> Vec3 {
     let row = |k: usize| Vec3::new(view.x_axis[k], view.y_axis[k], view.z_axis[k]);
-    (row(0) * c.x + row(1) * c.y + row(2) * (1.0 - r2).max(0.0).sqrt()).normalize()
+    let q = glam::Vec2::new(rot.x * t.x + rot.y * t.y, rot.x * t.y - rot.y * t.x);
+    (row(0) * q.x + row(1) * q.y + row(2) * t.z).normalize()
+}
+
+/// `particle_sprite_angle`: the sprite's angle on the quad of `slot`, as
+/// (cos a, sin a).
+pub fn sprite_angle(slot: u32) -> glam::Vec2 {
+    let a = (pcg(slot ^ 0x9e37_79b9) >> 8) as f32 / 16_777_216.0 * 2.0 * std::f32::consts::PI;
+    glam::Vec2::new(a.cos(), a.sin())
 }
 
 /// Twin of `particles.sort`: the slot drawn at each instance. Inside each
