@@ -9,7 +9,7 @@
 // them with a per-pixel normal. One thread per (slot, point):
 // workgroups x over the ring, y the emitter (its size at the particle's
 // age places the corners). CPU twin: passes/particles/reference.rs
-// `light_particle`, `quad_point`.
+// `light_point`, `quad_point`.
 #import particles
 #import forward
 #import shadow

@@ -148,28 +148,11 @@ pub fn exact_diffuse(lights: &[(Vec3, Vec3)], n: Vec3) -> Vec3 {
         .sum()
 }
 
-/// `particles.light` for one slot at its centre: the sun (`sun_e` klux
+/// The light `particles.light` accumulates at `x` (a live particle's
+/// centre or a corner of its quad, [`quad_point`]): the sun (`sun_e` klux
 /// toward `sun_dir`, visibility `vis`, the shadow filter's result) and
 /// `lights`, light k seen with visibility `local_vis(k, x)` (its atlas
-/// lookup, `shadows::reference::local_point_visibility`; 1 unshadowed);
-/// nothing for a dead slot. [`light_point`] lights any point.
-pub fn light_particle(
-    p: &ParticleGpu,
-    sun_dir: Vec3,
-    sun_e: Vec3,
-    vis: f32,
-    lights: &[LocalLightGpu],
-    local_vis: impl Fn(usize, Vec3) -> f32,
-) -> ParticleLightGpu {
-    if p.vel_alive[3] < 0.5 {
-        return ParticleLightGpu::default();
-    }
-    let x = Vec3::from_slice(&p.pos_age[..3]);
-    light_point(x, sun_dir, sun_e, vis, lights, local_vis)
-}
-
-/// The light `particles.light` accumulates at `x` (a particle's centre or
-/// a corner of its quad, [`quad_point`]); see [`light_particle`].
+/// lookup, `shadows::reference::local_point_visibility`; 1 unshadowed).
 pub fn light_point(
     x: Vec3,
     sun_dir: Vec3,
