@@ -233,6 +233,33 @@ impl RayScene {
     }
 }
 
+impl RayScene {
+    /// True where no triangle that `blocks` (given its index, in the
+    /// order the scene was made, and the hit's barycentrics) lies along
+    /// `dir` within (t_min, t_max): alpha-tested cards let rays through
+    /// their holes.
+    pub fn unoccluded_where(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        blocks: impl Fn(usize, [f32; 3]) -> bool,
+    ) -> bool {
+        let Some(bvh) = self.bvh() else {
+            return true;
+        };
+        let ray = Ray::new(Vec3A::from(origin), off_axis(dir), t_min, t_max);
+        bvh.ray_traverse_miss(ray, |ray, id| {
+            let prim = bvh.primitive_indices[id] as usize;
+            match intersect_bary(&self.tris[prim], ray) {
+                Some((t, b)) if blocks(prim, b) => t,
+                _ => f32::INFINITY,
+            }
+        })
+    }
+}
+
 /// The direction with no component exactly zero: obvhs's wide-node test
 /// misses everything along a zero component (a ray straight down finds no
 /// ground). 1e-6 turns the ray by a microradian.
@@ -251,12 +278,17 @@ fn off_axis(dir: Vec3) -> Vec3A {
 /// rejects a barycentric of -0.0, so a ray straight down a shared edge or
 /// vertex of a terrain grid, where probes stand, hits neither triangle).
 fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
+    intersect_bary(tri, ray).map_or(f32::INFINITY, |(t, _)| t)
+}
+
+/// [`intersect`] with the hit's barycentrics (weights of v0, v1, v2).
+fn intersect_bary(tri: &Triangle, ray: &Ray) -> Option<(f32, [f32; 3])> {
     let e1 = tri.v1 - tri.v0;
     let e2 = tri.v2 - tri.v0;
     let p = ray.direction.cross(e2);
     let det = e1.dot(p);
     if det.abs() < 1e-12 {
-        return f32::INFINITY;
+        return None;
     }
     let inv = 1.0 / det;
     let s = ray.origin - tri.v0;
@@ -265,14 +297,10 @@ fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
     let v = ray.direction.dot(q) * inv;
     const EDGE: f32 = -1e-6;
     if u < EDGE || v < EDGE || u + v > 1.0 - EDGE {
-        return f32::INFINITY;
+        return None;
     }
     let t = e2.dot(q) * inv;
-    if t >= ray.tmin && t <= ray.tmax {
-        t
-    } else {
-        f32::INFINITY
-    }
+    (t >= ray.tmin && t <= ray.tmax).then_some((t, [1.0 - u - v, u, v]))
 }
 
 /// An orthonormal frame whose third column is `n` (Frisvad-style branchless

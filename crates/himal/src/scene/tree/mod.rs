@@ -13,6 +13,7 @@
 //! tint]`: the cluster's random tint in [0, 1], already mixed into the
 //! vertex colour between the leaf material and the tint colour (V5).
 
+pub mod ao;
 pub mod bake;
 pub mod impostor;
 pub mod visibility;
