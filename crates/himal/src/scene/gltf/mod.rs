@@ -558,12 +558,14 @@ pub fn load_from_bytes_with(
                                     meshes[mesh].name, bad.1, bad.0.joints
                                 )));
                             }
+                            // Animated weights: morphed, then skinned.
+                            let morph = (mesh_morph[mesh].clone())
+                                .filter(|_| rig.animates_weights(node.index()));
                             Some(skinned(
                                 rig,
-                                node.index(),
-                                skin,
+                                (node.index(), skin),
                                 first_clip,
-                                vertices,
+                                (vertices, morph),
                                 &mut meshes[mesh],
                             ))
                         }
@@ -646,7 +648,7 @@ pub fn load_from_bytes_with(
     }
     if !unmorphed.is_empty() {
         out.warnings.push(format!(
-            "animated morph weights are not applied to skinned meshes or meshes without targets: {}",
+            "animated morph weights of meshes without targets are not applied: {}",
             unmorphed.join(", ")
         ));
     }
@@ -665,20 +667,24 @@ pub fn load_from_bytes_with(
 
 /// The object of skinned mesh `mesh` on node `node`: its vertices become
 /// the pose at t = 0 of `clip` (what static consumers and the first frame
-/// see), its bounds those over every clip.
+/// see), its bounds those over every clip; with `morph` (animated weights)
+/// each pose is of the vertices morphed to the node's weights first.
 fn skinned(
     rig: &std::sync::Arc<Rig>,
-    node: usize,
-    skin: usize,
+    (node, skin): (usize, usize),
     clip: Option<usize>,
-    vertices: Vec<SkinVertex>,
+    (vertices, morph): (Vec<SkinVertex>, Option<std::sync::Arc<MorphTargets>>),
     mesh: &mut Mesh,
 ) -> Animated {
     let joints = rig.joint_matrices(skin, &rig.pose(clip, 0.0));
-    for (v, s) in mesh.vertices.iter_mut().zip(&vertices) {
+    let at_zero = match &morph {
+        Some(m) => m.morph_skin(&vertices, &rig.weights(clip, 0.0, node, &m.defaults)),
+        None => vertices.clone(),
+    };
+    for (v, s) in mesh.vertices.iter_mut().zip(&at_zero) {
         (v.position, v.normal, v.tangent) = skin_vertex(s, &joints);
     }
-    let swept = animation::swept_skinned(rig, skin, &vertices);
+    let swept = animation::swept_skinned(rig, skin, &vertices, morph.as_deref().map(|m| (m, node)));
     mesh.bounds = swept;
     Animated {
         rig: rig.clone(),
@@ -686,7 +692,7 @@ fn skinned(
         skin: Some((skin, std::sync::Arc::new(vertices))),
         clip,
         swept,
-        morph: None,
+        morph,
     }
 }
 
