@@ -498,13 +498,28 @@ pub fn load_from_bytes_with(
             // instance's transform before the node's.
             let instances = instancing::node_instances(&cx, &doc, &node, &buffers)?;
             // A node's own weights replace its mesh's defaults (glTF 2.0
-            // 3.7.2.2): each such node draws its own copy (not instanced ones).
+            // 3.7.2.2): each such node draws its own copy, shared by its
+            // instances (EXT_mesh_gpu_instancing instances share the node's).
             let own = node.weights().filter(|w| Some(*w) != m.weights());
             let targets = drawn.iter().flatten().any(|&p| mesh_morph[p].is_some());
-            if own.is_some() && (instances.is_some() || !targets) {
+            if own.is_some() && !targets {
                 reweighted.push(name.clone());
             }
-            let own = own.filter(|_| instances.is_none());
+            let drawn: Vec<Option<usize>> = (drawn.iter())
+                .map(|p| {
+                    let mesh = (*p)?;
+                    Some(match (own, mesh_morph[mesh].clone()) {
+                        (Some(w), Some(t)) => reweighted_copy(
+                            w,
+                            &t,
+                            mesh,
+                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
+                            &mut out.pbr,
+                        ),
+                        _ => mesh,
+                    })
+                })
+                .collect();
             let placements = instances.as_deref().unwrap_or(&[Mat4::IDENTITY]);
             let drawn_objects = out.objects.len() + placements.len() * count;
             if drawn_objects as u64 > buffers::MAX_NODE_INSTANCES {
@@ -522,15 +537,6 @@ pub fn load_from_bytes_with(
                 };
                 for (k, mesh) in drawn.iter().enumerate() {
                     let Some(mut mesh) = *mesh else { continue };
-                    if let (Some(w), Some(t)) = (own, mesh_morph[mesh].clone()) {
-                        mesh = reweighted_copy(
-                            w,
-                            &t,
-                            mesh,
-                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
-                            &mut out.pbr,
-                        );
-                    }
                     let rig = rig.as_ref().filter(|_| instances.is_none());
                     let skin = node.skin().map(|s| s.index());
                     if skin.is_some() && mesh_skin[mesh].is_none() {
@@ -654,7 +660,7 @@ pub fn load_from_bytes_with(
     }
     if !reweighted.is_empty() {
         out.warnings.push(format!(
-            "instanced nodes, or nodes whose mesh has no targets, with their own morph weights are drawn with their mesh's default weights: {}",
+            "nodes with their own morph weights whose mesh has no targets: {}",
             reweighted.join(", ")
         ));
     }
