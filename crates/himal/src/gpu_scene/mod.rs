@@ -277,18 +277,7 @@ fn deform_gpu(
                     .collect(),
             ),
             // Only morphed: no weight, so not skinned.
-            None => (
-                0,
-                (drawn.iter())
-                    .map(|v| SkinVertex {
-                        position: [v.position[0], v.position[1], v.position[2], 0.0],
-                        normal: [v.normal[0], v.normal[1], v.normal[2], 0.0],
-                        tangent: v.tangent,
-                        weights: [0.0; 4],
-                        joints: [0; 4],
-                    })
-                    .collect(),
-            ),
+            None => (0, drawn.iter().map(SkinVertex::unskinned).collect()),
         };
         let targets = a.morph.as_ref().map_or(0, |m| m.targets.len() as u32);
         for (i, mut s) in bind.into_iter().enumerate() {

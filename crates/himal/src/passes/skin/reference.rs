@@ -29,15 +29,7 @@ pub fn skin(sources: &[SkinVertex], joints: &[Mat4]) -> Vec<([f32; 3], [f32; 3],
 pub fn deform(a: &Animated, drawn: &[Vertex], time: f32) -> Vec<([f32; 3], [f32; 3], [f32; 4])> {
     let sources: Vec<SkinVertex> = match &a.skin {
         Some((_, bind)) => bind.to_vec(),
-        None => (drawn.iter())
-            .map(|v| SkinVertex {
-                position: [v.position[0], v.position[1], v.position[2], 0.0],
-                normal: [v.normal[0], v.normal[1], v.normal[2], 0.0],
-                tangent: v.tangent,
-                weights: [0.0; 4],
-                joints: [0; 4],
-            })
-            .collect(),
+        None => drawn.iter().map(SkinVertex::unskinned).collect(),
     };
     let sources = match &a.morph {
         Some(m) => m.morph_skin(&sources, &a.weights_at(time)),

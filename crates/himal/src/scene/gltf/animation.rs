@@ -370,6 +370,20 @@ pub struct SkinVertex {
     pub joints: [u32; 4],
 }
 
+impl SkinVertex {
+    /// Drawn vertex `v` with no joint weight: [`skin_vertex`] leaves it in
+    /// place (the meshes `passes/skin` only morphs).
+    pub fn unskinned(v: &crate::scene::Vertex) -> Self {
+        SkinVertex {
+            position: [v.position[0], v.position[1], v.position[2], 0.0],
+            normal: [v.normal[0], v.normal[1], v.normal[2], 0.0],
+            tangent: v.tangent,
+            weights: [0.0; 4],
+            joints: [0; 4],
+        }
+    }
+}
+
 /// The skinned position, normal and tangent of `v` under joint matrices
 /// `joints` (the CPU twin of `passes/skin/skin.wgsl`): with
 /// M = Σ w_i J\[j_i\], p' = M p, n' = normalize(M⁻ᵀ n) (through the
