@@ -41,6 +41,10 @@ pub struct BenchArgs {
     /// fixed camera; the bench used to dolly 0.5 m per frame).
     #[arg(long, value_name = "METRES", allow_hyphen_values = true)]
     pub dolly: Option<f32>,
+    /// Advance the scene's clock 1/30 s per frame (default: time 0), so
+    /// animated glTF files (skins, morph weights) deform while measured.
+    #[arg(long)]
+    pub play: bool,
     /// Frames run after the measured ones with every pass submitted alone
     /// and timed by the wall clock: compute passes whose timestamps read
     /// under half that time are counted at it (`timing` isolated-wall).
@@ -423,6 +427,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for i in 0..args.frames {
         // A fixed camera unless --dolly moves it.
         let cam = dollied(i);
+        if args.play {
+            settings.time_s = (i + 1) as f32 / 30.0;
+        }
         let t = Instant::now();
         let frame = renderer.render(&cam, &settings)?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);

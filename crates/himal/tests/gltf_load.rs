@@ -731,3 +731,52 @@ fn a_nodes_own_morph_weights_replace_the_meshs() {
     };
     assert_eq!((top("own"), top("plain")), (2.0, 1.0));
 }
+
+/// An instanced node's own `weights` (EXT_mesh_gpu_instancing) morph its
+/// instances: the triangle above drawn twice by a node with weights [1]
+/// and once by a node without. Before, the instanced node drew the mesh's
+/// weights (0) and was named in a warning.
+#[test]
+fn an_instanced_nodes_own_morph_weights_morph_its_instances() {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let delta: [f32; 9] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let offsets: [f32; 6] = [0.0, 0.0, 0.0, 0.0, 0.0, 3.0];
+    let bin: Vec<u8> = (positions.iter().chain(&delta).chain(&offsets))
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],"extensionsUsed":["EXT_mesh_gpu_instancing"],
+"nodes":[{{"mesh":0,"weights":[1.0],"name":"own","extensions":{{"EXT_mesh_gpu_instancing":{{"attributes":{{"TRANSLATION":2}}}}}}}},{{"mesh":0,"translation":[2,0,0],"name":"plain"}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"targets":[{{"POSITION":1}}]}}],"weights":[0.0]}}],
+"buffers":[{{"byteLength":96,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},{{"buffer":0,"byteOffset":72,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,1,0]}},
+{{"bufferView":2,"componentType":5126,"count":2,"type":"VEC3"}}]}}"#,
+        common::base64(&bin)
+    );
+    let path = common::temp_dir("instanced-weights").join("weights.gltf");
+    std::fs::write(&path, json).unwrap();
+    let a = gltf::load(&path).expect("loads");
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("weights")),
+        "{:?}",
+        a.warnings
+    );
+    let tops: Vec<(String, usize, f32)> = (a.objects.iter())
+        .map(|o| {
+            (
+                o.name.clone(),
+                o.mesh,
+                a.meshes[o.mesh].vertices[2].position[1],
+            )
+        })
+        .collect();
+    let own: Vec<_> = tops.iter().filter(|t| t.0.starts_with("own#")).collect();
+    assert_eq!(own.len(), 2, "{tops:?}");
+    assert!(own.iter().all(|t| t.2 == 2.0), "{tops:?}");
+    // One copy at the node's weights, shared by its instances.
+    assert_eq!(own[0].1, own[1].1, "{tops:?}");
+    let plain = tops.iter().find(|t| t.0 == "plain").expect("plain");
+    assert_eq!(plain.2, 1.0, "{tops:?}");
+}

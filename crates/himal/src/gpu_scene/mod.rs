@@ -14,7 +14,6 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
-pub mod morph;
 pub mod skin;
 pub mod textures;
 pub mod uniforms;
@@ -216,13 +215,12 @@ pub struct SceneGpu {
     /// Per object (GPU order): foliage or a tree trunk, what
     /// `--vegetation off` skips.
     pub vegetation_objects: Vec<bool>,
-    /// Skinned meshes (`passes/skin`); `None` without any.
+    /// Skinned meshes and meshes with animated morph weights
+    /// (`passes/skin`); `None` without any.
     pub skins: Option<skin::SkinGpu>,
-    /// Meshes with animated morph weights, morphed by `update_objects`.
-    pub morphs: Vec<morph::MorphJob>,
     /// The deformed vertices' previous-frame positions (`shaders/deform.wgsl`:
-    /// header, then the skinned meshes' (written by `passes/skin`) and the
-    /// morphed meshes' (written by `update_objects`), from vertex 0).
+    /// header, then the deformed meshes' from vertex 0, written by
+    /// `passes/skin`).
     pub deform: wgpu::Buffer,
     /// A `deform_prev` header of count 0: bound with `--deform-motion off`.
     pub no_deform: wgpu::Buffer,
@@ -234,19 +232,20 @@ pub struct SceneGpu {
 /// The next [`SceneGpu::id`].
 static NEXT_SCENE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
-/// The skinned meshes of `scene` with the object that poses each (the
-/// first, where objects share one: a mesh has one pose).
-fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
+/// The deformed meshes of `scene` (skinned, or with animated morph
+/// weights) with the object that deforms each (the first, where objects
+/// share one: a mesh has one pose).
+fn deform_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
     let mut out: Vec<(usize, crate::scene::gltf::Animated)> = Vec::new();
     for o in &scene.objects {
         let Some(a) = o.motion.as_ref().and_then(|m| m.animated.as_ref()) else {
             continue;
         };
-        if a.skin.is_none() || o.mesh >= scene.meshes.len() {
+        if (a.skin.is_none() && a.morph.is_none()) || o.mesh >= scene.meshes.len() {
             continue;
         }
         if out.iter().any(|(m, _)| *m == o.mesh) {
-            log::warn!("skinned mesh {} is posed by its first object only", o.mesh);
+            log::warn!("deformed mesh {} is posed by its first object only", o.mesh);
             continue;
         }
         out.push((o.mesh, a.clone()));
@@ -254,18 +253,61 @@ fn skin_jobs(scene: &Scene) -> Vec<(usize, crate::scene::gltf::Animated)> {
     out
 }
 
-/// The meshes of `scene` whose morph weights a clip animates (each once).
-fn morph_meshes(scene: &Scene) -> Vec<usize> {
-    let mut out = Vec::new();
-    for o in &scene.objects {
-        let morphed = (o.motion.as_ref())
-            .and_then(|m| m.animated.as_ref())
-            .is_some_and(|a| a.morph.is_some());
-        if morphed && o.mesh < scene.meshes.len() && !out.contains(&o.mesh) {
-            out.push(o.mesh);
+/// `passes/skin`'s buffers for `jobs` (meshes of `scene`, drawn from vertex
+/// 0 in this order in `vertices`).
+fn deform_gpu(
+    device: &wgpu::Device,
+    scene: &Scene,
+    jobs: &[(usize, crate::scene::gltf::Animated)],
+    vertices: &[Vertex],
+) -> skin::SkinGpu {
+    let (mut sources, mut info, mut deltas) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut out, mut first_joint, mut first_weight) = (Vec::new(), 0u32, 0u32);
+    let v3 = |v: &[f32]| [v[0], v[1], v[2]];
+    for (mesh, a) in jobs {
+        let drawn = &scene.meshes[*mesh].vertices;
+        let (joint_count, bind): (u32, Vec<SkinVertex>) = match &a.skin {
+            Some((skin, bind)) => (
+                a.rig.skins[*skin].joints.len() as u32,
+                (bind.iter())
+                    .map(|v| SkinVertex {
+                        joints: v.joints.map(|j| j + first_joint),
+                        ..*v
+                    })
+                    .collect(),
+            ),
+            // Only morphed: no weight, so not skinned.
+            None => (0, drawn.iter().map(SkinVertex::unskinned).collect()),
+        };
+        let targets = a.morph.as_ref().map_or(0, |m| m.targets.len() as u32);
+        for (i, mut s) in bind.into_iter().enumerate() {
+            match &a.morph {
+                Some(m) => {
+                    let (p, n, t) = m.base(i, (v3(&s.position), v3(&s.normal), v3(&s.tangent)));
+                    s.position[..3].copy_from_slice(&p);
+                    s.normal[..3].copy_from_slice(&n);
+                    s.tangent[..3].copy_from_slice(&t);
+                    let first = deltas.len() as u32;
+                    info.push([first, targets, first_weight, 0].map(f32::from_bits));
+                    m.gpu_deltas(i, &mut deltas);
+                }
+                None => info.push([0.0; 4]),
+            }
+            sources.push(s);
         }
+        out.push(skin::SkinJob {
+            animated: a.clone(),
+            first_joint,
+            joint_count,
+            first_weight,
+            target_count: targets,
+        });
+        first_joint += joint_count;
+        first_weight += 2 * targets;
     }
-    out
+    info.extend(deltas);
+    let rest = &vertices[..sources.len().min(vertices.len())];
+    skin::SkinGpu::new(device, out, (&sources, &info), rest, 0)
 }
 
 /// Vertex attributes of [`Vertex`], locations as in gbuffer.wgsl.
@@ -303,29 +345,19 @@ impl SceneGpu {
         let mut lods = vec![Vec::new(); n];
         let mut mean_area = vec![0.0; n];
         let mut area_histograms = vec![Vec::new(); n];
-        // Skinned meshes first: one range the skin pass copies into; then
-        // the morphed ones: together the deformed range (`deform`).
-        let skinned = skin_jobs(scene);
-        let morphed = morph_meshes(scene);
+        // Deformed meshes first: one range the skin pass writes and copies
+        // into (`deform` too).
+        let deform_jobs = deform_jobs(scene);
         let mut placed = vec![false; n];
         let mut order: Vec<usize> = Vec::with_capacity(n);
-        let deformed_meshes =
-            (skinned.iter().map(|(mesh, _)| *mesh)).chain(morphed.iter().copied());
-        for m in deformed_meshes.chain(0..n) {
+        for m in deform_jobs.iter().map(|(m, _)| *m).chain(0..n) {
             if m < n && !placed[m] {
                 placed[m] = true;
                 order.push(m);
             }
         }
-        let deformed_count: usize = (order.iter())
-            .take(
-                skinned.len()
-                    + morphed
-                        .iter()
-                        .filter(|m| !skinned.iter().any(|(s, _)| s == *m))
-                        .count(),
-            )
-            .map(|&m| scene.meshes[m].vertices.len())
+        let deformed_count: usize = (deform_jobs.iter())
+            .map(|(m, _)| scene.meshes[*m].vertices.len())
             .sum();
         for mi in order {
             let mesh = &scene.meshes[mi];
@@ -340,45 +372,8 @@ impl SceneGpu {
             area_histograms[mi] = histograms;
             mean_area[mi] = crate::scene::lod::geometric_mean_area(&mesh.vertices, &mesh.indices);
         }
-        let skins = (!skinned.is_empty()).then(|| {
-            let (mut sources, mut jobs, mut first_joint) = (Vec::new(), Vec::new(), 0u32);
-            for (_, a) in &skinned {
-                let Some((skin, bind)) = &a.skin else {
-                    continue;
-                };
-                let joint_count = a.rig.skins[*skin].joints.len() as u32;
-                sources.extend(bind.iter().map(|v| SkinVertex {
-                    joints: v.joints.map(|j| j + first_joint),
-                    ..*v
-                }));
-                jobs.push(skin::SkinJob {
-                    animated: a.clone(),
-                    first_joint,
-                    joint_count,
-                });
-                first_joint += joint_count;
-            }
-            skin::SkinGpu::new(&ctx.device, jobs, &sources, &vertices[..sources.len()], 0)
-        });
-        // Morphed meshes: the first object animating each.
-        let mut morphs: Vec<morph::MorphJob> = Vec::new();
-        for o in &scene.objects {
-            let Some(a) = o.motion.as_ref().and_then(|m| m.animated.as_ref()) else {
-                continue;
-            };
-            let Some(&(_, _, first_vertex)) = ranges.get(o.mesh) else {
-                continue;
-            };
-            if a.morph.is_none() || morphs.iter().any(|j| j.first_vertex == first_vertex as u32) {
-                continue;
-            }
-            morphs.push(morph::MorphJob {
-                animated: a.clone(),
-                first_vertex: first_vertex as u32,
-                rest: scene.meshes[o.mesh].vertices.clone(),
-                written: Default::default(),
-            });
-        }
+        let skins = (!deform_jobs.is_empty())
+            .then(|| deform_gpu(&ctx.device, scene, &deform_jobs, &vertices));
         // The deformed range: the skinned and morphed meshes, from vertex 0.
         let deformed = deformed_count.min(vertices.len());
         let mut deform: Vec<[f32; 4]> = vertices[..deformed]
@@ -528,7 +523,6 @@ impl SceneGpu {
                 vegetation: AtomicBool::new(true),
                 vegetation_objects,
                 skins,
-                morphs,
                 deform: init(
                     "scene.deform",
                     bytemuck::cast_slice(&deform),
@@ -562,9 +556,6 @@ impl SceneGpu {
         if let Some(skins) = &self.skins {
             skins.update(queue, time, prev_time);
         }
-        for job in &self.morphs {
-            job.update(queue, (&self.vertices, &self.deform), (time, prev_time));
-        }
     }
 
     /// The `deform_prev` buffer the G-buffer binds: the deformed vertices'
@@ -586,9 +577,6 @@ impl SceneGpu {
             }
         }
         for job in self.skins.iter_mut().flat_map(|s| &mut s.jobs) {
-            job.animated.play(name);
-        }
-        for job in &mut self.morphs {
             job.animated.play(name);
         }
     }

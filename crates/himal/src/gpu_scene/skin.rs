@@ -1,28 +1,42 @@
-//! The scene's skinned meshes on the GPU: bind-pose vertices with joints
-//! and weights, the joint matrices (rewritten per frame), and the skinned
-//! vertices `passes/skin` writes and copies into the scene's vertex buffer,
-//! where the skinned meshes lie together from `first_vertex` on.
+//! The scene's deformed meshes on the GPU (skinned, morphed, or both):
+//! bind-pose vertices with joints and weights, morph targets' deltas
+//! (uploaded once), the joint matrices and morph weights (rewritten per
+//! frame: O(joints + targets) per mesh, not per vertex), and the deformed
+//! vertices `passes/skin` writes and copies into the scene's vertex
+//! buffer, where the deformed meshes lie together from `first_vertex` on.
 
 use wgpu::util::DeviceExt;
 
 use crate::scene::Vertex;
 use crate::scene::gltf::{Animated, SkinVertex};
 
-/// One skinned object: its rig binding and its first joint in `joints`.
+/// One deformed object: its rig binding, its first joint in `joints` and
+/// its first weight in `weights`.
 #[derive(Clone, Debug)]
 pub struct SkinJob {
-    /// The object's rig binding: its clip and skin.
+    /// The object's rig binding: its clip, skin and morph targets.
     pub animated: Animated,
     /// Offset of its joints in [`SkinGpu::joints`].
     pub first_joint: u32,
-    /// Joints of its skin.
+    /// Joints of its skin (0: not skinned).
     pub joint_count: u32,
+    /// Offset of its weights in [`SkinGpu::weights`] (the frame's, then
+    /// the previous frame's).
+    pub first_weight: u32,
+    /// Its morph targets (0: not morphed).
+    pub target_count: u32,
 }
 
-/// Buffers of `passes/skin` for every skinned mesh of one uploaded scene.
+/// Buffers of `passes/skin` for every deformed mesh of one uploaded scene.
 pub struct SkinGpu {
-    /// [`SkinVertex`] per skinned vertex, joints offset to `joints`.
+    /// [`SkinVertex`] per deformed vertex, joints offset to `joints`
+    /// (morphed ones: their un-morphed base; only morphed: no weight).
     pub sources: wgpu::Buffer,
+    /// Per deformed vertex (first delta, targets, first weight, 0) as u32
+    /// bits, then the deltas ([`crate::scene::gltf::MorphTargets::gpu_deltas`]).
+    pub morph: wgpu::Buffer,
+    /// Per morphed job: its weights at the frame's time, then the previous.
+    pub weights: wgpu::Buffer,
     /// One mat4x4 per joint of every job.
     pub joints: wgpu::Buffer,
     /// The skinned vertices ([`Vertex`] layout; uv, colour and surface from
@@ -42,16 +56,17 @@ pub struct SkinGpu {
 }
 
 impl SkinGpu {
-    /// `sources` and `rest` (the same vertices as drawn at upload) of every
-    /// job in order.
+    /// `sources`, `morph` (the `morph` buffer's contents) and `rest` (the
+    /// same vertices as drawn at upload) of every job in order.
     pub fn new(
         device: &wgpu::Device,
         jobs: Vec<SkinJob>,
-        sources: &[SkinVertex],
+        (sources, morph): (&[SkinVertex], &[[f32; 4]]),
         rest: &[Vertex],
         first_vertex: u32,
     ) -> Self {
         let joint_count: u32 = jobs.iter().map(|j| j.joint_count).sum();
+        let weight_count: u32 = jobs.iter().map(|j| 2 * j.target_count).sum();
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -66,6 +81,12 @@ impl SkinGpu {
             sources: init("skin.sources", bytemuck::cast_slice(sources), U::STORAGE),
             joints: init("skin.joints", &joint_bytes, U::STORAGE | U::COPY_DST),
             prev_joints: init("skin.prev_joints", &joint_bytes, U::STORAGE | U::COPY_DST),
+            morph: init("skin.morph", bytemuck::cast_slice(morph), U::STORAGE),
+            weights: init(
+                "skin.weights",
+                &vec![0u8; weight_count.max(1) as usize * 4],
+                U::STORAGE | U::COPY_DST,
+            ),
             skinned: init(
                 "skin.skinned",
                 bytemuck::cast_slice(rest),
@@ -85,12 +106,33 @@ impl SkinGpu {
             .collect()
     }
 
-    /// Writes the joint matrices at `time` and at the previous frame's `prev_time`.
+    /// Every morphed job's weights at `time` then at `prev_time`, in
+    /// `weights` order.
+    pub fn morph_weights(&self, time: f32, prev_time: f32) -> Vec<f32> {
+        let mut out = Vec::new();
+        for j in self.jobs.iter().filter(|j| j.target_count > 0) {
+            for t in [time, prev_time] {
+                let mut w = j.animated.weights_at(t);
+                w.resize(j.target_count as usize, 0.0);
+                out.extend(w);
+            }
+        }
+        out
+    }
+
+    /// Writes the joint matrices and morph weights at `time` and at the
+    /// previous frame's `prev_time`.
     pub fn update(&self, queue: &wgpu::Queue, time: f32, prev_time: f32) {
         let m = self.joint_matrices(time);
-        queue.write_buffer(&self.joints, 0, bytemuck::cast_slice(&m));
-        let m = self.joint_matrices(prev_time);
-        queue.write_buffer(&self.prev_joints, 0, bytemuck::cast_slice(&m));
+        if !m.is_empty() {
+            queue.write_buffer(&self.joints, 0, bytemuck::cast_slice(&m));
+            let m = self.joint_matrices(prev_time);
+            queue.write_buffer(&self.prev_joints, 0, bytemuck::cast_slice(&m));
+        }
+        let w = self.morph_weights(time, prev_time);
+        if !w.is_empty() {
+            queue.write_buffer(&self.weights, 0, bytemuck::cast_slice(&w));
+        }
     }
 }
 

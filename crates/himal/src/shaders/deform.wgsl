@@ -1,7 +1,6 @@
 // The previous frame's positions of the deformed vertices (SceneGpu::deform):
-// the skinned ones `passes/skin` writes from the previous time's joints, the
-// morphed ones `SceneGpu::update_objects` writes from the previous weights,
-// so motion vectors carry the deformation (docs/gltf.md, "Animation and
+// `passes/skin` writes them from the previous time's morph weights and
+// joints, so motion vectors carry the deformation (docs/gltf.md, "Animation and
 // skinning").
 // Element 0: (first vertex, count) as u32 bits; 1 + i: vertex first + i
 // (model space; the object's prev_model places it). `--deform-motion off`

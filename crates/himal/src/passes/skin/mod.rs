@@ -1,5 +1,6 @@
-//! `skin`: the scene's skinned meshes posed on the GPU each frame (the
-//! joint matrices come from `SceneGpu::update_objects`), then `skin.copy`
+//! `skin`: the scene's skinned and morphed meshes deformed on the GPU each
+//! frame, morph targets first, then joints (the joint matrices and morph
+//! weights come from `SceneGpu::update_objects`), then `skin.copy`
 //! puts them into the scene's vertex buffer, before any pass draws it.
 //! Every later pass (G-buffer, shadows, sky occlusion) draws the pose
 //! unchanged. CPU twin: [`reference::skin`]. docs/gltf.md, "Animation and
@@ -47,6 +48,8 @@ impl SkinPass {
             .uniform("joints", &skins.joints)
             .uniform("prev_joints", &skins.prev_joints)
             .uniform("prev", &scene.deform)
+            .uniform("morph", &skins.morph)
+            .uniform("weights", &skins.weights)
             .write_buffer("skinned", skinned)
             .dispatch([skins.vertex_count.div_ceil(GROUP), 1, 1])
             .buffer(skinned);

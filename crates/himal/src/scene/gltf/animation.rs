@@ -370,13 +370,27 @@ pub struct SkinVertex {
     pub joints: [u32; 4],
 }
 
+impl SkinVertex {
+    /// Drawn vertex `v` with no joint weight: [`skin_vertex`] leaves it in
+    /// place (the meshes `passes/skin` only morphs).
+    pub fn unskinned(v: &crate::scene::Vertex) -> Self {
+        SkinVertex {
+            position: [v.position[0], v.position[1], v.position[2], 0.0],
+            normal: [v.normal[0], v.normal[1], v.normal[2], 0.0],
+            tangent: v.tangent,
+            weights: [0.0; 4],
+            joints: [0; 4],
+        }
+    }
+}
+
 /// The skinned position, normal and tangent of `v` under joint matrices
 /// `joints` (the CPU twin of `passes/skin/skin.wgsl`): with
-/// M = Σ w_i J\[j_i\], p' = M p, n' = normalize(M n), t' = M t made
-/// orthogonal to n' and normalised.
-/// (Normals by M, not its inverse transpose: exact for rotation and uniform
-/// scale, as three.js and Filament do. A direction M collapses keeps its
-/// bind-pose value.)
+/// M = Σ w_i J\[j_i\], p' = M p, n' = normalize(M⁻ᵀ n) (through the
+/// cofactor matrix, sign(det M) kept: exact under non-uniform joint scale),
+/// t' = M t made orthogonal to n' and normalised. A vertex with no weight
+/// is not skinned (M = I: the morphed-only meshes of the deform pass). A
+/// direction M collapses keeps its bind-pose value.
 pub fn skin_vertex(v: &SkinVertex, joints: &[Mat4]) -> ([f32; 3], [f32; 3], [f32; 4]) {
     let mut m = Mat4::ZERO;
     for (w, j) in v.weights.iter().zip(v.joints) {
@@ -384,14 +398,31 @@ pub fn skin_vertex(v: &SkinVertex, joints: &[Mat4]) -> ([f32; 3], [f32; 3], [f32
             m += *joints.get(j as usize).unwrap_or(&Mat4::IDENTITY) * *w;
         }
     }
+    if v.weights == [0.0; 4] {
+        m = Mat4::IDENTITY;
+    }
     let p = m.transform_point3(Vec3::from_slice(&v.position[..3]));
-    let n = m.transform_vector3(Vec3::from_slice(&v.normal[..3]));
+    let n = normal_matrix(&m) * Vec3::from_slice(&v.normal[..3]);
     let t = m.transform_vector3(Vec3::from_slice(&v.tangent[..3]));
     let n = n.normalize_or(Vec3::from_slice(&v.normal[..3]));
     // Blended matrices are not rotations: the tangent is made orthogonal to
     // the normal again (the vertex contract).
     let t = (t - n * n.dot(t)).normalize_or(Vec3::from_slice(&v.tangent[..3]));
     (p.to_array(), n.to_array(), [t.x, t.y, t.z, v.tangent[3]])
+}
+
+/// det(M)·M⁻ᵀ of the upper 3×3 up to its sign: the cofactor matrix, whose
+/// columns are the cross products of M's, times sign(det M) (normals need
+/// only the direction, and a singular M keeps one). `skin.wgsl`'s
+/// `normal_matrix` is the same.
+pub fn normal_matrix(m: &Mat4) -> glam::Mat3 {
+    let (a, b, c) = (
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    );
+    let sign = if a.dot(b.cross(c)) < 0.0 { -1.0 } else { 1.0 };
+    glam::Mat3::from_cols(b.cross(c), c.cross(a), a.cross(b)) * sign
 }
 
 /// Bind-pose vertices with their joints and weights, shared by the objects
@@ -412,8 +443,9 @@ pub struct Animated {
     pub clip: Option<usize>,
     /// Bounds of the object's mesh over every clip, in file space.
     pub swept: Aabb,
-    /// Morph targets whose weights a clip animates (unskinned meshes): the
-    /// mesh is morphed each frame to [`Animated::weights_at`].
+    /// Morph targets whose weights a clip animates: the mesh is morphed
+    /// each frame to [`Animated::weights_at`] (on the GPU, `passes/skin`),
+    /// before skinning where it is skinned.
     pub morph: Option<Arc<super::MorphTargets>>,
 }
 
@@ -464,11 +496,21 @@ pub(super) fn swept_rigid(rig: &Rig, node: usize, mesh: &Aabb) -> Aabb {
     })
 }
 
-/// Bounds of a skinned mesh over every clip (and the rest pose).
-pub(super) fn swept_skinned(rig: &Rig, skin: usize, vertices: &[SkinVertex]) -> Aabb {
+/// Bounds of a skinned mesh over every clip (and the rest pose); with
+/// `morph` (its targets and node) the vertices are morphed to the node's
+/// weights at each time first.
+pub(super) fn swept_skinned(
+    rig: &Rig,
+    skin: usize,
+    vertices: &[SkinVertex],
+    morph: Option<(&super::MorphTargets, usize)>,
+) -> Aabb {
     let mut b = Aabb::EMPTY;
     for (c, t) in rig.sample_times() {
         let joints = rig.joint_matrices(skin, &rig.pose(c, t));
+        let morphed =
+            morph.map(|(m, node)| m.morph_skin(vertices, &rig.weights(c, t, node, &m.defaults)));
+        let vertices = morphed.as_deref().unwrap_or(vertices);
         b = b.union(&Aabb::from_points(
             vertices
                 .iter()

@@ -498,13 +498,28 @@ pub fn load_from_bytes_with(
             // instance's transform before the node's.
             let instances = instancing::node_instances(&cx, &doc, &node, &buffers)?;
             // A node's own weights replace its mesh's defaults (glTF 2.0
-            // 3.7.2.2): each such node draws its own copy (not instanced ones).
+            // 3.7.2.2): each such node draws its own copy, shared by its
+            // instances (EXT_mesh_gpu_instancing instances share the node's).
             let own = node.weights().filter(|w| Some(*w) != m.weights());
             let targets = drawn.iter().flatten().any(|&p| mesh_morph[p].is_some());
-            if own.is_some() && (instances.is_some() || !targets) {
+            if own.is_some() && !targets {
                 reweighted.push(name.clone());
             }
-            let own = own.filter(|_| instances.is_none());
+            let drawn: Vec<Option<usize>> = (drawn.iter())
+                .map(|p| {
+                    let mesh = (*p)?;
+                    Some(match (own, mesh_morph[mesh].clone()) {
+                        (Some(w), Some(t)) => reweighted_copy(
+                            w,
+                            &t,
+                            mesh,
+                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
+                            &mut out.pbr,
+                        ),
+                        _ => mesh,
+                    })
+                })
+                .collect();
             let placements = instances.as_deref().unwrap_or(&[Mat4::IDENTITY]);
             let drawn_objects = out.objects.len() + placements.len() * count;
             if drawn_objects as u64 > buffers::MAX_NODE_INSTANCES {
@@ -522,15 +537,6 @@ pub fn load_from_bytes_with(
                 };
                 for (k, mesh) in drawn.iter().enumerate() {
                     let Some(mut mesh) = *mesh else { continue };
-                    if let (Some(w), Some(t)) = (own, mesh_morph[mesh].clone()) {
-                        mesh = reweighted_copy(
-                            w,
-                            &t,
-                            mesh,
-                            (&mut meshes, &mut mesh_skin, &mut mesh_morph),
-                            &mut out.pbr,
-                        );
-                    }
                     let rig = rig.as_ref().filter(|_| instances.is_none());
                     let skin = node.skin().map(|s| s.index());
                     if skin.is_some() && mesh_skin[mesh].is_none() {
@@ -558,12 +564,14 @@ pub fn load_from_bytes_with(
                                     meshes[mesh].name, bad.1, bad.0.joints
                                 )));
                             }
+                            // Animated weights: morphed, then skinned.
+                            let morph = (mesh_morph[mesh].clone())
+                                .filter(|_| rig.animates_weights(node.index()));
                             Some(skinned(
                                 rig,
-                                node.index(),
-                                skin,
+                                (node.index(), skin),
                                 first_clip,
-                                vertices,
+                                (vertices, morph),
                                 &mut meshes[mesh],
                             ))
                         }
@@ -646,13 +654,13 @@ pub fn load_from_bytes_with(
     }
     if !unmorphed.is_empty() {
         out.warnings.push(format!(
-            "animated morph weights are not applied to skinned meshes or meshes without targets: {}",
+            "animated morph weights of meshes without targets are not applied: {}",
             unmorphed.join(", ")
         ));
     }
     if !reweighted.is_empty() {
         out.warnings.push(format!(
-            "instanced nodes, or nodes whose mesh has no targets, with their own morph weights are drawn with their mesh's default weights: {}",
+            "nodes with their own morph weights whose mesh has no targets: {}",
             reweighted.join(", ")
         ));
     }
@@ -665,20 +673,24 @@ pub fn load_from_bytes_with(
 
 /// The object of skinned mesh `mesh` on node `node`: its vertices become
 /// the pose at t = 0 of `clip` (what static consumers and the first frame
-/// see), its bounds those over every clip.
+/// see), its bounds those over every clip; with `morph` (animated weights)
+/// each pose is of the vertices morphed to the node's weights first.
 fn skinned(
     rig: &std::sync::Arc<Rig>,
-    node: usize,
-    skin: usize,
+    (node, skin): (usize, usize),
     clip: Option<usize>,
-    vertices: Vec<SkinVertex>,
+    (vertices, morph): (Vec<SkinVertex>, Option<std::sync::Arc<MorphTargets>>),
     mesh: &mut Mesh,
 ) -> Animated {
     let joints = rig.joint_matrices(skin, &rig.pose(clip, 0.0));
-    for (v, s) in mesh.vertices.iter_mut().zip(&vertices) {
+    let at_zero = match &morph {
+        Some(m) => m.morph_skin(&vertices, &rig.weights(clip, 0.0, node, &m.defaults)),
+        None => vertices.clone(),
+    };
+    for (v, s) in mesh.vertices.iter_mut().zip(&at_zero) {
         (v.position, v.normal, v.tangent) = skin_vertex(s, &joints);
     }
-    let swept = animation::swept_skinned(rig, skin, &vertices);
+    let swept = animation::swept_skinned(rig, skin, &vertices, morph.as_deref().map(|m| (m, node)));
     mesh.bounds = swept;
     Animated {
         rig: rig.clone(),
@@ -686,7 +698,7 @@ fn skinned(
         skin: Some((skin, std::sync::Arc::new(vertices))),
         clip,
         swept,
-        morph: None,
+        morph,
     }
 }
 
