@@ -171,12 +171,14 @@ fn impostor_gbuffer(in: VertexOut) -> GBufferOut {
     return out;
 }
 
-// `--view impostor`: impostor pixels in the hue of their nearest capture
-// around (8 hues), lighter toward the top capture.
+// `--view impostor`: impostor pixels in the saturated hue of the capture
+// with the largest weight (9 hues, the top one the ninth).
 fn impostor_view_albedo(w: vec3f) -> vec3f {
     let b = impostor_blend(w);
-    let k = select(b.captures.x, b.captures.y, b.weights.y > b.weights.x);
-    let h = f32(k) / 8.0;
-    let hue = clamp(abs(fract(h + vec3f(0.0, 2.0 / 3.0, 1.0 / 3.0)) * 6.0 - 3.0) - 1.0, vec3f(0.0), vec3f(1.0));
-    return mix(hue, vec3f(1.0), b.weights.z * 0.6);
+    var k = select(b.captures.x, b.captures.y, b.weights.y > b.weights.x);
+    if (b.weights.z > max(b.weights.x, b.weights.y)) {
+        k = b.captures.z;
+    }
+    let h = f32(k) / 9.0;
+    return clamp(abs(fract(h + vec3f(0.0, 2.0 / 3.0, 1.0 / 3.0)) * 6.0 - 3.0) - 1.0, vec3f(0.0), vec3f(1.0));
 }
