@@ -7,7 +7,7 @@
 mod common;
 
 use glam::Vec3;
-use himal::Renderer;
+use himal::{Culling, Renderer};
 use himal::scene::lod::{distance_to_box, focal_px, geometric_mean_area};
 use himal::scene::{Camera, Scene};
 
@@ -120,9 +120,12 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
             t.radius,
             3.0 * t.d1
         );
+        // The culling path of the next frames (the CPU one pops).
+        let culling = std::cell::Cell::new(Culling::Gpu);
         let mut frame =
             |camera: &Camera, view: &str, lod: bool, impostors: bool, vegetation: bool| {
                 let mut s = common::raw_settings(&scene, SIZE, view);
+                s.culling = culling.get();
                 s.lod_threshold_px = if lod { THRESHOLD_PX } else { 0.0 };
                 s.impostors = impostors;
                 s.vegetation = vegetation;
@@ -135,9 +138,15 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
         let off = impostor_pixels(&frame(&past, "impostor", true, false, true));
         let near = camera_at(&t, 0.0, 0.0, 2.5);
         let before = impostor_pixels(&frame(&near, "impostor", true, true, true));
+        culling.set(Culling::Cpu);
+        let cpu = impostor_pixels(&frame(&past, "impostor", true, true, true));
+        let cpu_off = impostor_pixels(&frame(&past, "impostor", true, false, true));
+        culling.set(Culling::Gpu);
         println!(
-            "{species}: impostor pixels past the switch {count}, with --impostors off {off}, at 2.5 d_1 {before}"
+            "{species}: impostor pixels past the switch {count} (CPU culling {cpu}), with --impostors off {off} (CPU {cpu_off}), at 2.5 d_1 {before}"
         );
+        assert!(cpu > 150, "{species}: {cpu} impostor pixels on the CPU path");
+        assert_eq!(cpu_off, 0, "{species}: impostors with --impostors off on the CPU path");
         // Measured 2026-12-06: larch 266+, rosewood 400+ (lavapipe).
         assert!(
             count > 150,
