@@ -7,9 +7,9 @@
 mod common;
 
 use glam::Vec3;
-use himal::{Culling, Renderer};
 use himal::scene::lod::{distance_to_box, focal_px, geometric_mean_area};
 use himal::scene::{Camera, Scene};
+use himal::{Culling, Renderer};
 
 const SIZE: (u32, u32) = (160, 120);
 const FOV: f32 = 60.0;
@@ -145,9 +145,15 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
         println!(
             "{species}: impostor pixels past the switch {count} (CPU culling {cpu}), with --impostors off {off} (CPU {cpu_off}), at 2.5 d_1 {before}"
         );
-        assert!(cpu > 150, "{species}: {cpu} impostor pixels on the CPU path");
-        assert_eq!(cpu_off, 0, "{species}: impostors with --impostors off on the CPU path");
-        // Measured 2026-12-06: larch 266+, rosewood 400+ (lavapipe).
+        assert!(
+            cpu > 150,
+            "{species}: {cpu} impostor pixels on the CPU path"
+        );
+        assert_eq!(
+            cpu_off, 0,
+            "{species}: impostors with --impostors off on the CPU path"
+        );
+        // Measured 2026-12-06 (lavapipe): larch 293, rosewood 329 on both paths.
         assert!(
             count > 150,
             "{species}: {count} impostor pixels past the switch"
