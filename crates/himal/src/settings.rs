@@ -85,13 +85,13 @@ impl ViewBuffer {
         "bent-normal",
         "sectors",
         "lod",
-        "impostor",
         "ssdo",
         "ao-bleed",
         "particle-lighting",
         "indirect",
         "probe-cells",
         "clipmap",
+        "impostor",
     ];
 
     /// The tone-mapped image (the final one, or the particles' lighting in it).
