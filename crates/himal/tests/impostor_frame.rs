@@ -138,6 +138,34 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
         let off = impostor_pixels(&frame(&past, "impostor", true, false, true));
         let near = camera_at(&t, 0.0, 0.0, 2.5);
         let before = impostor_pixels(&frame(&near, "impostor", true, true, true));
+        // In E2's band (the last 0.2 d_1 before the switch) LOD2 and the
+        // impostor cross-fade with complementary screen-door masks (GPU
+        // path): the impostor's share of the tree's pixels rises from 0 to
+        // nearly all (the trunk, at LOD2, keeps the rest). Sampled across
+        // the band, some distance shows a partial share: no pop.
+        let mut share = |camera: &Camera| {
+            let img = frame(camera, "impostor", true, true, true);
+            let bare = frame(camera, "impostor", true, true, false);
+            let tree = (img.iter().zip(&bare)).filter(|(a, b)| a != b).count();
+            impostor_pixels(&img) as f32 / tree.max(1) as f32
+        };
+        let share_past = share(&past);
+        let shares: Vec<f32> = [2.6, 2.7, 2.8, 2.9]
+            .iter()
+            .map(|&k| share(&camera_at(&t, 0.0, 0.0, k)))
+            .collect();
+        println!(
+            "{species}: impostor share of the tree's pixels at 2.6, 2.7, 2.8, 2.9 d_1: {shares:.2?}; past the switch {share_past:.2}"
+        );
+        // Measured 2026-12-06: larch [0, 0, 0, 0.50] and 0.94; rosewood
+        // [0, 0.22, 0.76, 0.93] and 0.92. The rosewood's band sits about
+        // 0.15 d_1 nearer than this test's box estimate (not explained yet).
+        assert!(
+            shares
+                .iter()
+                .any(|&f| f > 0.15 * share_past && f < 0.85 * share_past),
+            "{species}: no partial cross-fade {shares:?} (past: {share_past})"
+        );
         culling.set(Culling::Cpu);
         let cpu = impostor_pixels(&frame(&past, "impostor", true, true, true));
         let cpu_off = impostor_pixels(&frame(&past, "impostor", true, false, true));
