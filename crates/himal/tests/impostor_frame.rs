@@ -16,14 +16,16 @@ const FOV: f32 = 60.0;
 /// `FrameSettings::lod_threshold_px`'s default (E2).
 const THRESHOLD_PX: f32 = 4.0;
 
-/// A tree's leaves: its box (with the sway margin the culling adds), d_1
-/// at 160 x 120, and R (the impostor's half side, from the grid vertices).
+/// A tree's leaves: its world box (with the sway margin the culling adds),
+/// d_1 at 160 x 120, its capture centre and R (world), and its model
+/// matrix (trees are placed with a random yaw and size).
 struct Tree {
     lo: Vec3,
     hi: Vec3,
     d1: f32,
     centre: Vec3,
     radius: f32,
+    model: glam::Mat4,
 }
 
 fn tree(scene: &Scene, mesh_name: &str) -> Tree {
@@ -33,28 +35,32 @@ fn tree(scene: &Scene, mesh_name: &str) -> Tree {
     let o = (scene.objects.iter())
         .find(|o| o.mesh == mi)
         .expect("leaves object");
-    let t = o.transform.w_axis.truncate();
+    let model = o.transform;
+    let scale = himal::scene::lod::linear_scale(&model);
     let area = geometric_mean_area(&mesh.vertices, &mesh.indices);
-    let d1 = area.sqrt() * focal_px(FOV, SIZE.1) / THRESHOLD_PX.sqrt();
+    let d1 = area.sqrt() * scale * focal_px(FOV, SIZE.1) / THRESHOLD_PX.sqrt();
     let grid = (mesh.vertices.iter())
         .find(|v| v.uv1[0] < 0.0)
         .expect("impostor vertices");
-    let margin = Vec3::splat(0.03);
+    let b = mesh.bounds.transform(&model);
+    let margin = Vec3::splat(0.03 * model.to_scale_rotation_translation().0.max_element());
     Tree {
-        lo: mesh.bounds.min + t - margin,
-        hi: mesh.bounds.max + t + margin,
+        lo: b.min - margin,
+        hi: b.max + margin,
         d1,
-        centre: Vec3::from(grid.position) + t,
-        radius: grid.tangent[3],
+        centre: model.transform_point3(Vec3::from(grid.position)),
+        radius: grid.tangent[3] * scale,
+        model,
     }
 }
 
-/// The camera at azimuth `az` (degrees about +Y from +Z) and elevation
-/// `el` looking at the tree's centre, its distance to the tree's box
-/// `k d_1` (bisection).
+/// The camera at azimuth `az` (degrees about +Y from +Z, in the tree's own
+/// frame, so 0, 45, ... are the capture angles) and elevation `el` looking
+/// at the tree's centre, its distance to the tree's box `k d_1` (bisection).
 fn camera_at(t: &Tree, az: f32, el: f32, k: f32) -> Camera {
     let (a, e) = (az.to_radians(), el.to_radians());
-    let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+    let local = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+    let dir = t.model.transform_vector3(local).normalize();
     let (c, h) = ((t.lo + t.hi) * 0.5, (t.hi - t.lo) * 0.5);
     let (mut lo, mut hi) = (0.0f32, 10.0 * k * t.d1 + 100.0);
     for _ in 0..60 {
@@ -157,9 +163,8 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
         println!(
             "{species}: impostor share of the tree's pixels at 2.6, 2.7, 2.8, 2.9 d_1: {shares:.2?}; past the switch {share_past:.2}"
         );
-        // Measured 2026-12-06: larch [0, 0, 0, 0.50] and 0.94; rosewood
-        // [0, 0.22, 0.76, 0.93] and 0.92. The rosewood's band sits about
-        // 0.15 d_1 nearer than this test's box estimate (not explained yet).
+        // Measured 2026-12-06: larch [0, 0, 0, 0.48] and 0.93; rosewood
+        // [0, 0, 0, 0.48] and 0.92 (the band is 2.8 to 3 d_1).
         assert!(
             shares
                 .iter()
@@ -181,7 +186,7 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
             cpu_off, 0,
             "{species}: impostors with --impostors off on the CPU path"
         );
-        // Measured 2026-12-06 (lavapipe): larch 293, rosewood 329 on both paths.
+        // Measured 2026-12-06 (lavapipe): larch 258, rosewood 368 on both paths.
         assert!(
             count > 150,
             "{species}: {count} impostor pixels past the switch"
@@ -249,9 +254,9 @@ fn impostors_replace_lod2_close_to_the_full_tree_and_cast_shadows() {
             lod2_sum / views.len() as f32
         );
         // Measured 2026-12-06 (lavapipe, 160 x 120, the crop of the tree's
-        // 2R square at 3.05 d_1): mean 0.069 / 0.072, worst 0.097 (larch,
-        // az 225) / 0.109 (rosewood, az 112.5 el 30); the 0.05 is
-        // not met (V3.md "Left").
+        // 2R square at 3.05 d_1): mean 0.064 / 0.076, worst 0.088 (larch,
+        // az 112.5 el 30) / 0.117 (rosewood, az 112.5 el 30); the issue's
+        // 0.05 is not met (V3.md "Left").
         assert!(mean < 0.085, "{species}: FLIP mean {mean}");
         assert!(worst < 0.13, "{species}: worst FLIP {worst}");
         worst_overall = worst_overall.max(worst);
