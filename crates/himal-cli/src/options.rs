@@ -158,6 +158,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub vegetation: String,
+    /// V3 depth impostors: trees' leaves past LOD2 draw as impostors
+    /// (off: LOD2 stays to the end).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub impostors: String,
     /// R4: Burley's remapped roughness in the visibility term of the sun
     /// and local lights (less specular on rough surfaces at grazing light).
     #[arg(
@@ -439,6 +448,7 @@ impl PostArgs {
         settings.smaa_edge_mask = on_off("--smaa-edge-mask", &self.smaa_edge_mask)?;
         settings.deform_motion = on_off("--deform-motion", &self.deform_motion)?;
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
+        settings.impostors = on_off("--impostors", &self.impostors)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         if !(0.0..=1.0).contains(&self.wetness) {

@@ -223,6 +223,11 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     scene
         .vegetation
         .store(settings.vegetation, std::sync::atomic::Ordering::Relaxed);
+    // V3: impostor levels drawn, or LOD2 to the end (both culling paths).
+    scene
+        .impostors
+        .store(settings.impostors, std::sync::atomic::Ordering::Relaxed);
+    passes.cull.set_impostors(&ctx.queue, settings.impostors);
     // The GPU culling's lists hold every object: without vegetation the CPU culls.
     let hide_vegetation = !settings.vegetation && scene.vegetation_objects.contains(&true);
     let size = (settings.width, settings.height);
@@ -341,6 +346,8 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     // The world's terrain: CDLOD patches for the camera, the cascades at its levels.
     let lod_view = settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Lod);
     passes.gbuffer.lod_view = lod_view;
+    passes.gbuffer.impostor_view =
+        settings.view == ViewBuffer::Debug(crate::passes::debug::DebugView::Impostor);
     let terrain = passes.terrain.as_mut().map(|t| {
         t.lod_view = lod_view;
         t.specular_aa = settings.specular_aa;

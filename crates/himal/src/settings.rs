@@ -60,7 +60,7 @@ pub enum IndirectView {
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 30] = [
+    pub const NAMES: [&'static str; 31] = [
         "final",
         "albedo",
         "normal",
@@ -91,6 +91,7 @@ impl ViewBuffer {
         "indirect",
         "probe-cells",
         "clipmap",
+        "impostor",
     ];
 
     /// The tone-mapped image (the final one, or the particles' lighting in it).
@@ -130,6 +131,7 @@ impl std::str::FromStr for ViewBuffer {
             "bent-normal" => ViewBuffer::SkyOcc(SkyOccView::BentNormal),
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
+            "impostor" => ViewBuffer::Debug(D::Impostor),
             "particle-lighting" => ViewBuffer::ParticleLighting,
             "indirect" => ViewBuffer::Indirect(IndirectView::Irradiance),
             "probe-cells" => ViewBuffer::Indirect(IndirectView::ProbeCells),
@@ -283,6 +285,9 @@ pub struct FrameSettings {
     /// (off: their draws are skipped in every pass; the frame culls on the
     /// CPU then, as the GPU culling's lists hold every object).
     pub vegetation: bool,
+    /// V3 depth impostors as the trees' leaves' level after LOD2 (off:
+    /// LOD2 stays to the end).
+    pub impostors: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -369,6 +374,7 @@ impl FrameSettings {
             particles_sort: true,
             particles_probe_ambient: false,
             vegetation: true,
+            impostors: true,
         }
     }
 }

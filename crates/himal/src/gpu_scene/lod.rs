@@ -76,7 +76,17 @@ impl SceneGpu {
             return 0;
         };
         let mut errors = [0.0; crate::scene::lod::MAX_LODS];
-        let n = levels.len().min(errors.len());
+        let mut n = levels.len().min(errors.len());
+        // V3 `--impostors off`: the impostor level goes, LOD2 stays.
+        if !self.impostors.load(std::sync::atomic::Ordering::Relaxed)
+            && self
+                .impostor_mesh
+                .get(mesh as usize)
+                .copied()
+                .unwrap_or(false)
+        {
+            n = n.min(levels.len().saturating_sub(1)).max(1);
+        }
         for (e, l) in errors.iter_mut().zip(levels) {
             *e = l.error;
         }

@@ -14,6 +14,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
+pub mod impostor;
 pub mod skin;
 pub mod textures;
 pub mod uniforms;
@@ -227,6 +228,13 @@ pub struct SceneGpu {
     /// Unique per upload: what caches of scene resources are keyed by
     /// ([`textures::MaterialGroups`]).
     pub id: u64,
+    /// V3: the trees' impostor atlases (a one-texel fallback without trees).
+    pub impostor_atlas: impostor::ImpostorAtlas,
+    /// Per mesh: its last level is an impostor (`--impostors off` drops it).
+    pub impostor_mesh: Vec<bool>,
+    /// Whether impostor levels draw (`FrameSettings::impostors`, set per
+    /// frame; off: LOD2 stays to the end).
+    pub impostors: AtomicBool,
 }
 
 /// The next [`SceneGpu::id`].
@@ -536,6 +544,15 @@ impl SceneGpu {
                     wgpu::BufferUsages::STORAGE,
                 ),
                 id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
+                impostor_atlas: impostor::ImpostorAtlas::upload(
+                    &ctx.device,
+                    &ctx.queue,
+                    &scene.impostors,
+                ),
+                impostor_mesh: (scene.meshes.iter())
+                    .map(crate::scene::tree::impostor_level::has_impostor)
+                    .collect(),
+                impostors: AtomicBool::new(true),
             }
         })
     }

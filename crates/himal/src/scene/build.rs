@@ -195,9 +195,11 @@ pub(crate) fn build_scene(
         mesh_keys: HashMap::new(),
         budget,
         charged: 0,
+        impostors: Default::default(),
     };
     let mut objects = Placer::place_all(&mut world, &file.object)?;
     let charged = world.charged;
+    let impostors = world.impostors.atlases;
     let mut meshes = world.meshes;
     let mut lights = lights;
     // Models share what the scene's own meshes left of the budget.
@@ -249,6 +251,7 @@ pub(crate) fn build_scene(
     }
     Ok(Scene {
         path: Some(origin.into()),
+        impostors,
         meshes,
         objects,
         materials,
@@ -439,6 +442,8 @@ pub(crate) struct World<'a> {
     pub budget: MemoryBudget,
     /// Bytes charged to the budget by the meshes built so far.
     pub charged: u64,
+    /// V3: the impostor atlas layers of the scene's trees.
+    pub impostors: super::tree::impostor_level::Layers,
 }
 
 /// A validated primitive; its Debug text (with the material) keys mesh sharing.

@@ -184,7 +184,7 @@ impl World<'_> {
             None => default_bark(),
         };
         let name = format!("{}/{seed}", species.name());
-        let m = tree::cached(
+        let mut m = tree::cached(
             species,
             seed,
             &name,
@@ -192,6 +192,11 @@ impl World<'_> {
             &self.materials[leaves],
             tint,
         );
+        // V3: the impostor as the leaves' level after LOD2.
+        let (layer, imp) = self.impostors.layer(species, seed);
+        let colours =
+            tree::impostor_level::Colours::new(&bark_material, &self.materials[leaves], tint);
+        tree::impostor_level::append(&mut m.leaves, &imp, layer, &colours);
         for (part, mesh) in [("trunk", &m.trunk), ("leaves", &m.leaves)] {
             let indices =
                 mesh.indices.len() + mesh.levels.iter().map(|l| l.indices.len()).sum::<usize>();

@@ -727,6 +727,9 @@ pub struct Scene {
     pub probes: Vec<Vec3>,
     /// An HDR environment lighting the scene instead of the physical sky.
     pub environment: Option<EnvironmentDesc>,
+    /// V3: the impostor captures of the scene's trees, one atlas layer each
+    /// (the leaves meshes' impostor levels name their layer).
+    pub impostors: Vec<std::sync::Arc<tree::impostor::Impostor>>,
 }
 
 /// Largest scene file read (the demo is 30 kB).
@@ -852,6 +855,7 @@ impl Scene {
             wind: DEFAULT_WIND,
             probes: Vec::new(),
             environment: None,
+            impostors: Vec::new(),
         })
     }
 

@@ -2,6 +2,8 @@
 // depth_masked.wgsl): one layout, so a depth node binds it once and draws
 // with pipelines of both programs.
 #import scene
+// V3 impostors cast: the atlas planes at bindings 8-10 (vs_vegetation).
+#import impostor_atlas
 
 struct ShadowView {
     light_view_proj: mat4x4f,

@@ -209,6 +209,10 @@ pub struct CullLayout {
     pub pool_batches: Vec<u32>,
     /// The scene mesh each batch draws.
     pub batch_mesh: Vec<u32>,
+    /// V3: the batches whose mesh ends in an impostor level.
+    pub impostor_batches: Vec<u32>,
+    /// Whether their `lods` count the impostor level ([`CullPass::set_impostors`]).
+    pub impostors: bool,
     /// Per chunk: the box around its objects' boxes, `None` until
     /// [`CullLayout::refresh_chunk_boxes`] after they changed (the CPU
     /// path's early-out: a chunk whose box a view culls has every object culled).
@@ -251,6 +255,7 @@ impl CullLayout {
         let mut layout = Self {
             bounds: scene.cull_bounds.clone(),
             objects: scene.cull_bounds.len() as u32,
+            impostors: true,
             ..Self::default()
         };
         layout.opaque_batches = layout.push_runs(scene, &scene.draws_opaque);
@@ -346,7 +351,17 @@ impl CullLayout {
                     lods = l as u32 + 1;
                 }
             }
-            self.batch_mesh.push(mesh.copied().unwrap_or(0));
+            let m = mesh.copied().unwrap_or(0);
+            if lods > 1
+                && scene
+                    .impostor_mesh
+                    .get(m as usize)
+                    .copied()
+                    .unwrap_or(false)
+            {
+                self.impostor_batches.push(self.batches.len() as u32);
+            }
+            self.batch_mesh.push(m);
             self.batches.push(BatchGpu {
                 first_chunk,
                 chunks: self.chunks.len() as u32 - first_chunk,
@@ -514,6 +529,24 @@ impl CullPass {
             hiz: hiz::HizPyramid::new(ctx)?,
             occlusion: false,
         })
+    }
+
+    /// V3 `--impostors on|off`: off, the impostor batches' level count
+    /// drops their last level (LOD2 stays to the end), on brings it back;
+    /// rewrites those batches where the state changes.
+    pub fn set_impostors(&mut self, queue: &wgpu::Queue, on: bool) {
+        if self.layout.impostors == on {
+            return;
+        }
+        self.layout.impostors = on;
+        for &b in &self.layout.impostor_batches {
+            let Some(batch) = self.layout.batches.get_mut(b as usize) else {
+                continue;
+            };
+            batch.lods = if on { batch.lods + 1 } else { batch.lods - 1 };
+            let offset = b as u64 * std::mem::size_of::<BatchGpu>() as u64;
+            queue.write_buffer(&self.batches, offset, bytemuck::bytes_of(&*batch));
+        }
     }
 
     /// Writes the culling bounds of objects from `first_object` on

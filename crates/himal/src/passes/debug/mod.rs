@@ -40,6 +40,9 @@ pub enum DebugView {
     /// Each surface's LOD level (E2) or terrain quadtree level, as a hue
     /// over its albedo (the G-buffer draws each level with its own pipeline).
     Lod = 14,
+    /// V3: the albedo, impostor pixels in the hue of their nearest capture
+    /// around (lighter toward the top one).
+    Impostor = 15,
 }
 
 /// The full-screen pass that draws a [`DebugView`] of the frame's buffers.

@@ -40,7 +40,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var raw = vec4f(0.0, 0.0, 0.0, 1.0);
     var disp = vec3f(0.0);
     switch VIEW {
-        case 1u, 14u: { // albedo (linear; the sRGB target encodes it); 14: lod, hues by level
+        case 1u, 14u, 15u: { // albedo (linear; the sRGB target encodes it); 14: lod, hues by level; 15: impostors by capture
             raw = vec4f(textureLoad(gbuffer_albedo, px, 0).rgb, 1.0);
             return select(raw, vec4f(0.0, 0.0, 0.0, 1.0), sky);
         }

@@ -70,6 +70,9 @@ pub struct GBufferKey {
     /// E3: textured materials widen roughness by their normal maps'
     /// variance (`SPECULAR_AA`; false for the other material types).
     pub specular_aa: bool,
+    /// V3 `--view impostor`: vegetation tints impostor pixels by capture
+    /// (`IMPOSTOR_VIEW`; false for the other material types).
+    pub impostor_view: bool,
 }
 
 /// Mip bias of textured materials under temporal anti-aliasing (A2).
@@ -84,6 +87,7 @@ impl GBufferKey {
         dither: false,
         lod_view: None,
         specular_aa: false,
+        impostor_view: false,
     };
     /// E2 transitions of per-vertex objects.
     pub const VERTEX_DITHER: Self = Self {
@@ -98,6 +102,7 @@ impl GBufferKey {
         dither: false,
         lod_view: None,
         specular_aa: false,
+        impostor_view: false,
     };
 
     /// A glTF material's permutation: `double_sided` as the material says, `mip_bias` under TAA, `specular_aa` for E3.
@@ -109,6 +114,7 @@ impl GBufferKey {
             dither: false,
             lod_view: None,
             specular_aa,
+            impostor_view: false,
         }
     }
 
@@ -116,6 +122,14 @@ impl GBufferKey {
     pub const fn at_level(self, level: u8) -> Self {
         Self {
             lod_view: Some(level),
+            ..self
+        }
+    }
+
+    /// This permutation under `--view impostor` (vegetation only).
+    pub const fn impostor_view(self, on: bool) -> Self {
+        Self {
+            impostor_view: on && matches!(self.material, MaterialType::Vegetation),
             ..self
         }
     }
@@ -174,6 +188,8 @@ pub struct GBufferPass {
     pub visible: VisibleLists,
     /// `--view lod` this frame: albedo shows each draw's level (`frame::plan`).
     pub lod_view: bool,
+    /// `--view impostor` this frame: impostor pixels tinted by capture (`frame::plan`).
+    pub impostor_view: bool,
     /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`,
     /// set by the renderer before planning).
     pub specular_aa: bool,
@@ -193,6 +209,7 @@ impl GBufferPass {
         let pass = Self {
             visible: VisibleLists::default(),
             lod_view: false,
+            impostor_view: false,
             specular_aa: true,
             deform_motion: true,
             program: Program::new(ctx, "passes/gbuffer/gbuffer.wgsl")?,
@@ -263,7 +280,10 @@ impl GBufferPass {
                 &spec(
                     "gbuffer.vegetation",
                     cull,
-                    &with_lod(&[("VEGETATION", 1.0)]),
+                    &with_lod(&[
+                        ("VEGETATION", 1.0),
+                        ("IMPOSTOR_VIEW", f64::from(u8::from(key.impostor_view))),
+                    ]),
                 ),
             ),
             MaterialType::Textured => {
@@ -324,14 +344,19 @@ impl GBufferPass {
         let pipelines: Vec<(GBufferKey, Result<wgpu::RenderPipeline, GpuError>)> =
             GBufferKey::for_view(scene, mip_bias, self.specular_aa, self.lod_view)
                 .into_iter()
+                .map(|key| key.impostor_view(self.impostor_view))
                 .map(|key| (key, self.pipeline(ctx, key)))
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
         let (lod_view, specular_aa) = (self.lod_view, self.specular_aa);
+        let impostor_view = self.impostor_view;
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects)
-            .uniform("deform_prev", scene.deform_prev(self.deform_motion));
+            .uniform("deform_prev", scene.deform_prev(self.deform_motion))
+            .external("impostor_color_load", &scene.impostor_atlas.color)
+            .external("impostor_normal_load", &scene.impostor_atlas.normal)
+            .external("impostor_depth_load", &scene.impostor_atlas.depth);
         let node = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances);
         let written = node
             .color(albedo, clear)
@@ -416,7 +441,7 @@ impl GBufferPass {
                 // Vegetation, per level under `--view lod` as the opaque draws.
                 let by_level = lod_view.then(|| scene.split_levels(vegetation));
                 for &level in &levels {
-                    let key = at(GBufferKey::VEGETATION, level);
+                    let key = at(GBufferKey::VEGETATION.impostor_view(impostor_view), level);
                     if !vegetation.is_empty() {
                         rp.set_pipeline(pipeline(key)?);
                         match (&by_level, level) {

@@ -12,6 +12,8 @@
 #import gltf_material
 #import object_vertex
 #import deform
+// V3: declared for the layout gbuffer.wgsl shares (bindings 8-10).
+#import impostor_atlas
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;

@@ -38,16 +38,27 @@ impl MaskedProgram {
 }
 
 /// Position and uv of [`crate::scene::Vertex`] (locations as in gbuffer.wgsl).
-const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 4] = [
     wgpu::VertexAttribute {
         format: wgpu::VertexFormat::Float32x3,
         offset: 0,
         shader_location: 0,
     },
+    // V3 impostor vertices: tangent.w = R, uv1.x = -1 - layer.
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x4,
+        offset: 24,
+        shader_location: 2,
+    },
     wgpu::VertexAttribute {
         format: wgpu::VertexFormat::Float32x2,
         offset: 40,
         shader_location: 3,
+    },
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x2,
+        offset: 80,
+        shader_location: 6,
     },
 ];
 

@@ -21,12 +21,18 @@ struct VegetationOut {
     @builtin(position) clip: vec4f,
     @location(0) uv: vec2f,
     @location(1) @interpolate(flat) pattern: u32,
+    // V3 impostors: p (centre-relative, units of R); flat the light's
+    // direction w (tree space) and the layer (< 0: not an impostor)
+    @location(2) impostor_p: vec3f,
+    @location(3) @interpolate(flat) impostor_w: vec4f,
 }
 
 @vertex
 fn vs_vegetation(
     @location(0) position: vec3f,
+    @location(2) tangent: vec4f,
     @location(3) uv: vec2f,
+    @location(6) uv1: vec2f,
     @builtin(instance_index) instance: u32,
 ) -> VegetationOut {
     let o = objects[instance_object(instances[instance])];
@@ -34,11 +40,29 @@ fn vs_vegetation(
     out.clip = shadow.light_view_proj * object_world(o, o.model, position, uv, true, shadow.time.x);
     out.uv = uv;
     out.pattern = foliage_pattern(o);
+    out.impostor_p = vec3f(0.0);
+    out.impostor_w = vec4f(0.0, 0.0, 1.0, -1.0);
+    let layer = impostor_layer(uv1);
+    if (layer >= 0) {
+        // The impostor faces the light, so it casts its captured shape.
+        let centre = (o.model * vec4f(position, 1.0)).xyz;
+        let toward = impostor_toward_light(shadow.light_view_proj, centre);
+        let g = impostor_object_vertex(o.normal_matrix, layer, position, tangent.w, uv, toward);
+        out.clip = shadow.light_view_proj * (o.model * vec4f(g.local, 1.0));
+        out.impostor_p = g.p;
+        out.impostor_w = vec4f(g.w, f32(layer));
+    }
     return out;
 }
 
 @fragment
 fn fs_vegetation(in: VegetationOut) {
+    if (in.impostor_w.w >= 0.0) {
+        if (impostor_pixel(i32(in.impostor_w.w), in.impostor_w.xyz, in.impostor_p).cover < 0.5) {
+            discard;
+        }
+        return;
+    }
     if (foliage_alpha(in.pattern, in.uv) < 0.5) {
         discard;
     }

@@ -284,7 +284,10 @@ impl ShadowPass {
         let node = graph
             .raster(id, &self.depth_program)
             .uniform("shadow", view)
-            .uniform("objects", &scene.objects);
+            .uniform("objects", &scene.objects)
+            .external("impostor_color_load", &scene.impostor_atlas.color)
+            .external("impostor_normal_load", &scene.impostor_atlas.normal)
+            .external("impostor_depth_load", &scene.impostor_atlas.depth);
         let mut node = bind_instances(node, culled.as_ref(), &scene.instances).depth(
             map,
             Some(layer_view_desc(layer)),
@@ -336,6 +339,18 @@ impl ShadowPass {
                             ("shadow", buffer.as_entire_binding()),
                             ("objects", scene.objects.as_entire_binding()),
                             ("instances", scene.instances.as_entire_binding()),
+                            (
+                                "impostor_color_load",
+                                wgpu::BindingResource::TextureView(&scene.impostor_atlas.color),
+                            ),
+                            (
+                                "impostor_normal_load",
+                                wgpu::BindingResource::TextureView(&scene.impostor_atlas.normal),
+                            ),
+                            (
+                                "impostor_depth_load",
+                                wgpu::BindingResource::TextureView(&scene.impostor_atlas.depth),
+                            ),
                         ],
                     )?;
                     let t = p.tile;

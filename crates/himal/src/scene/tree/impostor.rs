@@ -555,6 +555,72 @@ pub fn render_mesh(
     resolve(&linear, size, ss)
 }
 
+/// An impostor pixel before its alpha test: the blended coverage and the
+/// coverage-weighted sums of tint, leaf fraction and normal (divide by
+/// `cover`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pixel {
+    /// Blended coverage, `Σ w_k a_k` (alpha-tested at 0.5).
+    pub cover: f32,
+    /// `Σ w_k a_k t_k`.
+    pub tint: f32,
+    /// `Σ w_k a_k leaf_k`.
+    pub leaf: f32,
+    /// `Σ w_k a_k n_k` (tree space, not normalised).
+    pub normal: Vec3,
+}
+
+/// The pixel at the grid's interpolated point `p` (centre-relative, units
+/// of R) seen along `w` (toward the camera): per blended capture
+/// [`PIXEL_STEPS`] ray-depth steps from the pixel's own `t = p·w`, so each
+/// capture's texels are read where its own surface is, then its texels
+/// bilinear and coverage-premultiplied. `impostor_pixel` in
+/// `shaders/impostor_draw.wgsl` (`tests/impostor_wgsl.rs`).
+pub fn pixel(imp: &Impostor, w: Vec3, p: Vec3) -> Pixel {
+    let b = blend(w);
+    let z = p.dot(w);
+    let (mut cover, mut tint, mut leaf, mut normal) = (0.0, 0.0, 0.0, Vec3::ZERO);
+    for (k, wk) in b.captures.into_iter().zip(b.weights) {
+        if wk <= 0.0 {
+            continue;
+        }
+        let q = p - w * z;
+        let mut t = z;
+        for _ in 0..PIXEL_STEPS {
+            let (taps, f) = bilinear_taps(atlas_coord(k, q + w * t));
+            let d = bilinear(taps.map(|i| imp.depth_at(i)), f);
+            t = depth_step(capture_dir(k), q, w, d);
+        }
+        let (taps, f) = bilinear_taps(atlas_coord(k, q + w * t));
+        let c = |ch: usize| bilinear(taps.map(|t| f32::from(imp.color[t][ch]) / 255.0), f);
+        let a = |ch: usize| {
+            bilinear(
+                taps.map(|t| f32::from(imp.color[t][ch]) * f32::from(imp.color[t][3]) / 65025.0),
+                f,
+            )
+        };
+        let nm = |ch: usize| {
+            bilinear(
+                taps.map(|t| {
+                    (f32::from(imp.normal[t][ch]) / 127.5 - 1.0) * f32::from(imp.color[t][3])
+                        / 255.0
+                }),
+                f,
+            )
+        };
+        cover += wk * c(3);
+        tint += wk * a(0);
+        leaf += wk * a(1);
+        normal += wk * Vec3::new(nm(0), nm(1), nm(2));
+    }
+    Pixel {
+        cover,
+        tint,
+        leaf,
+        normal,
+    }
+}
+
 /// The impostor seen orthographically along `-dir`: the displaced grid
 /// ([`displace`]) rasterised, each pixel's point projected into the blended
 /// captures (bilinear, coverage-weighted), alpha-tested at coverage 0.5,
@@ -568,7 +634,6 @@ pub fn render_impostor(
 ) -> Vec<[f32; 3]> {
     let (out_size, size) = (size, size * ss);
     let basis = view_basis(dir);
-    let b = blend(dir);
     let g = GRID + 1;
     let points: Vec<Vec3> = (0..g * g)
         .map(|v| displace(imp, basis, grid_point(v % g, v / g)))
@@ -601,49 +666,12 @@ pub fn render_impostor(
                     if z <= depth[px] {
                         return;
                     }
-                    let (mut cover, mut tint, mut leaf, mut normal) = (0.0, 0.0, 0.0, Vec3::ZERO);
-                    for (k, wk) in b.captures.into_iter().zip(b.weights) {
-                        if wk <= 0.0 {
-                            continue;
-                        }
-                        // Per pixel, each capture's own ray-depth hit (as
-                        // the vertices, from the grid's depth): its texels
-                        // register with the others' where the grid is off.
-                        let q = p - basis[2] * z;
-                        let mut t = z;
-                        for _ in 0..PIXEL_STEPS {
-                            let (taps, f) = bilinear_taps(atlas_coord(k, q + basis[2] * t));
-                            let d = bilinear(taps.map(|i| imp.depth_at(i)), f);
-                            t = depth_step(capture_dir(k), q, basis[2], d);
-                        }
-                        let (taps, f) = bilinear_taps(atlas_coord(k, q + basis[2] * t));
-                        let c = |ch: usize| {
-                            bilinear(taps.map(|t| f32::from(imp.color[t][ch]) / 255.0), f)
-                        };
-                        let a = |ch: usize| {
-                            bilinear(
-                                taps.map(|t| {
-                                    f32::from(imp.color[t][ch]) * f32::from(imp.color[t][3])
-                                        / 65025.0
-                                }),
-                                f,
-                            )
-                        };
-                        let nm = |ch: usize| {
-                            bilinear(
-                                taps.map(|t| {
-                                    (f32::from(imp.normal[t][ch]) / 127.5 - 1.0)
-                                        * f32::from(imp.color[t][3])
-                                        / 255.0
-                                }),
-                                f,
-                            )
-                        };
-                        cover += wk * c(3);
-                        tint += wk * a(0);
-                        leaf += wk * a(1);
-                        normal += wk * Vec3::new(nm(0), nm(1), nm(2));
-                    }
+                    let Pixel {
+                        cover,
+                        tint,
+                        leaf,
+                        normal,
+                    } = pixel(imp, basis[2], p);
                     if cover < 0.5 {
                         return;
                     }

@@ -16,6 +16,7 @@
 pub mod ao;
 pub mod bake;
 pub mod impostor;
+pub mod impostor_level;
 pub mod visibility;
 
 use std::ops::Range;
@@ -34,7 +35,8 @@ pub use visibility::{DISTANCES, VIEWPOINTS, VisibilityTable};
 /// Name prefix of trunk meshes (`--vegetation off` finds trunks by it).
 pub const TRUNK_PREFIX: &str = "tree-trunk/";
 
-/// Levels per tree part: LOD0 and two reductions (impostors are a later part).
+/// Levels per tree part: LOD0 and two reductions (the leaves' impostor
+/// level comes after them: `impostor_level`).
 pub const LEVELS: usize = 3;
 
 /// Tree species.

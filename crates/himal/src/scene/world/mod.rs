@@ -265,6 +265,7 @@ impl World {
             pbr: Default::default(),
             probes: Vec::new(),
             environment: None,
+            impostors: Vec::new(),
         }
     }
 }

@@ -1,0 +1,161 @@
+//! V3 in the frame: a tree's impostor as the leaves mesh's last level
+//! (after LOD2). The level is the 16 x 16 grid of [`super::impostor`],
+//! 17 x 17 vertices marked `uv1.x < 0`; the G-buffer and shadow vertex
+//! stages (`shaders/impostor_atlas.wgsl`) face it to the viewer and
+//! displace it by the captured depth, and the fragment stages read the
+//! atlas layer `-1 - uv1.x`. Other passes see every grid vertex at the
+//! capture centre: zero-area triangles, nothing drawn.
+//! Method and figures: `docs/techniques/V3.md` "In the frame".
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::impostor::{self, GRID, Impostor, grid_point};
+use super::{Species, generate};
+use crate::scene::lod::Level;
+use crate::scene::{MaterialDesc, Mesh, Vertex};
+
+/// The impostor of tree (`species`, `seed`) through the tree cache
+/// ([`super::bake::cache_dir`]), or baked in memory without one.
+pub fn cached(species: Species, seed: u32) -> Impostor {
+    let model = generate(species, seed, 1.0);
+    match super::bake::cache_dir() {
+        Some(dir) => impostor::load_or_bake_in(&dir, &model, seed).0,
+        None => impostor::bake(&model),
+    }
+}
+
+/// The atlas layers of a scene's impostors, one per (species, seed).
+#[derive(Clone, Debug, Default)]
+pub struct Layers {
+    /// (species, seed) of each layer.
+    pub keys: Vec<(Species, u32)>,
+    /// The captures of each layer.
+    pub atlases: Vec<Arc<Impostor>>,
+}
+
+impl Layers {
+    /// The layer of tree (`species`, `seed`), baked or read on first use.
+    pub fn layer(&mut self, species: Species, seed: u32) -> (u32, Arc<Impostor>) {
+        if let Some(i) = self.keys.iter().position(|k| *k == (species, seed)) {
+            return (i as u32, self.atlases[i].clone());
+        }
+        let imp = Arc::new(cached(species, seed));
+        self.keys.push((species, seed));
+        self.atlases.push(imp.clone());
+        ((self.keys.len() - 1) as u32, imp)
+    }
+}
+
+/// The colours and materials an impostor pixel mixes (`impostor::albedo`).
+#[derive(Clone, Copy, Debug)]
+pub struct Colours {
+    /// Bark albedo (linear).
+    pub bark: Vec3,
+    /// Bark glossiness (the rest of the bark's material is the leaves').
+    pub bark_glossiness: f32,
+    /// Leaf albedo (linear) and material AO.
+    pub leaf: [f32; 4],
+    /// Leaf material (`Vertex::surface`).
+    pub leaf_surface: [f32; 4],
+    /// The cluster tint colour (linear).
+    pub tint: Vec3,
+}
+
+impl Colours {
+    /// The colours of a tree with these materials and tint.
+    pub fn new(bark: &MaterialDesc, leaves: &MaterialDesc, tint: Vec3) -> Self {
+        Colours {
+            bark: bark.albedo,
+            bark_glossiness: bark.glossiness,
+            leaf: leaves.vertex_color(),
+            leaf_surface: leaves.vertex_surface(),
+            tint,
+        }
+    }
+}
+
+/// Whether `v` is an impostor grid vertex (`uv1.x < 0`; leaf cards carry
+/// their cluster index there).
+pub fn is_impostor_vertex(v: &Vertex) -> bool {
+    v.uv1[0] < 0.0
+}
+
+/// The grid vertex `(i, j)` of layer `layer`. Packing (read by
+/// `impostor_atlas.wgsl`): position = capture centre (tree space, m),
+/// tangent = (bark albedo, R), normal = tint colour, uv = grid point in
+/// [-1, 1]², colour = leaf albedo and AO, surface = leaf material,
+/// uv1 = (-1 - layer, bark glossiness).
+fn grid_vertex(imp: &Impostor, layer: u32, c: &Colours, i: usize, j: usize) -> Vertex {
+    let xy = grid_point(i, j);
+    Vertex {
+        position: imp.centre.to_array(),
+        normal: c.tint.to_array(),
+        tangent: c.bark.extend(imp.radius).to_array(),
+        uv: xy.to_array(),
+        color: c.leaf,
+        surface: c.leaf_surface,
+        uv1: [-1.0 - layer as f32, c.bark_glossiness],
+    }
+}
+
+/// Appends the impostor level to a leaves mesh (its levels LOD1 and LOD2
+/// already there): the grid's vertices after the mesh's, two triangles per
+/// cell (counter-clockwise seen from the viewer, `+w`).
+pub fn append(leaves: &mut Mesh, imp: &Impostor, layer: u32, colours: &Colours) {
+    let g = GRID + 1;
+    let first = leaves.vertices.len() as u32;
+    leaves
+        .vertices
+        .extend((0..g * g).map(|v| grid_vertex(imp, layer, colours, v % g, v / g)));
+    let mut indices = Vec::with_capacity(GRID * GRID * 6);
+    for j in 0..GRID {
+        for i in 0..GRID {
+            let v = |i: usize, j: usize| first + (j * g + i) as u32;
+            let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1));
+            // i right, j down: (a, d, c) turns counter-clockwise.
+            indices.extend([a, d, c, a, c, b]);
+        }
+    }
+    let error = leaves.levels.last().map_or(0.0, |l| l.error);
+    leaves.levels.push(Level { indices, error });
+}
+
+/// Whether `mesh`'s last level is an impostor ([`append`]).
+pub fn has_impostor(mesh: &Mesh) -> bool {
+    (mesh.levels.last())
+        .and_then(|l| l.indices.first())
+        .and_then(|&i| mesh.vertices.get(i as usize))
+        .is_some_and(is_impostor_vertex)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_level_is_the_marked_grid() {
+        let model = generate(Species::Larch, 3, 0.2);
+        let imp = impostor::bake(&model);
+        let m = MaterialDesc::default();
+        let lods = super::super::bake::bake(&model);
+        let mut meshes = super::super::meshes(&model, &lods, "l", &m, &m, Vec3::ONE);
+        assert!(!has_impostor(&meshes.leaves));
+        let n = meshes.leaves.vertices.len();
+        append(
+            &mut meshes.leaves,
+            &imp,
+            2,
+            &Colours::new(&m, &m, Vec3::ONE),
+        );
+        assert!(has_impostor(&meshes.leaves));
+        assert_eq!(meshes.leaves.levels.len(), 3);
+        assert_eq!(meshes.leaves.vertices.len(), n + (GRID + 1) * (GRID + 1));
+        let v = &meshes.leaves.vertices[n];
+        assert_eq!(v.uv1[0], -3.0);
+        assert_eq!(v.tangent[3], imp.radius);
+        // LOD0..2 hold no grid vertex.
+        assert!(meshes.leaves.indices.iter().all(|&i| (i as usize) < n));
+    }
+}
