@@ -28,7 +28,10 @@
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 // Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
 @group(0) @binding(6) var<storage, read> instances: array<u32>;
-@group(0) @binding(2) var<uniform> lighting: Lighting;
+// Storage, not uniform: lavapipe 22.3 recompiles, per draw and without
+// freeing it, a shader whose branches read a uniform block (the BLEND soak
+// growth of #22; docs/reliability.md).
+@group(0) @binding(2) var<storage, read> lighting: Lighting;
 @group(0) @binding(3) var env_specular: texture_cube<f32>;
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;
