@@ -639,6 +639,11 @@ pub fn build<'a>(
         shadow_mask,
         ao: ao_targets.map(|t| t.ao),
         ambient_lights: &passes.lighting.ambient_lights.buffer,
+        sun_maps,
+        shadow_params: passes.shadows.mask_params(),
+        shadow_sampler: &passes.shadows.sampler,
+        lights: &passes.shadows.local_lights,
+        light_tiles: passes.shadows.light_tiles(),
     };
     let forward = passes.forward.add(ctx, &mut g, hdr, gbuffer.depth, forward);
     let hdr = forward.hdr;

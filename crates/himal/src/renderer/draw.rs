@@ -362,6 +362,8 @@ impl Renderer {
         self.res.passes.gbuffer.specular_aa = settings.specular_aa;
         self.res.passes.gbuffer.deform_motion = settings.deform_motion;
         self.res.passes.forward.specular_aa = settings.specular_aa;
+        self.res.passes.forward.fog =
+            super::lighting_key(settings, self.res.environment.is_some()).fog;
         self.res.passes.wet.amount = settings.wetness;
         self.res.passes.wet.specular_aa = settings.specular_aa;
         self.res.passes.particles.key = crate::passes::particles::ParticleKey {

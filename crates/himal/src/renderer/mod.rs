@@ -155,7 +155,7 @@ impl Renderer {
     fn from_upload(ctx: GpuContext, scene: &Scene, scene_gpu: SceneGpu) -> Result<Self, Error> {
         let mut passes = Passes::new(&ctx, scene, &scene_gpu)?;
         // Pre-warm the scene's permutations: a bad one fails here, not mid-frame.
-        for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu, true) {
+        for key in crate::passes::forward::ForwardKey::for_scene(&scene_gpu, true, (true, true)) {
             passes.forward.pipeline(&ctx, key)?;
         }
         for key in GBufferKey::for_scene(&scene_gpu, false, true) {
@@ -329,8 +329,16 @@ impl Renderer {
             for key in GBufferKey::for_scene(&self.res.scene, true, specular_aa) {
                 passes.gbuffer.pipeline(ctx, key)?;
             }
-            for key in crate::passes::forward::ForwardKey::for_scene(&self.res.scene, specular_aa) {
-                passes.forward.pipeline(ctx, key)?;
+            // forward.blend: shadows and fog on or off.
+            for lit in [(true, true), (true, false), (false, true), (false, false)] {
+                let keys = crate::passes::forward::ForwardKey::for_scene(
+                    &self.res.scene,
+                    specular_aa,
+                    lit,
+                );
+                for key in keys {
+                    passes.forward.pipeline(ctx, key)?;
+                }
             }
         }
         // E4: per-particle and per-pixel lighting, white or not, either ambient.

@@ -2,9 +2,11 @@
 // pass's sun, SH sky and environment-specular terms for one surface point,
 // plus emission, premultiplied by alpha. `f90`: Schlick's F90 (below 1 for
 // a KHR_materials_specular dielectric). The caller samples the filtered
-// cube (`prefiltered`) and the DFG table (`dfg` = (A, B)). The sun is
-// unshadowed: the shadow mask holds the opaque surface behind. `ao`: the
+// cube (`prefiltered`) and the DFG table (`dfg` = (A, B)) and applies the
+// sun's shadow to `sun_illuminance` (forward.blend: the sun's maps at the
+// fragment; the shadow mask holds the opaque surface behind). `ao`: the
 // occlusion times the ambient lights' RGB multiplier (both ambient terms).
+// `local`: the local lights' reflected radiance, added like emission.
 // CPU twin:
 // passes/forward/reference.rs `forward_shade_premultiplied`.
 #import brdf
@@ -23,15 +25,22 @@ struct Lighting {
 
 fn forward_shade_premultiplied(s: Surface, f90: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f,
         sun_direction: vec3f, sun_illuminance: vec3f, sky_irradiance: Sh9,
-        prefiltered: vec3f, dfg: vec2f, ao: vec3f, emissive: vec3f, alpha: f32) -> vec4f {
+        prefiltered: vec3f, dfg: vec2f, ao: vec3f, emissive: vec3f, local: vec3f, alpha: f32) -> vec4f {
     var c = brdf_cos_f90(s, f90, t, b, n, v, sun_direction) * sun_illuminance;
     // Radiance (kcd/m^2): no 1/pi, unlike the irradiance term below.
     c += prefiltered * (s.f0 * dfg.x + f90 * dfg.y) * ao;
     let e_n = max(sh9_eval(sky_irradiance, n), vec3f(0.0));
     c += s.diffuse_albedo * e_n * (ao / PI);
-    c += emissive;
+    c += emissive + local;
     let a = saturate(alpha);
     return vec4f(c * a, a);
+}
+
+// A premultiplied fragment `c` through the frame's aerial perspective
+// `ap` = (L_in, T) (shaders/fog.wgsl): the layer's share of "over",
+// (c.rgb T + L_in (1 - T) c.a, c.a). CPU twin: `fog_premultiplied`.
+fn fog_premultiplied(c: vec4f, ap: vec4f) -> vec4f {
+    return vec4f(c.rgb * ap.a + ap.rgb * ((1.0 - ap.a) * c.a), c.a);
 }
 
 // KHR_materials_unlit: the base colour shown as it is. himal's radiance has

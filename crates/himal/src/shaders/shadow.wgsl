@@ -271,6 +271,19 @@ fn shadow_local_lookup(l: LocalLight, t: ShadowTile, p: vec3f, n: vec3f, atlas_s
     return out;
 }
 
+// Visibility of surface point p (normal n) from local light `l` through
+// its atlas tile `t` (from shadow_local_tile): S1's rotated Poisson filter
+// of `radius` texels; 1 off the tile. shadows.mask per pixel, forward.blend
+// per fragment.
+fn shadow_local_visibility(l: LocalLight, t: ShadowTile, p: vec3f, n: vec3f,
+                           atlas: texture_depth_2d_array, cmp: sampler_comparison, radius: f32) -> f32 {
+    let k = shadow_local_lookup(l, t, p, n, vec2f(textureDimensions(atlas)));
+    if (!k.inside) {
+        return 1.0;
+    }
+    return shadow_poisson_visibility(atlas, cmp, 0, k.uv, k.depth_ref, radius, k.angle);
+}
+
 // Windowed inverse square: 1/d² · (1 − (d/range)⁴)², zero at the range
 // (Karis 2013), d clamped to 1 cm.
 fn local_light_falloff(d: f32, range: f32) -> f32 {

@@ -19,7 +19,8 @@
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
-@group(0) @binding(2) var<uniform> lighting: Lighting;
+// Storage: see forward.wgsl.
+@group(0) @binding(2) var<storage, read> lighting: Lighting;
 @group(0) @binding(3) var env_specular: texture_cube<f32>;
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;

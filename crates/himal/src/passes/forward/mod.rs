@@ -12,9 +12,12 @@
 //! [`reference::transmitted_radiance`]), and
 //! `forward.blend` draws alpha BLEND materials back to front (per object,
 //! by the distance of its bounds' centre) with premultiplied alpha into the
-//! HDR target, lit by the unshadowed sun, the sky SH and the filtered
-//! environment cube. Shader `forward.wgsl`, shading in `shaders/forward.wgsl`,
-//! CPU twin [`reference::forward_shade_premultiplied`].
+//! HDR target, lit like the deferred world (issue #22): the sun through its
+//! shadow maps at the fragment, the local lights through their atlas, the
+//! sky SH, the filtered environment cube and the frame's aerial
+//! perspective. Shader `forward.wgsl`, shading in `shaders/forward.wgsl`
+//! and `shaders/fog.wgsl`, CPU twins [`reference::forward_shade_premultiplied`]
+//! and [`crate::passes::lighting::reference::aerial_perspective`].
 
 pub mod reference;
 
@@ -53,6 +56,13 @@ pub struct ForwardKey {
     /// E3: roughness widened by normal-map variance (`SPECULAR_AA`); only
     /// for the kinds that shade specular (layers, transmission, blend).
     pub specular_aa: bool,
+    /// `forward.blend` reads the sun's and the local lights' shadow maps,
+    /// `forward.transmission` the sun's (`SHADOWS`: shadows on and drawn
+    /// this frame); other kinds: false.
+    pub shadows: bool,
+    /// `forward.blend` applies the frame's aerial perspective (`FOG`, as
+    /// `LightingKey::fog`); other kinds: false.
+    pub fog: bool,
 }
 
 impl ForwardKey {
@@ -63,11 +73,26 @@ impl ForwardKey {
             kind,
             double_sided,
             specular_aa: specular_aa && shades,
+            shadows: false,
+            fog: false,
         }
     }
 
-    /// The permutations `scene`'s emissive, layered and blend draws use.
-    pub fn for_scene(scene: &SceneGpu, specular_aa: bool) -> Vec<ForwardKey> {
+    /// The key with `forward.blend`'s shadows and fog and
+    /// `forward.transmission`'s shadows (dropped for other kinds).
+    pub fn lit(self, shadows: bool, fog: bool) -> Self {
+        let blend = self.kind == ForwardKind::Blend;
+        let transmission = self.kind == ForwardKind::Transmission;
+        Self {
+            shadows: shadows && (blend || transmission),
+            fog: fog && blend,
+            ..self
+        }
+    }
+
+    /// The permutations `scene`'s emissive, layered and blend draws use
+    /// (blend with shadows and fog as `lit` says).
+    pub fn for_scene(scene: &SceneGpu, specular_aa: bool, lit: (bool, bool)) -> Vec<ForwardKey> {
         let mut keys = Vec::new();
         let Some(m) = &scene.materials else {
             return keys;
@@ -89,7 +114,8 @@ impl ForwardKey {
             .chain(blend);
         for (kind, mat) in all {
             if let Some(binding) = m.materials.get(mat) {
-                let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
+                let key =
+                    ForwardKey::new(kind, binding.double_sided, specular_aa).lit(lit.0, lit.1);
                 if !keys.contains(&key) {
                     keys.push(key);
                 }
@@ -115,6 +141,16 @@ pub struct ForwardInputs<'a> {
     pub ao: Option<TextureHandle>,
     /// The scene's ambient lights (`passes/lighting/ambient.rs`).
     pub ambient_lights: &'a wgpu::Buffer,
+    /// The sun's maps this frame (`forward.blend`; `None`: shadows off).
+    pub sun_maps: Option<crate::passes::shadows::SunMaps>,
+    /// The sun maps' matrices (`ShadowPass::mask_params`).
+    pub shadow_params: &'a wgpu::Buffer,
+    /// The maps' comparison sampler.
+    pub shadow_sampler: &'a wgpu::Sampler,
+    /// The local lights (`ShadowPass::local_lights`).
+    pub lights: &'a wgpu::Buffer,
+    /// Their atlas tiles (`ShadowPass::light_tiles`), read with `sun_maps`' atlas.
+    pub light_tiles: &'a wgpu::Buffer,
 }
 
 /// What the forward passes leave: the HDR target and the depth, written by
@@ -163,6 +199,9 @@ pub struct ForwardPass {
     /// E3 specular anti-aliasing this frame (`FrameSettings::specular_aa`,
     /// set by the renderer before planning).
     pub specular_aa: bool,
+    /// Aerial perspective on `forward.blend` this frame (`LightingKey::fog`,
+    /// set by the renderer before planning).
+    pub fog: bool,
 }
 
 impl ForwardPass {
@@ -203,6 +242,7 @@ impl ForwardPass {
             layer_groups: Default::default(),
             transmission_groups: Default::default(),
             specular_aa: true,
+            fog: true,
             sheen_albedo: table.create_view(&Default::default()),
         })
     }
@@ -281,6 +321,13 @@ impl ForwardPass {
             write_mask: wgpu::ColorWrites::ALL,
         })];
         let buffers = [Some(vertex_layout())];
+        let b = |on: bool| f64::from(u8::from(on));
+        let mut constants = vec![("SPECULAR_AA", b(key.specular_aa))];
+        if std::ptr::eq(program, &self.program) {
+            constants.extend([("SHADOWS", b(key.shadows)), ("FOG", b(key.fog))]);
+        } else if std::ptr::eq(program, &self.transmission) {
+            constants.push(("SHADOWS", b(key.shadows)));
+        }
         let spec = RenderSpec {
             label,
             vertex_entry: "vs_main",
@@ -304,7 +351,7 @@ impl ForwardPass {
                 },
                 ..Default::default()
             },
-            constants: &[("SPECULAR_AA", f64::from(u8::from(key.specular_aa)))],
+            constants: &constants,
         };
         program.render_pipeline(ctx, &spec)
     }
@@ -441,11 +488,13 @@ impl ForwardPass {
         };
         // The permutations these draws use, from the shared cache.
         let specular_aa = self.specular_aa;
+        let (shadows, fog) = (inputs.sun_maps.is_some(), self.fog);
         let mut pipelines: Vec<(ForwardKey, Result<wgpu::RenderPipeline, GpuError>)> = Vec::new();
         if let Some(m) = &scene.materials {
             for (_, material) in draws.as_ref() {
                 if let Some(binding) = m.materials.get(*material) {
-                    let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
+                    let key =
+                        ForwardKey::new(kind, binding.double_sided, specular_aa).lit(shadows, fog);
                     if !pipelines.iter().any(|(k, _)| *k == key) {
                         pipelines.push((key, self.pipeline(ctx, key)));
                     }
@@ -461,6 +510,25 @@ impl ForwardPass {
             .external("dfg_lut", &inputs.envmap.dfg_view)
             .external_group(1)
             .color(targets.hdr, wgpu::LoadOp::Load);
+        // The sun's maps (fs_blend, fs_transmission) and the local lights
+        // with their atlas (fs_blend).
+        let maps = inputs.sun_maps;
+        let far = Fallback::DepthFar;
+        let node = if kind == ForwardKind::Layers {
+            node
+        } else {
+            node.uniform("shadow_params", inputs.shadow_params)
+                .optional_array("cascades", maps.and_then(|m| m.cascades), far)
+                .optional_array("static_map", maps.and_then(|m| m.static_map), far)
+                .sampler("shadow_sampler", inputs.shadow_sampler)
+        };
+        let node = if std::ptr::eq(program, &self.program) {
+            node.optional_array("atlas", maps.and_then(|m| m.atlas), far)
+                .uniform("lights", inputs.lights)
+                .uniform("light_tiles", inputs.light_tiles)
+        } else {
+            node
+        };
         let node = if kind == ForwardKind::Transmission {
             let ops = wgpu::Operations {
                 load: wgpu::LoadOp::Load,
@@ -481,7 +549,8 @@ impl ForwardPass {
                 else {
                     continue;
                 };
-                let key = ForwardKey::new(kind, binding.double_sided, specular_aa);
+                let key =
+                    ForwardKey::new(kind, binding.double_sided, specular_aa).lit(shadows, fog);
                 match pipelines.iter().find(|(k, _)| *k == key) {
                     Some((_, Ok(p))) => rp.set_pipeline(p),
                     Some((_, Err(e))) => {

@@ -33,7 +33,8 @@ pub struct ForwardLight {
 /// and Schlick F90 `f90` (below 1 for a KHR_materials_specular dielectric),
 /// right-handed frame (t, b, n), view vector `v`, ambient occlusion `ao`
 /// (times the ambient lights' multiplier, per channel),
-/// emission `emissive` (radiance) and coverage `alpha` (clamped to [0, 1]).
+/// emission `emissive` (radiance), the local lights' reflected radiance
+/// `local` (see [`local_radiance`]) and coverage `alpha` (clamped to [0, 1]).
 #[allow(clippy::too_many_arguments)]
 pub fn forward_shade_premultiplied(
     s: &Surface,
@@ -45,15 +46,43 @@ pub fn forward_shade_premultiplied(
     light: &ForwardLight,
     ao: Vec3,
     emissive: Vec3,
+    local: Vec3,
     alpha: f32,
 ) -> Vec4 {
     let mut c = brdf_cos_f90(s, f90, t, b, n, v, light.sun_direction) * light.sun_illuminance;
     c += light.prefiltered * (s.f0 * light.dfg.x + Vec3::splat(f90 * light.dfg.y)) * ao;
     let e_n = light.sky_irradiance.eval(n).max(Vec3::ZERO);
     c += s.diffuse_albedo * e_n * (ao / PI);
-    c += emissive;
+    c += emissive + local;
     let a = alpha.clamp(0.0, 1.0);
     (c * a).extend(a)
+}
+
+/// The local lights' reflected radiance at a `forward.blend` fragment
+/// (twin of `blend_local` in passes/forward/forward.wgsl): the sum over
+/// `lights` of (unit direction to the light, its illuminance × shadow
+/// visibility) of the BRDF × cosine with Schlick F90 `f90`.
+#[allow(clippy::too_many_arguments)]
+pub fn local_radiance(
+    s: &Surface,
+    f90: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    lights: &[(Vec3, Vec3)],
+) -> Vec3 {
+    lights
+        .iter()
+        .map(|&(dir, e)| brdf_cos_f90(s, f90, t, b, n, v, dir) * e)
+        .sum()
+}
+
+/// A premultiplied `forward.blend` fragment `c` seen through the frame's
+/// aerial perspective (L_in, T) (twin of fs_blend's FOG branch): the layer's
+/// share of "over", (c.rgb T + L_in (1 − T) c.a, c.a).
+pub fn fog_premultiplied(c: Vec4, (inscatter, transmittance): (Vec3, f32)) -> Vec4 {
+    (c.truncate() * transmittance + inscatter * ((1.0 - transmittance) * c.w)).extend(c.w)
 }
 
 /// KHR_materials_transmission's BTDF roughness: `roughness` (perceptual

@@ -8,7 +8,9 @@
 // refracted by the ior leaves a volume `thickness` deep, at a mip by the
 // BTDF's roughness, through the volume's Beer-Lambert transmittance
 // (shaders/forward.wgsl, CPU twin passes/forward/reference.rs).
-// The sun is unshadowed (the shadow mask holds the surface behind).
+// SHADOWS: the sun through its own maps at the fragment (as fs_blend; the
+// shadow mask holds the surface behind); no local lights, no fog (the
+// scene behind is fogged already).
 #import gbuffer_io
 #import view
 #import scene
@@ -18,10 +20,15 @@
 #import forward
 #import forward_vertex
 #import ambient_lights
+#import shadow
+
+override SHADOWS: bool = false;
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
-@group(0) @binding(2) var<uniform> lighting: Lighting;
+// Storage, not uniform: lavapipe 22.3 recompiles per draw a shader whose
+// branches read a uniform block (docs/reliability.md).
+@group(0) @binding(2) var<storage, read> lighting: Lighting;
 @group(0) @binding(3) var env_specular: texture_cube<f32>;
 @group(0) @binding(4) var env_sampler: sampler;
 @group(0) @binding(5) var dfg_lut: texture_2d<f32>;
@@ -29,6 +36,11 @@
 @group(0) @binding(6) var<storage, read> instances: array<u32>;
 // The opaque scene's HDR radiance and its box mips (forward.scene_color).
 @group(0) @binding(7) var scene_color: texture_2d<f32>;
+// The sun's maps (shadows.mask's lookup).
+@group(0) @binding(8) var<storage, read> shadow_params: ShadowMaskParams;
+@group(0) @binding(9) var cascades: texture_depth_2d_array;
+@group(0) @binding(10) var static_map: texture_depth_2d_array;
+@group(0) @binding(11) var shadow_sampler: sampler_comparison;
 
 @vertex
 fn vs_main(in: GBufferVertexIn) -> ForwardVertexOut {
@@ -47,14 +59,20 @@ fn fs_transmission(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> 
     let v = to_eye(view, in.world);
     let env = forward_env(f, v, env_specular, env_sampler, dfg_lut);
     let n = f.tbn[2];
+    var sun = lighting.sun_illuminance.rgb;
+    if (SHADOWS) {
+        let dist = dot(in.world - view.camera_position.xyz, shadow_params.camera_forward.xyz);
+        let n_geo = select(-1.0, 1.0, front) * normalize(in.normal);
+        sun *= shadow_world_visibility(shadow_params, cascades, static_map, shadow_sampler, in.world, n_geo, dist);
+    }
     let ior = material.transmission.w;
     // The dielectric's diffuse share that is transmitted instead.
     let transmission = saturate(material.transmission.x * tr_tex);
     let t_albedo = f.s.diffuse_albedo * transmission;
     f.s.diffuse_albedo *= 1.0 - transmission;
     let base = forward_shade_premultiplied(analytic_surface(f.s, lighting.sun_illuminance.w), f.f90, f.tbn[0], f.tbn[1], n, v,
-        lighting.sun_direction.xyz, lighting.sun_illuminance.rgb, lighting.sky_irradiance,
-        env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, 1.0).rgb;
+        lighting.sun_direction.xyz, sun, lighting.sky_irradiance,
+        env.prefiltered, env.dfg, f.ao * ambient_scale(in.world), f.emissive, vec3f(0.0), 1.0).rgb;
 
     // The refracted ray's exit from a volume `thickness` deep (world units);
     // thin-walled (0): the scene straight behind.
@@ -70,6 +88,6 @@ fn fs_transmission(in: ForwardVertexOut, @builtin(front_facing) front: bool) -> 
     let alpha_t = transmission_roughness(sqrt(f.s.alpha.x * f.s.alpha.y), ior);
     let through = transmitted_radiance(f.s.f0, f.f90, env.dfg, t_albedo, transmittance,
         behind, alpha_t, f.tbn[0], f.tbn[1], n, v,
-        lighting.sun_direction.xyz, lighting.sun_illuminance.rgb);
+        lighting.sun_direction.xyz, sun);
     return vec4f((base + through) * alpha, alpha);
 }

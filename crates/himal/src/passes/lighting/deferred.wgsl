@@ -35,6 +35,7 @@
 #import tangent_frame
 #import sh
 #import sky
+#import fog
 #import shadow
 #import envmap
 #import sky_occlusion
@@ -264,15 +265,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p), indirect);
     c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask, o);
     if (FOG) {
-        let transmittance = exp(-lighting.fog.x * dist);
-        // fog.z = 1 (Bruneton sky, L1): the SH sky radiance toward the horizon,
-        // so distant terrain fades to the colour of the sky drawn behind it.
-        var inscatter = preetham_sky_radiance(sky, -v) * lighting.fog.y;
-        if (lighting.fog.z > 0.5) {
-            let d = normalize(vec3f(-v.x, max(-v.y, 0.0), -v.z) + vec3f(0.0, 1e-4, 0.0));
-            inscatter = max(sh9_eval_radiance_from_irradiance(lighting.sky_irradiance, d), vec3f(0.0)) * lighting.fog.y;
-        }
-        c = c * transmittance + inscatter * (1.0 - transmittance);
+        let ap = aerial_perspective(dist, v, lighting.fog, lighting.sky_irradiance, preetham_sky_radiance(sky, -v));
+        c = c * ap.a + ap.rgb * (1.0 - ap.a);
     }
     return vec4f(c, 1.0);
 }

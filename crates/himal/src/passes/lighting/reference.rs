@@ -224,3 +224,29 @@ pub fn ambient_scale(lights: &[crate::scene::AmbientLightDesc], p: Vec3) -> Vec3
         .take(crate::scene::MAX_AMBIENT_LIGHTS)
         .fold(Vec3::ONE, |s, l| s * ambient_light_scale(l, p))
 }
+
+/// Aerial perspective of a surface `dist` metres away seen along `-v`
+/// (twin of `shaders/fog.wgsl` `aerial_perspective`): (inscattered
+/// radiance L_in, transmittance T); the caller applies c T + L_in (1 − T).
+/// `fog` is the lighting constant's (x extinction per metre, y amount, z 1 =
+/// inscatter from the sky SH); `preetham`: the Preetham sky's radiance
+/// toward −v (used when fog.z is 0).
+pub fn aerial_perspective(
+    dist: f32,
+    v: Vec3,
+    fog: glam::Vec4,
+    sky_irradiance: &Sh9Rgb,
+    preetham: Vec3,
+) -> (Vec3, f32) {
+    let transmittance = (-fog.x * dist).exp();
+    let inscatter = if fog.z > 0.5 {
+        let d = (Vec3::new(-v.x, (-v.y).max(0.0), -v.z) + Vec3::new(0.0, 1e-4, 0.0)).normalize();
+        sky_irradiance
+            .radiance_from_irradiance_eval(d)
+            .max(Vec3::ZERO)
+            * fog.y
+    } else {
+        preetham * fog.y
+    };
+    (inscatter, transmittance)
+}

@@ -45,11 +45,7 @@ fn local_visibility(l: LocalLight, r: Receiver) -> f32 {
     if (tile < 0) {
         return 1.0;
     }
-    let k = shadow_local_lookup(l, light_tiles[tile], r.p, r.n, vec2f(textureDimensions(atlas)));
-    if (!k.inside) {
-        return 1.0;
-    }
-    return shadow_poisson_visibility(atlas, shadow_sampler, 0, k.uv, k.depth_ref, params.filter_params.x, k.angle);
+    return shadow_local_visibility(l, light_tiles[tile], r.p, r.n, atlas, shadow_sampler, params.filter_params.x);
 }
 
 fn receiver(frag: vec4f, d: f32) -> Receiver {
