@@ -4,12 +4,6 @@
 
 mod common;
 
-fn settings(scene: &himal::scene::Scene) -> himal::FrameSettings {
-    let mut s = himal::FrameSettings::new(160, 120, scene.sun.clone());
-    s.time_s = 2.0;
-    s
-}
-
 /// Renders `name`'s camera "side" and checks the GPU's draw order: every
 /// ring a permutation, live slots far to near, the dead last, the same
 /// permutation as the twin; with sorting off, ring order. Returns the
@@ -18,7 +12,7 @@ fn check_draw_order(name: &str) -> usize {
     use himal::passes::particles::reference::draw_order;
     let (scene, camera) = common::scene_and_camera(name, "side");
     let mut r = common::renderer(&scene);
-    let mut s = settings(&scene);
+    let mut s = common::particle_settings(&scene);
     let f = r.render(&camera, &s).expect("frame");
     let ms: Vec<f64> = (f.timings.iter())
         .filter(|t| t.id == "particles.sort")

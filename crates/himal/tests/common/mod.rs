@@ -574,3 +574,11 @@ pub fn read_rgb(
         .map(|t| Vec3::new(t[0], t[1], t[2]))
         .collect()
 }
+
+/// A 160 x 120 frame of `scene` at clock 2 s: the particle tests' settings
+/// (plumes settled by the pre-warm).
+pub fn particle_settings(scene: &Scene) -> FrameSettings {
+    let mut s = FrameSettings::new(160, 120, scene.sun.clone());
+    s.time_s = 2.0;
+    s
+}
