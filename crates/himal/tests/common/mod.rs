@@ -582,3 +582,37 @@ pub fn particle_settings(scene: &Scene) -> FrameSettings {
     s.time_s = 2.0;
     s
 }
+
+/// The animation rigs of `scene`'s objects.
+pub fn animated(scene: &Scene) -> Vec<&himal::scene::gltf::Animated> {
+    (scene.objects.iter())
+        .filter_map(|o| o.motion.as_ref()?.animated.as_ref())
+        .collect()
+}
+
+/// The animated `scene`'s normals at `t` (96², raw) against `deformed`
+/// (the CPU's shape at `t`, not animated) and against `scene` at t = 0:
+/// mean absolute differences (same shape, moved).
+pub fn frame_against(
+    scene: &Scene,
+    deformed: &Scene,
+    camera: &himal::scene::Camera,
+    t: f32,
+) -> (f32, f32) {
+    let image = |scene: &Scene, t: f32| {
+        let mut s = raw_settings(scene, (96, 96), "normal");
+        s.time_s = t;
+        render_rgba(&mut renderer(scene), camera, &s)
+    };
+    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        let sum: f32 = (a.iter().zip(b))
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f32>() / 3.0)
+            .sum();
+        sum / a.len() as f32
+    };
+    let gpu = image(scene, t);
+    (
+        diff(&gpu, &image(deformed, t)),
+        diff(&gpu, &image(scene, 0.0)),
+    )
+}
