@@ -316,7 +316,61 @@ fn material_bind_groups_are_made_once_per_scene() {
 /// matches the other hypothesis.
 #[test]
 fn the_second_uv_set_maps_the_emissive_texture() {
-    let path = common::gltf_sample("MultiUVTest");
+    emission_follows_uv_set(&common::gltf_sample("MultiUVTest"), "TEXCOORD_1");
+}
+
+/// The same cube with the emissive's set renamed TEXCOORD_2 and TEXCOORD_0
+/// also given as TEXCOORD_1: a material reading sets 0 and 2 carries both
+/// in the vertex's two slots (PbrMaterial::uv_sets). Before, set 2 was
+/// drawn with TEXCOORD_0 and warned about.
+#[test]
+fn a_third_uv_set_maps_the_emissive_texture() {
+    let from = common::gltf_sample("MultiUVTest");
+    let dir = std::env::temp_dir().join(format!("himal-uv2-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for f in ["MultiUVTest.bin", "uv0.png", "uv1.png"] {
+        std::fs::copy(from.with_file_name(f), dir.join(f)).expect("copy");
+    }
+    let json = std::fs::read_to_string(&from).expect("gltf");
+    let renamed = json
+        .replace(
+            "\"TEXCOORD_1\" : 5",
+            "\"TEXCOORD_2\" : 5, \"TEXCOORD_1\" : 4",
+        )
+        .replace("\"texCoord\" : 1", "\"texCoord\" : 2");
+    assert!(renamed.contains("TEXCOORD_2") && renamed.contains("\"texCoord\" : 2"));
+    let path = dir.join("MultiUVTest.gltf");
+    std::fs::write(&path, renamed).expect("write");
+    let loaded = himal::scene::gltf::load(&path).expect("loads");
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!(loaded.pbr.materials[0].uv_sets(), [0, 2]);
+    emission_follows_uv_set(&path, "TEXCOORD_2");
+
+    // A third set (occlusion through TEXCOORD_1 beside 0 and 2) is drawn
+    // with the first slot's and named in one warning.
+    let three = std::fs::read_to_string(&path).expect("gltf").replace(
+        "\"emissiveTexture\"",
+        "\"occlusionTexture\" : { \"index\" : 0, \"texCoord\" : 1 }, \"emissiveTexture\"",
+    );
+    std::fs::write(&path, three).expect("write");
+    let loaded = himal::scene::gltf::load(&path).expect("loads");
+    let m = &loaded.pbr.materials[0];
+    assert_eq!((m.uv_sets(), m.uv_sets_past_slots()), ([0, 1], vec![2]));
+    assert!(
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.contains("Material (TEXCOORD_2)")),
+        "{:?}",
+        loaded.warnings
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The emission of the cube at `path` per pixel against the emissive image
+/// looked up at UV set `set`, and not at TEXCOORD_0.
+fn emission_follows_uv_set(path: &std::path::Path, set: &str) {
+    let path = path.to_path_buf();
     let mut scene = Scene::from_gltf(&path).expect("model");
     let size = 160u32;
     let camera = himal::scene::gltf::orbit_camera(&scene.bounds, 35.0, 20.0, None, 40.0);
@@ -385,20 +439,17 @@ fn the_second_uv_set_maps_the_emissive_texture() {
             let i = (y * size + x) as usize;
             let measured =
                 glam::Vec3::from_slice(&lit[i][..3]) - glam::Vec3::from_slice(&dark[i][..3]);
-            err1 += (measured - sample(at("TEXCOORD_1"))).abs().element_sum() / 3.0;
+            err1 += (measured - sample(at(set))).abs().element_sum() / 3.0;
             err0 += (measured - sample(at("TEXCOORD_0"))).abs().element_sum() / 3.0;
             n += 1;
         }
     }
     let (err1, err0) = (err1 / n as f32, err0 / n as f32);
     eprintln!(
-        "{n} cube pixels: mean |emission - uv1 lookup| {err1}, |emission - uv0 lookup| {err0}"
+        "{n} cube pixels: mean |emission - {set} lookup| {err1}, |emission - uv0 lookup| {err0}"
     );
     assert!(n > 3000, "the cube covers {n} pixels");
-    assert!(
-        err1 < 0.05,
-        "emission against the TEXCOORD_1 lookup: {err1}"
-    );
+    assert!(err1 < 0.05, "emission against the {set} lookup: {err1}");
     assert!(err0 > 4.0 * err1, "uv0 {err0} vs uv1 {err1}");
 }
 

@@ -100,8 +100,8 @@ fn uv_rows(m: &PbrMaterial) -> [[f32; 4]; 2 * TEXTURE_SLOTS] {
         let r = t
             .and_then(|t| t.transform)
             .map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |x| x.rows());
-        // The loader moved sets past 1 to set 0 (and warned).
-        let set = t.map_or(0.0, |t| t.tex_coord.min(1) as f32);
+        // The vertex slot holding the file's set (sets past two: slot 0, warned).
+        let set = t.map_or(0.0, |t| m.uv_slot(t.tex_coord) as f32);
         rows[2 * k] = [r[0][0], r[0][1], r[0][2], set];
         rows[2 * k + 1] = [r[1][0], r[1][1], r[1][2], 0.0];
     }

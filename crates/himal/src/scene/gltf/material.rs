@@ -59,7 +59,9 @@ impl AlphaMode {
 pub struct TextureRef {
     /// Index into [`super::PbrSet::textures`].
     pub texture: usize,
-    /// UV set read: 0 = `TEXCOORD_0`, 1 = `TEXCOORD_1` (after any `KHR_texture_transform` override).
+    /// The file's UV set read, `TEXCOORD_<tex_coord>` (after any
+    /// `KHR_texture_transform` override); [`PbrMaterial::uv_slot`] says
+    /// which of the vertex's two UV slots holds it.
     pub tex_coord: u32,
     /// `KHR_texture_transform` of this use of the texture.
     pub transform: Option<UvTransform>,
@@ -488,6 +490,42 @@ impl PbrMaterial {
     /// Whether a texture slot reads UV set `set`.
     pub fn reads_uv_set(&self, set: u32) -> bool {
         (self.texture_refs().iter().flatten()).any(|t| t.tex_coord == set)
+    }
+
+    /// The file's UV sets the vertex's two slots (`Vertex::uv`, `uv1`)
+    /// carry for this material: TEXCOORD_0 and _1 while it reads no later
+    /// set, else the two lowest sets it reads (a third set and beyond read
+    /// the first slot, warned at load).
+    pub fn uv_sets(&self) -> [u32; 2] {
+        let mut sets: Vec<u32> = (self.texture_refs().iter().flatten())
+            .map(|t| t.tex_coord)
+            .collect();
+        sets.sort_unstable();
+        sets.dedup();
+        match sets.as_slice() {
+            s if s.iter().all(|&k| k <= 1) => [0, 1],
+            [a] => [*a, *a],
+            [a, b, ..] => [*a, *b],
+            [] => [0, 1],
+        }
+    }
+
+    /// The vertex UV slot (0: `uv`, 1: `uv1`) that holds UV set `set`.
+    pub fn uv_slot(&self, set: u32) -> u32 {
+        let [s0, s1] = self.uv_sets();
+        u32::from(set != s0 && set == s1)
+    }
+
+    /// The UV sets the material reads that neither vertex slot holds.
+    pub fn uv_sets_past_slots(&self) -> Vec<u32> {
+        let slots = self.uv_sets();
+        let mut past: Vec<u32> = (self.texture_refs().iter().flatten())
+            .map(|t| t.tex_coord)
+            .filter(|k| !slots.contains(k))
+            .collect();
+        past.sort_unstable();
+        past.dedup();
+        past
     }
 }
 

@@ -415,18 +415,17 @@ pub fn load_from_bytes_with(
     let mut skinned_meshes = std::collections::HashSet::new();
     let mut morphed_meshes = std::collections::HashSet::new();
     let mut unmorphed = Vec::new();
-    // Two UV sets per vertex (`Vertex::uv`, `uv1`): slots reading a later
-    // set read TEXCOORD_0 instead, named here.
-    let mut past_second: Vec<String> = Vec::new();
-    for m in &mut pbr.materials {
-        let name = m.name.clone();
-        for t in m.texture_refs_mut().into_iter().flatten() {
-            if t.tex_coord > 1 {
-                past_second.push(format!("{name} (TEXCOORD_{})", t.tex_coord));
-                t.tex_coord = 0;
-            }
-        }
-    }
+    // Two UV slots per vertex (`Vertex::uv`, `uv1`) hold the two sets a
+    // material reads (PbrMaterial::uv_sets); a third is named here.
+    let past_slots: Vec<String> = (pbr.materials.iter())
+        .filter_map(|m| {
+            let past = m.uv_sets_past_slots();
+            (!past.is_empty()).then(|| {
+                let sets: Vec<String> = past.iter().map(|k| format!("TEXCOORD_{k}")).collect();
+                format!("{} ({})", m.name, sets.join(", "))
+            })
+        })
+        .collect();
     let blended_layers: Vec<String> = (pbr.materials.iter())
         .filter(|m| m.coated() && (m.alpha_mode == AlphaMode::Blend || m.transmits()))
         .map(|m| m.name.clone())
@@ -444,11 +443,10 @@ pub fn load_from_bytes_with(
             names(shared_normals)
         ));
     }
-    if !past_second.is_empty() {
-        past_second.dedup();
+    if !past_slots.is_empty() {
         warnings.push(format!(
-            "himal reads TEXCOORD_0 and TEXCOORD_1; textures of these materials read a later set and are drawn with TEXCOORD_0: {}",
-            names(past_second)
+            "himal draws two UV sets per material; textures reading a third set use the material's first: {}",
+            names(past_slots)
         ));
     }
 

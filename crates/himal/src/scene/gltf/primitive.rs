@@ -149,7 +149,7 @@ pub(super) fn primitive<'a>(
             "mesh \"{name}\": index {bad} is out of range (vertices: {n})"
         )));
     }
-    // TEXCOORD_0 and _1; a set a texture reads must be there.
+    // A UV set; one a texture reads must be there.
     let read_uvs = |set: u32| -> Result<Vec<[f32; 2]>, SceneError> {
         let uvs = match attribute(gltf::Semantic::TexCoords(set)) {
             Some(a) => buffers::read_floats::<2>(&a, data).ok_or_else(|| unreadable("TEXCOORD"))?,
@@ -165,14 +165,16 @@ pub(super) fn primitive<'a>(
         count_ok(uvs.len(), "TEXCOORD")?;
         Ok(uvs)
     };
-    let (uvs, uvs1) = (read_uvs(0)?, read_uvs(1)?);
-    // Later sets are drawn with TEXCOORD_0 (warned at load) but must exist.
-    for t in material.texture_refs().iter().flatten() {
-        if t.tex_coord > 1 && attribute(gltf::Semantic::TexCoords(t.tex_coord)).is_none() {
+    // The material's sets in the vertex's two slots (PbrMaterial::uv_sets).
+    let [set0, set1] = material.uv_sets();
+    let (uvs, uvs1) = (read_uvs(set0)?, read_uvs(set1)?);
+    // A third set is drawn with the first slot's (warned at load) but must exist.
+    for set in material.uv_sets_past_slots() {
+        if attribute(gltf::Semantic::TexCoords(set)).is_none() {
             return Err(cx.invalid(format!(
-                "mesh \"{name}\": its material \"{}\" reads TEXCOORD_{}, \
+                "mesh \"{name}\": its material \"{}\" reads TEXCOORD_{set}, \
                  which the primitive does not have",
-                material.name, t.tex_coord
+                material.name
             )));
         }
     }
@@ -225,7 +227,9 @@ pub(super) fn primitive<'a>(
         }
         // Only normal-mapped or anisotropic materials need a tangent frame from the UVs.
         None if material.normal_texture.is_some() || material.anisotropy_strength > 0.0 => {
-            let set = material.normal_texture.map_or(0, |t| t.tex_coord);
+            let set = material
+                .normal_texture
+                .map_or(0, |t| material.uv_slot(t.tex_coord));
             let (v, i, origins) = tangents::generate(&vertices, &indices, set);
             (vertices, indices, remap) = (v, i, Some(origins));
         }

@@ -11,7 +11,7 @@ use crate::scene::Vertex;
 
 struct Corners<'a> {
     vertices: &'a mut [Vertex],
-    /// The UV set the normal texture reads (0: `uv`, 1: `uv1`).
+    /// The vertex UV slot the normal texture reads (0: `uv`, 1: `uv1`).
     set: u32,
 }
 
