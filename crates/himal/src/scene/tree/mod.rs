@@ -511,6 +511,22 @@ pub fn meshes(
     leaves: &MaterialDesc,
     tint: Vec3,
 ) -> TreeMeshes {
+    let kept = std::array::from_fn(|level| lods.kept(model, level));
+    meshes_keeping(model, &kept, lods.card_scale, name, bark, leaves, tint)
+}
+
+/// [`meshes`] with each leaf level's clusters and card scale given
+/// (`kept[0]`: every cluster), e.g. a chain chosen without visibility to
+/// compare against (`tests/tree_stability.rs`).
+pub fn meshes_keeping(
+    model: &TreeModel,
+    kept: &[Vec<usize>; LEVELS],
+    card_scale: [f32; LEVELS],
+    name: &str,
+    bark: &MaterialDesc,
+    leaves: &MaterialDesc,
+    tint: Vec3,
+) -> TreeMeshes {
     // Trunk.
     let mut trunk_levels: Vec<(Vec<u32>, usize)> = Vec::new();
     let mut b = MeshBuilder::new(bark);
@@ -540,14 +556,17 @@ pub fn meshes(
     let alpha = leaves.vertex_color()[3];
     let mut leaf_levels = Vec::new();
     let mut clusters = [0; LEVELS];
-    let mut card_scale = [1.0; LEVELS];
     for level in 0..LEVELS {
-        let kept = lods.kept(model, level);
-        let s = lods.card_scale[level];
-        clusters[level] = kept.len();
-        card_scale[level] = s;
+        clusters[level] = kept[level].len();
         let (v0, i0) = (b.vertex_count(), b.index_count());
-        cards_mesh(&mut b, model, &kept, s, colors, alpha);
+        cards_mesh(
+            &mut b,
+            model,
+            &kept[level],
+            card_scale[level],
+            colors,
+            alpha,
+        );
         leaf_levels.push((b.indices_from(i0), (b.vertex_count() - v0) as usize));
     }
     // Visibility, not a geometric error, chooses what a leaf level drops:
