@@ -60,12 +60,15 @@ fn random_score(c: usize) -> f32 {
     ((h >> 40) as f32) / (1u64 << 24) as f32
 }
 
+/// A chain's name, each level's clusters and each level's card scale.
+type Chain = (&'static str, [Vec<usize>; LEVELS], [f32; LEVELS]);
+
 /// The chains compared, each level with as many clusters as himal's and
 /// cards scaled by the same coverage compensation for what it keeps:
 /// himal's (the most visible per height band), the same bands filled in a
 /// random order (what the visibility ranking adds within them), and a
 /// naive one: random clusters over the whole crown.
-fn chains(model: &TreeModel) -> [(&'static str, [Vec<usize>; LEVELS], [f32; LEVELS]); 3] {
+fn chains(model: &TreeModel) -> [Chain; 3] {
     let ours = tree::bake::bake(model);
     let kept = std::array::from_fn(|l| ours.kept(model, l));
     let random = LeafLods {
