@@ -109,9 +109,9 @@ impl TreeAoPass {
         }
         let pipeline = match g.texture_desc(target) {
             Some(d) => self.pipeline(ctx, d.format),
-            None => Err(GpuError::Other(
-                format!("{id}: the target is not in this graph"),
-            )),
+            None => Err(GpuError::Other(format!(
+                "{id}: the target is not in this graph"
+            ))),
         };
         let count = volumes.count;
         let written = g
@@ -141,7 +141,9 @@ impl TreeAoPass {
         depth: TextureHandle,
         output: TextureHandle,
     ) -> TextureHandle {
-        let size = g.texture_desc(depth).map_or((1, 1), |d| (d.width, d.height));
+        let size = g
+            .texture_desc(depth)
+            .map_or((1, 1), |d| (d.width, d.height));
         let factor = g.create_texture(
             "vegetation.ao.factor",
             TextureDesc::new_2d(size.0, size.1, FACTOR_FORMAT),

@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{UVec3, Vec3};
 
-use super::{Species, TreeModel};
 use super::impostor::{capture_meshes, view, view_basis};
+use super::{Species, TreeModel};
 use crate::scene::{Aabb, Mesh};
 
 /// Shadow maps baked per tree (the talk's 32).
@@ -208,7 +208,12 @@ pub fn encode(model: &TreeModel, v: &AoVolume) -> Vec<u8> {
     for r in v.res.to_array() {
         out.extend_from_slice(&r.to_le_bytes());
     }
-    let corners = v.bounds.min.to_array().into_iter().chain(v.bounds.max.to_array());
+    let corners = v
+        .bounds
+        .min
+        .to_array()
+        .into_iter()
+        .chain(v.bounds.max.to_array());
     for x in corners.chain(v.visibility.iter().copied()) {
         out.extend_from_slice(&x.to_le_bytes());
     }
@@ -237,9 +242,7 @@ pub fn decode(model: &TreeModel, bytes: &[u8]) -> Option<AoVolume> {
     let f = |i: usize| word(28 + 4 * i).map(f32::from_le_bytes);
     let min = Vec3::new(f(0)?, f(1)?, f(2)?);
     let max = Vec3::new(f(3)?, f(4)?, f(5)?);
-    let visibility = (0..count)
-        .map(|i| f(6 + i))
-        .collect::<Option<Vec<f32>>>()?;
+    let visibility = (0..count).map(|i| f(6 + i)).collect::<Option<Vec<f32>>>()?;
     let sane = min.is_finite() && max.is_finite() && max.cmpgt(min).all();
     (sane && visibility.iter().all(|v| (0.0..=1.0).contains(v))).then(|| AoVolume {
         bounds: Aabb::new(min, max),
@@ -383,7 +386,11 @@ mod tests {
         assert_eq!(v.factor(Vec3::new(5.0, 5.0, 5.0)), 0.5);
         assert_eq!(v.factor(Vec3::new(0.0, 5.0, 5.0)), 1.0);
         assert_eq!(v.factor(Vec3::new(5.0, 10.0, 5.0)), 1.0);
-        assert_eq!(v.factor(Vec3::new(5.0, 0.0, 5.0)), 0.5, "no fade at the bottom");
+        assert_eq!(
+            v.factor(Vec3::new(5.0, 0.0, 5.0)),
+            0.5,
+            "no fade at the bottom"
+        );
         assert_eq!(v.factor(Vec3::new(-1.0, 5.0, 5.0)), 1.0);
         let half = v.factor(Vec3::new(0.75, 5.0, 5.0));
         assert!((half - 0.75).abs() < 1e-6, "{half}");
