@@ -200,14 +200,20 @@ fn bake_trees(dir: &std::path::Path, args: &BakeArgs) -> Result<()> {
         if args.force {
             let _ = std::fs::remove_file(&imp_path);
         }
+        let ao_path = tree::ao::cache_file(dir, *species, *seed);
+        if args.force {
+            let _ = std::fs::remove_file(&ao_path);
+        }
         let (_, read) = bake::load_or_bake_in(dir, &model, *seed);
         // V3: the nine impostor captures beside the leaf LODs.
         let (_, imp_read) = tree::impostor::load_or_bake_in(dir, &model, *seed);
-        if read && imp_read {
+        // V4: the occlusion volume.
+        let (_, ao_read) = tree::ao::load_or_bake_in(dir, &model, *seed);
+        if read && imp_read && ao_read {
             cached += 1;
         } else {
             baked += 1;
-            for p in [&path, &imp_path] {
+            for p in [&path, &imp_path, &ao_path] {
                 if !p.exists() {
                     bail!("bake: could not write {}", p.display());
                 }

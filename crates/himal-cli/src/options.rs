@@ -167,6 +167,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub impostors: String,
+    /// V4 tree occlusion volumes: the sky light of the trees and of the
+    /// ground under them darkened by each species' baked volume.
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub tree_ao: String,
     /// R4: Burley's remapped roughness in the visibility term of the sun
     /// and local lights (less specular on rough surfaces at grazing light).
     #[arg(
@@ -449,6 +458,7 @@ impl PostArgs {
         settings.deform_motion = on_off("--deform-motion", &self.deform_motion)?;
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.impostors = on_off("--impostors", &self.impostors)?;
+        settings.tree_ao = on_off("--tree-ao", &self.tree_ao)?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         if !(0.0..=1.0).contains(&self.wetness) {

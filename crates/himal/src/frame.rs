@@ -8,6 +8,7 @@
 //! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
 //! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
+//! gbuffer [─> terrain] [─> vegetation.ao (V4: tree volumes multiply the albedo's alpha)] [─> gbuffer.wet]
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
 //!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.unlit ─> forward.layers ─> forward.scene_color(.mipN) ─> forward.transmission ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
@@ -104,6 +105,8 @@ pub struct Passes {
     pub debug: DebugPass,
     /// The world's CDLOD terrain (`--scene world`; `None` for plain scenes).
     pub terrain: Option<TerrainPass>,
+    /// V4: the trees' occlusion volumes as a deferred decal.
+    pub tree_ao: crate::passes::tree_ao::TreeAoPass,
 }
 
 impl Passes {
@@ -143,6 +146,7 @@ impl Passes {
             aa_buffers: BufferTaaPass::new(ctx)?,
             debug: DebugPass::new(ctx)?,
             terrain: None,
+            tree_ao: crate::passes::tree_ao::TreeAoPass::new(ctx)?,
         })
     }
 }
@@ -228,6 +232,8 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         .impostors
         .store(settings.impostors, std::sync::atomic::Ordering::Relaxed);
     passes.cull.set_impostors(&ctx.queue, settings.impostors);
+    // V4: the trees' volumes darken the sky light where the trees are drawn.
+    passes.tree_ao.on = settings.tree_ao && settings.vegetation;
     // The GPU culling's lists hold every object: without vegetation the CPU culls.
     let hide_vegetation = !settings.vegetation && scene.vegetation_objects.contains(&true);
     let size = (settings.width, settings.height);
@@ -475,6 +481,15 @@ pub fn build<'a>(
     let gbuffer = match &passes.terrain {
         Some(t) => t.add(ctx, &mut g, gbuffer, view),
         None => gbuffer,
+    };
+    // V4: every tree's occlusion volume multiplies the albedo's alpha (the
+    // occlusion of the sky and ambient light) inside its box.
+    let gbuffer = match passes.tree_ao.on {
+        true => GBuffer {
+            albedo: (passes.tree_ao).add(ctx, &mut g, scene, gbuffer.albedo, gbuffer.depth),
+            ..gbuffer
+        },
+        false => gbuffer,
     };
     // Roughness edited after texturing, with E3's screen-space filter: the
     // wet albedo and material replace the G-buffer's for every later reader.
@@ -752,6 +767,7 @@ pub fn build<'a>(
         ViewBuffer::Debug(v) => passes
             .debug
             .add(ctx, &mut g, v, gbuffer, hdr, post_inputs, out),
+        ViewBuffer::TreeAo => (passes.tree_ao).add_view(ctx, &mut g, scene, gbuffer.depth, out),
         // The lighting pass wrote the probes' irradiance (INDIRECT_VIEW).
         ViewBuffer::Indirect(_) => {
             let lighting = crate::passes::debug::DebugView::Lighting;

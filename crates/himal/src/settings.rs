@@ -42,6 +42,9 @@ pub enum ViewBuffer {
     /// klux raw), `probe-cells` (the grid of the cascade each pixel reads),
     /// `clipmap` (the cascade as a hue).
     Indirect(IndirectView),
+    /// V4: the tree occlusion volumes' factor on the sky light
+    /// (`tree-ao`; white outside every tree's box).
+    TreeAo,
 }
 
 /// What `--view indirect|probe-cells|clipmap` shows (L5); the number is
@@ -60,7 +63,7 @@ pub enum IndirectView {
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 31] = [
+    pub const NAMES: [&'static str; 32] = [
         "final",
         "albedo",
         "normal",
@@ -92,6 +95,7 @@ impl ViewBuffer {
         "probe-cells",
         "clipmap",
         "impostor",
+        "tree-ao",
     ];
 
     /// The tone-mapped image (the final one, or the particles' lighting in it).
@@ -136,6 +140,7 @@ impl std::str::FromStr for ViewBuffer {
             "indirect" => ViewBuffer::Indirect(IndirectView::Irradiance),
             "probe-cells" => ViewBuffer::Indirect(IndirectView::ProbeCells),
             "clipmap" => ViewBuffer::Indirect(IndirectView::ClipMap),
+            "tree-ao" => ViewBuffer::TreeAo,
             other => {
                 return Err(Error::InvalidSettings(format!(
                     "unknown view \"{other}\" (known: {})",
@@ -288,6 +293,9 @@ pub struct FrameSettings {
     /// V3 depth impostors as the trees' leaves' level after LOD2 (off:
     /// LOD2 stays to the end).
     pub impostors: bool,
+    /// V4: the trees' occlusion volumes darken the sky light of everything
+    /// inside their boxes (the trees and the ground under them).
+    pub tree_ao: bool,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -375,6 +383,7 @@ impl FrameSettings {
             particles_probe_ambient: false,
             vegetation: true,
             impostors: true,
+            tree_ao: true,
         }
     }
 }

@@ -17,6 +17,7 @@ use crate::scene::{Object, Scene, Vertex};
 pub mod impostor;
 pub mod skin;
 pub mod textures;
+pub mod tree_ao;
 pub mod uniforms;
 
 mod draws;
@@ -235,6 +236,8 @@ pub struct SceneGpu {
     /// Whether impostor levels draw (`FrameSettings::impostors`, set per
     /// frame; off: LOD2 stays to the end).
     pub impostors: AtomicBool,
+    /// V4: the trees' occlusion volumes and the list of trees the decal draws.
+    pub tree_ao: tree_ao::TreeAoGpu,
 }
 
 /// The next [`SceneGpu::id`].
@@ -398,6 +401,12 @@ impl SceneGpu {
         let mut vegetation_objects = Vec::with_capacity(scene.objects.len());
         let mut alpha_casters = Vec::with_capacity(scene.objects.len());
         let mut triangles = 0u64;
+        // V4: each tree's leaves object (its impostor layer names its volume).
+        let volume_of: Vec<Option<u32>> = (scene.meshes.iter())
+            .map(|m| crate::scene::tree::impostor_level::layer_of(m))
+            .map(|l| l.filter(|&l| (l as usize) < scene.ao_volumes.len()))
+            .collect();
+        let mut trees = Vec::new();
         for (i, object) in gpu_order(scene)
             .into_iter()
             .map(|i| &scene.objects[i])
@@ -413,6 +422,9 @@ impl SceneGpu {
             };
             let m = object.transform;
             objects.push(ObjectGpu::new(m, m, params(object)));
+            if let Some(Some(v)) = volume_of.get(object.mesh) {
+                trees.push([i as u32, *v]);
+            }
             // Swaying cards reach up to their amplitude (local metres,
             // scaled: a generous margin) beyond the mesh.
             let b = object.swept_bounds(&scene.meshes[object.mesh].bounds);
@@ -553,6 +565,12 @@ impl SceneGpu {
                     .map(crate::scene::tree::impostor_level::has_impostor)
                     .collect(),
                 impostors: AtomicBool::new(true),
+                tree_ao: tree_ao::TreeAoGpu::upload(
+                    &ctx.device,
+                    &ctx.queue,
+                    &scene.ao_volumes,
+                    &trees,
+                ),
             }
         })
     }

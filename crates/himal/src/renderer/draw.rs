@@ -77,6 +77,7 @@ pub(super) fn prepare_view(
         ViewBuffer::Indirect(_) => (passes.debug)
             .pipeline(ctx, crate::passes::debug::DebugView::Lighting, format)
             .map(drop),
+        ViewBuffer::TreeAo => passes.tree_ao.view_pipeline(ctx, format).map(drop),
         ViewBuffer::Final | ViewBuffer::ParticleLighting => Ok(()),
     }
 }

@@ -345,6 +345,13 @@ impl Renderer {
         for key in crate::passes::particles::ParticleKey::all() {
             passes.particles.draw_pipeline(ctx, key)?;
         }
+        // V4: the decal into the G-buffer albedo and into its view's factor.
+        for format in [
+            crate::passes::gbuffer::ALBEDO_FORMAT,
+            crate::passes::tree_ao::FACTOR_FORMAT,
+        ] {
+            passes.tree_ao.pipeline(ctx, format)?;
+        }
         for name in ViewBuffer::NAMES {
             for format in [DISPLAY_FORMAT, RAW_FORMAT] {
                 prepare_view(ctx, passes, name.parse()?, format)?;

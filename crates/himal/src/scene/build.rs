@@ -199,6 +199,7 @@ pub(crate) fn build_scene(
     };
     let mut objects = Placer::place_all(&mut world, &file.object)?;
     let charged = world.charged;
+    let ao_volumes = world.impostors.volumes;
     let impostors = world.impostors.atlases;
     let mut meshes = world.meshes;
     let mut lights = lights;
@@ -252,6 +253,7 @@ pub(crate) fn build_scene(
     Ok(Scene {
         path: Some(origin.into()),
         impostors,
+        ao_volumes,
         meshes,
         objects,
         materials,

@@ -730,6 +730,8 @@ pub struct Scene {
     /// V3: the impostor captures of the scene's trees, one atlas layer each
     /// (the leaves meshes' impostor levels name their layer).
     pub impostors: Vec<std::sync::Arc<tree::impostor::Impostor>>,
+    /// V4: the occlusion volume of each impostor layer's tree (same order).
+    pub ao_volumes: Vec<std::sync::Arc<tree::ao::AoVolume>>,
 }
 
 /// Largest scene file read (the demo is 30 kB).
@@ -856,6 +858,7 @@ impl Scene {
             probes: Vec::new(),
             environment: None,
             impostors: Vec::new(),
+            ao_volumes: Vec::new(),
         })
     }
 

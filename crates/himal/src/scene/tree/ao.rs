@@ -9,10 +9,12 @@
 //! the sky light by. Reference: rays traced against the same triangles
 //! ([`traced_visibility`]). Math and figures: `docs/techniques/V4.md`.
 
+use std::path::{Path, PathBuf};
+
 use glam::{UVec3, Vec3};
 
-use super::TreeModel;
 use super::impostor::{capture_meshes, view, view_basis};
+use super::{Species, TreeModel};
 use crate::scene::{Aabb, Mesh};
 
 /// Shadow maps baked per tree (the talk's 32).
@@ -76,6 +78,28 @@ impl AoVolume {
             lerp(y0, y1, f.y)
         };
         lerp(plane(i.z), plane(i.z + 1), f.z)
+    }
+}
+
+/// Width of the fade to 1 at the box's side and top faces, as a fraction
+/// of the box along each axis: the frame multiplies [`AoVolume::factor`],
+/// so no seam shows where a box ends (the bottom face lies under the
+/// ground and does not fade).
+pub const EDGE_FADE: f32 = 0.15;
+
+impl AoVolume {
+    /// What the frame multiplies the sky light by at `p` (tree space):
+    /// [`Self::sample`] faded to 1 toward the side and top faces
+    /// ([`EDGE_FADE`]), 1 outside the box. Twin of `passes/tree_ao/decal.wgsl`.
+    pub fn factor(&self, p: Vec3) -> f32 {
+        let u = (p - self.bounds.min) / self.bounds.extent().max(Vec3::splat(1e-6));
+        if u.min_element() < 0.0 || u.max_element() > 1.0 {
+            return 1.0;
+        }
+        let edge = (u.x.min(1.0 - u.x)).min(u.z.min(1.0 - u.z)).min(1.0 - u.y);
+        let t = (edge / EDGE_FADE).clamp(0.0, 1.0);
+        let fade = t * t * (3.0 - 2.0 * t);
+        1.0 + (self.sample(p) - 1.0) * fade
     }
 }
 
@@ -164,6 +188,103 @@ pub fn bake_volume(model: &TreeModel) -> AoVolume {
     }
 }
 
+const MAGIC: &[u8; 4] = b"HAOV";
+const VERSION: u32 = 1;
+
+/// The volume file of tree (`species`, `seed`) under `dir`.
+pub fn cache_file(dir: &Path, species: Species, seed: u32) -> PathBuf {
+    dir.join("trees")
+        .join(format!("{}-{seed}.himal-ao", species.name()))
+}
+
+/// File: magic `HAOV`, version, the impostor's fingerprint (cards and
+/// limbs: what the maps see), voxels per axis, the box, then one f32
+/// visibility per voxel (x fastest), all little-endian.
+pub fn encode(model: &TreeModel, v: &AoVolume) -> Vec<u8> {
+    let mut out = Vec::with_capacity(52 + 4 * v.visibility.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&super::impostor::fingerprint(model).to_le_bytes());
+    for r in v.res.to_array() {
+        out.extend_from_slice(&r.to_le_bytes());
+    }
+    let corners = v
+        .bounds
+        .min
+        .to_array()
+        .into_iter()
+        .chain(v.bounds.max.to_array());
+    for x in corners.chain(v.visibility.iter().copied()) {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out
+}
+
+/// The file's volume, if it is whole and made for `model`.
+pub fn decode(model: &TreeModel, bytes: &[u8]) -> Option<AoVolume> {
+    let word = |at: usize| -> Option<[u8; 4]> { bytes.get(at..at + 4)?.try_into().ok() };
+    if bytes.get(..4)? != MAGIC
+        || u32::from_le_bytes(word(4)?) != VERSION
+        || u64::from_le_bytes(bytes.get(8..16)?.try_into().ok()?)
+            != super::impostor::fingerprint(model)
+    {
+        return None;
+    }
+    let u = |i: usize| word(16 + 4 * i).map(u32::from_le_bytes);
+    let res = UVec3::new(u(0)?, u(1)?, u(2)?);
+    if res.min_element() < 2 || res.max_element() > VOXELS {
+        return None;
+    }
+    let count = (res.x * res.y * res.z) as usize;
+    if bytes.len() != 52 + 4 * count {
+        return None;
+    }
+    let f = |i: usize| word(28 + 4 * i).map(f32::from_le_bytes);
+    let min = Vec3::new(f(0)?, f(1)?, f(2)?);
+    let max = Vec3::new(f(3)?, f(4)?, f(5)?);
+    let visibility = (0..count).map(|i| f(6 + i)).collect::<Option<Vec<f32>>>()?;
+    let sane = min.is_finite() && max.is_finite() && max.cmpgt(min).all();
+    (sane && visibility.iter().all(|v| (0.0..=1.0).contains(v))).then(|| AoVolume {
+        bounds: Aabb::new(min, max),
+        res,
+        visibility,
+    })
+}
+
+/// Reads tree (`model.species`, `seed`)'s volume from `dir`, or bakes and
+/// writes it (a damaged or stale file is reported with its path and baked
+/// again); the flag is true when read from the cache.
+pub fn load_or_bake_in(dir: &Path, model: &TreeModel, seed: u32) -> (AoVolume, bool) {
+    let path = cache_file(dir, model.species, seed);
+    match std::fs::read(&path) {
+        Ok(bytes) => match decode(model, &bytes) {
+            Some(v) => return (v, true),
+            None => log::warn!(
+                "tree AO cache {}: damaged or made for another tree; baking it again",
+                path.display()
+            ),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => log::warn!("tree AO cache {}: {e}; baking it again", path.display()),
+    }
+    let v = bake_volume(model);
+    let written = std::fs::create_dir_all(path.parent().unwrap_or(dir))
+        .and_then(|_| std::fs::write(&path, encode(model, &v)));
+    if let Err(e) = written {
+        log::warn!("tree AO cache {}: {e} (baked in memory)", path.display());
+    }
+    (v, false)
+}
+
+/// The volume of tree (`species`, `seed`) through the tree cache
+/// ([`super::bake::cache_dir`]), or baked in memory without one.
+pub fn cached(model: &TreeModel, seed: u32) -> AoVolume {
+    match super::bake::cache_dir() {
+        Some(dir) => load_or_bake_in(&dir, model, seed).0,
+        None => bake_volume(model),
+    }
+}
+
 /// The reference: sky visibility at `p` by `rays` cosine-weighted rays
 /// ([`hemisphere_directions`]) traced against `model`'s LOD0 triangles,
 /// leaf cards alpha-tested at the hit (`vegetation::leaves_alpha`), from
@@ -216,5 +337,62 @@ impl TreeTracer {
         };
         self.scene
             .unoccluded_where(origin, dir, 0.0, f32::INFINITY, blocks)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::generate;
+    use super::*;
+
+    /// The cache: same bytes from two bakes, a round trip, other trees and
+    /// damaged files refused (and baked again through `load_or_bake_in`).
+    #[test]
+    fn cache_round_trips_and_rebakes_damaged_files() {
+        let model = generate(Species::Larch, 2, 0.1);
+        let v = bake_volume(&model);
+        let bytes = encode(&model, &v);
+        assert_eq!(bytes, encode(&model, &bake_volume(&model)), "deterministic");
+        assert_eq!(decode(&model, &bytes), Some(v.clone()));
+        assert_eq!(decode(&generate(Species::Larch, 3, 0.1), &bytes), None);
+        assert_eq!(decode(&model, &bytes[..bytes.len() - 1]), None);
+        let mut nan = bytes.clone();
+        let at = nan.len() - 4;
+        nan[at..].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(decode(&model, &nan), None);
+        let dir = std::env::temp_dir().join(format!("himal-ao-cache-{}", std::process::id()));
+        let (a, read) = load_or_bake_in(&dir, &model, 2);
+        assert!(!read && a == v);
+        let path = cache_file(&dir, Species::Larch, 2);
+        assert_eq!(std::fs::read(&path).ok(), Some(bytes.clone()));
+        let (b, read) = load_or_bake_in(&dir, &model, 2);
+        assert!(read && b == v);
+        std::fs::write(&path, &bytes[..100]).expect("truncate");
+        let (c, read) = load_or_bake_in(&dir, &model, 2);
+        assert!(!read && c == v, "a damaged file is baked again");
+        assert_eq!(std::fs::read(&path).ok(), Some(bytes), "and rewritten");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The factor fades to 1 at the side and top faces and is the volume's
+    /// sample inside the fade.
+    #[test]
+    fn factor_fades_to_one_at_the_faces() {
+        let v = AoVolume {
+            bounds: Aabb::new(Vec3::ZERO, Vec3::splat(10.0)),
+            res: UVec3::splat(4),
+            visibility: vec![0.5; 64],
+        };
+        assert_eq!(v.factor(Vec3::new(5.0, 5.0, 5.0)), 0.5);
+        assert_eq!(v.factor(Vec3::new(0.0, 5.0, 5.0)), 1.0);
+        assert_eq!(v.factor(Vec3::new(5.0, 10.0, 5.0)), 1.0);
+        assert_eq!(
+            v.factor(Vec3::new(5.0, 0.0, 5.0)),
+            0.5,
+            "no fade at the bottom"
+        );
+        assert_eq!(v.factor(Vec3::new(-1.0, 5.0, 5.0)), 1.0);
+        let half = v.factor(Vec3::new(0.75, 5.0, 5.0));
+        assert!((half - 0.75).abs() < 1e-6, "{half}");
     }
 }

@@ -694,7 +694,7 @@ pub fn cache_file(dir: &Path, species: Species, seed: u32) -> PathBuf {
 }
 
 /// FNV-1a over the cards (V1's fingerprint) and the limbs.
-fn fingerprint(model: &TreeModel) -> u64 {
+pub fn fingerprint(model: &TreeModel) -> u64 {
     let mut h = super::bake::fingerprint(model);
     for limb in &model.limbs {
         for v in limb

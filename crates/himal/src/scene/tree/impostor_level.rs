@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::ao::AoVolume;
 use super::impostor::{self, GRID, Impostor, grid_point};
 use super::{Species, generate};
 use crate::scene::lod::Level;
@@ -26,13 +27,16 @@ pub fn cached(species: Species, seed: u32) -> Impostor {
     }
 }
 
-/// The atlas layers of a scene's impostors, one per (species, seed).
+/// The atlas layers of a scene's impostors, one per (species, seed), and
+/// the trees' V4 occlusion volumes in the same order.
 #[derive(Clone, Debug, Default)]
 pub struct Layers {
     /// (species, seed) of each layer.
     pub keys: Vec<(Species, u32)>,
     /// The captures of each layer.
     pub atlases: Vec<Arc<Impostor>>,
+    /// V4: the occlusion volume of each layer's tree (`super::ao::cached`).
+    pub volumes: Vec<Arc<AoVolume>>,
 }
 
 impl Layers {
@@ -42,6 +46,8 @@ impl Layers {
             return (i as u32, self.atlases[i].clone());
         }
         let imp = Arc::new(cached(species, seed));
+        let model = generate(species, seed, 1.0);
+        self.volumes.push(Arc::new(super::ao::cached(&model, seed)));
         self.keys.push((species, seed));
         self.atlases.push(imp.clone());
         ((self.keys.len() - 1) as u32, imp)
@@ -124,10 +130,17 @@ pub fn append(leaves: &mut Mesh, imp: &Impostor, layer: u32, colours: &Colours) 
 
 /// Whether `mesh`'s last level is an impostor ([`append`]).
 pub fn has_impostor(mesh: &Mesh) -> bool {
+    layer_of(mesh).is_some()
+}
+
+/// The atlas layer of `mesh`'s impostor level (`None`: no impostor), also
+/// the index of its tree's V4 volume ([`Layers::volumes`]).
+pub fn layer_of(mesh: &Mesh) -> Option<u32> {
     (mesh.levels.last())
         .and_then(|l| l.indices.first())
         .and_then(|&i| mesh.vertices.get(i as usize))
-        .is_some_and(is_impostor_vertex)
+        .filter(|v| is_impostor_vertex(v))
+        .map(|v| (-1.0 - v.uv1[0]).round().max(0.0) as u32)
 }
 
 #[cfg(test)]
@@ -150,6 +163,7 @@ mod tests {
             &Colours::new(&m, &m, Vec3::ONE),
         );
         assert!(has_impostor(&meshes.leaves));
+        assert_eq!(layer_of(&meshes.leaves), Some(2));
         assert_eq!(meshes.leaves.levels.len(), 3);
         assert_eq!(meshes.leaves.vertices.len(), n + (GRID + 1) * (GRID + 1));
         let v = &meshes.leaves.vertices[n];

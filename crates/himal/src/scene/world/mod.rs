@@ -266,6 +266,7 @@ impl World {
             probes: Vec::new(),
             environment: None,
             impostors: Vec::new(),
+            ao_volumes: Vec::new(),
         }
     }
 }
