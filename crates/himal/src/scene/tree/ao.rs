@@ -277,12 +277,14 @@ pub fn load_or_bake_in(dir: &Path, model: &TreeModel, seed: u32) -> (AoVolume, b
 }
 
 /// The volume of tree (`species`, `seed`) through the tree cache
-/// ([`super::bake::cache_dir`]), or baked in memory without one.
-pub fn cached(model: &TreeModel, seed: u32) -> AoVolume {
-    match super::bake::cache_dir() {
+/// ([`super::bake::cache_dir`]), or baked in memory without one; once per
+/// process ([`super::bake::Memo`]).
+pub fn cached(model: &TreeModel, seed: u32) -> std::sync::Arc<AoVolume> {
+    static MEMO: super::bake::Memo<AoVolume> = super::bake::Memo::new();
+    MEMO.get_or(model, seed, || match super::bake::cache_dir() {
         Some(dir) => load_or_bake_in(&dir, model, seed).0,
         None => bake_volume(model),
-    }
+    })
 }
 
 /// The reference: sky visibility at `p` by `rays` cosine-weighted rays

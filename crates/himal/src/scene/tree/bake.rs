@@ -10,8 +10,9 @@
 //! generator invalidates the file), cluster count, `LEVELS` card scales,
 //! one score per cluster. A bad or stale file is rebaked and rewritten.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use super::{LEVELS, Species, TreeModel, VisibilityTable, visibility};
 
@@ -198,11 +199,49 @@ pub fn load_or_bake_in(dir: &Path, model: &TreeModel, seed: u32) -> (LeafLods, b
 }
 
 /// The levels of `model` through the cache directory [`set_cache_dir`]
-/// set, or baked in memory without one.
+/// set, or baked in memory without one; once per process ([`Memo`]).
 pub fn load_or_bake(model: &TreeModel, seed: u32) -> LeafLods {
-    match cache_dir() {
+    static MEMO: Memo<LeafLods> = Memo::new();
+    let lods = MEMO.get_or(model, seed, || match cache_dir() {
         Some(dir) => load_or_bake_in(&dir, model, seed).0,
         None => bake(model),
+    });
+    (*lods).clone()
+}
+
+/// What a tree's baked data depends on: species, seed, the generated
+/// model's fingerprint and the cache directory (a new directory still
+/// gets its files written).
+type MemoKey = (Species, u32, u64, Option<PathBuf>);
+
+/// A tree's baked data kept for the process, so loading scenes again (the
+/// tests, the viewer's reload) does not bake their trees again: a second
+/// or two per tree without a cache. Bounded by the trees scenes name.
+pub struct Memo<T>(OnceLock<Mutex<HashMap<MemoKey, Arc<T>>>>);
+
+impl<T> Memo<T> {
+    /// An empty memo (for a `static`).
+    pub const fn new() -> Self {
+        Memo(OnceLock::new())
+    }
+
+    /// The data of tree `model` (from `seed`), made by `make` on first use.
+    /// Made outside the lock: two threads may both make it once.
+    pub fn get_or(&self, model: &TreeModel, seed: u32, make: impl FnOnce() -> T) -> Arc<T> {
+        let key = (model.species, seed, fingerprint(model), cache_dir());
+        let map = self.0.get_or_init(Default::default);
+        let lock = || map.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(v) = lock().get(&key) {
+            return v.clone();
+        }
+        let made = Arc::new(make());
+        lock().entry(key).or_insert(made).clone()
+    }
+}
+
+impl<T> Default for Memo<T> {
+    fn default() -> Self {
+        Self::new()
     }
 }
 

@@ -18,13 +18,15 @@ use crate::scene::lod::Level;
 use crate::scene::{MaterialDesc, Mesh, Vertex};
 
 /// The impostor of tree (`species`, `seed`) through the tree cache
-/// ([`super::bake::cache_dir`]), or baked in memory without one.
-pub fn cached(species: Species, seed: u32) -> Impostor {
+/// ([`super::bake::cache_dir`]), or baked in memory without one; once per
+/// process ([`super::bake::Memo`]).
+pub fn cached(species: Species, seed: u32) -> Arc<Impostor> {
+    static MEMO: super::bake::Memo<Impostor> = super::bake::Memo::new();
     let model = generate(species, seed, 1.0);
-    match super::bake::cache_dir() {
+    MEMO.get_or(&model, seed, || match super::bake::cache_dir() {
         Some(dir) => impostor::load_or_bake_in(&dir, &model, seed).0,
         None => impostor::bake(&model),
-    }
+    })
 }
 
 /// The atlas layers of a scene's impostors, one per (species, seed), and
@@ -45,9 +47,9 @@ impl Layers {
         if let Some(i) = self.keys.iter().position(|k| *k == (species, seed)) {
             return (i as u32, self.atlases[i].clone());
         }
-        let imp = Arc::new(cached(species, seed));
+        let imp = cached(species, seed);
         let model = generate(species, seed, 1.0);
-        self.volumes.push(Arc::new(super::ao::cached(&model, seed)));
+        self.volumes.push(super::ao::cached(&model, seed));
         self.keys.push((species, seed));
         self.atlases.push(imp.clone());
         ((self.keys.len() - 1) as u32, imp)
