@@ -403,7 +403,7 @@ impl SceneGpu {
         let mut triangles = 0u64;
         // V4: each tree's leaves object (its impostor layer names its volume).
         let volume_of: Vec<Option<u32>> = (scene.meshes.iter())
-            .map(|m| crate::scene::tree::impostor_level::layer_of(m))
+            .map(crate::scene::tree::impostor_level::layer_of)
             .map(|l| l.filter(|&l| (l as usize) < scene.ao_volumes.len()))
             .collect();
         let mut trees = Vec::new();

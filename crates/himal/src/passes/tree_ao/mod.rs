@@ -77,6 +77,16 @@ impl TreeAoPass {
         let mut spec = RenderSpec::fullscreen("vegetation.ao", &targets);
         // Back faces only: one fragment per pixel a box covers.
         spec.primitive.cull_mode = Some(wgpu::Face::Front);
+        // Reverse-Z: a back face at or behind the pixel's surface (the
+        // surface may lie inside the box); surfaces beyond it are skipped
+        // before the fragment runs (read-only depth).
+        spec.depth_stencil = Some(wgpu::DepthStencilState {
+            format: crate::passes::gbuffer::DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
         self.program.render_pipeline(ctx, &spec)
     }
 
@@ -124,6 +134,7 @@ impl TreeAoPass {
             .sampler("atlas_sampler", &self.sampler)
             .read("depth", depth)
             .color(target, wgpu::LoadOp::Load)
+            .depth_test(depth)
             .record(move |_, rp| {
                 rp.draw(0..36, 0..count);
                 Ok(())
