@@ -288,6 +288,12 @@ pub struct FrameSettings {
     /// V3 depth impostors as the trees' leaves' level after LOD2 (off:
     /// LOD2 stays to the end).
     pub impostors: bool,
+    /// V2 wind on the trees (`vegetation.simulate`) and V5's branch waves
+    /// and leaf flutter; `Bones`: V2 alone; `Off`: at rest.
+    pub vegetation_motion: crate::passes::vegetation::VegetationMotion,
+    /// V2: the global wind (m/s) in place of the scene's `[wind]`
+    /// (`--wind SPEED,DIR`); `None`: the scene's.
+    pub wind: Option<glam::Vec3>,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -375,6 +381,8 @@ impl FrameSettings {
             particles_probe_ambient: false,
             vegetation: true,
             impostors: true,
+            vegetation_motion: Default::default(),
+            wind: None,
         }
     }
 }

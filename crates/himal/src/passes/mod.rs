@@ -18,4 +18,5 @@ pub mod skin;
 pub mod sky;
 pub mod skyocc;
 pub mod terrain;
+pub mod vegetation;
 pub mod wet;

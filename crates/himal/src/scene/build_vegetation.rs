@@ -211,6 +211,10 @@ impl World<'_> {
         self.meshes.push(m.trunk);
         self.meshes.push(m.leaves);
         let trunk = self.meshes.len() - 2;
+        self.rigs.push(tree::rig::SceneRig {
+            meshes: [trunk, trunk + 1],
+            rig: m.rig,
+        });
         self.mesh_keys.insert(key, trunk);
         Ok((trunk, trunk + 1))
     }
