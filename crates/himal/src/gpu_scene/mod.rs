@@ -427,9 +427,9 @@ impl SceneGpu {
             // Swaying cards reach up to their amplitude (local metres,
             // scaled: a generous margin) beyond the mesh.
             let b = object.swept_bounds(&scene.meshes[object.mesh].bounds);
-            // V2: a tree's bones bend it up to its rig's margin.
-            let sway = (object.foliage.map_or(0.0, |f| f.sway)
-                + trees::object_margin(scene, object.mesh))
+            // V2: a tree's bend stays out of its box: E2 measures LOD
+            // distances to the box, and its switches must not move.
+            let sway = object.foliage.map_or(0.0, |f| f.sway)
                 * object
                     .transform
                     .to_scale_rotation_translation()
@@ -478,10 +478,10 @@ impl SceneGpu {
         // V2: the trees' bone records after every object (never drawn).
         let tree_layout = trees::layout(scene, &placed, &mut objects);
         let tree_buffers = trees::TreeBuffers::new(&ctx.device, &tree_layout);
-        let grass = (scene.objects.iter()).any(|o| {
-            o.foliage
-                .is_some_and(|f| f.pattern == crate::scene::AlphaPattern::Grass)
-        });
+        // V2: grass and bushes (foliage that is no tree's) bend with the ripple.
+        let rigged = trees::mesh_rigs(scene);
+        let grass = (scene.objects.iter())
+            .any(|o| o.foliage.is_some() && rigged.get(o.mesh).is_some_and(|r| r.is_none()));
         let ripple_n = if grass {
             crate::passes::vegetation::ripple::RIPPLE_N
         } else {

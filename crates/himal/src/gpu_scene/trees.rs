@@ -68,16 +68,6 @@ pub fn rig_gpu(rig: &Rig) -> [RigBoneGpu; BONES] {
     })
 }
 
-/// How far (m, local) a tree of `rig` may move from rest: the trunk's
-/// largest bend at its top plus a branch's at its tip.
-pub fn sway_margin(rig: &Rig) -> f32 {
-    let branches = rig.bones[1..]
-        .iter()
-        .map(|b| b.length)
-        .fold(0.0f32, f32::max);
-    rig.height * MAX_TRUNK_ANGLE.sin() + branches * MAX_BRANCH_ANGLE.sin()
-}
-
 /// The trees of an upload: slots, rigs, and where the records start.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TreeLayout {
@@ -150,15 +140,6 @@ pub(super) fn layout(
             .collect(),
         first_record,
     }
-}
-
-/// The local-space margin a swaying tree object needs (0 for others).
-pub fn object_margin(scene: &Scene, mesh: usize) -> f32 {
-    scene
-        .tree_rigs
-        .iter()
-        .find(|r| r.meshes.contains(&mesh))
-        .map_or(0.0, |r| sway_margin(&r.rig))
 }
 
 /// The slots' GPU buffers (`None` without trees).

@@ -75,11 +75,12 @@ fn ripple_bend(p: vec2f) -> vec2f {
     return b;
 }
 
-// V2: the ripple's offset of grass vertex `position` (card uv) of object o
-// at world `world`: the bend times the blade's sway weight (0 for
-// anything but grass).
+// V2: the ripple's offset of grass or bush vertex `position` (card uv) of
+// object o at world `world`: the bend times the card's sway weight (0 for
+// anything else; trees have their bones, params.y < 0).
 fn grass_ripple(o: Object, position: vec3f, uv: vec2f, world: vec3f) -> vec4f {
-    if (foliage_pattern(o) != FOLIAGE_GRASS) {
+    let p = foliage_pattern(o);
+    if ((p != FOLIAGE_GRASS && p != FOLIAGE_LEAVES) || o.params.y < 0.0) {
         return vec4f(0.0);
     }
     let b = ripple_bend(world.xz) * foliage_sway_weight(o, position, uv);

@@ -124,12 +124,16 @@ impl RippleCpu {
                 let zm = read((c.0, c.1 - 1)).x;
                 let lap = (xp + xm + zp + zm - 4.0 * own.x) / (dx * dx);
                 let centre = (Vec2::new(c.0 as f32, c.1 as f32) + 0.5) * dx;
-                let mut f = 0.0;
-                for s in &step.wind.sources[..ns] {
-                    let d = centre - Vec2::new(s.finish[0], s.finish[2]);
-                    let q = (d.dot(d) / (s.start[3] * s.start[3])).min(1.0);
-                    f -= RIPPLE_PUSH * s.finish[3] * (1.0 - q) * (1.0 - q);
-                }
+                let force = |p: Vec2| {
+                    let mut f = 0.0;
+                    for s in &step.wind.sources[..ns] {
+                        let d = p - Vec2::new(s.finish[0], s.finish[2]);
+                        let q = (d.dot(d) / (s.start[3] * s.start[3])).min(1.0);
+                        f -= RIPPLE_PUSH * s.finish[3] * (1.0 - q) * (1.0 - q);
+                    }
+                    f
+                };
+                let f = force(centre);
                 let a = speed * speed * lap
                     - RIPPLE_OMEGA * RIPPLE_OMEGA * own.x
                     - RIPPLE_DAMPING * own.y
@@ -138,6 +142,17 @@ impl RippleCpu {
                 let height = own.x + dt * v;
                 let tag = [c.0 as f32, c.1 as f32];
                 let s = slot(c, n);
+                if reset {
+                    let w2 = RIPPLE_OMEGA * RIPPLE_OMEGA;
+                    let (ex, ez) = (Vec2::new(dx, 0.0), Vec2::new(0.0, dx));
+                    let g = Vec2::new(
+                        force(centre + ex) - force(centre - ex),
+                        force(centre + ez) - force(centre - ez),
+                    ) / (2.0 * dx * w2);
+                    self.cells[dst * nn + s] = [f / w2, 0.0, tag[0], tag[1]];
+                    self.cells[(2 + dst) * nn + s] = [g.x, g.y, tag[0], tag[1]];
+                    continue;
+                }
                 self.cells[dst * nn + s] = [height, v, tag[0], tag[1]];
                 self.cells[(2 + dst) * nn + s] = [
                     (xp - xm) / (2.0 * dx),

@@ -5,7 +5,8 @@
 // F = -K sum_sources strength (1 - (d / radius)^2)^2 (d horizontal): a
 // source presses the grass down and the wave runs outward. Reads half z of
 // the header, writes half 1 - z and the gradient of the read heights
-// (central differences) for the draws. CPU twin: ripple.rs `step`.
+// (central differences) for the draws; a reset writes the sources' static
+// depression F / omega^2 and its gradient. CPU twin: ripple.rs `step`.
 #import wind
 #import ripple
 
@@ -68,6 +69,16 @@ fn cs_step(@builtin(global_invocation_id) id: vec3u) {
     let slot = ripple_slot(c, n);
     let nn = u32(n * n);
     let tag = vec2f(c);
+    if (step.time.y != 0.0) {
+        // A reset starts from the sources' static depression, F / omega^2.
+        let w2 = RIPPLE_OMEGA * RIPPLE_OMEGA;
+        let e = vec2f(dx, 0.0);
+        let g = vec2f(ripple_force(centre + e.xy) - ripple_force(centre - e.xy),
+                      ripple_force(centre + e.yx) - ripple_force(centre - e.yx)) / (2.0 * dx * w2);
+        ripple.cells[dst * nn + slot] = vec4f(ripple_force(centre) / w2, 0.0, tag);
+        ripple.cells[(2u + dst) * nn + slot] = vec4f(g, tag);
+        return;
+    }
     ripple.cells[dst * nn + slot] = vec4f(height, v, tag);
     ripple.cells[(2u + dst) * nn + slot] = vec4f((xp - xm) / (2.0 * dx), (zp - zm) / (2.0 * dx), tag);
 }
