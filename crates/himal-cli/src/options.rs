@@ -176,6 +176,19 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub tree_ao: String,
+    /// V2: trees bent by the wind, simulated on the GPU, with V5's branch
+    /// waves and leaf flutter (bones: V2 alone; off: at rest).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|bones|off",
+        allow_hyphen_values = true
+    )]
+    pub vegetation_motion: String,
+    /// V2: the global wind, SPEED (m/s, 0..100) toward DIR degrees about +Y
+    /// from +X (90: toward -z), in place of the scene's `[wind]`.
+    #[arg(long, value_name = "SPEED,DIR", allow_hyphen_values = true)]
+    pub wind: Option<String>,
     /// R4: Burley's remapped roughness in the visibility term of the sun
     /// and local lights (less specular on rough surfaces at grazing light).
     #[arg(
@@ -459,6 +472,9 @@ impl PostArgs {
         settings.vegetation = on_off("--vegetation", &self.vegetation)?;
         settings.impostors = on_off("--impostors", &self.impostors)?;
         settings.tree_ao = on_off("--tree-ao", &self.tree_ao)?;
+        settings.vegetation_motion = (self.vegetation_motion.parse())
+            .map_err(|e| anyhow::anyhow!("--vegetation-motion {e}"))?;
+        settings.wind = self.wind.as_deref().map(parse_wind).transpose()?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;
         if !(0.0..=1.0).contains(&self.wetness) {
@@ -661,4 +677,30 @@ impl ShadowArgs {
         settings.shadows.validate()?;
         Ok(())
     }
+}
+
+/// `--wind SPEED,DIR`: the velocity (the scene file's `[wind]` convention:
+/// toward (cos DIR, 0, -sin DIR)).
+fn parse_wind(s: &str) -> Result<glam::Vec3> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [speed, dir] = parts.as_slice() else {
+        bail!("--wind {s}: give SPEED,DIR (m/s, degrees), e.g. 8,90");
+    };
+    let speed: f32 = speed
+        .parse()
+        .map_err(|_| anyhow::anyhow!("--wind {s}: speed \"{speed}\" is not a number"))?;
+    let dir: f32 = dir
+        .parse()
+        .map_err(|_| anyhow::anyhow!("--wind {s}: direction \"{dir}\" is not a number"))?;
+    if !(0.0..=himal::scene::MAX_WIND).contains(&speed) {
+        bail!(
+            "--wind {s}: speed must lie in [0, {}] m/s",
+            himal::scene::MAX_WIND
+        );
+    }
+    if !(-360.0..=360.0).contains(&dir) {
+        bail!("--wind {s}: direction must lie in [-360, 360] degrees");
+    }
+    let a = dir.to_radians();
+    Ok(glam::Vec3::new(a.cos(), 0.0, -a.sin()) * speed)
 }

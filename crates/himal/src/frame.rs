@@ -85,6 +85,8 @@ pub struct Passes {
     pub indirect: crate::passes::indirect::IndirectPass,
     /// glTF emission and alpha-blended surfaces after lighting.
     pub forward: ForwardPass,
+    /// V2: the trees' bones moved by the wind.
+    pub vegetation: crate::passes::vegetation::VegetationPass,
     /// E4: the scene's particles, simulated, lit and drawn.
     pub particles: crate::passes::particles::ParticlesPass,
     /// H2: the log-average luminance.
@@ -136,6 +138,7 @@ impl Passes {
             skyocc: SkyOccPass::new(ctx, scene)?,
             indirect: crate::passes::indirect::IndirectPass::new(ctx)?,
             forward: ForwardPass::new(ctx)?,
+            vegetation: crate::passes::vegetation::VegetationPass::new(ctx, scene.wind_field())?,
             particles: crate::passes::particles::ParticlesPass::new(ctx, scene)?,
             luminance: LuminancePass::new(ctx)?,
             adapt: AdaptPass::new(ctx)?,
@@ -369,7 +372,25 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     (passes.lighting.ambient_lights).enable(&ctx.queue, settings.ambient_lights);
     // Alpha BLEND objects draw far to near from this camera.
     passes.forward.sort(scene, camera.position);
+    // V2: this frame's tree simulation steps.
+    (passes.vegetation).plan(
+        ctx,
+        scene,
+        settings.time_s,
+        (settings.vegetation, settings.vegetation_motion),
+        settings.wind,
+    );
+    (passes.vegetation).plan_ripple(
+        ctx,
+        scene,
+        settings.time_s,
+        camera.position,
+        settings.vegetation
+            && settings.vegetation_motion != crate::passes::vegetation::VegetationMotion::Off,
+    );
     // E4: this frame's particle steps (births, pre-warm after a reset).
+    // V2: particles follow the same global wind (`--wind` or the scene's).
+    passes.particles.sim.wind = settings.wind.unwrap_or(passes.vegetation.wind.global);
     (passes.particles).plan(ctx, settings.time_s, settings.particles);
     passes.particles.sort(camera.position);
     Planned {
@@ -456,6 +477,8 @@ pub fn build<'a>(
     let constants = [("view", view), ("lighting", lighting), ("sky", sky)];
     g.set_frame_constants(&constants);
     let mip_bias = aa.mode.temporal();
+    // V2: the trees' bones before anything draws them.
+    passes.vegetation.add(&mut g, scene);
     // Skinned meshes posed into the scene's vertex buffer first.
     passes.skin.add(&mut g, scene);
     // V6: the camera's and the cascades' objects, culled on the GPU.

@@ -296,6 +296,12 @@ pub struct FrameSettings {
     /// V4: the trees' occlusion volumes darken the sky light of everything
     /// inside their boxes (the trees and the ground under them).
     pub tree_ao: bool,
+    /// V2 wind on the trees (`vegetation.simulate`) and V5's branch waves
+    /// and leaf flutter; `Bones`: V2 alone; `Off`: at rest.
+    pub vegetation_motion: crate::passes::vegetation::VegetationMotion,
+    /// V2: the global wind (m/s) in place of the scene's `[wind]`
+    /// (`--wind SPEED,DIR`); `None`: the scene's.
+    pub wind: Option<glam::Vec3>,
     /// Animation clock in seconds (moving objects, vegetation sway); set by
     /// the caller, e.g. frame / 30 in sequences, so frames are deterministic.
     pub time_s: f32,
@@ -384,6 +390,8 @@ impl FrameSettings {
             vegetation: true,
             impostors: true,
             tree_ao: true,
+            vegetation_motion: Default::default(),
+            wind: None,
         }
     }
 }

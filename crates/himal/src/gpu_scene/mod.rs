@@ -23,6 +23,7 @@ pub mod uniforms;
 mod draws;
 mod lod;
 mod pool;
+pub mod trees;
 
 pub use draws::{Draw, VisibleLists, cull, draw_calls, draws_of, entries_of, material_runs, runs};
 pub use lod::{LodRange, LodView};
@@ -148,7 +149,8 @@ pub struct SceneGpu {
     pub vertices: wgpu::Buffer,
     /// Every mesh's indices, LOD levels after LOD0.
     pub indices: wgpu::Buffer,
-    /// [`ObjectGpu`] per object (GPU order), then the streamed regions.
+    /// [`ObjectGpu`] per object (GPU order), then the streamed regions,
+    /// then the trees' bone records (`tree_layout`).
     pub objects: wgpu::Buffer,
     /// Instance -> object for draws recorded on the CPU: the identity, so a
     /// draw of instances `k..k+n` draws objects `k..k+n` (the GPU-culled
@@ -238,6 +240,16 @@ pub struct SceneGpu {
     pub impostors: AtomicBool,
     /// V4: the trees' occlusion volumes and the list of trees the decal draws.
     pub tree_ao: tree_ao::TreeAoGpu,
+    /// V2: the trees' slots and rigs, and where their bone records start
+    /// in `objects` (after every object and streamed region).
+    pub tree_layout: trees::TreeLayout,
+    /// V2: their GPU buffers (`None`: no trees).
+    pub tree_buffers: Option<trees::TreeBuffers>,
+    /// V2: the grass ripple grid around the camera (`shaders/ripple.wgsl`;
+    /// one cell without grass), stepped by `vegetation.ripple`.
+    pub ripple: wgpu::Buffer,
+    /// Its cells per side.
+    pub ripple_n: i32,
 }
 
 /// The next [`SceneGpu::id`].
@@ -407,11 +419,10 @@ impl SceneGpu {
             .map(|l| l.filter(|&l| (l as usize) < scene.ao_volumes.len()))
             .collect();
         let mut trees = Vec::new();
-        for (i, object) in gpu_order(scene)
-            .into_iter()
-            .map(|i| &scene.objects[i])
-            .enumerate()
-        {
+        let mut placed = Vec::with_capacity(scene.objects.len());
+        for (i, si) in gpu_order(scene).into_iter().enumerate() {
+            let object = &scene.objects[si];
+            placed.push((i, si));
             let Some(&(first_index, index_count, base_vertex)) = ranges.get(object.mesh) else {
                 return Err(GpuError::Other(format!(
                     "object \"{}\" names mesh {} of {}",
@@ -428,6 +439,8 @@ impl SceneGpu {
             // Swaying cards reach up to their amplitude (local metres,
             // scaled: a generous margin) beyond the mesh.
             let b = object.swept_bounds(&scene.meshes[object.mesh].bounds);
+            // V2: a tree's bend stays out of its box: E2 measures LOD
+            // distances to the box, and its switches must not move.
             let sway = object.foliage.map_or(0.0, |f| f.sway)
                 * object
                     .transform
@@ -474,6 +487,22 @@ impl SceneGpu {
             vertices.push(Vertex::zeroed());
         }
         let identity: Vec<u32> = (0..objects.len() as u32).collect();
+        // V2: the trees' bone records after every object (never drawn).
+        let tree_layout = trees::layout(scene, &placed, &mut objects);
+        let tree_buffers = trees::TreeBuffers::new(&ctx.device, &tree_layout);
+        // V2: grass and bushes (foliage that is no tree's) bend with the ripple.
+        let rigged = trees::mesh_rigs(scene);
+        let grass = (scene.objects.iter())
+            .any(|o| o.foliage.is_some() && rigged.get(o.mesh).is_some_and(|r| r.is_none()));
+        let ripple_n = if grass {
+            crate::passes::vegetation::ripple::RIPPLE_N
+        } else {
+            1
+        };
+        let mut ripple =
+            vec![0u8; crate::passes::vegetation::ripple::ripple_bytes(ripple_n) as usize];
+        let header = crate::passes::vegetation::ripple::header(ripple_n, glam::Vec3::ZERO, 0, 0.0);
+        ripple[..32].copy_from_slice(bytemuck::bytes_of(&header));
         let materials = if scene.pbr.materials.is_empty() {
             None
         } else {
@@ -571,6 +600,16 @@ impl SceneGpu {
                     &scene.ao_volumes,
                     &trees,
                 ),
+                tree_layout,
+                tree_buffers,
+                ripple: init(
+                    "scene.ripple",
+                    &ripple,
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                ),
+                ripple_n,
             }
         })
     }

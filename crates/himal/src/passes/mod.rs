@@ -19,4 +19,5 @@ pub mod sky;
 pub mod skyocc;
 pub mod terrain;
 pub mod tree_ao;
+pub mod vegetation;
 pub mod wet;

@@ -303,6 +303,7 @@ impl Renderer {
         self.res.post.reset = true;
         self.res.history.reset();
         self.res.passes.cull.hiz.reset();
+        self.res.passes.vegetation.reset();
     }
 
     /// E1 pre-warm: fetches every pipeline permutation a frame of this

@@ -196,11 +196,13 @@ pub(crate) fn build_scene(
         budget,
         charged: 0,
         impostors: Default::default(),
+        rigs: Vec::new(),
     };
     let mut objects = Placer::place_all(&mut world, &file.object)?;
     let charged = world.charged;
     let ao_volumes = world.impostors.volumes;
     let impostors = world.impostors.atlases;
+    let tree_rigs = world.rigs;
     let mut meshes = world.meshes;
     let mut lights = lights;
     // Models share what the scene's own meshes left of the budget.
@@ -243,6 +245,7 @@ pub(crate) fn build_scene(
     };
     let emitters = super::emitters::build_emitters(&ck, base_dir, &file.emitter, object_box)?;
     let wind = super::emitters::build_wind(&ck, file.wind.as_ref())?;
+    let wind_sources = super::wind::build_sources(&ck, &file.wind_source)?;
     // E4: every particle slot holds its state and its light on the GPU.
     if let Some(first) = file.emitter.first() {
         let slots: u64 = emitters.iter().map(|e| e.capacity as u64).sum();
@@ -264,6 +267,8 @@ pub(crate) fn build_scene(
         ambient_lights,
         emitters,
         wind,
+        wind_sources,
+        tree_rigs,
         bounds,
         pbr,
         probes,
@@ -446,6 +451,8 @@ pub(crate) struct World<'a> {
     pub charged: u64,
     /// V3: the impostor atlas layers of the scene's trees.
     pub impostors: super::tree::impostor_level::Layers,
+    /// V2: the bones of the scene's tree meshes.
+    pub rigs: Vec<super::tree::rig::SceneRig>,
 }
 
 /// A validated primitive; its Debug text (with the material) keys mesh sharing.

@@ -23,7 +23,8 @@ pub(crate) const GRASS_SWAY: f32 = 0.04;
 pub(crate) const BUSH_CARDS: u32 = 80;
 pub(crate) const BUSH_CARD_SIZE: f32 = 0.3;
 pub(crate) const BUSH_SWAY: f32 = 0.03;
-/// Trees: the crown sways a little (GPU wind is a later part of issue #18).
+/// Trees: a margin in their bounds only; V2's bones move them
+/// (`gpu_scene/trees.rs` points their `params.y` at the bones).
 pub(crate) const TREE_SWAY: f32 = 0.03;
 /// Most trees one `[[object]]` may place.
 pub(crate) const MAX_TREES: i64 = 100_000;
@@ -211,6 +212,10 @@ impl World<'_> {
         self.meshes.push(m.trunk);
         self.meshes.push(m.leaves);
         let trunk = self.meshes.len() - 2;
+        self.rigs.push(tree::rig::SceneRig {
+            meshes: [trunk, trunk + 1],
+            rig: m.rig,
+        });
         self.mesh_keys.insert(key, trunk);
         Ok((trunk, trunk + 1))
     }

@@ -27,6 +27,8 @@ pub(crate) struct FileScene {
     #[serde(default)]
     pub emitter: Vec<FileEmitter>,
     pub wind: Option<Spanned<FileWind>>,
+    #[serde(default)]
+    pub wind_source: Vec<FileWindSource>,
     pub environment: Option<FileEnvironment>,
     pub cinematic_shadows: Option<FileCinematicShadows>,
     #[serde(default)]
@@ -212,6 +214,18 @@ pub(crate) struct FileWind {
     pub direction: Option<Spanned<f32>>,
     #[serde(default, deserialize_with = "exact3_opt")]
     pub velocity: Option<Spanned<[f32; 3]>>,
+}
+
+/// `[[wind_source]]`: a local wind source (V2, `scene/wind.rs`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileWindSource {
+    #[serde(default, deserialize_with = "exact3_opt")]
+    pub position: Option<Spanned<[f32; 3]>>,
+    pub path: Option<Spanned<Vec<[f32; 3]>>>,
+    pub speed: Option<Spanned<f32>>,
+    pub radius: Spanned<f32>,
+    pub strength: Spanned<f32>,
 }
 
 /// `[[ambient_light]]`: a multiplier on the ambient light inside a box or

@@ -179,6 +179,20 @@
 //!                                  # give speed (and direction) or velocity, not both
 //! ```
 //!
+//! `[wind]` also bends the trees and drives V2's wind field with gusts
+//! (`--wind SPEED,DIR` replaces it per frame). `[[wind_source]]` (at most
+//! 8): a local source pushing outward, like a helicopter's downwash, on
+//! trees, grass and particles (`scene/wind.rs`, `docs/techniques/V2.md`):
+//!
+//! ```toml
+//! [[wind_source]]
+//! position = [0.0, 8.0, 0.0]       # centre (m); or a path flown back and forth:
+//! # path = [[-40.0, 10.0, 0.0], [40.0, 10.0, 0.0]]   # 2 to 16 points (floats)
+//! # speed = 8.0                    # m/s along the path (path only), default 5
+//! radius = 20.0                    # m where the push falls to zero, (0, 1000]
+//! strength = 12.0                  # m/s outward at the centre, [0, 100]
+//! ```
+//!
 //! `[world]`: instead of objects, the file describes a streamed open world
 //! ([`world::WorldFile::load`]; `himal render --scene FILE` renders it as it
 //! does `--scene world`). Only `[sun]` and `[[camera]]` may join it: file
@@ -258,6 +272,7 @@ pub mod raycast;
 mod terrain;
 pub mod tree;
 pub mod vegetation;
+pub mod wind;
 pub mod world;
 
 use std::path::{Path, PathBuf};
@@ -719,6 +734,11 @@ pub struct Scene {
     pub emitters: Vec<EmitterDesc>,
     /// The wind particles drift in (m/s; `[wind]`, else [`DEFAULT_WIND`]).
     pub wind: Vec3,
+    /// V2: local wind sources (`[[wind_source]]`); with `wind` the field
+    /// that moves the trees ([`Scene::wind_field`]).
+    pub wind_sources: Vec<wind::WindSource>,
+    /// V2: the bones of the tree meshes (`passes/vegetation` moves them).
+    pub tree_rigs: Vec<tree::rig::SceneRig>,
     /// World bounds of all objects over all time ([`Object::swept_bounds`]).
     pub bounds: Aabb,
     /// Textured (glTF) materials and the meshes drawn with them.
@@ -775,6 +795,14 @@ pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
 pub const DEMO_TOML: &str = include_str!("../../../../scenes/demo.toml");
 
 impl Scene {
+    /// V2: the wind field of the scene: `wind` and the local sources.
+    pub fn wind_field(&self) -> wind::WindField {
+        wind::WindField {
+            global: self.wind,
+            sources: self.wind_sources.clone(),
+        }
+    }
+
     /// Reads, parses and builds the scene file at `path`; relative paths
     /// inside it are resolved against its folder.
     /// Allocations are checked against [`MemoryBudget::from_env`].
@@ -855,6 +883,8 @@ impl Scene {
             ambient_lights: Vec::new(),
             emitters: Vec::new(),
             wind: DEFAULT_WIND,
+            wind_sources: Vec::new(),
+            tree_rigs: Vec::new(),
             probes: Vec::new(),
             environment: None,
             impostors: Vec::new(),

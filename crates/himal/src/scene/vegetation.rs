@@ -203,7 +203,7 @@ pub fn bush(name: String, p: &BushParams, m: &MaterialDesc) -> Mesh {
 // CPU twins of the vegetation functions in `shaders/scene.wgsl` (tests).
 
 /// `foliage_hash`: PCG output permutation.
-fn foliage_hash(n: u32) -> u32 {
+pub fn foliage_hash(n: u32) -> u32 {
     let state = n.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
     (word >> 22) ^ word

@@ -233,8 +233,14 @@ mod tests {
 
     /// Modules that call functions their importer defines, each with the
     /// module that supplies them in the frame (validated in its place).
-    const IMPORTER_DEFINED: [(&str, &str); 1] =
-        [("shaders/impostor_draw.wgsl", "shaders/impostor_atlas.wgsl")];
+    /// (object_vertex reads the importer's `objects` for V2's tree bones,
+    /// ripple its `ripple` grid.)
+    const IMPORTER_DEFINED: [(&str, &str); 4] = [
+        ("shaders/ripple.wgsl", "passes/gbuffer/gbuffer.wgsl"),
+        ("shaders/impostor_draw.wgsl", "shaders/impostor_atlas.wgsl"),
+        ("shaders/object_vertex.wgsl", "passes/gbuffer/gbuffer.wgsl"),
+        ("shaders/forward_vertex.wgsl", "passes/forward/forward.wgsl"),
+    ];
 
     /// Every embedded shader composes and validates; modules are validated
     /// on their own too (they contain no entry points), except those in

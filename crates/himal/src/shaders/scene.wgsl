@@ -70,6 +70,34 @@ fn foliage_unit(h: u32, shift: u32) -> f32 {
     return f32((h >> shift) & 255u) / 255.0;
 }
 
+// V5 leaf flutter: value noise over a leaf card (5 cells across), drifting
+// with time t (s); each component in [-1, 1] (CPU twin
+// passes/vegetation/reference.rs `leaf_flutter`).
+fn leaf_flutter(uv: vec2f, t: f32) -> vec2f {
+    let p = uv * 5.0 + vec2f(1.7, 1.3) * t;
+    let i = floor(p);
+    let f = fract(p);
+    let s = f * f * (3.0 - 2.0 * f);
+    var c: array<vec2f, 4>;
+    for (var k = 0u; k < 4u; k++) {
+        let q = vec2i(i) + vec2i(i32(k & 1u), i32(k >> 1u));
+        let h = foliage_hash(bitcast<u32>(q.x) * 1973u + bitcast<u32>(q.y) * 9277u + 26699u);
+        c[k] = vec2f(foliage_unit(h, 0u), foliage_unit(h, 8u)) * 2.0 - 1.0;
+    }
+    return mix(mix(c[0], c[1], s.x), mix(c[2], c[3], s.x), s.y);
+}
+
+// Largest tilt of a leaf's normal by the flutter, at 10 m/s of wind or more.
+const LEAF_FLUTTER: f32 = 0.35;
+
+// The leaf normal n (tangent t) tilted by the flutter at uv, time, in a
+// wind of `speed` m/s.
+fn leaf_flutter_normal(n: vec3f, t: vec3f, uv: vec2f, time: f32, speed: f32) -> vec3f {
+    let f = leaf_flutter(uv, time) * (LEAF_FLUTTER * min(speed / 10.0, 1.0));
+    let b = cross(n, t);
+    return normalize(n + t * f.x + b * f.y);
+}
+
 // Grass card: four tapered blades of 55..100 % of the card's height,
 // leaning a little; 1 inside a blade, 0 elsewhere. uv.x integer part = seed.
 fn foliage_grass_alpha(uv: vec2f) -> f32 {

@@ -4,6 +4,8 @@
 #import scene
 // V3 impostors cast: the atlas planes at bindings 8-10 (vs_vegetation).
 #import impostor_atlas
+// V2: grass bends with the ripple grid (binding 12, vs_vegetation).
+#import ripple
 
 struct ShadowView {
     light_view_proj: mat4x4f,
@@ -15,3 +17,4 @@ struct ShadowView {
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 // Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
 @group(0) @binding(2) var<storage, read> instances: array<u32>;
+@group(0) @binding(12) var<storage, read> ripple: Ripple;

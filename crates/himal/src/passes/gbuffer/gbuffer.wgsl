@@ -18,11 +18,14 @@
 // V3 impostors: the atlas planes (group 0, bindings 8-10) and the grid's
 // vertex and pixel stages, taken by VEGETATION draws of uv1.x < 0 vertices.
 #import impostor_atlas
+// V2: grass bends with the ripple grid around the camera.
+#import ripple
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 // Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
 @group(0) @binding(2) var<storage, read> instances: array<u32>;
+@group(0) @binding(12) var<storage, read> ripple: Ripple;
 
 override VEGETATION: bool = false;
 // E2: the pipeline of the GPU lists fading between levels (screen-door
@@ -56,6 +59,15 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
     let entry = instances[in.instance];
     let o = objects[instance_object(entry)];
     var v = object_vertex(o, in, view.view_proj, view.prev_view_proj, VEGETATION, view.time.xy);
+    if (VEGETATION) {
+        // The ripple's bend moves both positions alike: its own change
+        // between frames is left out of the motion vectors.
+        let bend = grass_ripple(o, in.position, in.uv, v.world.xyz);
+        v.world += bend;
+        v.prev_world += bend;
+        v.clip = view.view_proj * v.world;
+        v.prev_clip = view.prev_view_proj * v.prev_world;
+    }
     var out: VertexOut;
     out.impostor_w = vec4f(0.0, 0.0, 1.0, -1.0);
     out.impostor_p = vec3f(0.0);
@@ -69,8 +81,8 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
             toward = -view.camera_forward.xyz;
         }
         let g = impostor_object_vertex(o.normal_matrix, layer, in.position, in.tangent.w, in.uv, toward);
-        v.world = o.model * vec4f(g.local, 1.0);
-        v.prev_world = o.prev_model * vec4f(g.local, 1.0);
+        v.world = impostor_world(o, g.local, false, view.time.x);
+        v.prev_world = impostor_world(o, g.local, true, view.time.y);
         v.clip = view.view_proj * v.world;
         v.prev_clip = view.prev_view_proj * v.prev_world;
         // The fragment stage reads the raw tint and bark colours.
@@ -116,6 +128,13 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
         // part; bush normals are the bush's outward normal on both faces.
         if (!front && in.pattern == FOLIAGE_GRASS) {
             n = vec3f(-n.x, n.y, -n.z);
+        }
+        // V5: tree leaves flutter per pixel, more in a stronger wind (the
+        // speed at the trunk, 0 with the waves off).
+        let first = object_tree_first(objects[in.object]);
+        if (first >= 0) {
+            let speed = objects[u32(first)].params.y;
+            n = leaf_flutter_normal(n, normalize(in.tangent.xyz), in.uv, view.time.x, speed);
         }
     } else if (!front) {
         n = -n;

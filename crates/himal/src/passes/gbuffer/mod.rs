@@ -353,6 +353,7 @@ impl GBufferPass {
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects)
+            .uniform("ripple", &scene.ripple)
             .uniform("deform_prev", scene.deform_prev(self.deform_motion))
             .external("impostor_color_load", &scene.impostor_atlas.color)
             .external("impostor_normal_load", &scene.impostor_atlas.normal)

@@ -137,6 +137,7 @@ pub struct ParticleLightGpu {
 struct SimParamsGpu {
     counts: [u32; 4],
     wind: [f32; 4],
+    field: crate::scene::wind::WindGpu,
 }
 
 /// The births of emitter `e` (ring of `capacity`) in the step (t_a, t_b]:
@@ -197,6 +198,8 @@ pub struct SimFrame {
     pub reset: bool,
     /// Wind velocity (m/s).
     pub wind: Vec3,
+    /// V2: the local wind sources over the steps (global zero).
+    pub field: crate::scene::wind::WindGpu,
 }
 
 impl SimFrame {
@@ -216,6 +219,8 @@ pub struct Simulation {
     pub last: Option<f64>,
     /// Wind velocity (m/s): the scene's `[wind]`.
     pub wind: Vec3,
+    /// V2: the scene's local wind sources.
+    pub sources: Vec<crate::scene::wind::WindSource>,
     /// Per emitter riding a moving object: the object's motion (a copy,
     /// as `SceneGpu::animated` keeps one) and the point in its frame.
     paths: Vec<Option<(Motion, Vec3)>>,
@@ -245,6 +250,7 @@ impl Simulation {
             records,
             last: None,
             wind,
+            sources: Vec::new(),
             paths,
         }
     }
@@ -302,11 +308,20 @@ impl Simulation {
                 steps.push(s);
             }
         }
+        let field = crate::scene::wind::WindField {
+            global: Vec3::ZERO,
+            sources: self.sources.clone(),
+        };
+        let (t0, t1) = match (times.first(), times.last()) {
+            (Some(a), Some(b)) => (a.0 as f32, b.1 as f32),
+            _ => (t as f32, t as f32),
+        };
         SimFrame {
             emitters: self.records.clone(),
             steps,
             reset,
             wind: self.wind,
+            field: field.gpu(t0, t1),
         }
     }
 }
@@ -443,7 +458,8 @@ impl ParticlesPass {
             ])
         };
         let sort_pipelines = [sort_pair(0.0)?, sort_pair(1.0)?];
-        let sim = Simulation::new(emitters, scene.wind, &scene.objects);
+        let mut sim = Simulation::new(emitters, scene.wind, &scene.objects);
+        sim.sources = scene.wind_sources.clone();
         let buffers = (!emitters.is_empty()).then(|| {
             let ne = emitters.len() as u64;
             let slots = sim.slots() as u64;
@@ -584,6 +600,7 @@ impl ParticlesPass {
                 frame.reset as u32,
             ],
             wind: frame.wind.extend(0.0).to_array(),
+            field: frame.field,
         };
         ctx.queue
             .write_buffer(&b.params, 0, bytemuck::bytes_of(&params));

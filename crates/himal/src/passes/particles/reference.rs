@@ -92,7 +92,12 @@ pub fn simulate(particles: &mut [ParticleGpu], frame: &SimFrame) -> Vec<[u32; 2]
             let mut born = 0;
             for s in 0..frame.steps_count() {
                 let st = &frame.steps[s * ne + ei];
-                let (q, b) = step_slot(p, e, ei as u32, r as u32, st, frame.wind);
+                let f = (s + 1) as f32 / frame.steps_count() as f32;
+                let push = frame
+                    .field
+                    .sources_push(Vec3::from_slice(&p.pos_age[..3]), f);
+                let wind = frame.wind + Vec3::new(push.x, 0.0, push.y);
+                let (q, b) = step_slot(p, e, ei as u32, r as u32, st, wind);
                 p = q;
                 born += b as u32;
             }

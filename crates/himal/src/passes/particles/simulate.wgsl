@@ -4,12 +4,15 @@
 // compaction, a fixed-capacity ring per emitter. CPU twin:
 // passes/particles/reference.rs `simulate`.
 #import particles
+#import wind
 
 struct SimParams {
     // x: emitters, y: steps, z: slots in all, w: 1 = start from empty
     counts: vec4u,
     // xyz: wind velocity (m/s)
     wind: vec4f,
+    // V2: the scene's local wind sources (global zero), over the frame's steps
+    field: Wind,
 }
 
 @group(0) @binding(0) var<storage, read> sim: SimParams;
@@ -39,7 +42,10 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
     }
     var born = 0u;
     for (var s = 0u; s < sim.counts.y; s++) {
-        let stepped = particle_step(p, e, ei, r, steps[s * sim.counts.x + ei], sim.wind.xyz);
+        // V2: the local sources push where the particle is.
+        let push = wind_sources_push(sim.field, p.pos_age.xyz, f32(s + 1u) / f32(sim.counts.y));
+        let wind = sim.wind.xyz + vec3f(push.x, 0.0, push.y);
+        let stepped = particle_step(p, e, ei, r, steps[s * sim.counts.x + ei], wind);
         p = stepped.p;
         born += select(0u, 1u, stepped.born);
     }

@@ -62,6 +62,10 @@ const VEGETATION_ATTRIBUTES: [wgpu::VertexAttribute; 4] = [
     },
 ];
 
+/// Opaque casters: position, and uv1 (V2: a trunk's bone and weight).
+const OPAQUE_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
+    [VEGETATION_ATTRIBUTES[0], VEGETATION_ATTRIBUTES[3]];
+
 /// Twin of `ShadowView` in `depth.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -104,7 +108,7 @@ impl DepthPipelines {
         format: wgpu::TextureFormat,
     ) -> Result<Self, GpuError> {
         let mut layout = vertex_layout();
-        layout.attributes = &layout.attributes[..1]; // position only
+        layout.attributes = &OPAQUE_ATTRIBUTES;
         let mut veg_layout = vertex_layout();
         veg_layout.attributes = &VEGETATION_ATTRIBUTES;
         let depth_stencil = caster_depth(format);

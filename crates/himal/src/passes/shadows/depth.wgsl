@@ -12,9 +12,11 @@
 #import shadow_caster
 
 @vertex
-fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {
+fn vs_main(@location(0) position: vec3f, @location(6) uv1: vec2f,
+        @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {
     let o = objects[instance_object(instances[instance])];
-    return shadow.light_view_proj * object_world(o, o.model, position, vec2f(0.0), false, 0.0);
+    // Trunks bend with their tree's bones (V2).
+    return shadow.light_view_proj * object_world(o, false, position, vec2f(0.0), uv1, false, shadow.time.x);
 }
 
 struct VegetationOut {
@@ -37,7 +39,9 @@ fn vs_vegetation(
 ) -> VegetationOut {
     let o = objects[instance_object(instances[instance])];
     var out: VegetationOut;
-    out.clip = shadow.light_view_proj * object_world(o, o.model, position, uv, true, shadow.time.x);
+    var world = object_world(o, false, position, uv, uv1, true, shadow.time.x);
+    world += grass_ripple(o, position, uv, world.xyz);
+    out.clip = shadow.light_view_proj * world;
     out.uv = uv;
     out.pattern = foliage_pattern(o);
     out.impostor_p = vec3f(0.0);
@@ -48,7 +52,7 @@ fn vs_vegetation(
         let centre = (o.model * vec4f(position, 1.0)).xyz;
         let toward = impostor_toward_light(shadow.light_view_proj, centre);
         let g = impostor_object_vertex(o.normal_matrix, layer, position, tangent.w, uv, toward);
-        out.clip = shadow.light_view_proj * (o.model * vec4f(g.local, 1.0));
+        out.clip = shadow.light_view_proj * impostor_world(o, g.local, false, shadow.time.x);
         out.impostor_p = g.p;
         out.impostor_w = vec4f(g.w, f32(layer));
     }

@@ -24,7 +24,7 @@ fn vs_masked(
 ) -> MaskedOut {
     let o = objects[instance_object(instances[instance])];
     var out: MaskedOut;
-    out.clip = shadow.light_view_proj * object_world(o, o.model, position, vec2f(0.0), false, 0.0);
+    out.clip = shadow.light_view_proj * object_rest(o, position);
     out.uv = vec4f(uv, uv1);
     return out;
 }

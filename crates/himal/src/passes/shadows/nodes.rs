@@ -285,6 +285,7 @@ impl ShadowPass {
             .raster(id, &self.depth_program)
             .uniform("shadow", view)
             .uniform("objects", &scene.objects)
+            .uniform("ripple", &scene.ripple)
             .external("impostor_color_load", &scene.impostor_atlas.color)
             .external("impostor_normal_load", &scene.impostor_atlas.normal)
             .external("impostor_depth_load", &scene.impostor_atlas.depth);
@@ -338,6 +339,7 @@ impl ShadowPass {
                         &[
                             ("shadow", buffer.as_entire_binding()),
                             ("objects", scene.objects.as_entire_binding()),
+                            ("ripple", scene.ripple.as_entire_binding()),
                             ("instances", scene.instances.as_entire_binding()),
                             (
                                 "impostor_color_load",

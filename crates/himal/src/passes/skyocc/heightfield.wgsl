@@ -27,7 +27,7 @@ struct HeightOut {
 @vertex
 fn vs_main(@location(0) position: vec3f, @builtin(instance_index) instance: u32) -> HeightOut {
     let o = objects[instance_object(instances[instance])];
-    let world = object_world(o, o.model, position, vec2f(0.0), false, 0.0);
+    let world = object_rest(o, position);
     var out: HeightOut;
     out.clip = sector.view_proj * world;
     out.height = world.y;

@@ -215,13 +215,14 @@ impl Impostor {
 pub fn capture_meshes(model: &TreeModel) -> (Mesh, Mesh) {
     let material = MaterialDesc::default();
     let mut b = MeshBuilder::new(&material);
-    for limb in &model.limbs {
-        limb_mesh(&mut b, limb, 0);
+    let rig = super::rig::rig(model);
+    for (limb, &hang) in model.limbs.iter().zip(&rig.limbs) {
+        limb_mesh(&mut b, limb, 0, &rig, hang);
     }
     let trunk = b.finish("impostor-trunk".into());
     let mut b = MeshBuilder::new(&material);
     let all: Vec<usize> = (0..model.clusters.len()).collect();
-    cards_mesh(&mut b, model, &all, 1.0, (Vec3::ZERO, Vec3::ONE), 1.0);
+    cards_mesh(&mut b, model, &all, 1.0, (Vec3::ZERO, Vec3::ONE), 1.0, &rig);
     (trunk, b.finish("impostor-leaves".into()))
 }
 

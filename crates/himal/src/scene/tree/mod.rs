@@ -9,14 +9,16 @@
 //! Method and figures: `docs/techniques/V1.md`.
 //!
 //! Card vertices follow the vegetation conventions (`vegetation.rs`: `uv.x`
-//! = pattern seed + 0..1, `uv.y` = 0..1) and carry `uv1 = [cluster id,
-//! tint]`: the cluster's random tint in [0, 1], already mixed into the
-//! vertex colour between the leaf material and the tint colour (V5).
+//! = pattern seed + 0..1, `uv.y` = 0..1); the cluster's random tint in
+//! [0, 1] is mixed into the vertex colour between the leaf material and
+//! the tint colour (V5). Every trunk and card vertex carries `uv1 = [bone,
+//! weight]` (V2 wind, [`rig`]).
 
 pub mod ao;
 pub mod bake;
 pub mod impostor;
 pub mod impostor_level;
+pub mod rig;
 pub mod visibility;
 
 use std::ops::Range;
@@ -405,8 +407,9 @@ fn limb_detail(limb: &Limb, level: usize) -> (u32, usize) {
     (radial, 1 << level)
 }
 
-/// Appends the tube of `limb` at `level` to `b`; UVs in metres (u around, v along).
-fn limb_mesh(b: &mut MeshBuilder, limb: &Limb, level: usize) {
+/// Appends the tube of `limb` at `level` to `b`; UVs in metres (u around,
+/// v along); `uv1` its bone and weight (`hang`: [`rig::Rig::limbs`]).
+fn limb_mesh(b: &mut MeshBuilder, limb: &Limb, level: usize, rig: &rig::Rig, hang: (u32, Vec3)) {
     let (radial, step) = limb_detail(limb, level);
     let n = limb.points.len();
     if n < 2 {
@@ -438,12 +441,9 @@ fn limb_mesh(b: &mut MeshBuilder, limb: &Limb, level: usize) {
             let a = k as f32 / radial as f32 * std::f32::consts::TAU;
             let out = normal * a.cos() + binormal * a.sin();
             let around = t.cross(out);
-            b.vertex(
-                limb.points[i] + out * r,
-                out,
-                around,
-                [a * r.max(0.05), along],
-            );
+            let p = limb.points[i] + out * r;
+            let v = b.vertex(p, out, around, [a * r.max(0.05), along]);
+            b.set_uv1(v, rig.uv1(hang, p));
         }
         first_rows.push(first);
     }
@@ -465,6 +465,7 @@ fn cards_mesh(
     s: f32,
     colors: (Vec3, Vec3),
     alpha: f32,
+    rig: &rig::Rig,
 ) {
     for &ci in clusters {
         let cl = &model.clusters[ci];
@@ -474,7 +475,7 @@ fn cards_mesh(
                 .normalize_or(card.normal.any_orthonormal_vector());
             let i = card.corners(cl.centre, s).map(|(p, uv)| {
                 let i = b.vertex(p, card.normal, tangent, uv);
-                b.set_uv1(i, [ci as f32, cl.tint]);
+                b.set_uv1(i, rig.uv1(rig.clusters[ci], p));
                 b.set_color(i, [color.x, color.y, color.z, alpha]);
                 i
             });
@@ -497,6 +498,8 @@ pub struct TreeMeshes {
     pub clusters: [usize; LEVELS],
     /// Scale of the kept clusters per leaf level (coverage compensation).
     pub card_scale: [f32; LEVELS],
+    /// V2: the bones both meshes hang on.
+    pub rig: rig::Rig,
 }
 
 /// Meshes `model`: levels over one vertex buffer per part (each level's
@@ -527,13 +530,14 @@ pub fn meshes_keeping(
     leaves: &MaterialDesc,
     tint: Vec3,
 ) -> TreeMeshes {
+    let rig = rig::rig(model);
     // Trunk.
     let mut trunk_levels: Vec<(Vec<u32>, usize)> = Vec::new();
     let mut b = MeshBuilder::new(bark);
     for level in 0..LEVELS {
         let (v0, i0) = (b.vertex_count(), b.index_count());
-        for limb in &model.limbs {
-            limb_mesh(&mut b, limb, level);
+        for (limb, &hang) in model.limbs.iter().zip(&rig.limbs) {
+            limb_mesh(&mut b, limb, level, &rig, hang);
         }
         trunk_levels.push((b.indices_from(i0), (b.vertex_count() - v0) as usize));
     }
@@ -566,6 +570,7 @@ pub fn meshes_keeping(
             card_scale[level],
             colors,
             alpha,
+            &rig,
         );
         leaf_levels.push((b.indices_from(i0), (b.vertex_count() - v0) as usize));
     }
@@ -586,6 +591,7 @@ pub fn meshes_keeping(
         ],
         clusters,
         card_scale,
+        rig,
     }
 }
 

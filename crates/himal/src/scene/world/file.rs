@@ -92,7 +92,7 @@ impl WorldDesc {
 
 /// Tables a world file cannot use, at the first entry of each.
 fn reject_scene_tables(ck: &Checker, f: &FileScene) -> Result<()> {
-    let first: [(&str, Option<Range<usize>>); 10] = [
+    let first: [(&str, Option<Range<usize>>); 11] = [
         ("[[object]]", f.object.first().map(|o| o.name.span())),
         ("[[material]]", f.material.first().map(|m| m.name.span())),
         ("[[light]]", f.light.first().map(|l| l.name.span())),
@@ -103,6 +103,10 @@ fn reject_scene_tables(ck: &Checker, f: &FileScene) -> Result<()> {
         ("[[probe]]", f.probe.first().map(|p| p.position.span())),
         ("[[emitter]]", f.emitter.first().map(|e| e.position.span())),
         ("[wind]", f.wind.as_ref().map(|w| w.span())),
+        (
+            "[[wind_source]]",
+            f.wind_source.first().map(|w| w.radius.span()),
+        ),
         ("[[gltf]]", f.gltf.first().map(|g| g.file.span())),
         (
             "[environment]",

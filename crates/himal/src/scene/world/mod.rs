@@ -261,6 +261,8 @@ impl World {
             ambient_lights: Vec::new(),
             emitters: Vec::new(),
             wind: crate::scene::DEFAULT_WIND,
+            wind_sources: Vec::new(),
+            tree_rigs: Vec::new(),
             bounds: Aabb::new(Vec3::new(-half, bottom, -half), Vec3::new(half, top, half)),
             pbr: Default::default(),
             probes: Vec::new(),
