@@ -99,6 +99,15 @@ pub fn clear_target(
     Ok(())
 }
 
+/// Whether a debug view written to `format` shows display values (float
+/// targets get the raw ones).
+pub fn is_display_format(format: wgpu::TextureFormat) -> bool {
+    !matches!(
+        format,
+        wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
+    )
+}
+
 /// Pipeline of a debug-view shader (`VIEW` selects the buffer, `DISPLAY`
 /// viewable vs raw): float targets get raw values, others display values.
 pub fn view_pipeline(
@@ -108,10 +117,7 @@ pub fn view_pipeline(
     view_id: u32,
     format: wgpu::TextureFormat,
 ) -> Result<wgpu::RenderPipeline, GpuError> {
-    let display = !matches!(
-        format,
-        wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
-    );
+    let display = is_display_format(format);
     let targets = [target(format)];
     let constants = [
         ("VIEW", view_id as f64),

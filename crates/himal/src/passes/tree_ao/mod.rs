@@ -16,7 +16,7 @@ use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::SceneGpu;
 use crate::graph::{FrameGraph, TextureAccess, TextureDesc, TextureHandle};
-use crate::passes::common::{clear_target, target};
+use crate::passes::common::{clear_target, is_display_format, target};
 
 /// The `--view tree-ao` factor target (white where no box writes).
 pub const FACTOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
@@ -185,10 +185,7 @@ impl TreeAoPass {
         ctx: &GpuContext,
         format: wgpu::TextureFormat,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        let display = !matches!(
-            format,
-            wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::Rgba16Float
-        );
+        let display = is_display_format(format);
         let targets = [target(format)];
         let constants = [("DISPLAY", if display { 1.0 } else { 0.0 })];
         let mut spec = RenderSpec::fullscreen("vegetation.ao.view", &targets);
