@@ -14,11 +14,15 @@
 #import deform
 // V3: declared for the layout gbuffer.wgsl shares (bindings 8-10).
 #import impostor_atlas
+#import ripple
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 // Instance -> object: the identity for draws recorded on the CPU, a culled list (V6).
 @group(0) @binding(2) var<storage, read> instances: array<u32>;
+// gbuffer.wgsl's V2 ripple grid: declared so the two pipelines share the
+// `gbuffer` node's group 0 (glTF meshes do not bend with it).
+@group(0) @binding(12) var<storage, read> ripple: Ripple;
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
