@@ -93,14 +93,18 @@ fn particle_buffers_are_listed_in_memory() {
     }
     // 384 slots: state 32 B, light 5 x 32 B (centre, corners), order and sort key
     // 4 + 8 B; params: the uniform
-    // (32 B), 2 emitter records (112 B), 121 pre-warm steps of 2 emitters
-    // (64 B), 2 counter pairs (8 B).
+    // (32 B, then V2's wind field: 16 B + 8 sources of 32 B), 2 emitter
+    // records (112 B), 121 pre-warm steps of 2 emitters (64 B), 2 counter
+    // pairs (8 B).
     let slots = 384u64;
     let want = [
         ("particles.state", slots * 32),
         ("particles.light", slots * 160),
         ("particles.order", slots * 12),
-        ("particles.params", 32 + 2 * 112 + 121 * 2 * 64 + 2 * 8),
+        (
+            "particles.params",
+            32 + (16 + 8 * 32) + 2 * 112 + 121 * 2 * 64 + 2 * 8,
+        ),
         // The puff's layer, 128^2 RGBA8 and its mips.
         ("particles.sprites (1 layers)", 87_380),
     ];

@@ -15,6 +15,7 @@ use crate::scene::gltf::SkinVertex;
 use crate::scene::{Object, Scene, Vertex};
 
 pub mod impostor;
+pub mod ripple;
 pub mod skin;
 pub mod textures;
 pub mod tree_ao;
@@ -494,14 +495,9 @@ impl SceneGpu {
         let rigged = trees::mesh_rigs(scene);
         let grass = (scene.objects.iter())
             .any(|o| o.foliage.is_some() && rigged.get(o.mesh).is_some_and(|r| r.is_none()));
-        let ripple_n = if grass {
-            crate::passes::vegetation::ripple::RIPPLE_N
-        } else {
-            1
-        };
-        let mut ripple =
-            vec![0u8; crate::passes::vegetation::ripple::ripple_bytes(ripple_n) as usize];
-        let header = crate::passes::vegetation::ripple::header(ripple_n, glam::Vec3::ZERO, 0, 0.0);
+        let ripple_n = if grass { ripple::RIPPLE_N } else { 1 };
+        let mut ripple = vec![0u8; ripple::ripple_bytes(ripple_n) as usize];
+        let header = ripple::header(ripple_n, glam::Vec3::ZERO, 0, 0.0);
         ripple[..32].copy_from_slice(bytemuck::bytes_of(&header));
         let materials = if scene.pbr.materials.is_empty() {
             None

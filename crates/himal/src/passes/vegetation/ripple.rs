@@ -8,12 +8,10 @@ use glam::{Vec2, Vec3};
 
 use crate::scene::wind::WindGpu;
 
-/// Cells per side of the window (a scene with grass).
-pub const RIPPLE_N: i32 = 128;
-/// Cell size (m): the window covers 32 x 32 m.
-pub const RIPPLE_CELL: f32 = 0.25;
-/// Wave speed (m/s).
-pub const RIPPLE_SPEED: f32 = 3.0;
+pub use crate::gpu_scene::ripple::{
+    RIPPLE_CELL, RIPPLE_N, RIPPLE_SPEED, RippleHeader, header, ripple_bytes,
+};
+
 /// Longest step (s): c dt / dx stays below 1 / sqrt(2) (stable).
 pub const RIPPLE_MAX_STEP: f32 = 1.0 / 30.0;
 /// `RIPPLE_OMEGA`, `RIPPLE_DAMPING`, `RIPPLE_PUSH` of ripple.wgsl.
@@ -27,16 +25,6 @@ pub const RIPPLE_BEND: f32 = 3.0;
 /// See [`RIPPLE_BEND`].
 pub const RIPPLE_BEND_MAX: f32 = 0.3;
 
-/// Twin of `RippleHeader`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct RippleHeader {
-    /// Window origin (world cell x, z), the half this step reads, cells per side.
-    pub window: [i32; 4],
-    /// Cell size (m), step (s), wave speed (m/s), 0.
-    pub params: [f32; 4],
-}
-
 /// Twin of `RippleStep` in ripple.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -45,21 +33,6 @@ pub struct RippleStepGpu {
     pub time: [f32; 4],
     /// The sources (their centres at the step's end: `finish`).
     pub wind: WindGpu,
-}
-
-/// Bytes of a ripple buffer of `n` cells per side: header, two halves of
-/// heights, two of gradients.
-pub fn ripple_bytes(n: i32) -> u64 {
-    (std::mem::size_of::<RippleHeader>() + 4 * (n * n) as usize * 16) as u64
-}
-
-/// The header of a frame whose camera is at `camera`, reading `half`.
-pub fn header(n: i32, camera: Vec3, half: i32, dt: f32) -> RippleHeader {
-    let c = (Vec2::new(camera.x, camera.z) / RIPPLE_CELL).floor();
-    RippleHeader {
-        window: [c.x as i32 - n / 2, c.y as i32 - n / 2, half, n],
-        params: [RIPPLE_CELL, dt, RIPPLE_SPEED, 0.0],
-    }
 }
 
 fn slot(c: (i32, i32), n: i32) -> usize {
