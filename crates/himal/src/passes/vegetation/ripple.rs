@@ -4,7 +4,7 @@
 //! the grass vertex stage's `ripple_bend`.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 
 use crate::scene::wind::WindGpu;
 
