@@ -228,6 +228,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
         .impostors
         .store(settings.impostors, std::sync::atomic::Ordering::Relaxed);
     passes.cull.set_impostors(&ctx.queue, settings.impostors);
+    // The world's trees: their pool regions list nothing without vegetation.
+    passes
+        .cull
+        .show_pool_vegetation(&ctx.queue, settings.vegetation);
     // The GPU culling's lists hold every object: without vegetation the CPU culls.
     let hide_vegetation = !settings.vegetation && scene.vegetation_objects.contains(&true);
     let size = (settings.width, settings.height);
