@@ -122,6 +122,21 @@ fn the_default_pools_hold_the_forests_along_the_flight() {
         let u = s.settle(Vec2::new(p.x, p.z), Duration::from_secs(300));
         assert_eq!((u.stats.missing, u.stats.over_capacity), (0, 0), "{:?}", u.stats);
         let (l, r) = (u.live[larch], u.live[rose]);
+        let mut ys: Vec<f32> = (s.resident().values())
+            .flat_map(|r| r.data.instances.iter())
+            .filter(|i| i.kind.species().is_some())
+            .map(|i| i.position.y)
+            .collect();
+        ys.sort_by(f32::total_cmp);
+        let q = |f: f32| ys.get((f * ys.len() as f32) as usize).copied().unwrap_or(0.0);
+        eprintln!(
+            "        tree heights {:.0} / {:.0} / {:.0} / {:.0} / {:.0} m (0, 25, 50, 75, 99 %)",
+            q(0.0),
+            q(0.25),
+            q(0.5),
+            q(0.75),
+            q(0.99)
+        );
         eprintln!("{:>5.0} m: {l} larches, {r} rosewoods resident", k as f32 * 1000.0);
         peak = [peak[0].max(l), peak[1].max(r)];
         if l + r > most {

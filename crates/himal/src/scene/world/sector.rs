@@ -169,7 +169,7 @@ impl SectorData {
 pub struct PlacementRules {
     /// Scales each 8 m cell's chance of a rock (at most one per cell).
     pub rock_density: f32,
-    /// Scales each 6.4 m cell's chance of a tree (at most one per cell).
+    /// Scales each 4 m cell's chance of a tree (at most one per cell).
     pub tree_density: f32,
     /// Steepest ground a tree stands on (degrees from horizontal).
     pub tree_max_slope: f32,
@@ -190,7 +190,7 @@ impl Default for PlacementRules {
             rock_density: 1.0,
             tree_density: 1.0,
             tree_max_slope: 34.0,
-            larch_line: 300.0,
+            larch_line: 160.0,
             houses: true,
             fields: true,
             fences: true,
@@ -465,7 +465,8 @@ fn scatter_trees(
     out: &mut Vec<Instance>,
 ) {
     let mut rng = Rng(seed as u64 ^ 0x0000_0000_7ee5_0000);
-    let cell = 6.4;
+    // 625 trees/ha at most: closed forests (FC4's Kyrat) of >= 50,000 trees within 1 km.
+    let cell = 4.0;
     let n = (SECTOR_SIZE / cell) as usize;
     let s = &t.shape;
     for j in 0..n {
