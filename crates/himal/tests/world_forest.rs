@@ -17,7 +17,8 @@ fn world(density: f32) -> Arc<World> {
     let mut desc = WorldDesc::default();
     desc.stream.radius = 256.0;
     desc.pools.tiles = 128;
-    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 4096, 4096, 256];
+    // Trees: 68 sectors of at most 256 (4 m cells) within 256 m.
+    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 16384, 16384, 256];
     desc.rules.tree_density = density;
     Arc::new(World::new(desc))
 }
@@ -52,7 +53,7 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
     let camera = forest_camera(&trees);
     let mut r = settled(&trees, &camera);
     let scene = trees.scene();
-    let mut frame = |r: &mut Renderer, culling, view: &str| {
+    let frame = |r: &mut Renderer, culling, view: &str| {
         let mut s = common::raw_settings(&scene, SIZE, view);
         s.culling = culling;
         r.reset_history();

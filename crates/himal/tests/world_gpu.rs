@@ -20,7 +20,8 @@ fn small_world() -> Arc<World> {
     let mut desc = WorldDesc::default();
     desc.stream.radius = 256.0;
     desc.pools.tiles = 128;
-    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 2048, 4096, 256];
+    // Trees: 68 sectors of at most 256 (4 m cells) within 256 m.
+    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 16384, 16384, 256];
     Arc::new(World::new(desc))
 }
 
