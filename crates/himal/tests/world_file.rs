@@ -235,13 +235,7 @@ fn rules_change_what_sectors_place() {
     assert!(double.len() > rocks.len() && positions(&double).is_superset(&all_pos));
 
     // Trees: density 0 gives none; a lower tree line or max slope a subset.
-    assert!(
-        of_kind(
-            &with("tree_density = 0.5", "tree_density = 0.0"),
-            &TREES
-        )
-        .is_empty()
-    );
+    assert!(of_kind(&with("tree_density = 0.5", "tree_density = 0.0"), &TREES).is_empty());
     // A tree line 20 m below the median tree (its jitter is 20 m either way).
     let mut ys: Vec<f32> = trees.iter().map(|t| t.position.y).collect();
     ys.sort_by(f32::total_cmp);
@@ -351,7 +345,10 @@ fn village_rules_decide_villages_and_their_parts() {
 fn pool_sizes_from_the_file_reach_the_streamer() {
     let w = Arc::new(world_from(&heightmap_text()));
     let mut s = Streamer::new(w);
-    assert_eq!(s.capacities(), [3000, 3001, 3002, 16, 17, 18, 19, 4000, 8000, 20]);
+    assert_eq!(
+        s.capacities(),
+        [3000, 3001, 3002, 16, 17, 18, 19, 4000, 8000, 20]
+    );
     let u = s.settle(Vec2::ZERO, Duration::from_secs(120));
     let st = u.stats;
     assert_eq!(st.tiles_total, 128);

@@ -120,7 +120,12 @@ fn the_default_pools_hold_the_forests_along_the_flight() {
     for k in 0..=8 {
         let p = path.position(k as f32 * 1000.0);
         let u = s.settle(Vec2::new(p.x, p.z), Duration::from_secs(300));
-        assert_eq!((u.stats.missing, u.stats.over_capacity), (0, 0), "{:?}", u.stats);
+        assert_eq!(
+            (u.stats.missing, u.stats.over_capacity),
+            (0, 0),
+            "{:?}",
+            u.stats
+        );
         let (l, r) = (u.live[larch], u.live[rose]);
         let mut ys: Vec<f32> = (s.resident().values())
             .flat_map(|r| r.data.instances.iter())
@@ -128,7 +133,11 @@ fn the_default_pools_hold_the_forests_along_the_flight() {
             .map(|i| i.position.y)
             .collect();
         ys.sort_by(f32::total_cmp);
-        let q = |f: f32| ys.get((f * ys.len() as f32) as usize).copied().unwrap_or(0.0);
+        let q = |f: f32| {
+            ys.get((f * ys.len() as f32) as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
         eprintln!(
             "        tree heights {:.0} / {:.0} / {:.0} / {:.0} / {:.0} m (0, 25, 50, 75, 99 %)",
             q(0.0),
@@ -137,7 +146,10 @@ fn the_default_pools_hold_the_forests_along_the_flight() {
             q(0.75),
             q(0.99)
         );
-        eprintln!("{:>5.0} m: {l} larches, {r} rosewoods resident", k as f32 * 1000.0);
+        eprintln!(
+            "{:>5.0} m: {l} larches, {r} rosewoods resident",
+            k as f32 * 1000.0
+        );
         peak = [peak[0].max(l), peak[1].max(r)];
         if l + r > most {
             most = l + r;

@@ -87,7 +87,12 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
         gpu.image.to_rgba_f32().expect("rgba"),
         bare.image.to_rgba_f32().expect("rgba"),
     );
-    let tree: Vec<&[f32; 4]> = a.iter().zip(&b).filter(|(x, y)| x != y).map(|p| p.0).collect();
+    let tree: Vec<&[f32; 4]> = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| x != y)
+        .map(|p| p.0)
+        .collect();
     let leaves = tree.iter().filter(|p| green(p)).count();
     let bark = tree.len() - leaves;
     let n = a.len();
@@ -100,7 +105,11 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
         cpu.shadows.draws
     );
     assert!(tree.len() > n / 10, "only {} tree pixels", tree.len());
-    assert!(leaves > tree.len() / 2, "{leaves} leaf pixels of {}", tree.len());
+    assert!(
+        leaves > tree.len() / 2,
+        "{leaves} leaf pixels of {}",
+        tree.len()
+    );
     assert!(bark > 0, "no bark pixel");
     // Impostors: most resident trees are far; the impostor view tints them.
     let imp = frame(&mut r, Culling::Gpu, "impostor");

@@ -29,8 +29,9 @@ fn small_world() -> Arc<World> {
 /// trunk and leaves).
 fn kind_bounds(scene: &himal::scene::Scene, kind: InstanceKind) -> himal::scene::Aabb {
     let regions = himal::scene::world::forest::regions();
-    (regions.iter().filter(|r| r.kind == kind))
-        .fold(himal::scene::Aabb::EMPTY, |b, r| b.union(&scene.meshes[r.mesh].bounds))
+    (regions.iter().filter(|r| r.kind == kind)).fold(himal::scene::Aabb::EMPTY, |b, r| {
+        b.union(&scene.meshes[r.mesh].bounds)
+    })
 }
 
 /// The world's camera called `name`.

@@ -82,7 +82,8 @@ impl WorldState {
     /// A streamer over `world` with nothing resident yet; `scene` is the
     /// world's scene (`World::scene`: its meshes as [`forest::regions`] lays them out).
     pub fn new(world: Arc<World>, scene: &Scene) -> Self {
-        let mut regions: Vec<Vec<RegionRecords>> = InstanceKind::ALL.iter().map(|_| Vec::new()).collect();
+        let mut regions: Vec<Vec<RegionRecords>> =
+            InstanceKind::ALL.iter().map(|_| Vec::new()).collect();
         for (region, r) in forest::regions().into_iter().enumerate() {
             let Some(m) = scene.meshes.get(r.mesh) else {
                 continue;
@@ -154,18 +155,17 @@ impl WorldState {
                 };
                 let mut run: Vec<(ObjectGpu, ObjectBounds)> = Vec::new();
                 let mut start = 0u32;
-                let flush = |start: u32,
-                             run: &mut Vec<(ObjectGpu, ObjectBounds)>,
-                             cull: &mut CullPass| {
-                    if run.is_empty() {
-                        return;
-                    }
-                    let first = region.first_object + start;
-                    let (objects, bounds): (Vec<ObjectGpu>, Vec<ObjectBounds>) =
-                        run.drain(..).unzip();
-                    scene.write_objects(queue, first, &objects);
-                    cull.write_bounds(queue, first, &bounds);
-                };
+                let flush =
+                    |start: u32, run: &mut Vec<(ObjectGpu, ObjectBounds)>, cull: &mut CullPass| {
+                        if run.is_empty() {
+                            return;
+                        }
+                        let first = region.first_object + start;
+                        let (objects, bounds): (Vec<ObjectGpu>, Vec<ObjectBounds>) =
+                            run.drain(..).unzip();
+                        scene.write_objects(queue, first, &objects);
+                        cull.write_bounds(queue, first, &bounds);
+                    };
                 for &slot in dirty.iter().filter(|&&s| s < region.capacity) {
                     if !run.is_empty() && slot != start + run.len() as u32 {
                         flush(start, &mut run, cull);

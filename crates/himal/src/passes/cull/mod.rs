@@ -336,7 +336,10 @@ impl CullLayout {
     /// consecutive, after the list's own runs).
     pub fn pool_range(&self, list: List) -> (u32, u32) {
         let (first, count) = self.range(list);
-        let inside = self.pool_batches.iter().filter(|&&b| b >= first && b < first + count);
+        let inside = self
+            .pool_batches
+            .iter()
+            .filter(|&&b| b >= first && b < first + count);
         let n = inside.clone().count() as u32;
         (inside.copied().min().unwrap_or(first + count), n)
     }
@@ -607,7 +610,11 @@ impl CullPass {
             return;
         };
         r.0 = live;
-        let shown = if r.1 && !self.pool_vegetation { 0 } else { live };
+        let shown = if r.1 && !self.pool_vegetation {
+            0
+        } else {
+            live
+        };
         self.write_counts(queue, region, shown);
     }
 

@@ -129,11 +129,14 @@ pub struct Region {
 /// in the scene ([`super::World::scene`]).
 pub fn regions() -> Vec<Region> {
     let n = InstanceKind::ALL.len();
-    let own = InstanceKind::ALL.iter().enumerate().map(|(k, &kind)| Region {
-        kind,
-        mesh: k,
-        leaves: false,
-    });
+    let own = InstanceKind::ALL
+        .iter()
+        .enumerate()
+        .map(|(k, &kind)| Region {
+            kind,
+            mesh: k,
+            leaves: false,
+        });
     let trees = InstanceKind::ALL.iter().filter(|k| k.species().is_some());
     let leaves = trees.enumerate().map(|(j, &kind)| Region {
         kind,

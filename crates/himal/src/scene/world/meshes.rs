@@ -8,9 +8,9 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::{InstanceKind, forest};
-use crate::scene::tree::impostor::Impostor;
 use crate::scene::noise;
 use crate::scene::primitives::{self, MeshBuilder};
+use crate::scene::tree::impostor::Impostor;
 use crate::scene::{Aabb, MaterialDesc, Mesh};
 
 fn material(name: &str, albedo: [f32; 3], glossiness: f32) -> MaterialDesc {
@@ -207,7 +207,9 @@ mod tests {
 
     #[test]
     fn meshes_stand_on_their_base_and_are_well_formed() {
-        let meshes = InstanceKind::ALL.iter().filter_map(|&k| Some((k, kind_mesh(k)?)));
+        let meshes = InstanceKind::ALL
+            .iter()
+            .filter_map(|&k| Some((k, kind_mesh(k)?)));
         for (k, m) in meshes {
             assert!(
                 m.bounds.min.y.abs() < 1e-4,

@@ -62,7 +62,9 @@ impl Default for PoolSizes {
         PoolSizes {
             tiles: 1024,
             // rock0..2, house, roof, field, fence, larch, rosewood, water
-            instances: [16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536, 65536, 1024],
+            instances: [
+                16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536, 65536, 1024,
+            ],
         }
     }
 }
