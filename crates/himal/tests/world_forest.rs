@@ -12,7 +12,8 @@ use himal::scene::world::{World, WorldDesc};
 use himal::{Culling, FrameSettings, Renderer};
 
 /// A world streamed 256 m around its cameras, with small pools; trees at
-/// `density` times the default.
+/// `density` times the default (the tests use a fifth at most: lavapipe
+/// takes minutes per frame of the full forest, docs/world.md "Forests").
 fn world(density: f32) -> Arc<World> {
     let mut desc = WorldDesc::default();
     desc.stream.radius = 256.0;
@@ -49,7 +50,7 @@ fn green(p: &[f32; 4]) -> bool {
 
 #[test]
 fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
-    let trees = world(1.0);
+    let trees = world(0.2);
     let camera = forest_camera(&trees);
     let mut r = settled(&trees, &camera);
     let scene = trees.scene();
@@ -104,7 +105,7 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
         gpu.shadows.draws,
         cpu.shadows.draws
     );
-    assert!(tree.len() > n / 10, "only {} tree pixels", tree.len());
+    assert!(tree.len() > n / 20, "only {} tree pixels", tree.len());
     assert!(
         leaves > tree.len() / 2,
         "{leaves} leaf pixels of {}",
@@ -127,7 +128,7 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
 #[test]
 fn vegetation_draw_calls_do_not_depend_on_the_tree_count() {
     let mut counts = Vec::new();
-    for density in [1.0, 0.25] {
+    for density in [0.2, 0.05] {
         let w = world(density);
         let camera = forest_camera(&w);
         let mut r = settled(&w, &camera);
@@ -140,7 +141,7 @@ fn vegetation_draw_calls_do_not_depend_on_the_tree_count() {
         );
         counts.push((live, f.gbuffer_draws, f.shadows.draws));
     }
-    assert!(counts[0].0 > counts[1].0 + 1000, "{counts:?}");
+    assert!(counts[0].0 > counts[1].0 + 500, "{counts:?}");
     assert_eq!(
         (counts[0].1, counts[0].2),
         (counts[1].1, counts[1].2),

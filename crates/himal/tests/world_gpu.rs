@@ -22,6 +22,9 @@ fn small_world() -> Arc<World> {
     desc.pools.tiles = 128;
     // Trees: 68 sectors of at most 256 (4 m cells) within 256 m.
     desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 16384, 16384, 256];
+    // Forests at a tenth: lavapipe takes minutes per frame of the full
+    // forest (docs/world.md "Forests"); tests/world_forest.rs draws them.
+    desc.rules.tree_density = 0.1;
     Arc::new(World::new(desc))
 }
 

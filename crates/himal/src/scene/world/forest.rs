@@ -72,10 +72,13 @@ fn look(species: Species) -> (MaterialDesc, MaterialDesc, Vec3) {
     }
 }
 
+/// The process's world trees by (species, seed).
+type Memo = Mutex<HashMap<(Species, u32), Arc<WorldTree>>>;
+
 /// The world tree of `species`, built (or read from the tree cache) on
 /// first use and shared by every later world scene of the process.
 pub fn tree(species: Species) -> Arc<WorldTree> {
-    static MEMO: OnceLock<Mutex<HashMap<(Species, u32), Arc<WorldTree>>>> = OnceLock::new();
+    static MEMO: OnceLock<Memo> = OnceLock::new();
     let key = (species, seed(species));
     let memo = MEMO.get_or_init(Default::default);
     // Held while building: a second scene waits for the first's trees.
