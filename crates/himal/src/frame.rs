@@ -237,6 +237,10 @@ pub fn plan(passes: &mut Passes, p: PlanInputs<'_>) -> Planned {
     passes.cull.set_impostors(&ctx.queue, settings.impostors);
     // V4: the trees' volumes darken the sky light where the trees are drawn.
     passes.tree_ao.on = settings.tree_ao && settings.vegetation;
+    // The world's trees: their pool regions list nothing without vegetation.
+    passes
+        .cull
+        .show_pool_vegetation(&ctx.queue, settings.vegetation);
     // The GPU culling's lists hold every object: without vegetation the CPU culls.
     let hide_vegetation = !settings.vegetation && scene.vegetation_objects.contains(&true);
     let size = (settings.width, settings.height);

@@ -105,7 +105,7 @@ fn a_probe_over_flat_open_ground_sees_the_ground_the_terrain_shader_paints() {
     use himal::passes::terrain::TerrainLayerDesc;
     let world = small_world();
     let layers = TerrainLayerDesc::for_world(&world);
-    let meshes = himal::scene::world::meshes::world_meshes();
+    let meshes = himal::scene::world::meshes::solid_meshes();
     let block = IVec2::new(1, 1);
     let geometry = block_geometry(&world, &meshes, &layers, block);
     // The flattest probe position of the block: least height change within 32 m.

@@ -57,6 +57,8 @@ fn positions(all: &[Instance]) -> HashSet<[u32; 3]> {
         .collect()
 }
 
+const TREES: [InstanceKind; 2] = [InstanceKind::Larch, InstanceKind::Rosewood];
+
 const ROCKS: [InstanceKind; 3] = [
     InstanceKind::Rock0,
     InstanceKind::Rock1,
@@ -79,6 +81,7 @@ fn the_scene_file_becomes_the_description_it_says() {
             rock_density: 2.0,
             tree_density: 0.5,
             tree_max_slope: 30.0,
+            larch_line: 220.0,
             houses: true,
             fields: true,
             fences: false,
@@ -97,7 +100,7 @@ fn the_scene_file_becomes_the_description_it_says() {
         d.pools,
         PoolSizes {
             tiles: 128,
-            instances: [3000, 3001, 3002, 16, 17, 18, 19, 8000, 20],
+            instances: [3000, 3001, 3002, 16, 17, 18, 19, 4000, 8000, 20],
         }
     );
     let HeightSource::Image(g) = &d.source else {
@@ -198,7 +201,7 @@ fn height_map_heights_reach_the_sectors() {
     // No river is carved into a height map.
     let all = all_instances(&w);
     assert!(of_kind(&all, &[InstanceKind::Water]).is_empty());
-    assert!(!of_kind(&all, &ROCKS).is_empty() && !of_kind(&all, &[InstanceKind::Tree]).is_empty());
+    assert!(!of_kind(&all, &ROCKS).is_empty() && !of_kind(&all, &TREES).is_empty());
 }
 
 #[test]
@@ -210,7 +213,7 @@ fn rules_change_what_sectors_place() {
     };
     let full = with("rock_density = 2.0", "rock_density = 1.0");
     let rocks = of_kind(&full, &ROCKS);
-    let trees = of_kind(&full, &[InstanceKind::Tree]);
+    let trees = of_kind(&full, &TREES);
 
     // Rocks: a thinner scatter keeps a subset of the same rocks, about half.
     let half = of_kind(&with("rock_density = 2.0", "rock_density = 0.5"), &ROCKS);
@@ -232,20 +235,14 @@ fn rules_change_what_sectors_place() {
     assert!(double.len() > rocks.len() && positions(&double).is_superset(&all_pos));
 
     // Trees: density 0 gives none; a lower tree line or max slope a subset.
-    assert!(
-        of_kind(
-            &with("tree_density = 0.5", "tree_density = 0.0"),
-            &[InstanceKind::Tree]
-        )
-        .is_empty()
-    );
+    assert!(of_kind(&with("tree_density = 0.5", "tree_density = 0.0"), &TREES).is_empty());
     // A tree line 20 m below the median tree (its jitter is 20 m either way).
     let mut ys: Vec<f32> = trees.iter().map(|t| t.position.y).collect();
     ys.sort_by(f32::total_cmp);
     let line = ys[ys.len() / 2] - 20.0;
     let low = of_kind(
         &with("tree_line = 500.0", &format!("tree_line = {line}")),
-        &[InstanceKind::Tree],
+        &TREES,
     );
     assert!(!low.is_empty() && positions(&low).is_subset(&positions(&trees)));
     assert!(low.iter().all(|t| t.position.y < line + 20.0));
@@ -257,9 +254,32 @@ fn rules_change_what_sectors_place() {
     );
     let flat = of_kind(
         &with("tree_max_slope = 30.0", "tree_max_slope = 10.0"),
-        &[InstanceKind::Tree],
+        &TREES,
     );
     assert!(flat.len() < trees.len() && positions(&flat).is_subset(&positions(&trees)));
+
+    // Species by altitude: larches above the larch line, rosewoods below,
+    // mixed within LARCH_MIX of it; moving the line changes species, not places.
+    let mix = himal::scene::world::sector::LARCH_MIX;
+    let of = |all: &[Instance], k| of_kind(all, &[k]);
+    let (larch, rose) = (
+        of(&full, InstanceKind::Larch),
+        of(&full, InstanceKind::Rosewood),
+    );
+    eprintln!(
+        "larches {}, rosewoods {}; tree heights {:.0} / {:.0} / {:.0} m (min / median / max)",
+        larch.len(),
+        rose.len(),
+        ys[0],
+        ys[ys.len() / 2],
+        ys[ys.len() - 1]
+    );
+    assert!(larch.len() > 50 && rose.len() > 50);
+    assert!(larch.iter().all(|t| t.position.y > 220.0 - mix - 1.0));
+    assert!(rose.iter().all(|t| t.position.y < 220.0 + mix));
+    let high = with("larch_line = 220.0", "larch_line = 2000.0");
+    assert!(of(&high, InstanceKind::Larch).is_empty());
+    assert_eq!(positions(&of_kind(&high, &TREES)), positions(&trees));
 }
 
 #[test]
@@ -325,13 +345,16 @@ fn village_rules_decide_villages_and_their_parts() {
 fn pool_sizes_from_the_file_reach_the_streamer() {
     let w = Arc::new(world_from(&heightmap_text()));
     let mut s = Streamer::new(w);
-    assert_eq!(s.capacities(), [3000, 3001, 3002, 16, 17, 18, 19, 8000, 20]);
+    assert_eq!(
+        s.capacities(),
+        [3000, 3001, 3002, 16, 17, 18, 19, 4000, 8000, 20]
+    );
     let u = s.settle(Vec2::ZERO, Duration::from_secs(120));
     let st = u.stats;
     assert_eq!(st.tiles_total, 128);
     assert_eq!(
         st.instances_total,
-        3000 + 3001 + 3002 + 16 + 17 + 18 + 19 + 8000 + 20
+        3000 + 3001 + 3002 + 16 + 17 + 18 + 19 + 4000 + 8000 + 20
     );
     assert_eq!((st.missing, st.over_capacity), (0, 0), "{st:?}");
     assert!(st.resident > 40 && st.resident <= 128, "{st:?}");
@@ -444,14 +467,14 @@ fn bad_input_is_an_error_at_the_key() {
         "world.pools.tiles = 0 is out of range",
     );
     fails(
-        "[world]\n[world.pools]\ntree = 0\n",
-        "3:8",
-        "world.pools.tree = 0",
+        "[world]\n[world.pools]\nlarch = 0\n",
+        "3:9",
+        "world.pools.larch = 0",
     );
     fails(
         "[world]\n[world.pools]\nrock9 = 10\n",
         "3:9",
-        "no such pool (known: tiles, rock0, rock1, rock2, house, roof, field, fence, tree, water)",
+        "no such pool (known: tiles, rock0, rock1, rock2, house, roof, field, fence, larch, rosewood, water)",
     );
     fails(
         "[world]\n[world.pools]\ntiles = 100\n",
@@ -487,37 +510,39 @@ fn bad_input_is_an_error_at_the_key() {
 }
 
 /// A sector's (x, z), instance counts by kind and three heights.
-type Recorded = ((u16, u16), [usize; 9], [f32; 3]);
+type Recorded = ((u16, u16), [usize; 10], [f32; 3]);
 
 #[test]
 fn the_default_world_is_unchanged() {
     // Recorded from `WorldDesc::default()` before scene files could
     // describe a world (instance counts by kind in `InstanceKind::ALL`
-    // order; heights at samples 0, the centre and the last).
+    // order; heights at samples 0, the centre and the last). The trees
+    // were recorded again when the forests came (issue #18: 4 m cells,
+    // larches above 160 m, rosewoods below); the rest is as recorded then.
     let recorded: [Recorded; 5] = [
         (
             (80, 80),
-            [4, 4, 3, 0, 0, 0, 0, 0, 2],
+            [4, 4, 3, 0, 0, 0, 0, 0, 0, 2],
             [106.18969, 105.73825, 105.36053],
         ),
         (
             (40, 120),
-            [4, 7, 5, 0, 0, 0, 0, 0, 0],
+            [4, 7, 5, 0, 0, 0, 0, 0, 0, 0],
             [267.08038, 246.90013, 225.05351],
         ),
         (
             (100, 60),
-            [1, 1, 0, 0, 0, 0, 0, 72, 0],
+            [1, 1, 0, 0, 0, 0, 0, 14, 165, 0],
             [137.8264, 137.62943, 137.43782],
         ),
         (
             (12, 150),
-            [6, 9, 7, 0, 0, 0, 0, 8, 0],
+            [6, 9, 7, 0, 0, 0, 0, 13, 0, 0],
             [506.63718, 513.72797, 519.7742],
         ),
         (
             (130, 20),
-            [0, 0, 1, 0, 0, 0, 0, 55, 0],
+            [0, 0, 1, 0, 0, 0, 0, 66, 63, 0],
             [164.79463, 163.43689, 162.01277],
         ),
     ];
@@ -528,7 +553,7 @@ fn the_default_world_is_unchanged() {
     for ((x, z), counts, heights) in recorded {
         let c = SectorCoord { x, z };
         let s = w.sector(c);
-        let mut got = [0usize; 9];
+        let mut got = [0usize; 10];
         for i in &s.instances {
             got[i.kind as usize] += 1;
         }

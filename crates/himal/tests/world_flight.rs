@@ -101,3 +101,70 @@ fn check_instance_slots(s: &Streamer, u: &StreamUpdate) {
     }
     assert_eq!(live.to_vec(), u.live, "regions not packed");
 }
+
+/// Trees resident along the flight with the default radius (1 km) and
+/// pools: the forests of issue #18 item 6 (at least 50,000 trees in the
+/// world at once), every wanted sector placed (no pool over capacity).
+#[test]
+fn the_default_pools_hold_the_forests_along_the_flight() {
+    let w = Arc::new(World::new(WorldDesc::default()));
+    let path = w.paths[0].clone();
+    let mut s = Streamer::new(w.clone());
+    let (larch, rose) = (
+        InstanceKind::Larch as usize,
+        InstanceKind::Rosewood as usize,
+    );
+    let cap = |k: usize| w.desc.pools.instances[k];
+    let (mut most, mut least, mut peak) = (0u32, u32::MAX, [0u32; 2]);
+    let t0 = Instant::now();
+    for k in 0..=8 {
+        let p = path.position(k as f32 * 1000.0);
+        let u = s.settle(Vec2::new(p.x, p.z), Duration::from_secs(300));
+        assert_eq!(
+            (u.stats.missing, u.stats.over_capacity),
+            (0, 0),
+            "{:?}",
+            u.stats
+        );
+        let (l, r) = (u.live[larch], u.live[rose]);
+        let mut ys: Vec<f32> = (s.resident().values())
+            .flat_map(|r| r.data.instances.iter())
+            .filter(|i| i.kind.species().is_some())
+            .map(|i| i.position.y)
+            .collect();
+        ys.sort_by(f32::total_cmp);
+        let q = |f: f32| {
+            ys.get((f * ys.len() as f32) as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        eprintln!(
+            "        tree heights {:.0} / {:.0} / {:.0} / {:.0} / {:.0} m (0, 25, 50, 75, 99 %)",
+            q(0.0),
+            q(0.25),
+            q(0.5),
+            q(0.75),
+            q(0.99)
+        );
+        eprintln!(
+            "{:>5.0} m: {l} larches, {r} rosewoods resident",
+            k as f32 * 1000.0
+        );
+        peak = [peak[0].max(l), peak[1].max(r)];
+        if l + r > most {
+            most = l + r;
+        }
+        least = least.min(l + r);
+    }
+    eprintln!(
+        "trees resident along the flight: {least}..{most}; peaks {} of {} larch and {} of {} rosewood slots ({:.1} s)",
+        peak[0],
+        cap(larch),
+        peak[1],
+        cap(rose),
+        t0.elapsed().as_secs_f64()
+    );
+    assert!(most >= 50_000, "at most {most} trees resident");
+    // Headroom: a denser stretch than the flight's still fits.
+    assert!(peak[0] < cap(larch) && peak[1] < cap(rose));
+}

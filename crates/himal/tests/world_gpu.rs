@@ -20,8 +20,21 @@ fn small_world() -> Arc<World> {
     let mut desc = WorldDesc::default();
     desc.stream.radius = 256.0;
     desc.pools.tiles = 128;
-    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 4096, 256];
+    // Trees: 68 sectors of at most 256 (4 m cells) within 256 m.
+    desc.pools.instances = [1024, 1024, 1024, 256, 256, 64, 1024, 16384, 16384, 256];
+    // Forests at a tenth: lavapipe takes minutes per frame of the full
+    // forest (docs/world.md "Forests"); tests/world_forest.rs draws them.
+    desc.rules.tree_density = 0.1;
     Arc::new(World::new(desc))
+}
+
+/// The local bounds of everything an instance of `kind` draws (a tree's
+/// trunk and leaves).
+fn kind_bounds(scene: &himal::scene::Scene, kind: InstanceKind) -> himal::scene::Aabb {
+    let regions = himal::scene::world::forest::regions();
+    (regions.iter().filter(|r| r.kind == kind)).fold(himal::scene::Aabb::EMPTY, |b, r| {
+        b.union(&scene.meshes[r.mesh].bounds)
+    })
 }
 
 /// The world's camera called `name`.
@@ -46,7 +59,7 @@ fn streamed_pool_lists_match_the_twin() {
     let ctx = common::context();
     let world = small_world();
     let scene = world.scene();
-    let pool = himal::renderer::world_pools(&world);
+    let pool = himal::renderer::world_pools(&world, &scene);
     let gpu = SceneGpu::upload_with_pool(&ctx, &scene, &pool).expect("upload");
     let mut cull = CullPass::new(&ctx, &gpu).expect("cull pass");
     cull.supported().expect("lavapipe draws indirectly");
@@ -105,7 +118,10 @@ fn streamed_pool_lists_match_the_twin() {
         got.instances, want.instances,
         "instance lists differ from the twin"
     );
-    // The top-down view over 6 km sees every live instance: one entry each.
+    // The top-down view over 6 km sees every live instance: one entry per
+    // region (a tree's trunk and leaves).
+    let regions = himal::scene::world::forest::regions();
+    let live: u32 = regions.iter().map(|r| u2.live[r.kind as usize]).sum();
     let l = &cull.layout;
     let per_view = l.batches.len() * himal::passes::cull::LISTS;
     let listed: u32 = got.args[2 * per_view..3 * per_view]
@@ -117,8 +133,8 @@ fn streamed_pool_lists_match_the_twin() {
         "the whole-world view lists {listed} of {live} live instances"
     );
     // And only live slots: each listed object lies inside its region's live prefix.
-    for (k, r) in gpu.pool.iter().enumerate() {
-        let live_k = u2.live[k];
+    for (r, region) in gpu.pool.iter().zip(&regions) {
+        let live_k = u2.live[region.kind as usize];
         for list in &got.instances[2 * per_view..3 * per_view] {
             for &e in list {
                 let o = e & 0x00ff_ffff;
@@ -126,7 +142,7 @@ fn streamed_pool_lists_match_the_twin() {
                     assert!(
                         o - r.first_object < live_k,
                         "{} slot {} listed past live {live_k}",
-                        InstanceKind::ALL[k].name(),
+                        region.kind.name(),
                         o - r.first_object
                     );
                 }
@@ -149,8 +165,8 @@ fn streamed_pool_lists_match_the_twin() {
         "distance culling differs from the twin"
     );
     let mut dropped = 0;
-    for (k, r) in gpu.pool.iter().enumerate() {
-        let kind = InstanceKind::ALL[k];
+    for (r, region) in gpu.pool.iter().zip(&regions) {
+        let (kind, k) = (region.kind, region.kind as usize);
         let max = kind.draw_distance();
         let within = (0..u2.live[k])
             .filter(|&s| {
@@ -440,9 +456,7 @@ fn static_shadow_map_holds_terrain_and_instances_and_follows_streaming() {
                     continue;
                 };
                 for i in world.sector(c).instances {
-                    let b: Aabb = scene.meshes[i.kind as usize]
-                        .bounds
-                        .transform(&i.transform());
+                    let b: Aabb = kind_bounds(&scene, i.kind).transform(&i.transform());
                     out.push((i.kind, b));
                 }
             }

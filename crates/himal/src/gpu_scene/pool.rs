@@ -6,9 +6,11 @@ use bytemuck::Zeroable;
 
 use super::{ObjectBounds, ObjectGpu, SceneGpu};
 use crate::gpu::GpuError;
+use crate::scene::Foliage;
 
 /// A streamed region of the objects buffer (the open world, V6): objects
-/// `first_object..first_object + capacity` draw mesh `mesh`; streaming
+/// `first_object..first_object + capacity` draw mesh `mesh`, opaque or as
+/// vegetation; streaming
 /// writes their records ([`SceneGpu::write_objects`]) and bounds, packed
 /// from the front; `passes::cull` culls them per view (on the GPU, or its
 /// CPU twin where that path is off).
@@ -22,6 +24,13 @@ pub struct PoolRegion {
     pub capacity: u32,
     /// Culled beyond this distance from the camera (m; 0: no limit).
     pub max_distance: f32,
+    /// Vegetation (a tree's leaves): culled among the vegetation batches
+    /// and drawn alpha-tested, each record's parameters these; `None`:
+    /// opaque.
+    pub foliage: Option<Foliage>,
+    /// Part of the vegetation (a tree's trunk or leaves): hidden with
+    /// `FrameSettings::vegetation` off.
+    pub vegetation: bool,
 }
 
 /// A streamed region to reserve ([`SceneGpu::upload_with_pool`]).
@@ -33,6 +42,10 @@ pub struct PoolSpec {
     pub capacity: u32,
     /// Per-class distance culling (m; 0: no limit).
     pub max_distance: f32,
+    /// Vegetation with these foliage parameters ([`PoolRegion::foliage`]); `None`: opaque.
+    pub foliage: Option<Foliage>,
+    /// Part of the vegetation ([`PoolRegion::vegetation`]).
+    pub vegetation: bool,
 }
 
 /// Reserves the regions `pool` asks for after the objects laid out so far
@@ -52,6 +65,8 @@ pub(super) fn reserve(
         mesh,
         capacity,
         max_distance,
+        foliage,
+        vegetation,
     } in pool
     {
         if mesh >= meshes {
@@ -65,6 +80,8 @@ pub(super) fn reserve(
             first_object: objects.len() as u32,
             capacity,
             max_distance,
+            foliage,
+            vegetation,
         });
         let n = capacity as usize;
         objects.resize(objects.len() + n, ObjectGpu::zeroed());
@@ -80,5 +97,13 @@ impl SceneGpu {
     pub fn write_objects(&self, queue: &wgpu::Queue, first_object: u32, objects: &[ObjectGpu]) {
         let offset = first_object as u64 * std::mem::size_of::<ObjectGpu>() as u64;
         queue.write_buffer(&self.objects, offset, bytemuck::cast_slice(objects));
+    }
+}
+
+impl SceneGpu {
+    /// Whether anything draws as vegetation: the scene's own objects or a
+    /// streamed vegetation region.
+    pub fn has_vegetation(&self) -> bool {
+        !self.draws_vegetation.is_empty() || self.pool.iter().any(|r| r.foliage.is_some())
     }
 }

@@ -1,6 +1,7 @@
 //! The streamed world in the renderer (`--scene world`): each frame the
 //! streamer's changes become object records and culling bounds in the
-//! scene's pool regions (one per instance kind), and the regions' live
+//! scene's pool regions (one per instance kind, two per tree kind: its
+//! trunk and its leaves), and the regions' live
 //! counts become the culling chunks' counts. Sector generation runs on the
 //! streamer's workers; this thread only copies what changed.
 
@@ -15,8 +16,8 @@ use crate::gpu_scene::{OBJECT_TINTED, ObjectBounds, ObjectGpu};
 use crate::passes::cull::CullPass;
 use crate::passes::terrain::{TerrainDesc, TerrainLayerDesc, TerrainPass};
 use crate::scene::world::stream::{StreamStats, StreamUpdate, Streamer};
-use crate::scene::world::{Instance, InstanceKind, World};
-use crate::scene::{Aabb, lod};
+use crate::scene::world::{Instance, InstanceKind, World, forest};
+use crate::scene::{Aabb, Foliage, lod};
 
 /// L2's depth range below the lowest coarse height and above the highest
 /// (m): tiles between coarse points, and the tallest house on a peak.
@@ -62,39 +63,60 @@ pub struct WorldState {
     pub stream_ms: f64,
     /// ... by phase.
     pub stream_times: StreamTimes,
-    /// Per kind: its mesh's bounds and geometric-mean triangle area (E2).
-    meshes: Vec<(Aabb, f32)>,
+    /// Per kind: its pool regions (a tree's trunk and leaves).
+    regions: Vec<Vec<RegionRecords>>,
+}
+
+/// What the records of one pool region need: the region (its index in
+/// `SceneGpu::pool`), its mesh's bounds and geometric-mean triangle area
+/// (E2), and its foliage (leaves: vegetation parameters, bounds grown by
+/// the sway).
+struct RegionRecords {
+    region: usize,
+    bounds: Aabb,
+    area: f32,
+    foliage: Option<Foliage>,
 }
 
 impl WorldState {
     /// A streamer over `world` with nothing resident yet; `scene` is the
-    /// world's scene (`World::scene`: one shared mesh per `InstanceKind`).
+    /// world's scene (`World::scene`: its meshes as [`forest::regions`] lays them out).
     pub fn new(world: Arc<World>, scene: &Scene) -> Self {
-        let meshes = scene
-            .meshes
-            .iter()
-            .map(|m| (m.bounds, lod::geometric_mean_area(&m.vertices, &m.indices)))
-            .collect();
+        let mut regions: Vec<Vec<RegionRecords>> =
+            InstanceKind::ALL.iter().map(|_| Vec::new()).collect();
+        for (region, r) in forest::regions().into_iter().enumerate() {
+            let Some(m) = scene.meshes.get(r.mesh) else {
+                continue;
+            };
+            regions[r.kind as usize].push(RegionRecords {
+                region,
+                bounds: m.bounds,
+                area: lod::geometric_mean_area(&m.vertices, &m.indices),
+                foliage: r.leaves.then(|| forest::foliage(m)),
+            });
+        }
         WorldState {
             streamer: Streamer::new(world),
             stats: StreamStats::default(),
             stream_ms: 0.0,
             stream_times: StreamTimes::default(),
-            meshes,
+            regions,
         }
     }
 
-    /// The GPU record and culling bounds of `instance`.
-    fn records(&self, i: &Instance) -> (ObjectGpu, ObjectBounds) {
+    /// The GPU record and culling bounds of `instance` in region `r`.
+    fn records(r: &RegionRecords, i: &Instance) -> (ObjectGpu, ObjectBounds) {
         let m = i.transform();
-        let (bounds, area) = self.meshes[i.kind as usize];
         let t = i.tint.map(|c| c as f32 / 255.0);
-        let object = ObjectGpu::new(m, m, [OBJECT_TINTED, t[0], t[1], t[2]]);
-        let b = ObjectBounds::new(
-            &bounds.transform(&m),
-            lod::object_size(area, &m),
-            lod::linear_scale(&m),
-        );
+        let (params, margin) = match r.foliage {
+            // Swaying cards reach up to their amplitude (scaled) beyond the mesh.
+            Some(f) => (f.params(), f.sway * i.size.max_element()),
+            None => ([OBJECT_TINTED, t[0], t[1], t[2]], 0.0),
+        };
+        let object = ObjectGpu::new(m, m, params);
+        let b = r.bounds.transform(&m);
+        let b = Aabb::new(b.min - Vec3::splat(margin), b.max + Vec3::splat(margin));
+        let b = ObjectBounds::new(&b, lod::object_size(r.area, &m), lod::linear_scale(&m));
         (object, b)
     }
 
@@ -122,38 +144,44 @@ impl WorldState {
         self.stream_times.tiles = tiles.span();
         let records = Stopwatch::start();
         for (k, dirty) in u.dirty.iter().enumerate() {
-            let (Some(&kind), Some(region)) = (InstanceKind::ALL.get(k), scene.pool.get(k)) else {
+            let Some(&kind) = InstanceKind::ALL.get(k) else {
                 continue;
             };
             let live = u.live.get(k).copied().unwrap_or(0);
-            let mut run: Vec<(ObjectGpu, ObjectBounds)> = Vec::new();
-            let mut start = 0u32;
-            let flush = |start: u32,
-                         run: &mut Vec<(ObjectGpu, ObjectBounds)>,
-                         cull: &mut CullPass| {
-                if run.is_empty() {
-                    return;
-                }
-                let first = region.first_object + start;
-                let (objects, bounds): (Vec<ObjectGpu>, Vec<ObjectBounds>) = run.drain(..).unzip();
-                scene.write_objects(queue, first, &objects);
-                cull.write_bounds(queue, first, &bounds);
-            };
-            for &slot in dirty.iter().filter(|&&s| s < region.capacity) {
-                if !run.is_empty() && slot != start + run.len() as u32 {
-                    flush(start, &mut run, cull);
-                }
-                if run.is_empty() {
-                    start = slot;
-                }
-                let record = match self.streamer.instance(kind, slot).filter(|_| slot < live) {
-                    Some(i) => self.records(i),
-                    None => (bytemuck::Zeroable::zeroed(), ObjectBounds::NONE),
+            // Slot s of the kind is slot s of each of its regions.
+            for r in &self.regions[k] {
+                let Some(region) = scene.pool.get(r.region) else {
+                    continue;
                 };
-                run.push(record);
+                let mut run: Vec<(ObjectGpu, ObjectBounds)> = Vec::new();
+                let mut start = 0u32;
+                let flush =
+                    |start: u32, run: &mut Vec<(ObjectGpu, ObjectBounds)>, cull: &mut CullPass| {
+                        if run.is_empty() {
+                            return;
+                        }
+                        let first = region.first_object + start;
+                        let (objects, bounds): (Vec<ObjectGpu>, Vec<ObjectBounds>) =
+                            run.drain(..).unzip();
+                        scene.write_objects(queue, first, &objects);
+                        cull.write_bounds(queue, first, &bounds);
+                    };
+                for &slot in dirty.iter().filter(|&&s| s < region.capacity) {
+                    if !run.is_empty() && slot != start + run.len() as u32 {
+                        flush(start, &mut run, cull);
+                    }
+                    if run.is_empty() {
+                        start = slot;
+                    }
+                    let record = match self.streamer.instance(kind, slot).filter(|_| slot < live) {
+                        Some(i) => Self::records(r, i),
+                        None => (bytemuck::Zeroable::zeroed(), ObjectBounds::NONE),
+                    };
+                    run.push(record);
+                }
+                flush(start, &mut run, cull);
+                cull.set_live(queue, r.region, live.min(region.capacity));
             }
-            flush(start, &mut run, cull);
-            cull.set_live(queue, k, live.min(region.capacity));
         }
         self.stream_times.records = records.span();
         self.stats = u.stats;
@@ -177,15 +205,22 @@ fn terrain_desc(world: &World) -> TerrainDesc {
     }
 }
 
-/// The pool regions of `world`'s scene: one per kind (its mesh is the
-/// kind's), sized by the scene file, culled at the kind's draw distance.
-pub fn world_pools(world: &World) -> Vec<crate::gpu_scene::PoolSpec> {
-    (world.desc.pools.instances.iter().zip(InstanceKind::ALL))
-        .enumerate()
-        .map(|(k, (&capacity, kind))| crate::gpu_scene::PoolSpec {
-            mesh: k,
-            capacity,
-            max_distance: kind.draw_distance(),
+/// The pool regions of `world`'s scene ([`forest::regions`]): one per kind
+/// (its mesh is the kind's; a tree kind's trunk, opaque) and per tree kind
+/// its leaves (vegetation, with the leaves' foliage parameters), each of the
+/// kind's size in the scene file, culled at the kind's draw distance.
+/// `scene`: [`World::scene`].
+pub fn world_pools(world: &World, scene: &Scene) -> Vec<crate::gpu_scene::PoolSpec> {
+    forest::regions()
+        .into_iter()
+        .map(|r| crate::gpu_scene::PoolSpec {
+            mesh: r.mesh,
+            capacity: world.desc.pools.instances[r.kind as usize],
+            max_distance: r.kind.draw_distance(),
+            foliage: (r.leaves)
+                .then(|| scene.meshes.get(r.mesh).map(forest::foliage))
+                .flatten(),
+            vegetation: r.kind.species().is_some(),
         })
         .collect()
 }
@@ -196,7 +231,7 @@ impl Renderer {
     /// [`Renderer::settle_world`]).
     pub fn with_world(ctx: GpuContext, world: Arc<World>) -> Result<Self, Error> {
         let scene = world.scene();
-        let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &world_pools(&world))?;
+        let scene_gpu = SceneGpu::upload_with_pool(&ctx, &scene, &world_pools(&world, &scene))?;
         let desc = terrain_desc(&world);
         let terrain = TerrainPass::new(&ctx, &desc)?;
         let mut r = Self::from_upload(ctx, &scene, scene_gpu)?;

@@ -68,6 +68,7 @@ pub(crate) struct FileRules {
     pub rock_density: Option<Spanned<f32>>,
     pub tree_density: Option<Spanned<f32>>,
     pub tree_max_slope: Option<Spanned<f32>>,
+    pub larch_line: Option<Spanned<f32>>,
     pub tree_line: Option<Spanned<f32>>,
     pub village_chance: Option<Spanned<f32>>,
     pub village_max_rise: Option<Spanned<f32>>,

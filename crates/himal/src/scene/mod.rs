@@ -218,8 +218,9 @@
 //!
 //! [world.rules]             # what each sector places
 //! rock_density = 1.0        # [0, 100], scales each 8 m cell's rock chance (one rock per cell at most)
-//! tree_density = 1.0        # [0, 100], scales each 6.4 m cell's tree chance (one tree at most)
+//! tree_density = 1.0        # [0, 100], scales each 4 m cell's tree chance (one tree at most)
 //! tree_max_slope = 34.0     # degrees from horizontal, [0, 90]
+//! larch_line = 160.0        # m: larches above, rosewoods below, mixed by noise within 60 m
 //! tree_line = 560.0         # m, forests thin over the 80 m below it (+-20 m jitter);
 //!                           # villages stand 40 m below it or lower
 //! village_chance = 0.55     # [0, 1], per 768 m cell
@@ -238,14 +239,16 @@
 //! [world.pools]             # fixed GPU pools, allocated once
 //! tiles = 1024              # terrain tiles (65^2 heights, 16.5 KiB each), 1..=2048; must hold
 //!                           # what the radius wants: (64^2 + 256 r + pi r^2) / 64^2 sectors
-//! rock0 = 16384             # instance slots per kind (240 bytes each), 1..=1048576
+//! rock0 = 16384             # instance slots per kind (240 bytes each; a tree's 480:
+//!                           # trunk and leaves), 1..=1048576
 //! rock1 = 16384
 //! rock2 = 16384
 //! house = 4096
 //! roof = 4096
 //! field = 1024
 //! fence = 16384
-//! tree = 65536
+//! larch = 65536
+//! rosewood = 65536
 //! water = 1024
 //! ```
 //!

@@ -17,8 +17,9 @@ pub struct Culled<'a> {
     pub args: CulledArgs<'a>,
     opaque: (u32, u32),
     vegetation: (u32, u32),
-    /// The streamed regions' batches (first, count; inside the opaque list).
-    pool: (u32, u32),
+    /// The streamed regions' batches (first, count) inside the opaque and
+    /// the vegetation list.
+    pool: [(u32, u32); 2],
     batches: u32,
     /// Some batch has more than one level: fading lists may be non-empty.
     pub has_lods: bool,
@@ -77,13 +78,18 @@ impl<'a> Culled<'a> {
             args,
             opaque: layout.range(List::Opaque),
             vegetation: layout.range(List::Vegetation),
-            pool: (
-                layout.pool_batches.first().copied().unwrap_or(0),
-                layout.pool_batches.len() as u32,
-            ),
+            pool: [
+                layout.pool_range(List::Opaque),
+                layout.pool_range(List::Vegetation),
+            ],
             batches: layout.batches.len() as u32,
             has_lods: layout.has_lods(),
         }
+    }
+
+    /// Whether `list` has streamed regions (the world's pool).
+    pub fn has_pool(&self, list: List) -> bool {
+        self.pool[list as usize].1 > 0
     }
 
     /// Records view `view`'s draws of `list`'s `kinds` ([`STEADY`],
@@ -135,24 +141,25 @@ impl<'a> Culled<'a> {
         calls
     }
 
-    /// View `view`'s draws of the streamed regions' batches alone (L2's
-    /// height fields, shadow maps on the CPU path: static world instances,
-    /// no scene objects): one multi-draw per kind in `kinds`. Returns the
-    /// calls recorded.
+    /// View `view`'s draws of `list`'s streamed regions' batches alone
+    /// (L2's height fields, shadow maps on the CPU path: static world
+    /// instances, no scene objects): one multi-draw per kind in `kinds`.
+    /// Returns the calls recorded.
     pub fn draw_pool(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
         ctx: &PassContext<'_>,
         view: u32,
+        list: List,
         kinds: std::ops::Range<u32>,
     ) -> u32 {
-        let (first, count) = self.pool;
+        let (first, count) = self.pool[list as usize];
         if count == 0 {
             return 0;
         }
         let mut calls = 0;
         for kind in kinds {
-            let start = self.args_at(view, List::Opaque, kind, first - self.opaque.0, 0);
+            let start = self.args_at(view, list, kind, first - self.range(list).0, 0);
             calls += self.record(rp, ctx, start, count * MAX_LODS as u32);
         }
         calls

@@ -184,10 +184,10 @@ pub struct BatchGpu {
 /// Which pipeline a batch draws with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum List {
-    /// The opaque batches: the scene's runs, then the streamed regions.
-    Opaque,
-    /// The vegetation batches.
-    Vegetation,
+    /// The opaque batches: the scene's runs, then the opaque streamed regions.
+    Opaque = 0,
+    /// The vegetation batches: the scene's runs, then the vegetation streamed regions.
+    Vegetation = 1,
 }
 
 /// The scene's batches and chunks: opaque batches first, then vegetation.
@@ -199,13 +199,15 @@ pub struct CullLayout {
     pub chunks: Vec<ChunkGpu>,
     /// Culling bounds per object (the CPU copy of `cull.bounds`).
     pub bounds: Vec<ObjectBounds>,
-    /// Opaque batches (streamed regions included): the first in `batches`.
+    /// Opaque batches (opaque streamed regions included): the first in `batches`.
     pub opaque_batches: u32,
-    /// Vegetation batches, after the opaque ones.
+    /// Vegetation batches (vegetation streamed regions included), after the opaque ones.
     pub vegetation_batches: u32,
     /// Objects in the scene (the stride of the per-view instance lists).
     pub objects: u32,
-    /// The batch of each streamed region (`SceneGpu::pool`), opaque.
+    /// The batch of each streamed region (`SceneGpu::pool`): the opaque
+    /// regions' after the opaque runs, the vegetation regions' after the
+    /// vegetation runs ([`CullLayout::pool_range`]).
     pub pool_batches: Vec<u32>,
     /// The scene mesh each batch draws.
     pub batch_mesh: Vec<u32>,
@@ -258,31 +260,14 @@ impl CullLayout {
             impostors: true,
             ..Self::default()
         };
+        layout.pool_batches = vec![0; scene.pool.len()];
         layout.opaque_batches = layout.push_runs(scene, &scene.draws_opaque);
-        // Streamed regions: one batch each, chunks empty until streaming fills them.
-        for r in &scene.pool {
-            let Some(&(first_index, index_count, base_vertex)) =
-                scene.mesh_ranges.get(r.mesh as usize)
-            else {
-                continue;
-            };
-            let d = Draw {
-                first_index,
-                index_count,
-                base_vertex,
-                object: r.first_object,
-            };
-            layout.pool_batches.push(layout.batches.len() as u32);
-            layout.push_batch(scene, &d, r.capacity);
-            let b = layout.batches.len() - 1;
-            layout.batches[b].max_distance = r.max_distance;
-            let first = layout.batches[b].first_chunk as usize;
-            for c in &mut layout.chunks[first..] {
-                c.count = 0;
-            }
-            layout.opaque_batches += 1;
-        }
+        // Streamed regions: one batch each, chunks empty until streaming
+        // fills them; the opaque ones after the opaque runs, the vegetation
+        // ones (trees' leaves) after the vegetation runs.
+        layout.opaque_batches += layout.push_pool(scene, false);
         layout.vegetation_batches = layout.push_runs(scene, &scene.draws_vegetation);
+        layout.vegetation_batches += layout.push_pool(scene, true);
         layout.chunk_boxes = vec![None; layout.chunks.len()];
         layout.refresh_chunk_boxes();
         layout
@@ -314,6 +299,49 @@ impl CullLayout {
             }
             *slot = None;
         }
+    }
+
+    /// One empty batch per streamed region of `scene` that is vegetation
+    /// (or not); returns the batches added.
+    fn push_pool(&mut self, scene: &SceneGpu, vegetation: bool) -> u32 {
+        let before = self.batches.len();
+        for (i, r) in scene.pool.iter().enumerate() {
+            if r.foliage.is_some() != vegetation {
+                continue;
+            }
+            let Some(&(first_index, index_count, base_vertex)) =
+                scene.mesh_ranges.get(r.mesh as usize)
+            else {
+                continue;
+            };
+            let d = Draw {
+                first_index,
+                index_count,
+                base_vertex,
+                object: r.first_object,
+            };
+            self.pool_batches[i] = self.batches.len() as u32;
+            self.push_batch(scene, &d, r.capacity);
+            let b = self.batches.len() - 1;
+            self.batches[b].max_distance = r.max_distance;
+            let first = self.batches[b].first_chunk as usize;
+            for c in &mut self.chunks[first..] {
+                c.count = 0;
+            }
+        }
+        (self.batches.len() - before) as u32
+    }
+
+    /// The streamed regions' batches inside `list` (first, count; they are
+    /// consecutive, after the list's own runs).
+    pub fn pool_range(&self, list: List) -> (u32, u32) {
+        let (first, count) = self.range(list);
+        let inside = self
+            .pool_batches
+            .iter()
+            .filter(|&&b| b >= first && b < first + count);
+        let n = inside.clone().count() as u32;
+        (inside.copied().min().unwrap_or(first + count), n)
     }
 
     fn push_runs(&mut self, scene: &SceneGpu, draws: &[Draw]) -> u32 {
@@ -451,6 +479,11 @@ pub struct CullPass {
     cpu: CpuLists,
     /// V6 Hi-Z: the previous frame's depth pyramid.
     pub hiz: hiz::HizPyramid,
+    /// Per streamed region: its live objects ([`CullPass::set_live`]) and
+    /// whether it is vegetation (hidden by [`CullPass::show_pool_vegetation`]).
+    pool_live: Vec<(u32, bool)>,
+    /// Whether the vegetation regions draw.
+    pool_vegetation: bool,
     /// Whether view 0 is occlusion-culled this frame (the pyramid valid).
     occlusion: bool,
 }
@@ -528,6 +561,8 @@ impl CullPass {
             cpu: CpuLists::default(),
             hiz: hiz::HizPyramid::new(ctx)?,
             occlusion: false,
+            pool_live: scene.pool.iter().map(|r| (0, r.vegetation)).collect(),
+            pool_vegetation: true,
         })
     }
 
@@ -569,12 +604,43 @@ impl CullPass {
 
     /// Streamed region `region` holds `live` objects packed from its front:
     /// its chunks' counts cover them and no more (empty chunks cost a
-    /// workgroup that exits at once).
+    /// workgroup that exits at once); none while it is hidden vegetation.
     pub fn set_live(&mut self, queue: &wgpu::Queue, region: usize, live: u32) {
-        let Some(&b) = self.layout.pool_batches.get(region) else {
+        let Some(r) = self.pool_live.get_mut(region) else {
             return;
         };
-        let batch = self.layout.batches[b as usize];
+        r.0 = live;
+        let shown = if r.1 && !self.pool_vegetation {
+            0
+        } else {
+            live
+        };
+        self.write_counts(queue, region, shown);
+    }
+
+    /// `FrameSettings::vegetation` for the streamed regions: off, the
+    /// vegetation regions (trees' trunks and leaves) list nothing on either
+    /// culling path; on, their live objects again.
+    pub fn show_pool_vegetation(&mut self, queue: &wgpu::Queue, on: bool) {
+        if self.pool_vegetation == on {
+            return;
+        }
+        self.pool_vegetation = on;
+        for region in 0..self.pool_live.len() {
+            let (live, vegetation) = self.pool_live[region];
+            if vegetation {
+                self.write_counts(queue, region, if on { live } else { 0 });
+            }
+        }
+    }
+
+    /// Sets region `region`'s chunk counts to cover `live` objects.
+    fn write_counts(&mut self, queue: &wgpu::Queue, region: usize, live: u32) {
+        let Some(&batch) = (self.layout.pool_batches.get(region))
+            .and_then(|&b| self.layout.batches.get(b as usize))
+        else {
+            return;
+        };
         let first = batch.first_chunk as usize;
         let chunks = &mut self.layout.chunks[first..first + batch.chunks as usize];
         let boxes = &mut self.layout.chunk_boxes[first..first + batch.chunks as usize];

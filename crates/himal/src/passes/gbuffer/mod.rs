@@ -165,7 +165,7 @@ impl GBufferKey {
         if scene.has_lods {
             keys.push(Self::VERTEX_DITHER);
         }
-        if !scene.draws_vegetation.is_empty() {
+        if scene.has_vegetation() {
             keys.push(Self::VEGETATION);
         }
         if let Some(m) = &scene.materials {
@@ -451,7 +451,7 @@ impl GBufferPass {
                         }
                     }
                     if let Some((c, view)) = culled
-                        && !scene.draws_vegetation.is_empty()
+                        && scene.has_vegetation()
                     {
                         rp.set_pipeline(pipeline(key)?);
                         match level {

@@ -63,7 +63,7 @@ pub fn world_bake_settings() -> BakeSettings {
 /// The opaque geometry block `block` (in blocks) is baked against.
 pub fn block_geometry(
     world: &World,
-    meshes: &[Mesh],
+    meshes: &[Option<Mesh>],
     layers: &[TerrainLayerDesc],
     block: IVec2,
 ) -> RayScene {
@@ -115,15 +115,12 @@ pub fn block_geometry(
                     );
                 }
             }
-            for inst in sector
-                .instances
-                .iter()
-                .filter(|i| i.kind != InstanceKind::Tree)
-            {
+            // Trees have no mesh here: the bake skips them.
+            for inst in &sector.instances {
                 let Some(mesh) = InstanceKind::ALL
                     .iter()
                     .position(|k| *k == inst.kind)
-                    .and_then(|k| meshes.get(k))
+                    .and_then(|k| meshes.get(k)?.as_ref())
                 else {
                     continue;
                 };
@@ -218,7 +215,7 @@ pub type Progress = Box<dyn Fn(usize, usize) + Send + Sync>;
 
 struct Shared {
     world: Arc<World>,
-    meshes: Vec<Mesh>,
+    meshes: Vec<Option<Mesh>>,
     layers: Vec<TerrainLayerDesc>,
     settings: BakeSettings,
     folder: Option<PathBuf>,
@@ -263,7 +260,7 @@ impl WorldProbes {
         }
         Ok(WorldProbes {
             shared: Arc::new(Shared {
-                meshes: crate::scene::world::meshes::world_meshes(),
+                meshes: crate::scene::world::meshes::solid_meshes(),
                 layers: TerrainLayerDesc::for_world(&world),
                 world,
                 settings,

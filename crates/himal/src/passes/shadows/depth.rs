@@ -224,7 +224,11 @@ impl DepthPipelines {
         }
         if let (Some(view), Some((c, ctx))) = (lists.pool_view, culled) {
             rp.set_pipeline(&self.opaque);
-            c.draw_pool(rp, ctx, view, SHADOW);
+            c.draw_pool(rp, ctx, view, List::Opaque, SHADOW);
+            if c.has_pool(List::Vegetation) {
+                rp.set_pipeline(&self.vegetation);
+                c.draw_pool(rp, ctx, view, List::Vegetation, SHADOW);
+            }
         }
         Ok(())
     }

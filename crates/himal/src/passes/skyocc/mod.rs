@@ -29,7 +29,7 @@ use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{Draw, SceneGpu};
 use crate::graph::{FrameGraph, TextureHandle};
 use crate::passes::common::{view_node, view_pipeline};
-use crate::passes::cull::{CullView, Culled, SHADOW, bind_instances};
+use crate::passes::cull::{CullView, Culled, List, SHADOW, bind_instances};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::terrain::TerrainHeights;
 use crate::scene::{Aabb, Camera, Scene};
@@ -504,7 +504,9 @@ impl SkyOccPass {
                         scene.draw_list(rp, draws);
                     }
                     if let Some((c, view)) = pool {
-                        c.draw_pool(rp, ctx, view, SHADOW);
+                        // Opaque regions alone: the height pipeline does
+                        // not alpha-test (the trees' trunks stand in).
+                        c.draw_pool(rp, ctx, view, List::Opaque, SHADOW);
                     }
                     Ok(())
                 });

@@ -177,6 +177,10 @@ fn build_desc(ck: &Checker, w: &FileWorld, base_dir: &Path) -> Result<WorldDesc>
         if let Some(v) = &r.tree_max_slope {
             rules.tree_max_slope = ck.range(v, "world.rules.tree_max_slope", 0.0, 90.0)?;
         }
+        if let Some(v) = &r.larch_line {
+            rules.larch_line =
+                ck.range(v, "world.rules.larch_line", -HEIGHT_LIMIT, HEIGHT_LIMIT)?;
+        }
         rules.houses = r.houses.unwrap_or(rules.houses);
         rules.fields = r.fields.unwrap_or(rules.fields);
         rules.fences = r.fences.unwrap_or(rules.fences);

@@ -1,12 +1,16 @@
-//! The world's shared meshes, one per [`InstanceKind`], built once: the
-//! instances only move, turn, scale and tint them. Each mesh's local origin
+//! The world's shared meshes, one per [`InstanceKind`] (and a tree kind's
+//! leaves, [`super::forest`]), built once: the instances only move, turn,
+//! scale and tint them. Each mesh's local origin
 //! is at its base (where it meets the ground), not its centre.
+
+use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::InstanceKind;
+use super::{InstanceKind, forest};
 use crate::scene::noise;
 use crate::scene::primitives::{self, MeshBuilder};
+use crate::scene::tree::impostor::Impostor;
 use crate::scene::{Aabb, MaterialDesc, Mesh};
 
 fn material(name: &str, albedo: [f32; 3], glossiness: f32) -> MaterialDesc {
@@ -142,39 +146,6 @@ fn fence() -> Mesh {
     m
 }
 
-/// A 16 m conifer stand-in: a trunk and a cone of foliage (opaque).
-fn tree() -> Mesh {
-    let bark = material("bark", [0.30, 0.22, 0.16], 0.15);
-    let needles = material("needles", [0.09, 0.16, 0.07], 0.2);
-    let trunk = offset(
-        primitives::cylinder("trunk".into(), 0.28, 4.0, 10, &bark),
-        Vec3::Y * 2.0,
-    );
-    let mut b = MeshBuilder::new(&needles);
-    let (segments, base, top, radius) = (16u32, 2.5f32, 16.0f32, 3.0f32);
-    let slope = radius / (top - base);
-    for i in 0..segments {
-        let a0 = std::f32::consts::TAU * i as f32 / segments as f32;
-        let a1 = std::f32::consts::TAU * (i + 1) as f32 / segments as f32;
-        let rim = |a: f32| Vec3::new(a.cos() * radius, base, -a.sin() * radius);
-        let normal = |a: f32| Vec3::new(a.cos(), slope, -a.sin()).normalize();
-        let tangent = |a: f32| Vec3::new(-a.sin(), 0.0, -a.cos());
-        let am = 0.5 * (a0 + a1);
-        let v0 = b.vertex(rim(a0), normal(a0), tangent(a0), [a0 * radius, 0.0]);
-        let v1 = b.vertex(rim(a1), normal(a1), tangent(a1), [a1 * radius, 0.0]);
-        let apex = b.vertex(Vec3::Y * top, normal(am), tangent(am), [am * radius, top]);
-        b.triangle(v0, v1, apex);
-        // The cone's underside.
-        let c = b.vertex(Vec3::Y * base, Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
-        let u0 = b.vertex(rim(a0), Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
-        let u1 = b.vertex(rim(a1), Vec3::NEG_Y, Vec3::X, [0.0, 0.0]);
-        b.triangle(c, u1, u0);
-    }
-    let mut m = merge(trunk, b.finish("crown".into()));
-    m.name = "tree".into();
-    m
-}
-
 /// A unit water quad (1 x 1 m, facing +Y, at y = 0): dark, glossy, the
 /// sky's reflection does the rest.
 fn water() -> Mesh {
@@ -185,22 +156,49 @@ fn water() -> Mesh {
     primitives::plane("water".into(), [1.0, 1.0], [1, 1], &m)
 }
 
-/// The mesh of every kind, in [`InstanceKind::ALL`] order.
-pub fn world_meshes() -> Vec<Mesh> {
-    InstanceKind::ALL
-        .iter()
-        .map(|k| match k {
-            InstanceKind::Rock0 => rock(11),
-            InstanceKind::Rock1 => rock(23),
-            InstanceKind::Rock2 => rock(37),
-            InstanceKind::HouseWalls => house(),
-            InstanceKind::Roof => roof(),
-            InstanceKind::Field => field(),
-            InstanceKind::Fence => fence(),
-            InstanceKind::Tree => tree(),
-            InstanceKind::Water => water(),
-        })
-        .collect()
+/// The mesh of a kind that is not a tree (`None` for trees: [`super::forest`]).
+fn kind_mesh(kind: InstanceKind) -> Option<Mesh> {
+    Some(match kind {
+        InstanceKind::Rock0 => rock(11),
+        InstanceKind::Rock1 => rock(23),
+        InstanceKind::Rock2 => rock(37),
+        InstanceKind::HouseWalls => house(),
+        InstanceKind::Roof => roof(),
+        InstanceKind::Field => field(),
+        InstanceKind::Fence => fence(),
+        InstanceKind::Larch | InstanceKind::Rosewood => return None,
+        InstanceKind::Water => water(),
+    })
+}
+
+/// Per kind in [`InstanceKind::ALL`] order its mesh, `None` for the tree
+/// kinds (what the probe bake traces: it skips trees, so nothing is baked).
+pub fn solid_meshes() -> Vec<Option<Mesh>> {
+    InstanceKind::ALL.iter().map(|&k| kind_mesh(k)).collect()
+}
+
+/// The world's meshes: one per kind in [`InstanceKind::ALL`] order (a
+/// tree kind's trunk), then each tree kind's leaves
+/// ([`super::forest::regions`]); and the trees' impostors, in atlas layer
+/// order ([`super::forest::layer`]).
+pub fn world_meshes() -> (Vec<Mesh>, Vec<Arc<Impostor>>) {
+    let mut meshes = Vec::new();
+    let mut leaves = Vec::new();
+    let mut impostors = Vec::new();
+    for &k in &InstanceKind::ALL {
+        match k.species() {
+            Some(species) => {
+                let t = forest::tree(species);
+                meshes.push(t.trunk.clone());
+                leaves.push(t.leaves.clone());
+                impostors.push((forest::layer(species), t.impostor.clone()));
+            }
+            None => meshes.extend(kind_mesh(k)),
+        }
+    }
+    meshes.extend(leaves);
+    impostors.sort_by_key(|(layer, _)| *layer);
+    (meshes, impostors.into_iter().map(|(_, i)| i).collect())
 }
 
 #[cfg(test)]
@@ -209,7 +207,10 @@ mod tests {
 
     #[test]
     fn meshes_stand_on_their_base_and_are_well_formed() {
-        for (k, m) in InstanceKind::ALL.iter().zip(world_meshes()) {
+        let meshes = InstanceKind::ALL
+            .iter()
+            .filter_map(|&k| Some((k, kind_mesh(k)?)));
+        for (k, m) in meshes {
             assert!(
                 m.bounds.min.y.abs() < 1e-4,
                 "{} starts at y {}",

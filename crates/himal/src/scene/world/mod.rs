@@ -9,11 +9,13 @@
 //!   farthest-first eviction, a per-frame upload budget.
 //! - [`path`]: named cameras and the flight path across the world.
 //! - [`mod@file`]: a world from a scene file's `[world]` table.
+//! - [`forest`]: the trees' meshes (V1) and the pool regions they fill.
 //!
 //! Nothing here touches the GPU; the renderer applies the uploads that
 //! [`stream::Streamer::update`] hands it. See `docs/world.md`.
 
 pub mod file;
+pub mod forest;
 pub mod meshes;
 pub mod path;
 pub mod pool;
@@ -48,7 +50,8 @@ pub const GPU_INSTANCE_BYTES: usize = 208 + 32;
 pub struct PoolSizes {
     /// Terrain tiles (`TILE_RES`^2 heights each).
     pub tiles: u32,
-    /// Instance slots per kind, in [`InstanceKind::ALL`] order.
+    /// Instance slots per kind, in [`InstanceKind::ALL`] order (a tree
+    /// kind's slots twice: its trunk and leaves regions).
     pub instances: [u32; InstanceKind::ALL.len()],
 }
 
@@ -58,8 +61,10 @@ impl Default for PoolSizes {
     fn default() -> Self {
         PoolSizes {
             tiles: 1024,
-            // rock0..2, house, roof, field, fence, tree, water
-            instances: [16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536, 1024],
+            // rock0..2, house, roof, field, fence, larch, rosewood, water
+            instances: [
+                16384, 16384, 16384, 4096, 4096, 1024, 16384, 65536, 65536, 1024,
+            ],
         }
     }
 }
@@ -236,9 +241,11 @@ impl World {
 
 impl World {
     /// The world as a [`Scene`] for the renderer: its shared meshes (one per
-    /// [`InstanceKind`], drawn from the streamed pool), its cameras, its
-    /// sun and its bounds; no objects of its own (instances stream).
+    /// [`InstanceKind`], a tree kind's trunk, then the tree kinds' leaves:
+    /// [`forest::regions`]), the trees' impostors, its cameras, its sun and
+    /// its bounds; no objects of its own (instances stream).
     pub fn scene(&self) -> Scene {
+        let (meshes, impostors) = meshes::world_meshes();
         let half = self.extent() * 0.5;
         let (bottom, top) = match &self.desc.source {
             HeightSource::Procedural => (
@@ -251,7 +258,7 @@ impl World {
         };
         Scene {
             path: None,
-            meshes: meshes::world_meshes(),
+            meshes,
             objects: Vec::new(),
             materials: Vec::new(),
             cameras: self.cameras.clone(),
@@ -267,7 +274,7 @@ impl World {
             pbr: Default::default(),
             probes: Vec::new(),
             environment: None,
-            impostors: Vec::new(),
+            impostors,
             ao_volumes: Vec::new(),
         }
     }

@@ -126,7 +126,9 @@ fn camera(name: &str, position: Vec3, target: Vec3, fov: f32) -> NamedCamera {
 /// the water), `village` (the village nearest the middle), `peak` (the
 /// flank of the highest ground near the middle, looking out), `grazing`
 /// (1.8 m above a meadow toward the horizon), `top` (straight down from
-/// 1.2 km), `street` (eye height in that village, along its street).
+/// 1.2 km), `street` (eye height in that village, along its street),
+/// `forest` (over the densest forest within 2 km of the middle, looking
+/// across it).
 pub fn cameras(w: &World) -> Vec<NamedCamera> {
     let t = &w.terrain;
     let ground = |x: f32, z: f32| t.height(x, z);
@@ -211,5 +213,24 @@ pub fn cameras(w: &World) -> Vec<NamedCamera> {
         let eye = |p: Vec2, up: f32| Vec3::new(p.x, ground(p.x, p.y).max(v.height) + up, p.y);
         out.push(camera("street", eye(from, 1.7), eye(to, 3.0), 65.0));
     }
+    // The strongest forest mask on a coarse grid, well below the tree line.
+    let mut forest = (f32::MIN, Vec2::ZERO);
+    for j in -10..=10 {
+        for i in -10..=10 {
+            let p = Vec2::new(i as f32, j as f32) * 200.0;
+            let m = super::sector::forest_mask(t, p);
+            if ground(p.x, p.y) < t.shape.tree_line - 150.0 && m > forest.0 {
+                forest = (m, p);
+            }
+        }
+    }
+    let c = forest.1;
+    let from = c + Vec2::new(-160.0, 120.0);
+    out.push(camera(
+        "forest",
+        Vec3::new(from.x, ground(from.x, from.y) + 30.0, from.y),
+        Vec3::new(c.x, ground(c.x, c.y) + 8.0, c.y),
+        60.0,
+    ));
     out
 }

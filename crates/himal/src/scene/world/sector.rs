@@ -1,7 +1,7 @@
 //! One 64 m sector of the world, generated on its own from the seed and its
 //! coordinates: its terrain tile (65 x 65 heights, 1 m apart, edges shared
-//! with the neighbours) and its instances (rocks, trees standing in for the
-//! forests, and the houses, roofs, fields and fences of villages).
+//! with the neighbours) and its instances (rocks, the forests' larches and
+//! rosewoods, and the houses, roofs, fields and fences of villages).
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
@@ -40,15 +40,33 @@ pub enum InstanceKind {
     Field,
     /// A 4 m fence segment (two posts, two rails).
     Fence,
-    /// Where a forest tree stands; the vegetation issue replaces the mesh.
-    Tree,
+    /// A conifer of the upper forests (V1's larch: a trunk and a leaves
+    /// region, each its own mesh).
+    Larch,
+    /// A broadleaf of the lower forests (V1's rosewood).
+    Rosewood,
     /// A 16 m stretch of the river's surface.
     Water,
 }
 
 impl InstanceKind {
+    /// The tree species a kind places (`None`: not a tree).
+    pub fn species(self) -> Option<crate::scene::tree::Species> {
+        match self {
+            InstanceKind::Larch => Some(crate::scene::tree::Species::Larch),
+            InstanceKind::Rosewood => Some(crate::scene::tree::Species::Rosewood),
+            _ => None,
+        }
+    }
+
+    /// GPU pool regions an instance fills: a tree's trunk and leaves, one
+    /// for the rest ([`super::forest::regions`]).
+    pub fn regions(self) -> usize {
+        1 + usize::from(self.species().is_some())
+    }
+
     /// Every kind, in the order of their GPU instance regions and [`super::PoolSizes::instances`].
-    pub const ALL: [InstanceKind; 9] = [
+    pub const ALL: [InstanceKind; 10] = [
         InstanceKind::Rock0,
         InstanceKind::Rock1,
         InstanceKind::Rock2,
@@ -56,7 +74,8 @@ impl InstanceKind {
         InstanceKind::Roof,
         InstanceKind::Field,
         InstanceKind::Fence,
-        InstanceKind::Tree,
+        InstanceKind::Larch,
+        InstanceKind::Rosewood,
         InstanceKind::Water,
     ];
 
@@ -64,6 +83,7 @@ impl InstanceKind {
     /// streaming radius bounds it): rocks and fences are too small to
     /// matter past a few hundred metres, where they would only shimmer.
     pub fn draw_distance(self) -> f32 {
+        // (Trees: every resident one draws; most at the impostor level.)
         match self {
             InstanceKind::Rock0 | InstanceKind::Rock1 | InstanceKind::Rock2 => 700.0,
             InstanceKind::Fence => 500.0,
@@ -71,7 +91,7 @@ impl InstanceKind {
         }
     }
 
-    /// Short lower-case name (`rock0`, `house`, `tree`...), as a scene file's pool sizes name the kind.
+    /// Short lower-case name (`rock0`, `house`, `larch`...), as a scene file's pool sizes name the kind.
     pub fn name(self) -> &'static str {
         match self {
             InstanceKind::Rock0 => "rock0",
@@ -81,7 +101,8 @@ impl InstanceKind {
             InstanceKind::Roof => "roof",
             InstanceKind::Field => "field",
             InstanceKind::Fence => "fence",
-            InstanceKind::Tree => "tree",
+            InstanceKind::Larch => "larch",
+            InstanceKind::Rosewood => "rosewood",
             InstanceKind::Water => "water",
         }
     }
@@ -135,7 +156,8 @@ pub struct SectorData {
 impl SectorData {
     /// Bytes this sector uploads (tile + instances as the GPU stores them).
     pub fn upload_bytes(&self) -> u64 {
-        (self.heights.len() * 4 + self.instances.len() * super::GPU_INSTANCE_BYTES) as u64
+        let records: usize = self.instances.iter().map(|i| i.kind.regions()).sum();
+        (self.heights.len() * 4 + records * super::GPU_INSTANCE_BYTES) as u64
     }
 }
 
@@ -147,10 +169,13 @@ impl SectorData {
 pub struct PlacementRules {
     /// Scales each 8 m cell's chance of a rock (at most one per cell).
     pub rock_density: f32,
-    /// Scales each 6.4 m cell's chance of a tree (at most one per cell).
+    /// Scales each 4 m cell's chance of a tree (at most one per cell).
     pub tree_density: f32,
     /// Steepest ground a tree stands on (degrees from horizontal).
     pub tree_max_slope: f32,
+    /// Altitude (m) above which forests are larches, below rosewoods; the
+    /// border is mixed by noise over [`LARCH_MIX`] metres either side.
+    pub larch_line: f32,
     /// Place villages' houses (walls and roofs).
     pub houses: bool,
     /// Place villages' fields.
@@ -165,6 +190,7 @@ impl Default for PlacementRules {
             rock_density: 1.0,
             tree_density: 1.0,
             tree_max_slope: 34.0,
+            larch_line: 160.0,
             houses: true,
             fields: true,
             fences: true,
@@ -397,6 +423,26 @@ fn place_water(t: &WorldTerrain, tile: &Tile, out: &mut Vec<Instance>) {
     }
 }
 
+/// Half width (m) of the altitude band where larch and rosewood stands mix.
+pub const LARCH_MIX: f32 = 60.0;
+
+/// The species of a tree at `p`, altitude `h`: larch above the larch line,
+/// rosewood below, the border moved up and down by noise in stands of
+/// about 40 m (a pure function of the world's seed and the place).
+pub fn tree_kind(t: &WorldTerrain, rules: &PlacementRules, p: Vec2, h: f32) -> InstanceKind {
+    let seed = noise::hash_lattice(t.shape.seed, 0x1a, 0x7c);
+    let f = noise::Fractal {
+        octaves: 2,
+        ..Default::default()
+    };
+    let border = rules.larch_line + LARCH_MIX * noise::fbm(seed, p.x / 40.0, p.y / 40.0, f);
+    if h >= border {
+        InstanceKind::Larch
+    } else {
+        InstanceKind::Rosewood
+    }
+}
+
 /// Forest mask: large patches with ragged edges, about [-1, 1].
 pub fn forest_mask(t: &WorldTerrain, p: Vec2) -> f32 {
     let seed = noise::hash_lattice(t.shape.seed, 0xf0, 0x7e);
@@ -409,7 +455,8 @@ pub fn forest_mask(t: &WorldTerrain, p: Vec2) -> f32 {
 }
 
 /// Trees where the forest mask is high, below the tree line, on slopes
-/// under `tree_max_slope` (34 degrees), away from the river and outside villages.
+/// under `tree_max_slope` (34 degrees), away from the river and outside
+/// villages; larches above the larch line, rosewoods below ([`tree_kind`]).
 fn scatter_trees(
     t: &WorldTerrain,
     rules: &PlacementRules,
@@ -418,7 +465,8 @@ fn scatter_trees(
     out: &mut Vec<Instance>,
 ) {
     let mut rng = Rng(seed as u64 ^ 0x0000_0000_7ee5_0000);
-    let cell = 6.4;
+    // 625 trees/ha at most: closed forests (FC4's Kyrat) of >= 50,000 trees within 1 km.
+    let cell = 4.0;
     let n = (SECTOR_SIZE / cell) as usize;
     let s = &t.shape;
     for j in 0..n {
@@ -443,7 +491,7 @@ fn scatter_trees(
             let scale = 0.65 + 0.7 * r1;
             let green = 0.8 + 0.35 * r2;
             out.push(Instance {
-                kind: InstanceKind::Tree,
+                kind: tree_kind(t, rules, p, h),
                 position: Vec3::new(p.x, h - 0.2, p.y),
                 yaw: r3 * std::f32::consts::TAU,
                 size: Vec3::splat(scale),
