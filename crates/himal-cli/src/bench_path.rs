@@ -48,7 +48,7 @@ pub struct PathFrame {
     pub object_triangles: u64,
     pub terrain_triangles: u64,
     /// Instances drawn per LOD level.
-    pub instances: [u64; 4],
+    pub instances: [u64; himal::scene::lod::MAX_LODS],
     pub resident: u32,
     pub missing: u32,
     pub tiles_used: u32,
@@ -77,11 +77,11 @@ impl PathFrame {
     }
 }
 
-const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,tiles_ms,records_ms,follow_ms,record_ms,submit_ms,cpu_ms,thread_ms,stream_thread_ms,gpu_ms,gbuffer_draws,shadow_draws,static_tiles,static_texels,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
+const CSV_HEADER: &str = "frame,t_s,plan_ms,stream_ms,update_ms,tiles_ms,records_ms,follow_ms,record_ms,submit_ms,cpu_ms,thread_ms,stream_thread_ms,gpu_ms,gbuffer_draws,shadow_draws,static_tiles,static_texels,object_triangles,terrain_triangles,lod0,lod1,lod2,lod3,lod4,resident_sectors,missing_sectors,tiles_used,tiles_total,instances_live,instances_total,uploaded,upload_bytes,evicted,resident_bytes";
 
 fn csv_row(i: usize, f: &PathFrame) -> String {
     format!(
-        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{i},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         f.t,
         f.plan_ms,
         f.stream_ms,
@@ -105,6 +105,7 @@ fn csv_row(i: usize, f: &PathFrame) -> String {
         f.instances[1],
         f.instances[2],
         f.instances[3],
+        f.instances[4],
         f.resident,
         f.missing,
         f.tiles_used,

@@ -77,7 +77,7 @@ impl SceneGpu {
         };
         let mut errors = [0.0; crate::scene::lod::MAX_LODS];
         let mut n = levels.len().min(errors.len());
-        // V3 `--impostors off`: the impostor level goes, LOD2 stays.
+        // V3 `--impostors off`: the impostor levels go, LOD2 stays.
         if !self.impostors.load(std::sync::atomic::Ordering::Relaxed)
             && self
                 .impostor_mesh
@@ -85,7 +85,8 @@ impl SceneGpu {
                 .copied()
                 .unwrap_or(false)
         {
-            n = n.min(levels.len().saturating_sub(1)).max(1);
+            let impostors = crate::scene::tree::impostor_level::LEVELS;
+            n = n.min(levels.len().saturating_sub(impostors)).max(1);
         }
         for (e, l) in errors.iter_mut().zip(levels) {
             *e = l.error;

@@ -8,8 +8,12 @@
 
 use super::{Mesh, Vertex};
 
-/// Levels per mesh at most, LOD0 (the mesh) included.
-pub const MAX_LODS: usize = 4;
+/// Levels per mesh at most, LOD0 (the mesh) included: a simplified chain
+/// has [`CHAIN_LODS`]; a tree's leaves have LOD0-2 and V3's two impostor
+/// levels (`scene/tree/impostor_level.rs`).
+pub const MAX_LODS: usize = 5;
+/// Levels of a mesh's simplified chain ([`lod_chain`]), LOD0 included.
+pub const CHAIN_LODS: usize = 4;
 /// Meshes with fewer triangles keep one level: halving them saves nothing
 /// a draw call does not cost anyway.
 pub const MIN_TRIANGLES: usize = 96;
@@ -269,7 +273,7 @@ pub fn lod_chain(mesh: &Mesh) -> Vec<Level> {
     };
     // meshoptimizer's errors are relative to this extent.
     let extent = meshopt::simplify_scale(&adapter);
-    for level in 1..MAX_LODS {
+    for level in 1..CHAIN_LODS {
         let (previous, previous_error) = chain
             .last()
             .map_or((&mesh.indices, 0.0), |l| (&l.indices, l.error));

@@ -63,9 +63,9 @@ struct Chunk {
     _pad: u32,
 }
 
-const MAX_LODS: u32 = 4u;
+const MAX_LODS: u32 = 5u;
 // Lists per batch: 3 kinds x MAX_LODS levels.
-const LISTS: u32 = 12u;
+const LISTS: u32 = 15u;
 const STEADY: u32 = 0u;
 const FADE_OUT: u32 = 1u;
 const FADE_IN: u32 = 2u;
@@ -81,17 +81,18 @@ struct Batch {
     _pad1: u32,
     _pad2: u32,
     // per level: first index, index count
-    lod: array<vec2u, 4>,
+    lod: array<vec2u, 5>,
     // per level: geometric error (mesh units)
-    error: vec4f,
+    error: array<f32, 5>,
+    _pad3: u32,
 }
 
 // Per (view, chunk) and list (kind * MAX_LODS + level): kept bits (0-31,
 // 32-63), count, and offset in the batch's lists.
 struct ChunkMask {
-    bits: array<vec2u, 12>,
-    count: array<u32, 12>,
-    offset: array<u32, 12>,
+    bits: array<vec2u, 15>,
+    count: array<u32, 15>,
+    offset: array<u32, 15>,
 }
 
 // wgpu::util::DrawIndexedIndirectArgs
@@ -197,7 +198,7 @@ fn args_index(view: u32, batch: u32, kind: u32, level: u32) -> u32 {
     return view * params.batches * LISTS + i;
 }
 
-var<workgroup> kept: array<atomic<u32>, 24>;
+var<workgroup> kept: array<atomic<u32>, 30>;
 
 @compute @workgroup_size(64)
 fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i: u32) {
@@ -238,10 +239,10 @@ fn cs_test(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) i:
 // batch's chunks are a scan: totals first (strided sums, then a reduction),
 // then blocks of 64 chunks, each an inclusive Hillis-Steele scan added to the
 // running offsets, so a batch of 100,000 objects is not one thread's loop.
-var<workgroup> scan: array<array<u32, 12>, 64>;
-var<workgroup> totals: array<u32, 12>;
-var<workgroup> base: array<u32, 12>;
-var<workgroup> running: array<u32, 12>;
+var<workgroup> scan: array<array<u32, 15>, 64>;
+var<workgroup> totals: array<u32, 15>;
+var<workgroup> base: array<u32, 15>;
+var<workgroup> running: array<u32, 15>;
 var<workgroup> batch_chunks: u32;
 
 @compute @workgroup_size(64)
@@ -254,7 +255,7 @@ fn cs_args(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) t:
     }
     let n = workgroupUniformLoad(&batch_chunks);
     // Each list's total.
-    var sum: array<u32, 12>;
+    var sum: array<u32, 15>;
     for (var k = t; k < n; k += 64u) {
         let count = masks[first + k].count;
         for (var j = 0u; j < LISTS; j++) {
@@ -295,7 +296,7 @@ fn cs_args(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) t:
     // Each chunk's offset per list.
     for (var block = 0u; block < n; block += 64u) {
         let k = block + t;
-        var own: array<u32, 12>;
+        var own: array<u32, 15>;
         if (k < n) {
             own = masks[first + k].count;
         }
@@ -314,7 +315,7 @@ fn cs_args(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) t:
             workgroupBarrier();
         }
         if (k < n) {
-            var offset: array<u32, 12>;
+            var offset: array<u32, 15>;
             for (var j = 0u; j < LISTS; j++) {
                 offset[j] = running[j] + scan[t][j] - own[j];
             }

@@ -46,7 +46,7 @@ pub const CHUNK: u32 = 64;
 /// Bytes of one `DrawIndexedIndirectArgs`.
 pub const ARGS_BYTES: u64 = 20;
 /// Bytes of one `ChunkMask` (per view and chunk).
-const MASK_BYTES: u64 = 192;
+const MASK_BYTES: u64 = 8 * LISTS as u64 + 2 * 4 * LISTS as u64;
 /// Lists per batch: kinds (steady, fading out, fading in) x levels.
 pub const LISTS: usize = 3 * MAX_LODS;
 /// Objects the instance entries can name (24 bits; 8 hold the fade code).
@@ -179,7 +179,11 @@ pub struct BatchGpu {
     pub lod: [[u32; 2]; MAX_LODS],
     /// Per level: geometric error (mesh units).
     pub error: [f32; MAX_LODS],
+    _tail: u32,
 }
+
+// `Batch` in cull.wgsl: 8-byte aligned, 96 bytes.
+const _: () = assert!(std::mem::size_of::<BatchGpu>() == 96);
 
 /// Which pipeline a batch draws with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -380,7 +384,7 @@ impl CullLayout {
                 }
             }
             let m = mesh.copied().unwrap_or(0);
-            if lods > 1
+            if lods > crate::scene::tree::impostor_level::LEVELS as u32
                 && scene
                     .impostor_mesh
                     .get(m as usize)
@@ -400,6 +404,7 @@ impl CullLayout {
                 _pad: [0; 2],
                 lod,
                 error,
+                _tail: 0,
             });
         }
     }
@@ -567,7 +572,7 @@ impl CullPass {
     }
 
     /// V3 `--impostors on|off`: off, the impostor batches' level count
-    /// drops their last level (LOD2 stays to the end), on brings it back;
+    /// drops their two impostor levels (LOD2 stays to the end), on brings them back;
     /// rewrites those batches where the state changes.
     pub fn set_impostors(&mut self, queue: &wgpu::Queue, on: bool) {
         if self.layout.impostors == on {
@@ -578,7 +583,8 @@ impl CullPass {
             let Some(batch) = self.layout.batches.get_mut(b as usize) else {
                 continue;
             };
-            batch.lods = if on { batch.lods + 1 } else { batch.lods - 1 };
+            let n = crate::scene::tree::impostor_level::LEVELS as u32;
+            batch.lods = if on { batch.lods + n } else { batch.lods - n };
             let offset = b as u64 * std::mem::size_of::<BatchGpu>() as u64;
             queue.write_buffer(&self.batches, offset, bytemuck::bytes_of(&*batch));
         }

@@ -320,8 +320,9 @@ mod tests {
             base_vertex: 0,
             max_distance: 600.0,
             _pad: [0; 2],
-            lod: [[0, 36], [0; 2], [0; 2], [0; 2]],
-            error: [0.0; 4],
+            lod: [[0, 36], [0; 2], [0; 2], [0; 2], [0; 2]],
+            error: [0.0; MAX_LODS],
+            _tail: 0,
         };
         let mut l = CullLayout {
             batches: vec![batch],
