@@ -113,9 +113,16 @@ pub struct BenchArgs {
 
 /// Budget group of a pass id (E5: shadows, G-buffer, lighting, blended, post, anti-aliasing, misc).
 pub fn group(pass: &str) -> &'static str {
-    // The world's terrain draws into the G-buffer and into the sun maps.
-    if pass.starts_with("terrain.shadow") || pass.starts_with("terrain.static") {
+    // The world's terrain and the vegetation draw into the G-buffer and
+    // into the sun maps.
+    if ["terrain.shadow", "terrain.static", "vegetation.shadow"]
+        .iter()
+        .any(|p| pass.starts_with(p))
+    {
         return "shadows";
+    }
+    if pass == "vegetation.gbuffer" || pass == "vegetation.impostor" {
+        return "G-buffer";
     }
     // See-through surfaces are the talk's blended passes; the forward
     // additions to opaque surfaces (emission, unlit, layers) are lighting.
@@ -142,6 +149,20 @@ pub fn group(pass: &str) -> &'static str {
         "aa" => "anti-aliasing",
         _ => "misc",
     }
+}
+
+/// The vegetation's per-frame ms by the talk's tree rows: simulation
+/// (`vegetation.simulate`, `.ripple`), shadow (`vegetation.shadow*`),
+/// G-buffer (`vegetation.gbuffer` and `.impostor`), and of that the
+/// impostors alone.
+fn vegetation_ms(rows: &[PassRow]) -> [f64; 4] {
+    let sum = |f: &dyn Fn(&str) -> bool| rows.iter().filter(|r| f(&r.id)).map(|r| r.frame_ms).sum();
+    [
+        sum(&|id| id == "vegetation.simulate" || id == "vegetation.ripple"),
+        sum(&|id| id.starts_with("vegetation.shadow")),
+        sum(&|id| id == "vegetation.gbuffer" || id == "vegetation.impostor"),
+        sum(&|id| id == "vegetation.impostor"),
+    ]
 }
 
 pub(crate) fn median(v: &mut [f64]) -> f64 {
@@ -558,6 +579,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             100.0 * stats.share(ms)
         );
     }
+    let vegetation = vegetation_ms(&stats.rows);
+    if vegetation.iter().any(|&ms| ms > 0.0) {
+        let [simulate, shadow, gbuffer, impostor] = vegetation;
+        let all: f64 = vegetation.iter().sum();
+        println!(
+            "vegetation (issue #18; Far Cry 4 PS4 trees: simulation 0.28, shadow 0.95, G-buffer 5.50 = 6.73 ms, 28.8% of 23.4): simulation {simulate:.3}, shadow {shadow:.3}, G-buffer {gbuffer:.3} (of which impostors {impostor:.3}) = {all:.3} ms, {:.1}% of the frame",
+            100.0 * stats.share(all)
+        );
+    }
     println!(
         "per frame (medians): GPU {total:.2} ms | CPU {:.2} ms wall, {:.2} ms thread CPU = plan {:.2} (culling {:.2}, uploads {:.2}) + record {:.2} + submit {:.2}",
         cpu.total, cpu.thread, cpu.plan, cpu.cull, cpu.upload, cpu.record, cpu.submit
@@ -723,6 +753,28 @@ mod tests {
             assert_eq!(group(pass), "lighting", "{pass}");
         }
         assert_eq!(group("shadows.mask"), "shadows");
+    }
+
+    /// Issue #18's rows: the vegetation's passes fall in the talk's groups
+    /// and sum into its tree rows.
+    #[test]
+    fn vegetation_passes_fall_in_the_talks_rows() {
+        assert_eq!(group("vegetation.gbuffer"), "G-buffer");
+        assert_eq!(group("vegetation.impostor"), "G-buffer");
+        assert_eq!(group("vegetation.shadow2"), "shadows");
+        assert_eq!(group("vegetation.simulate"), "misc");
+        let ids = [
+            ("gbuffer", 5.0),
+            ("vegetation.simulate", 0.5),
+            ("vegetation.gbuffer", 2.0),
+            ("vegetation.impostor", 1.0),
+            ("vegetation.shadow0", 0.25),
+            ("vegetation.shadow3", 0.75),
+        ];
+        let order: Vec<String> = ids.iter().map(|(id, _)| id.to_string()).collect();
+        let frame: Vec<PassTiming> = ids.iter().map(|&(id, ms)| timing(id, ms)).collect();
+        let s = PassStats::new(&order, &[frame]);
+        assert_eq!(vegetation_ms(&s.rows), [0.5, 1.0, 3.0, 1.0]);
     }
 
     fn timing(id: &str, ms: f64) -> PassTiming {

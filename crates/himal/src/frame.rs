@@ -7,8 +7,9 @@
 //!   (--occlusion hiz: cull also reads last frame's Hi-Z pyramid; gbuffer, terrain ─> cull.hiz ─> cull.hiz.mipK ─> next frame's cull)
 //! [skyocc.terrainN ─>] skyocc.groundN ─> skyocc.heightfieldN ─> skyocc.blur_x/_y ─> skyocc.visibility ─> skyocc.smooth ─┐ (new sectors)
 //! envmap.capture | envmap.probeN.* ─> envmap.mipM ─> envmap.filterM ─────────────┤ (when the sky changed)
-//! shadows.cascade0..3, shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
-//! gbuffer [─> terrain] [─> vegetation.ao (V4: tree volumes multiply the albedo's alpha)] [─> gbuffer.wet]
+//! [vegetation.simulate (V2 bones) ─> vegetation.ripple (grass)] before anything draws
+//! shadows.cascadeN [─> vegetation.shadowN] [─> terrain.shadowN], shadows.static | .static.tileN/.poolN + terrain.staticN (world), shadows.hero ─┐
+//! gbuffer [─> vegetation.gbuffer (cards) ─> vegetation.impostor (V3)] [─> terrain] [─> vegetation.ao (V4: tree volumes multiply the albedo's alpha)] [─> gbuffer.wet]
 //! gbuffer ─┬─────────────────────────────────────────┴─> shadows.mask ─┐
 //!          ├─> ao.hbao ─> … ─> ao.blur_y_stf ──────────────────────────┴─> lighting.deferred ─> sky ─> [forward.emissive ─> forward.unlit ─> forward.layers ─> forward.scene_color(.mipN) ─> forward.transmission ─> forward.blend] ─┬─> post.luminance ─> post.adapt ─┐
 //!          │          (passes/ao/mod.rs)                                     ├─> post.bloom.bright ─> post.bloom.blur0..N ─┐
@@ -504,6 +505,15 @@ pub fn build<'a>(
         camera_list.map(|c| (c, 0)),
         mip_bias,
     );
+    // V1/V3: the alpha-tested cards, then the impostors, each a pass.
+    let gbuffer = (passes.gbuffer).add_vegetation(
+        ctx,
+        &mut g,
+        scene,
+        visible,
+        camera_list.map(|c| (c, 0)),
+        gbuffer,
+    );
     // The world's terrain after the objects, into the same targets.
     let gbuffer = match &passes.terrain {
         Some(t) => t.add(ctx, &mut g, gbuffer, view),
@@ -605,8 +615,12 @@ pub fn build<'a>(
         // passes (sun unshadowed, sky unoccluded), then mipped and filtered.
         Some(probe) if passes.envmap.dirty => {
             let edge = (passes.probes.size, passes.probes.size);
-            let gbuffer =
-                |g: &mut FrameGraph<'a>| passes.gbuffer.add(ctx, g, edge, scene, None, None, false);
+            let gbuffer = |g: &mut FrameGraph<'a>| {
+                let opaque = passes.gbuffer.add(ctx, g, edge, scene, None, None, false);
+                passes
+                    .gbuffer
+                    .add_vegetation(ctx, g, scene, None, None, opaque)
+            };
             let relight = |g: &mut FrameGraph<'a>, stored: GBuffer, env_before| {
                 let inputs = LightingInputs {
                     shadow_mask: None,

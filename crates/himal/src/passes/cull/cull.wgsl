@@ -187,13 +187,15 @@ fn fade_step(t: f32) -> u32 {
     return min(u32(t * 127.0), 126u);
 }
 
-// Index of the arguments of (batch, kind, level) in view `view`.
+// Index of the arguments of (batch, kind, level) in view `view`: per view
+// the opaque batches' then the vegetation batches', each [kind][level][batch],
+// so one level (or a run of levels) of every batch is one multi-draw.
 fn args_index(view: u32, batch: u32, kind: u32, level: u32) -> u32 {
     let opaque = params.opaque_batches;
-    var i = (kind * opaque + batch) * MAX_LODS + level;
+    var i = (kind * MAX_LODS + level) * opaque + batch;
     if (batch >= opaque) {
         let vegetation = params.batches - opaque;
-        i = LISTS * opaque + (kind * vegetation + batch - opaque) * MAX_LODS + level;
+        i = LISTS * opaque + (kind * MAX_LODS + level) * vegetation + batch - opaque;
     }
     return view * params.batches * LISTS + i;
 }

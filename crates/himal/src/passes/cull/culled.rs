@@ -113,38 +113,36 @@ impl<'a> Culled<'a> {
         self.record(rp, ctx, start, draws)
     }
 
-    /// [`Self::draw`] of `level`'s lists alone, one indirect draw per
-    /// batch and kind (`--view lod`, a pipeline per level).
-    pub fn draw_level(
+    /// [`Self::draw`] of the levels in `levels` alone: one multi-draw per
+    /// kind (`--view lod`, a pipeline per level; V3's impostor levels in
+    /// their own pass). Returns the calls recorded.
+    pub fn draw_levels(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
         ctx: &PassContext<'_>,
         view: u32,
         list: List,
         kinds: std::ops::Range<u32>,
-        level: u32,
+        levels: std::ops::Range<u32>,
     ) -> u32 {
         let count = self.range(list).1;
-        let mut calls = 0;
-        for kind in kinds {
-            for b in 0..count {
-                let at = self.args_at(view, list, kind, b, level);
-                calls += match self.args {
-                    CulledArgs::Gpu(args) => {
-                        rp.draw_indexed_indirect(ctx.buffer(args), at * ARGS_BYTES);
-                        1
-                    }
-                    CulledArgs::Cpu { .. } => self.record(rp, ctx, at, 1),
-                };
-            }
+        let levels = levels.start..levels.end.min(MAX_LODS as u32);
+        if count == 0 || levels.is_empty() {
+            return 0;
         }
-        calls
+        let draws = (levels.end - levels.start) * count;
+        kinds
+            .map(|kind| {
+                let start = self.args_at(view, list, kind, 0, levels.start);
+                self.record(rp, ctx, start, draws)
+            })
+            .sum()
     }
 
     /// View `view`'s draws of `list`'s streamed regions' batches alone
     /// (L2's height fields, shadow maps on the CPU path: static world
-    /// instances, no scene objects): one multi-draw per kind in `kinds`.
-    /// Returns the calls recorded.
+    /// instances, no scene objects): one multi-draw per kind and level in
+    /// `kinds`. Returns the calls recorded.
     pub fn draw_pool(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
@@ -159,8 +157,10 @@ impl<'a> Culled<'a> {
         }
         let mut calls = 0;
         for kind in kinds {
-            let start = self.args_at(view, list, kind, first - self.range(list).0, 0);
-            calls += self.record(rp, ctx, start, count * MAX_LODS as u32);
+            for level in 0..MAX_LODS as u32 {
+                let start = self.args_at(view, list, kind, first - self.range(list).0, level);
+                calls += self.record(rp, ctx, start, count);
+            }
         }
         calls
     }
@@ -204,14 +204,15 @@ impl<'a> Culled<'a> {
     }
 
     /// Index of the arguments of (view, list, kind, batch of the list,
-    /// level): [view][opaque: kind, batch, level][vegetation: kind, batch, level].
+    /// level): [view][opaque: kind, level, batch][vegetation: kind, level,
+    /// batch] (`CullLayout::args_index`).
     fn args_at(&self, view: u32, list: List, kind: u32, batch: u32, level: u32) -> u64 {
         let (first, count) = self.range(list);
         let (lods, lists) = (MAX_LODS as u64, LISTS as u64);
         u64::from(view) * u64::from(self.batches) * lists
             + u64::from(first) * lists
-            + (u64::from(kind) * u64::from(count) + u64::from(batch)) * lods
-            + u64::from(level)
+            + (u64::from(kind) * lods + u64::from(level)) * u64::from(count)
+            + u64::from(batch)
     }
 
     fn range(&self, list: List) -> (u32, u32) {

@@ -415,20 +415,31 @@ impl CullLayout {
     }
 
     /// Multi-draws one culled view records in the G-buffer (`true`: the
-    /// opaque steady and fading lists, vegetation) or a shadow map.
+    /// opaque steady and fading lists; the vegetation's cards and, with
+    /// impostors, their levels, one per kind each) or a shadow map (one
+    /// per list).
     pub fn draw_calls(&self, gbuffer: bool) -> u32 {
         let fading = u32::from(gbuffer && self.has_lods() && self.opaque_batches > 0);
-        u32::from(self.opaque_batches > 0) + fading + u32::from(self.vegetation_batches > 0)
+        let vegetation = match (self.vegetation_batches > 0, gbuffer) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => {
+                let impostors = self.impostors && !self.impostor_batches.is_empty();
+                3 * (1 + u32::from(impostors))
+            }
+        };
+        u32::from(self.opaque_batches > 0) + fading + vegetation
     }
 
     /// Index of the arguments of (`batch`, `kind`, `level`) in view `view`
-    /// (`args_index` in `cull.wgsl`).
+    /// (`args_index` in `cull.wgsl`): per view the opaque batches' then the
+    /// vegetation batches', each `[kind][level][batch]`.
     pub fn args_index(&self, view: usize, batch: usize, kind: usize, level: usize) -> usize {
         let (opaque, all) = (self.opaque_batches as usize, self.batches.len());
         let i = if batch < opaque {
-            (kind * opaque + batch) * MAX_LODS + level
+            (kind * MAX_LODS + level) * opaque + batch
         } else {
-            LISTS * opaque + (kind * (all - opaque) + batch - opaque) * MAX_LODS + level
+            LISTS * opaque + (kind * MAX_LODS + level) * (all - opaque) + batch - opaque
         };
         view * all * LISTS + i
     }

@@ -306,7 +306,8 @@ impl GBufferPass {
     }
 
     /// The `gbuffer` node: clears the targets, then draws opaque per-vertex
-    /// objects, glTF materials and vegetation (`view` is the frame constant):
+    /// objects and glTF materials (`view` is the frame constant; vegetation
+    /// follows in [`Self::add_vegetation`]'s nodes):
     /// `lists`, or every object of `scene` (probe cubes) when `None`. With
     /// `culled` (V6 GPU culling: the lists, view), opaque and vegetation
     /// objects come from the GPU's list of that view and `lists` holds only
@@ -322,13 +323,9 @@ impl GBufferPass {
         culled: Option<(Culled<'a>, u32)>,
         mip_bias: bool,
     ) -> GBuffer {
-        let (opaque, vegetation, textured) = match lists {
-            Some(l) => (&l.opaque, &l.vegetation, &l.textured),
-            None => (
-                &scene.draws_opaque,
-                &scene.draws_vegetation,
-                &scene.draws_textured,
-            ),
+        let (opaque, textured) = match lists {
+            Some(l) => (&l.opaque, &l.textured),
+            None => (&scene.draws_opaque, &scene.draws_textured),
         };
         let (w, h) = size;
         let albedo =
@@ -340,16 +337,16 @@ impl GBufferPass {
         );
         let motion = graph.create_texture("motion", TextureDesc::new_2d(w, h, MOTION_FORMAT));
         let depth = graph.create_texture("depth", TextureDesc::new_2d(w, h, DEPTH_FORMAT));
-        // The permutations this scene draws with, from the shared cache.
+        // The permutations this scene draws with, from the shared cache
+        // (vegetation's in its own nodes).
         let pipelines: Vec<(GBufferKey, Result<wgpu::RenderPipeline, GpuError>)> =
             GBufferKey::for_view(scene, mip_bias, self.specular_aa, self.lod_view)
                 .into_iter()
-                .map(|key| key.impostor_view(self.impostor_view))
+                .filter(|key| key.material != MaterialType::Vegetation)
                 .map(|key| (key, self.pipeline(ctx, key)))
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
         let (lod_view, specular_aa) = (self.lod_view, self.specular_aa);
-        let impostor_view = self.impostor_view;
         let node = graph
             .raster("gbuffer", &self.program)
             .uniform("objects", &scene.objects)
@@ -402,7 +399,14 @@ impl GBufferPass {
                     }
                     if let Some((c, view)) = culled {
                         let draw = |rp: &mut wgpu::RenderPass<'_>, kinds| match level {
-                            Some(l) => c.draw_level(rp, ctx, view, List::Opaque, kinds, l.into()),
+                            Some(l) => c.draw_levels(
+                                rp,
+                                ctx,
+                                view,
+                                List::Opaque,
+                                kinds,
+                                u32::from(l)..u32::from(l) + 1,
+                            ),
                             None => c.draw(rp, ctx, view, List::Opaque, kinds),
                         };
                         draw(rp, STEADY);
@@ -439,27 +443,6 @@ impl GBufferPass {
                         }
                     }
                 }
-                // Vegetation, per level under `--view lod` as the opaque draws.
-                let by_level = lod_view.then(|| scene.split_levels(vegetation));
-                for &level in &levels {
-                    let key = at(GBufferKey::VEGETATION.impostor_view(impostor_view), level);
-                    if !vegetation.is_empty() {
-                        rp.set_pipeline(pipeline(key)?);
-                        match (&by_level, level) {
-                            (Some(split), Some(l)) => scene.draw_list(rp, &split[l as usize]),
-                            _ => scene.draw_list(rp, vegetation),
-                        }
-                    }
-                    if let Some((c, view)) = culled
-                        && scene.has_vegetation()
-                    {
-                        rp.set_pipeline(pipeline(key)?);
-                        match level {
-                            Some(l) => c.draw_level(rp, ctx, view, List::Vegetation, ALL, l.into()),
-                            None => c.draw(rp, ctx, view, List::Vegetation, ALL),
-                        };
-                    }
-                }
                 Ok(())
             });
         // The node declared four colour targets, in this order.
@@ -470,6 +453,143 @@ impl GBufferPass {
             material: colour(2).unwrap_or(material),
             motion: colour(3).unwrap_or(motion),
             depth: written.depth.unwrap_or(depth),
+        }
+    }
+
+    /// The vegetation's G-buffer nodes after [`Self::add`] (targets loaded):
+    /// `vegetation.gbuffer` draws the alpha-tested cards (LOD0-2 and any
+    /// vegetation without levels), `vegetation.impostor` V3's impostor
+    /// levels, each a pass of its own so the bench times them (issue #18).
+    /// The same lists as `add` (`lists`, `culled`); nothing without
+    /// vegetation.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_vegetation<'a>(
+        &'a self,
+        ctx: &GpuContext,
+        graph: &mut FrameGraph<'a>,
+        scene: &'a SceneGpu,
+        lists: Option<&'a VisibleLists>,
+        culled: Option<(Culled<'a>, u32)>,
+        gbuffer: GBuffer,
+    ) -> GBuffer {
+        let impostors = crate::scene::tree::impostor_level::frame_levels();
+        let any_impostor = scene.impostor_mesh.iter().any(|&i| i)
+            && scene.impostors.load(std::sync::atomic::Ordering::Relaxed);
+        let cards = match any_impostor {
+            true => 0..impostors.start,
+            false => 0..MAX_LODS as u32,
+        };
+        let gbuffer = self.vegetation_node(
+            ctx,
+            (graph, "vegetation.gbuffer"),
+            (scene, lists, culled),
+            gbuffer,
+            cards,
+        );
+        if !any_impostor {
+            return gbuffer;
+        }
+        self.vegetation_node(
+            ctx,
+            (graph, "vegetation.impostor"),
+            (scene, lists, culled),
+            gbuffer,
+            impostors,
+        )
+    }
+
+    /// One vegetation node (`id`): the vegetation lists' `levels` into
+    /// `gbuffer` (loaded), per level under `--view lod`.
+    fn vegetation_node<'a>(
+        &'a self,
+        ctx: &GpuContext,
+        (graph, id): (&mut FrameGraph<'a>, &str),
+        (scene, lists, culled): (
+            &'a SceneGpu,
+            Option<&'a VisibleLists>,
+            Option<(Culled<'a>, u32)>,
+        ),
+        gbuffer: GBuffer,
+        levels: std::ops::Range<u32>,
+    ) -> GBuffer {
+        let vegetation = lists.map_or(&scene.draws_vegetation, |l| &l.vegetation);
+        if vegetation.is_empty() && !(culled.is_some() && scene.has_vegetation()) {
+            return gbuffer;
+        }
+        let (lod_view, impostor_view) = (self.lod_view, self.impostor_view);
+        let key = |level: Option<u8>| {
+            let key = GBufferKey::VEGETATION.impostor_view(impostor_view);
+            level.map_or(key, |l| key.at_level(l))
+        };
+        let shown: Vec<u32> = levels.clone().collect();
+        let keys: Vec<Option<u8>> = match lod_view {
+            true => shown.iter().map(|&l| Some(l as u8)).collect(),
+            false => vec![None],
+        };
+        let pipelines: Vec<(Option<u8>, Result<wgpu::RenderPipeline, GpuError>)> = keys
+            .iter()
+            .map(|&l| (l, self.pipeline(ctx, key(l))))
+            .collect();
+        let load = wgpu::LoadOp::Load;
+        let node = graph
+            .raster(id, &self.program)
+            .uniform("objects", &scene.objects)
+            .uniform("ripple", &scene.ripple)
+            .uniform("deform_prev", scene.deform_prev(self.deform_motion))
+            .external("impostor_color_load", &scene.impostor_atlas.color)
+            .external("impostor_normal_load", &scene.impostor_atlas.normal)
+            .external("impostor_depth_load", &scene.impostor_atlas.depth);
+        let written = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances)
+            .color(gbuffer.albedo, load)
+            .color(gbuffer.frame, load)
+            .color(gbuffer.material, load)
+            .color(gbuffer.motion, load)
+            .depth(
+                gbuffer.depth,
+                None,
+                wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            )
+            .record(move |ctx, rp| {
+                // The scene's lists: each object at its level (CPU path).
+                let split = scene.split_levels(vegetation);
+                let all_levels = levels.start == 0 && levels.end as usize >= MAX_LODS;
+                scene.bind_geometry(rp);
+                for (level, pipeline) in &pipelines {
+                    let pipeline = pipeline.as_ref().map_err(|e| {
+                        GpuError::Other(format!("G-buffer vegetation permutation: {e}"))
+                    })?;
+                    rp.set_pipeline(pipeline);
+                    let drawn = match level {
+                        Some(l) => u32::from(*l)..u32::from(*l) + 1,
+                        None => levels.clone(),
+                    };
+                    if all_levels && level.is_none() {
+                        scene.draw_list(rp, vegetation);
+                    } else {
+                        for l in drawn.clone() {
+                            if let Some(draws) = split.get(l as usize) {
+                                scene.draw_list(rp, draws);
+                            }
+                        }
+                    }
+                    if let Some((c, view)) = culled
+                        && scene.has_vegetation()
+                    {
+                        c.draw_levels(rp, ctx, view, List::Vegetation, ALL, drawn);
+                    }
+                }
+                Ok(())
+            });
+        let colour = |i: usize, h: TextureHandle| written.colors.get(i).copied().unwrap_or(h);
+        GBuffer {
+            albedo: colour(0, gbuffer.albedo),
+            frame: colour(1, gbuffer.frame),
+            material: colour(2, gbuffer.material),
+            motion: colour(3, gbuffer.motion),
+            depth: written.depth.unwrap_or(gbuffer.depth),
         }
     }
 }

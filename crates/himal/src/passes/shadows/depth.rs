@@ -86,6 +86,18 @@ impl ShadowViewGpu {
     }
 }
 
+/// Which casters a depth pass draws: all, or the opaque ones and the
+/// vegetation in separate passes (`vegetation.shadow*`, timed apart).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// Every caster.
+    All,
+    /// Everything but the vegetation.
+    Opaque,
+    /// The vegetation alone (alpha-tested cards, impostors).
+    Vegetation,
+}
+
 /// Opaque and vegetation pipelines writing one depth format.
 pub struct DepthPipelines {
     /// Opaque casters: position only, no fragment stage, both faces.
@@ -202,11 +214,11 @@ impl DepthPipelines {
         device: (&wgpu::Device, bool),
     ) -> Result<(), GpuError> {
         scene.bind_geometry(rp);
-        self.draw_pipelines(rp, scene, lists, device)
+        self.draw_pipelines(rp, scene, lists, device, Part::All)
     }
 
-    /// Draws `lists` and, with `culled` (and the pass recording it), the GPU-culled
-    /// view the lists name (V6).
+    /// Draws `part` of `lists` and, with `culled` (and the pass recording
+    /// it), of the GPU-culled view the lists name (V6).
     pub fn draw_culled(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
@@ -214,18 +226,27 @@ impl DepthPipelines {
         lists: &DrawLists,
         culled: Option<(&Culled<'_>, &crate::graph::PassContext<'_>)>,
         device: (&wgpu::Device, bool),
+        part: Part,
     ) -> Result<(), GpuError> {
-        self.draw(rp, scene, lists, device)?;
+        scene.bind_geometry(rp);
+        self.draw_pipelines(rp, scene, lists, device, part)?;
+        let (opaque, vegetation) = (part != Part::Vegetation, part != Part::Opaque);
         if let (Some((view, _)), Some((c, ctx))) = (lists.gpu_view, culled) {
-            rp.set_pipeline(&self.opaque);
-            c.draw(rp, ctx, view, List::Opaque, SHADOW);
-            rp.set_pipeline(&self.vegetation);
-            c.draw(rp, ctx, view, List::Vegetation, SHADOW);
+            if opaque {
+                rp.set_pipeline(&self.opaque);
+                c.draw(rp, ctx, view, List::Opaque, SHADOW);
+            }
+            if vegetation {
+                rp.set_pipeline(&self.vegetation);
+                c.draw(rp, ctx, view, List::Vegetation, SHADOW);
+            }
         }
         if let (Some(view), Some((c, ctx))) = (lists.pool_view, culled) {
-            rp.set_pipeline(&self.opaque);
-            c.draw_pool(rp, ctx, view, List::Opaque, SHADOW);
-            if c.has_pool(List::Vegetation) {
+            if opaque {
+                rp.set_pipeline(&self.opaque);
+                c.draw_pool(rp, ctx, view, List::Opaque, SHADOW);
+            }
+            if vegetation && c.has_pool(List::Vegetation) {
                 rp.set_pipeline(&self.vegetation);
                 c.draw_pool(rp, ctx, view, List::Vegetation, SHADOW);
             }
@@ -251,7 +272,15 @@ impl DepthPipelines {
         scene: &SceneGpu,
         lists: &DrawLists,
         (device, alpha_test): (&wgpu::Device, bool),
+        part: Part,
     ) -> Result<(), GpuError> {
+        if part == Part::Vegetation {
+            if !lists.vegetation.is_empty() {
+                rp.set_pipeline(&self.vegetation);
+                scene.draw_list(rp, &lists.vegetation);
+            }
+            return Ok(());
+        }
         let on = alpha_test && self.masked.is_some();
         let alpha = |d: &Draw| scene.alpha_caster(d.object).filter(|_| on);
         let any_alpha = lists.opaque.iter().any(|d| alpha(d).is_some());
@@ -268,7 +297,7 @@ impl DepthPipelines {
             rp.set_pipeline(&self.opaque);
             scene.draw_list(rp, &lists.opaque);
         }
-        if !lists.vegetation.is_empty() {
+        if part == Part::All && !lists.vegetation.is_empty() {
             rp.set_pipeline(&self.vegetation);
             scene.draw_list(rp, &lists.vegetation);
         }

@@ -24,6 +24,8 @@ struct DepthNode<'s, 'a> {
     /// when `clear_rect`.
     rect: Option<[u32; 4]>,
     clear_rect: bool,
+    /// Which casters it draws.
+    part: super::depth::Part,
 }
 use crate::passes::common::view_node;
 
@@ -63,21 +65,33 @@ impl ShadowPass {
         let mut desc = TextureDesc::new_2d(n, n, SHADOW_FORMAT);
         desc.depth_or_layers = CASCADES as u32;
         let mut cascades = graph.create_texture("shadow.cascades", desc);
+        // Vegetation casts in passes of its own (bench rows
+        // `vegetation.shadow*`, issue #18), after each cascade's opaque casters.
+        let vegetation = scene.has_vegetation();
+        let parts: &[(&str, super::depth::Part)] = match vegetation {
+            true => &[
+                ("shadows.cascade", super::depth::Part::Opaque),
+                ("vegetation.shadow", super::depth::Part::Vegetation),
+            ],
+            false => &[("shadows.cascade", super::depth::Part::All)],
+        };
         for (i, (_, lists)) in plan.cascades.iter().enumerate() {
-            let id = format!("shadows.cascade{i}");
-            let target = (cascades, i as u32, true);
-            let node = DepthNode {
-                id: &id,
-                view: &self.views[i],
-                target,
-                pipelines: &self.depth32,
-                lists,
-                culled,
-                keep: false,
-                rect: None,
-                clear_rect: false,
-            };
-            cascades = self.depth_node(graph, scene, node);
+            for (k, &(name, part)) in parts.iter().enumerate() {
+                let id = format!("{name}{i}");
+                let node = DepthNode {
+                    id: &id,
+                    view: &self.views[i],
+                    target: (cascades, i as u32, k == 0),
+                    pipelines: &self.depth32,
+                    lists,
+                    culled,
+                    keep: false,
+                    rect: None,
+                    clear_rect: false,
+                    part,
+                };
+                cascades = self.depth_node(graph, scene, node);
+            }
             if let Some(c) = extra {
                 cascades = c.add_cascade(graph, cascades, i as u32, &self.views[i]);
             }
@@ -102,6 +116,7 @@ impl ShadowPass {
                 keep: true,
                 rect: None,
                 clear_rect: false,
+                part: super::depth::Part::All,
             };
             let h = self.depth_node(graph, scene, node);
             static_written[update.target.min(1)] = Some(h);
@@ -136,6 +151,7 @@ impl ShadowPass {
                     keep: true,
                     rect: Some(rect),
                     clear_rect: clear,
+                    part: super::depth::Part::All,
                 };
                 h = self.depth_node(graph, scene, node);
             }
@@ -159,6 +175,7 @@ impl ShadowPass {
                 keep: false,
                 rect: None,
                 clear_rect: false,
+                part: super::depth::Part::All,
             };
             self.depth_node(graph, scene, node)
         });
@@ -269,6 +286,7 @@ impl ShadowPass {
             keep,
             rect,
             clear_rect,
+            part,
         } = node;
         let culled = culled.filter(|_| lists.gpu_view.is_some() || lists.pool_view.is_some());
         let alpha_test = self.plan.as_ref().is_some_and(|p| p.alpha_test);
@@ -305,7 +323,7 @@ impl ShadowPass {
             }
             let device = (ctx.device, alpha_test);
             let culled = culled.as_ref().map(|c| (c, ctx));
-            pipelines.draw_culled(rp, scene, lists, culled, device)
+            pipelines.draw_culled(rp, scene, lists, culled, device, part)
         })
         .depth
         .unwrap_or(map)
@@ -364,6 +382,7 @@ impl ShadowPass {
                         scene,
                         &p.draws,
                         (ctx.device, plan.alpha_test),
+                        super::depth::Part::All,
                     )?;
                 }
                 Ok(())

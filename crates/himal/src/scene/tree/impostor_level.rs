@@ -113,6 +113,12 @@ fn grid_vertex(imp: &Impostor, layer: u32, c: &Colours, i: usize, j: usize) -> V
 
 /// Levels [`append`] adds: the impostor and the far impostor.
 pub const LEVELS: usize = 2;
+/// The levels of a leaves mesh that are impostors (after V1's
+/// [`super::LEVELS`]), as the culled lists number them.
+pub fn frame_levels() -> std::ops::Range<u32> {
+    super::LEVELS as u32..(super::LEVELS + LEVELS) as u32
+}
+
 /// The far impostor's grid step (in fine cells): 4 x 4 cells.
 pub const FAR_STEP: usize = 4;
 
