@@ -156,7 +156,12 @@ pub fn group(pass: &str) -> &'static str {
 /// G-buffer (`vegetation.gbuffer` and `.impostor`), and of that the
 /// impostors alone.
 fn vegetation_ms(rows: &[PassRow]) -> [f64; 4] {
-    let sum = |f: &dyn Fn(&str) -> bool| rows.iter().filter(|r| f(&r.id)).map(|r| r.frame_ms).sum();
+    // From +0: an empty sum of f64 is -0 and would print as "-0.000".
+    let sum = |f: &dyn Fn(&str) -> bool| {
+        (rows.iter().filter(|r| f(&r.id)))
+            .map(|r| r.frame_ms)
+            .fold(0.0, |a, b| a + b)
+    };
     [
         sum(&|id| id == "vegetation.simulate" || id == "vegetation.ripple"),
         sum(&|id| id.starts_with("vegetation.shadow")),
@@ -587,6 +592,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "vegetation (issue #18; Far Cry 4 PS4 trees: simulation 0.28, shadow 0.95, G-buffer 5.50 = 6.73 ms, 28.8% of 23.4): simulation {simulate:.3}, shadow {shadow:.3}, G-buffer {gbuffer:.3} (of which impostors {impostor:.3}) = {all:.3} ms, {:.1}% of the frame",
             100.0 * stats.share(all)
         );
+        if let Some(w) = renderer.world_stats() {
+            println!(
+                "  the world's trees resident: {} of {} instances",
+                w.trees, w.instances
+            );
+        }
     }
     println!(
         "per frame (medians): GPU {total:.2} ms | CPU {:.2} ms wall, {:.2} ms thread CPU = plan {:.2} (culling {:.2}, uploads {:.2}) + record {:.2} + submit {:.2}",

@@ -87,6 +87,8 @@ pub struct StreamStats {
     pub tiles_total: u32,
     /// Live instances in all kinds' regions.
     pub instances: u32,
+    /// Of those, trees (the kinds with a species: V1's forests).
+    pub trees: u32,
     /// Instance slots in all kinds' regions (the pools' capacity).
     pub instances_total: u32,
     /// Instance slots rewritten this frame (new, moved or emptied).
@@ -506,6 +508,10 @@ impl Streamer {
         st.tiles_used = self.tiles.used();
         st.tiles_total = self.tiles.capacity();
         st.instances = self.kinds.iter().map(|k| k.live()).sum();
+        st.trees = (InstanceKind::ALL.iter().zip(&self.kinds))
+            .filter(|(kind, _)| kind.species().is_some())
+            .map(|(_, k)| k.live())
+            .sum();
         st.instances_total = self.kinds.iter().map(|k| k.capacity()).sum();
         st.uploaded = u.uploads.len() as u32;
         st.evicted = u.evictions.len() as u32;
