@@ -351,7 +351,7 @@ fn twin_errors(scene: &Scene, camera: &Camera, leaf: bool) -> TwinErrors {
             let g = px(0).truncate();
             let rel = |c: Vec3| ((g - c).abs() / c.max(Vec3::splat(1e-3))).max_element();
             let e = rel(twin(leaf));
-            let k = usize::from(!(f > 0.0));
+            let k = usize::from(f <= 0.0);
             stats[k].0 += e;
             stats[k].1 = stats[k].1.max(e);
             stats[k].2 += 1;
@@ -433,10 +433,11 @@ fn effect(scene: &Scene, camera: &str) -> Effect {
     let mut same = true;
     for i in 0..on[0].len() {
         if on[1][i][0] > 0.0 {
-            for k in 0..=usize::from(on[2][i][0] > 0.5) {
-                sums[k].0 += lum(&on[0][i]);
-                sums[k].1 += lum(&off[0][i]);
-                sums[k].2 += 1;
+            let sunlit = on[2][i][0] > 0.5;
+            for sum in sums.iter_mut().take(1 + usize::from(sunlit)) {
+                sum.0 += lum(&on[0][i]);
+                sum.1 += lum(&off[0][i]);
+                sum.2 += 1;
             }
         } else {
             same &= on[0][i] == off[0][i];
