@@ -185,6 +185,15 @@ pub struct PostArgs {
         allow_hyphen_values = true
     )]
     pub vegetation_motion: String,
+    /// V5: leaves lit through from behind (translucency of the sun and
+    /// local lights) with a low, broad specular (off: like any dielectric).
+    #[arg(
+        long,
+        default_value = "on",
+        value_name = "on|off",
+        allow_hyphen_values = true
+    )]
+    pub leaf_shading: String,
     /// V2: the global wind, SPEED (m/s, 0..100) toward DIR degrees about +Y
     /// from +X (90: toward -z), in place of the scene's `[wind]`.
     #[arg(long, value_name = "SPEED,DIR", allow_hyphen_values = true)]
@@ -474,6 +483,7 @@ impl PostArgs {
         settings.tree_ao = on_off("--tree-ao", &self.tree_ao)?;
         settings.vegetation_motion = (self.vegetation_motion.parse())
             .map_err(|e| anyhow::anyhow!("--vegetation-motion {e}"))?;
+        settings.leaf_shading = on_off("--leaf-shading", &self.leaf_shading)?;
         settings.wind = self.wind.as_deref().map(parse_wind).transpose()?;
         settings.visibility_remap = on_off("--visibility-remap", &self.visibility_remap)?;
         settings.ambient_lights = on_off("--ambient-lights", &self.ambient_lights)?;

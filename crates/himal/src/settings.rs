@@ -63,7 +63,7 @@ pub enum IndirectView {
 
 impl ViewBuffer {
     /// Every name `--view` accepts (what [`str::parse`] reads), in the order the viewer lists them.
-    pub const NAMES: [&'static str; 32] = [
+    pub const NAMES: [&'static str; 33] = [
         "final",
         "albedo",
         "normal",
@@ -95,6 +95,7 @@ impl ViewBuffer {
         "probe-cells",
         "clipmap",
         "impostor",
+        "foliage",
         "tree-ao",
     ];
 
@@ -136,6 +137,7 @@ impl std::str::FromStr for ViewBuffer {
             "sectors" => ViewBuffer::Debug(D::Sectors),
             "lod" => ViewBuffer::Debug(D::Lod),
             "impostor" => ViewBuffer::Debug(D::Impostor),
+            "foliage" => ViewBuffer::Debug(D::Foliage),
             "particle-lighting" => ViewBuffer::ParticleLighting,
             "indirect" => ViewBuffer::Indirect(IndirectView::Irradiance),
             "probe-cells" => ViewBuffer::Indirect(IndirectView::ProbeCells),
@@ -299,6 +301,10 @@ pub struct FrameSettings {
     /// V2 wind on the trees (`vegetation.simulate`) and V5's branch waves
     /// and leaf flutter; `Bones`: V2 alone; `Off`: at rest.
     pub vegetation_motion: crate::passes::vegetation::VegetationMotion,
+    /// V5 leaf shading: foliage pixels (the G-buffer's leaf amount) get
+    /// light through the leaf from behind and a low, broad specular (off:
+    /// shaded like any dielectric).
+    pub leaf_shading: bool,
     /// V2: the global wind (m/s) in place of the scene's `[wind]`
     /// (`--wind SPEED,DIR`); `None`: the scene's.
     pub wind: Option<glam::Vec3>,
@@ -391,6 +397,7 @@ impl FrameSettings {
             impostors: true,
             tree_ao: true,
             vegetation_motion: Default::default(),
+            leaf_shading: true,
             wind: None,
         }
     }

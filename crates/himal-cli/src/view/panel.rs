@@ -300,6 +300,7 @@ impl Viewer {
         ui.checkbox(&mut self.settings.vegetation, "vegetation (V1)");
         ui.checkbox(&mut self.settings.impostors, "tree impostors (V3)");
         ui.checkbox(&mut self.settings.tree_ao, "tree AO volumes (V4)");
+        ui.checkbox(&mut self.settings.leaf_shading, "leaf shading (V5)");
         // L5's probes are baked when the viewer starts with --indirect on.
         let probes = self.renderer.probe_cells().is_some();
         ui.add_enabled(

@@ -88,7 +88,8 @@ impl ViewUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct LightingUniform {
-    /// xyz unit vector towards the sun (world space), w unused.
+    /// xyz unit vector towards the sun (world space); w 1 = V5 leaf shading
+    /// (foliage pixels lit through and with a leaf's specular).
     pub sun_direction: [f32; 4],
     /// rgb sun illuminance at the ground in klux (zero when the sun is off);
     /// w 1 = R4, Burley's remapped roughness in analytic lights' visibility term.
@@ -119,6 +120,12 @@ impl LightingUniform {
     /// R4 on or off (`sun_illuminance.w`; see `FrameSettings::visibility_remap`).
     pub fn with_visibility_remap(mut self, on: bool) -> Self {
         self.sun_illuminance[3] = if on { 1.0 } else { 0.0 };
+        self
+    }
+
+    /// V5 leaf shading on or off (`sun_direction.w`; see `FrameSettings::leaf_shading`).
+    pub fn with_leaf_shading(mut self, on: bool) -> Self {
+        self.sun_direction[3] = if on { 1.0 } else { 0.0 };
         self
     }
 }

@@ -352,7 +352,8 @@ impl Renderer {
                 if settings.bent_normals { 1.0 } else { 0.0 },
             ),
         )
-        .with_visibility_remap(settings.visibility_remap);
+        .with_visibility_remap(settings.visibility_remap)
+        .with_leaf_shading(settings.leaf_shading);
         let t_lighting = std::time::Instant::now();
         self.ctx
             .queue

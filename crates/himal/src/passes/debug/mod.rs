@@ -43,6 +43,9 @@ pub enum DebugView {
     /// V3: the albedo, impostor pixels in the hue of their nearest capture
     /// around (lighter toward the top one).
     Impostor = 15,
+    /// V5: the leaf amount in \[0,1\] as grey (1 on grass, bush and leaf
+    /// cards, the leaf fraction on impostors, 0 elsewhere).
+    Foliage = 16,
 }
 
 /// The full-screen pass that draws a [`DebugView`] of the frame's buffers.

@@ -9,6 +9,7 @@
 #import tangent_frame
 #import post
 #import fullscreen
+#import gbuffer_material
 
 override VIEW: u32 = 1u;
 override DISPLAY: bool = true;
@@ -48,7 +49,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         case 3u: { raw = vec4f(tbn[0], 1.0); disp = tbn[0] * 0.5 + 0.5; }
         case 4u: { raw = vec4f(vec3f(m.x), 1.0); disp = vec3f(m.x); }
         case 5u: { raw = vec4f(vec3f(m.y), 1.0); disp = vec3f(m.y); }
-        case 6u: { raw = vec4f(vec3f(m.z), 1.0); disp = vec3f(m.z); }
+        case 6u: { let metal = gbuffer_metallic(m.z); raw = vec4f(vec3f(metal), 1.0); disp = vec3f(metal); }
+        case 16u: { let f = gbuffer_foliage(m.z); raw = vec4f(vec3f(f), 1.0); disp = vec3f(f); } // V5 leaf amount
         case 7u: { raw = vec4f(vec3f(m.w), 1.0); disp = vec3f(m.w); }
         case 8u: {
             raw = vec4f(vec3f(d), 1.0);

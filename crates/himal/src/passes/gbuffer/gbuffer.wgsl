@@ -1,7 +1,8 @@
 // gbuffer: rasterise scene geometry into the G-buffer (TECHNIQUES M1-M3).
 // Targets: 0 albedo Rgba8UnormSrgb (rgb albedo, a material AO)
 //          1 frame  Rgb10a2Unorm   (tangent frame quaternion, smallest three + index; M3)
-//          2 material Rgba8Unorm   (glossiness, reflectance, metallic, anisotropy; M1)
+//          2 material Rgba8Unorm   (glossiness, reflectance, metallic|foliage, anisotropy; M1,
+//                                   V5: shaders/gbuffer_material.wgsl)
 //          3 motion Rg16Float      (previous uv - current uv)
 // Bindings: view (uniform View), objects (storage, per-object transforms; instance index = object).
 // VEGETATION (override): the alpha-tested, swaying, double-sided pipeline
@@ -20,6 +21,8 @@
 #import impostor_atlas
 // V2: grass bends with the ripple grid around the camera.
 #import ripple
+// V5: grass, bush and leaf cards and impostor leaves mark the material's blue channel.
+#import gbuffer_material
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -114,6 +117,7 @@ fn vs_main(in: GBufferVertexIn) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var n = normalize(in.normal);
+    var foliage = 0.0;
     if ((DITHER || VEGETATION) && !lod_dither_keep(in.fade, in.clip.xy)) {
         discard;
     }
@@ -123,6 +127,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     if (VEGETATION) {
         if (foliage_alpha(in.pattern, in.uv) < 0.5) {
             discard;
+        }
+        // Cards are leaves; trunks and bark (pattern 0, or tinted) are not.
+        if (in.pattern == FOLIAGE_GRASS || in.pattern == FOLIAGE_LEAVES) {
+            foliage = 1.0;
         }
         // Grass normals lean up on both faces: mirror only the horizontal
         // part; bush normals are the bush's outward normal on both faces.
@@ -147,7 +155,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
         out.albedo = vec4f(lod_view_albedo(u32(LOD_VIEW), in.color.rgb), in.color.a);
     }
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
-    out.material = clamp(in.surface, vec4f(0.0), vec4f(1.0));
+    let m = clamp(in.surface, vec4f(0.0), vec4f(1.0));
+    out.material = vec4f(m.xy, gbuffer_metallic_foliage(m.z, foliage), m.w);
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     return out;
 }
@@ -184,8 +193,10 @@ fn impostor_gbuffer(in: VertexOut) -> GBufferOut {
     }
     out.frame = pack_quat(frame_to_quat(tbn[0], tbn[1], tbn[2]));
     // The bark's glossiness (uv.x here), the rest the leaves'.
+    // The leaf fraction is the pixel's leaf amount (V5).
     let bark_surface = vec4f(in.uv.x, in.surface.yzw);
-    out.material = clamp(mix(bark_surface, in.surface, leaf), vec4f(0.0), vec4f(1.0));
+    let m = clamp(mix(bark_surface, in.surface, leaf), vec4f(0.0), vec4f(1.0));
+    out.material = vec4f(m.xy, gbuffer_metallic_foliage(m.z, leaf), m.w);
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     return out;
 }

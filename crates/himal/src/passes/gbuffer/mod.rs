@@ -19,8 +19,32 @@ use crate::scene::lod::MAX_LODS;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// Tangent-frame target: the frame's quaternion packed as its smallest three components plus the index of the largest (M3).
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
-/// Material target: glossiness, reflectance, metallic, anisotropy, each in \[0,1\] (M1).
+/// Material target: glossiness, reflectance, metallic|foliage
+/// ([`encode_metallic_foliage`]), anisotropy, each in \[0,1\] (M1, V5).
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The material target's blue channel as stored (code / 255; twin of
+/// `shaders/gbuffer_material.wgsl` `gbuffer_metallic_foliage`): codes
+/// 0..127 hold `metallic` in 7 bits, codes 128..255 mark a foliage pixel
+/// (`foliage` > 0) with its leaf amount in 7 bits and metallic 0 (V5).
+pub fn encode_metallic_foliage(metallic: f32, foliage: f32) -> f32 {
+    if foliage > 0.0 {
+        (128.0 + (127.0 * foliage.clamp(0.0, 1.0)).round()) / 255.0
+    } else {
+        (127.0 * metallic.clamp(0.0, 1.0)).round() / 255.0
+    }
+}
+
+/// (metallic, leaf amount) of a stored blue channel (twin of
+/// `gbuffer_metallic`, `gbuffer_foliage`).
+pub fn decode_metallic_foliage(z: f32) -> (f32, f32) {
+    let c = (z.clamp(0.0, 1.0) * 255.0).round();
+    if c > 127.5 {
+        (0.0, (c - 128.0) / 127.0)
+    } else {
+        (c / 127.0, 0.0)
+    }
+}
 /// Motion target: previous minus current screen uv (y down), in uv units.
 pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// Depth target: reverse-Z, 1 at the near plane and 0 at the far one (infinity for a perspective camera).

@@ -15,6 +15,8 @@
 // V3: declared for the layout gbuffer.wgsl shares (bindings 8-10).
 #import impostor_atlas
 #import ripple
+// Metallic in the material's blue channel, 7 bits (V5 keeps the upper half for foliage).
+#import gbuffer_material
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
@@ -102,7 +104,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     // KHR_materials_specular: the grey part of the dielectric's F0 (forward.layers
     // adds the colour and F90 where they differ: PbrMaterial::specular_differs).
     let reflectance = gltf_grey_reflectance(gltf_dielectric_fresnel(in.surface.y, spec_a, spec_rgb).rgb);
-    out.material = vec4f(1.0 - roughness, reflectance, metallic, anisotropy_from_khr(strength, roughness * roughness));
+    out.material = vec4f(1.0 - roughness, reflectance, gbuffer_metallic_foliage(metallic, 0.0), anisotropy_from_khr(strength, roughness * roughness));
     out.motion = gbuffer_motion(in.curr_clip, in.prev_clip);
     // Emissive is sampled so its binding stays in the reflected layout (the
     // material bind group is shared with passes/forward, which draws it).

@@ -28,6 +28,10 @@
 // both ambient terms times the scene's volumes' multiplier at p.
 // Indirect light (L5, INDIRECT): the probes' clip map (shaders/indirect.wgsl,
 // passes/indirect) replaces the flat ground bounce of the sky SH.
+// V5 leaf shading (lighting.sun_direction.w = 1): foliage pixels (the
+// material's blue channel, shaders/gbuffer_material.wgsl) take a leaf's
+// glossiness and F0 and add the sun's and local lights' light through the
+// leaf (shaders/leaf.wgsl); CPU twin reference.rs `shade_leaf`.
 // CPU twin: passes/lighting/reference.rs (`shade`, `shade_sky_occluded`).
 #import view
 #import ao
@@ -45,9 +49,11 @@
 #import color
 #import math
 #import fullscreen
+#import gbuffer_material
+#import leaf
 
 struct Lighting {
-    // xyz: unit vector towards the sun
+    // xyz: unit vector towards the sun; w: 1 = V5 leaf shading
     sun_direction: vec4f,
     // rgb: sun illuminance at the ground (klux); w: 1 = R4, Burley's
     // remapped roughness in the visibility term of the sun and local lights
@@ -118,8 +124,9 @@ fn ssdo_light(o: Ssdo, l: vec3f) -> f32 {
     return mix(1.0, ssdo_visibility(o.p, o.n, l_v, o.c, ao_params.ssdo.w, ao_params.ssdo.y), ao_params.ssdo.x);
 }
 
-// Reflected radiance of the local lights at p (mask: the shadow mask texel).
-fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f, o: Ssdo) -> vec3f {
+// Reflected radiance of the local lights at p (mask: the shadow mask texel),
+// and with leaf amount `foliage` > 0 the light through the leaf (V5).
+fn shade_local(s: Surface, foliage: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mask: vec4f, o: Ssdo) -> vec3f {
     var c = vec3f(0.0);
     for (var k = 0u; k < lights.count.x; k = k + 1u) {
         let l = lights.lights[k];
@@ -136,7 +143,11 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
         if (SSDO) {
             e *= ssdo_light(o, dir);
         }
-        c += brdf_cos(s, t, b, n, v, dir) * e;
+        var f = brdf_cos(s, t, b, n, v, dir);
+        if (foliage > 0.0) {
+            f += leaf_translucency(s.diffuse_albedo, foliage, n, v, dir);
+        }
+        c += f * e;
     }
     return c;
 }
@@ -147,10 +158,15 @@ fn shade_local(s: Surface, t: vec3f, b: vec3f, n: vec3f, v: vec3f, p: vec3f, mas
 // `spec_ao`: the occlusion of ambient specular (ao_in without reflection occlusion).
 // `bleed`: O5 bleed colour (black: plain occlusion). `ambient`: the ambient
 // lights' multiplier of both ambient terms. `indirect`: L5's irradiance
-// (rgb) and coverage (a; 0 keeps the sky SH's flat ground).
-fn shade(s: Surface, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f, bleed: vec3f, ambient: vec3f, indirect: vec4f) -> vec3f {
+// (rgb) and coverage (a; 0 keeps the sky SH's flat ground). `foliage`: the
+// leaf amount (0 without leaf shading): the sun through the leaf (V5).
+fn shade(s: Surface, foliage: f32, glossiness: f32, anisotropy: f32, ao_in: f32, spec_ao: f32, t: vec3f, b: vec3f, n: vec3f, v: vec3f, sun_visibility: f32, sky_vis: vec4f, bleed: vec3f, ambient: vec3f, indirect: vec4f) -> vec3f {
     let l = lighting.sun_direction.xyz;
-    var c = brdf_cos(s, t, b, n, v, l) * lighting.sun_illuminance.rgb * sun_visibility;
+    var sun = brdf_cos(s, t, b, n, v, l);
+    if (foliage > 0.0) {
+        sun += leaf_translucency(s.diffuse_albedo, foliage, n, v, l);
+    }
+    var c = sun * lighting.sun_illuminance.rgb * sun_visibility;
     let n_o_v = max(dot(n, v), 1e-4);
     var n_sky = n;
     var sky_visibility = 1.0;
@@ -209,8 +225,16 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let albedo_ao = textureLoad(gbuffer_albedo, px, 0);
     let tbn = quat_to_frame(unpack_quat(textureLoad(gbuffer_frame, px, 0)));
     let m = textureLoad(gbuffer_material, px, 0);
+    // V5: a leaf's glossiness and F0, by the pixel's leaf amount.
+    var foliage = 0.0;
+    var gloss_f0 = m.xy;
+    if (lighting.sun_direction.w > 0.5) {
+        foliage = gbuffer_foliage(m.z);
+        gloss_f0 = leaf_material(m.x, m.y, foliage);
+    }
+    let glossiness = gloss_f0.x;
     // R4: the sun and local lights see the remapped visibility (when on).
-    let s = analytic_surface(surface_from_material(albedo_ao.rgb, m.x, m.y, m.z, m.w), lighting.sun_illuminance.w);
+    let s = analytic_surface(surface_from_material(albedo_ao.rgb, glossiness, gloss_f0.y, gbuffer_metallic(m.z), m.w), lighting.sun_illuminance.w);
     let dist = length(view.camera_position.xyz - p);
     let v = to_eye(view, p);
     var mask = vec4f(1.0);
@@ -238,7 +262,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if (REFLECTION_OCCLUSION) {
         // Both bands (Ryse): the constant through Lagarde's formula, times the
         // directional term along the reflection vector.
-        let roughness = perceptual_roughness_from_glossiness(m.x);
+        let roughness = perceptual_roughness_from_glossiness(glossiness);
         spec_ao = albedo_ao.a * specular_occlusion_lagarde(max(dot(tbn[2], v), 1e-4), ssao, roughness);
         if (SSDO) {
             let r = reflect(-v, m4_reflection_normal(tbn[2], tbn[1], v, m.w));
@@ -262,8 +286,8 @@ fn fs_main(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             return vec4f(indirect_debug_view(indirect_params, p, indirect.rgb), 1.0);
         }
     }
-    var c = shade(s, m.x, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p), indirect);
-    c += shade_local(s, tbn[0], tbn[1], tbn[2], v, p, mask, o);
+    var c = shade(s, foliage, glossiness, m.w, ao_in, spec_ao, tbn[0], tbn[1], tbn[2], v, sun_visibility, sky_vis, bleed, ambient_scale(p), indirect);
+    c += shade_local(s, foliage, tbn[0], tbn[1], tbn[2], v, p, mask, o);
     if (FOG) {
         let ap = aerial_perspective(dist, v, lighting.fog, lighting.sky_irradiance, preetham_sky_radiance(sky, -v));
         c = c * ap.a + ap.rgb * (1.0 - ap.a);

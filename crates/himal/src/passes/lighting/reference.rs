@@ -161,22 +161,13 @@ pub fn spot_cone(cos_angle: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// `shade_local` for one light at `p` (unshadowed, R4 off): BRDF · cos · E, E in klux
-/// (`intensity` in cd, `color` linear).
-#[allow(clippy::too_many_arguments)]
-pub fn shade_local(
-    m: &Material,
-    t: Vec3,
-    b: Vec3,
-    n: Vec3,
-    v: Vec3,
-    p: Vec3,
-    light: &crate::scene::LightDesc,
-) -> Vec3 {
+/// Direction to a local light from `p` and its illuminance there (klux;
+/// `intensity` in cd, `color` linear), unshadowed; `None` out of range.
+pub fn local_light_illuminance(p: Vec3, light: &crate::scene::LightDesc) -> Option<(Vec3, Vec3)> {
     let to_l = light.position - p;
     let d = to_l.length();
     if d >= light.range || d <= 0.0 {
-        return Vec3::ZERO;
+        return None;
     }
     let l = to_l / d;
     let mut e = light.color * light.intensity * 1e-3 * local_light_falloff(d, light.range);
@@ -187,7 +178,98 @@ pub fn shade_local(
             light.inner_deg.to_radians().cos(),
         );
     }
-    brdf_cos(&surface_from_material(m), t, b, n, v, l) * e
+    Some((l, e))
+}
+
+/// `shade_local` for one light at `p` (unshadowed, R4 off): BRDF · cos · E.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_local(
+    m: &Material,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    p: Vec3,
+    light: &crate::scene::LightDesc,
+) -> Vec3 {
+    local_light_illuminance(p, light).map_or(Vec3::ZERO, |(l, e)| {
+        brdf_cos(&surface_from_material(m), t, b, n, v, l) * e
+    })
+}
+
+/// V5 (`shaders/leaf.wgsl`): transmitted over reflected diffuse light.
+pub const LEAF_TRANSLUCENCY: f32 = 0.6;
+/// V5: the share of the view-dependent term (CryEngine's "back view dependency").
+pub const LEAF_BACK_VIEW: f32 = 0.5;
+/// V5: a leaf's F0 (waxy cuticle, index ~1.42).
+pub const LEAF_F0: f32 = 0.03;
+/// V5: a leaf's largest glossiness (a broad highlight).
+pub const LEAF_GLOSS_MAX: f32 = 0.3;
+
+/// `leaf_material`: `m` with a leaf's glossiness and F0, blended by the leaf amount `f`.
+pub fn leaf_material(m: &Material, f: f32) -> Material {
+    let lerp = |a: f32, b: f32| a + (b - a) * f;
+    Material {
+        glossiness: lerp(m.glossiness, m.glossiness.min(LEAF_GLOSS_MAX)),
+        reflectance: lerp(m.reflectance, LEAF_F0),
+        ..*m
+    }
+}
+
+/// `leaf_translucency`: radiance toward `v` per unit illuminance from `l`
+/// (1/sr) through a leaf of amount `f`:
+/// k f albedo / π ((1 − d) max(−n·l, 0) + d saturate(−v·l)⁴).
+pub fn leaf_translucency(diffuse_albedo: Vec3, f: f32, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+    let back = (-n.dot(l)).max(0.0);
+    let t = (-v.dot(l)).clamp(0.0, 1.0);
+    let through = (t * t) * (t * t);
+    let b = back + (through - back) * LEAF_BACK_VIEW;
+    diffuse_albedo * (f * LEAF_TRANSLUCENCY * b / std::f32::consts::PI)
+}
+
+/// [`shade`] of a foliage pixel of leaf amount `f` with leaf shading on:
+/// the leaf's material ([`leaf_material`]) plus the sun through the leaf.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_leaf(
+    m: &Material,
+    f: f32,
+    ao: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    light: &LightingParams,
+    sun_visibility: f32,
+) -> Vec3 {
+    let leaf = leaf_material(m, f);
+    let through = leaf_translucency(
+        surface_from_material(&leaf).diffuse_albedo,
+        f,
+        n,
+        v,
+        light.sun_direction,
+    );
+    shade(&leaf, ao, t, b, n, v, light, sun_visibility)
+        + through * light.sun_illuminance * sun_visibility
+}
+
+/// [`shade_local`] of a foliage pixel of leaf amount `f` with leaf shading
+/// on: the leaf's material plus the light through the leaf.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_local_leaf(
+    m: &Material,
+    f: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    v: Vec3,
+    p: Vec3,
+    light: &crate::scene::LightDesc,
+) -> Vec3 {
+    let s = surface_from_material(&leaf_material(m, f));
+    local_light_illuminance(p, light).map_or(Vec3::ZERO, |(l, e)| {
+        (brdf_cos(&s, t, b, n, v, l) + leaf_translucency(s.diffuse_albedo, f, n, v, l)) * e
+    })
 }
 
 /// `ambient_light_scale`: the multiplier of ambient light `l` at `p`:

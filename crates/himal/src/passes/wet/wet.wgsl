@@ -14,6 +14,7 @@
 #import fullscreen
 #import tangent_frame
 #import brdf
+#import gbuffer_material
 
 override SPECULAR_AA: bool = true;
 
@@ -49,7 +50,7 @@ fn fs_main(@builtin(position) frag: vec4f) -> WetOut {
     let n = normal_at(px);
     let w = wet.amount.x * smoothstep(0.6, 0.95, n.y);
     let m = out.material;
-    out.albedo = vec4f(out.albedo.rgb * (1.0 - 0.4 * w * (1.0 - m.z)), out.albedo.a);
+    out.albedo = vec4f(out.albedo.rgb * (1.0 - 0.4 * w * (1.0 - gbuffer_metallic(m.z))), out.albedo.a);
     var r = mix(perceptual_roughness_from_glossiness(m.x), 0.08, w);
     if (SPECULAR_AA && w > 0.0) {
         // Tent weights (1, 2, 1) / 4 per axis; a sky neighbour counts as the centre.
