@@ -171,6 +171,8 @@ fn open(args: &BenchArgs) -> Result<Running> {
     world_haze(&renderer, &mut settings);
     // The sky tables from the cache: a comparison does not time them.
     args.post.configure(&mut renderer, &args.gpu, &scene)?;
+    // A world with every sector around the camera resident (bench.rs).
+    renderer.settle_world(&camera, std::time::Duration::from_secs(600))?;
     renderer.render(&camera, &settings)?; // warm-up: pools, first-use costs
     let dolly = args.dolly.unwrap_or(0.0);
     Ok(Running {

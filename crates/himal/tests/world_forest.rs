@@ -7,7 +7,6 @@
 mod common;
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use himal::scene::world::{World, WorldDesc};
 use himal::{Culling, FrameSettings, Renderer};
@@ -25,21 +24,6 @@ fn world(density: f32) -> Arc<World> {
     Arc::new(World::new(desc))
 }
 
-fn forest_camera(world: &World) -> himal::scene::Camera {
-    let named = world.cameras.iter().find(|c| c.name == "forest");
-    named.expect("a forest camera").camera.clone()
-}
-
-fn settled(world: &Arc<World>, camera: &himal::scene::Camera) -> Renderer {
-    let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
-    let stats = r
-        .settle_world(camera, Duration::from_secs(120))
-        .expect("streaming")
-        .expect("a world");
-    assert_eq!((stats.missing, stats.over_capacity), (0, 0), "{stats:?}");
-    r
-}
-
 const SIZE: (u32, u32) = (160, 90);
 /// `--lod-threshold`'s default (the library's is LOD0 everywhere).
 const LOD_PX: f32 = 4.0;
@@ -54,8 +38,8 @@ fn green(p: &[f32; 4]) -> bool {
 #[test]
 fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
     let trees = world(0.2);
-    let camera = forest_camera(&trees);
-    let mut r = settled(&trees, &camera);
+    let camera = common::world_camera(&trees, "forest");
+    let mut r = common::settled_world(&trees, &camera);
     let scene = trees.scene();
     let frame = |r: &mut Renderer, culling, view: &str| {
         let mut s = common::raw_settings(&scene, SIZE, view);
@@ -72,7 +56,11 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
     assert_eq!(gpu.culling, Culling::Gpu);
     let lit_gpu = frame(&mut r, Culling::Gpu, "final");
     let lit_cpu = frame(&mut r, Culling::Cpu, "final");
-    let again = frame(&mut settled(&trees, &camera), Culling::Gpu, "final");
+    let again = frame(
+        &mut common::settled_world(&trees, &camera),
+        Culling::Gpu,
+        "final",
+    );
     assert_eq!(
         gpu.image.bytes, cpu.image.bytes,
         "the CPU path's forest albedo differs from the GPU path's"
@@ -87,7 +75,7 @@ fn forests_draw_trunks_and_leaves_the_same_on_both_culling_paths() {
     );
     // The same world without trees: where it differs, trees are drawn.
     let bare_world = world(0.0);
-    let mut bare = settled(&bare_world, &camera);
+    let mut bare = common::settled_world(&bare_world, &camera);
     let bare = frame(&mut bare, Culling::Gpu, "albedo");
     let (a, b) = (
         gpu.image.to_rgba_f32().expect("rgba"),
@@ -142,8 +130,8 @@ fn vegetation_draw_calls_do_not_depend_on_the_tree_count() {
     let mut counts = Vec::new();
     for density in [0.2, 0.05] {
         let w = world(density);
-        let camera = forest_camera(&w);
-        let mut r = settled(&w, &camera);
+        let camera = common::world_camera(&w, "forest");
+        let mut r = common::settled_world(&w, &camera);
         let mut s = FrameSettings::new(SIZE.0, SIZE.1, w.scene().sun);
         s.lod_threshold_px = LOD_PX;
         let f = r.render(&camera, &s).expect("frame");

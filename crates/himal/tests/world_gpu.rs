@@ -37,23 +37,6 @@ fn kind_bounds(scene: &himal::scene::Scene, kind: InstanceKind) -> himal::scene:
     })
 }
 
-/// The world's camera called `name`.
-fn named_camera(world: &World, name: &str) -> himal::scene::Camera {
-    let named = world.cameras.iter().find(|c| c.name == name);
-    named.expect("camera").camera.clone()
-}
-
-/// A renderer of `world` with every sector around `camera` resident.
-fn settled(world: &Arc<World>, camera: &himal::scene::Camera) -> Renderer {
-    let mut r = Renderer::with_world(common::context(), world.clone()).expect("renderer");
-    let stats = r
-        .settle_world(camera, Duration::from_secs(120))
-        .expect("streaming")
-        .expect("a world");
-    assert_eq!(stats.missing, 0);
-    r
-}
-
 #[test]
 fn streamed_pool_lists_match_the_twin() {
     let ctx = common::context();
@@ -201,10 +184,10 @@ fn streamed_pool_lists_match_the_twin() {
 #[test]
 fn a_world_frame_is_the_same_twice_and_draws_the_village() {
     let world = small_world();
-    let camera = named_camera(&world, "village");
+    let camera = common::world_camera(&world, "village");
     let settings = FrameSettings::new(160, 90, world.scene().sun);
     let render = || {
-        settled(&world, &camera)
+        common::settled_world(&world, &camera)
             .render(&camera, &settings)
             .expect("frame")
     };
@@ -233,8 +216,8 @@ fn a_world_frame_is_the_same_twice_and_draws_the_village() {
 #[test]
 fn the_cpu_path_draws_the_streamed_pool_as_the_gpu_path_does() {
     let world = small_world();
-    let camera = named_camera(&world, "village");
-    let mut r = settled(&world, &camera);
+    let camera = common::world_camera(&world, "village");
+    let mut r = common::settled_world(&world, &camera);
     let mut settings = FrameSettings::new(160, 90, world.scene().sun);
     settings.shadows.mode = himal::passes::shadows::ShadowMode::CsmStatic;
     let mut frame = |culling, instancing| {
@@ -290,7 +273,7 @@ fn the_cpu_path_draws_the_streamed_pool_as_the_gpu_path_does() {
 fn sky_occlusion_height_fields_hold_terrain_and_instances_and_follow_streaming() {
     use himal::passes::skyocc::{RENDER_TEXELS, SkyOccPass, TEXEL_SIZE};
     let world = small_world();
-    let camera = named_camera(&world, "street");
+    let camera = common::world_camera(&world, "street");
     let mut settings = FrameSettings::new(96, 54, world.scene().sun);
     settings.sky_occlusion = true;
     let aspect = 96.0 / 54.0;
@@ -426,7 +409,7 @@ fn static_shadow_map_holds_terrain_and_instances_and_follows_streaming() {
     use himal::scene::Aabb;
     use himal::scene::world::InstanceKind::*;
     let world = small_world();
-    let village = named_camera(&world, "village");
+    let village = common::world_camera(&world, "village");
     let mut settings = FrameSettings::new(96, 54, world.scene().sun);
     settings.sun.time_hours = 17.0;
     settings.shadow_resolution = 256;
@@ -623,18 +606,18 @@ fn static_shadow_map_holds_terrain_and_instances_and_follows_streaming() {
 #[test]
 fn hiz_occlusion_in_the_village_keeps_the_image() {
     let world = small_world();
-    let camera = named_camera(&world, "village");
+    let camera = common::world_camera(&world, "village");
     let mut settings = FrameSettings::new(160, 90, world.scene().sun);
     let frames = |r: &mut Renderer, s: &FrameSettings| -> Vec<Vec<u8>> {
         (0..3)
             .map(|_| r.render(&camera, s).expect("frame").image.bytes)
             .collect()
     };
-    let mut off = settled(&world, &camera);
+    let mut off = common::settled_world(&world, &camera);
     let reference = frames(&mut off, &settings);
     let all = off.count_drawn(&camera, &settings).expect("counts");
     settings.occlusion = himal::Occlusion::Hiz;
-    let mut on = settled(&world, &camera);
+    let mut on = common::settled_world(&world, &camera);
     let images = frames(&mut on, &settings);
     let kept = on.count_drawn(&camera, &settings).expect("counts");
     eprintln!(

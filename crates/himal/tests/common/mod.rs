@@ -616,3 +616,27 @@ pub fn frame_against(
         diff(&gpu, &image(scene, 0.0)),
     )
 }
+
+/// The streamed world's camera called `name`.
+pub fn world_camera(world: &himal::scene::world::World, name: &str) -> Camera {
+    let named = world.cameras.iter().find(|c| c.name == name);
+    named
+        .unwrap_or_else(|| panic!("no world camera {name}"))
+        .camera
+        .clone()
+}
+
+/// A renderer of `world` with every sector around `camera` resident and
+/// none over its pool's capacity.
+pub fn settled_world(
+    world: &std::sync::Arc<himal::scene::world::World>,
+    camera: &Camera,
+) -> Renderer {
+    let mut r = Renderer::with_world(context(), world.clone()).expect("renderer");
+    let stats = r
+        .settle_world(camera, std::time::Duration::from_secs(120))
+        .expect("streaming")
+        .expect("a world");
+    assert_eq!((stats.missing, stats.over_capacity), (0, 0), "{stats:?}");
+    r
+}

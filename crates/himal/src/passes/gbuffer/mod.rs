@@ -10,7 +10,7 @@
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
 use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
-use crate::graph::{FrameGraph, TextureDesc, TextureHandle};
+use crate::graph::{FrameGraph, Node, TextureDesc, TextureHandle, Written};
 use crate::passes::common::target;
 use crate::passes::cull::{ALL, Culled, FADING, List, STEADY, bind_instances};
 use crate::scene::lod::MAX_LODS;
@@ -63,6 +63,35 @@ pub struct GBuffer {
     pub motion: TextureHandle,
     /// Depth ([`DEPTH_FORMAT`]).
     pub depth: TextureHandle,
+}
+
+impl GBuffer {
+    /// `node` drawing into these targets after the node that wrote them
+    /// (colours and depth loaded, in the G-buffer's order).
+    pub fn load_into<'g, 'a>(self, node: Node<'g, 'a>) -> Node<'g, 'a> {
+        let load = wgpu::LoadOp::Load;
+        let depth = wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        };
+        (node.color(self.albedo, load))
+            .color(self.frame, load)
+            .color(self.material, load)
+            .color(self.motion, load)
+            .depth(self.depth, None, depth)
+    }
+
+    /// The targets' new versions after a node bound by [`Self::load_into`].
+    pub fn after(self, written: &Written) -> GBuffer {
+        let colour = |i: usize, h: TextureHandle| written.colors.get(i).copied().unwrap_or(h);
+        GBuffer {
+            albedo: colour(0, self.albedo),
+            frame: colour(1, self.frame),
+            material: colour(2, self.material),
+            motion: colour(3, self.motion),
+            depth: written.depth.unwrap_or(self.depth),
+        }
+    }
 }
 
 /// Material type: which shader and specialisation draws an object.
@@ -371,15 +400,7 @@ impl GBufferPass {
                 .collect();
         let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
         let (lod_view, specular_aa) = (self.lod_view, self.specular_aa);
-        let node = graph
-            .raster("gbuffer", &self.program)
-            .uniform("objects", &scene.objects)
-            .uniform("ripple", &scene.ripple)
-            .uniform("deform_prev", scene.deform_prev(self.deform_motion))
-            .external("impostor_color_load", &scene.impostor_atlas.color)
-            .external("impostor_normal_load", &scene.impostor_atlas.normal)
-            .external("impostor_depth_load", &scene.impostor_atlas.depth);
-        let node = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances);
+        let node = self.scene_node(graph, "gbuffer", scene, culled.as_ref().map(|(c, _)| c));
         let written = node
             .color(albedo, clear)
             .color(frame, clear)
@@ -554,7 +575,51 @@ impl GBufferPass {
             .iter()
             .map(|&l| (l, self.pipeline(ctx, key(l))))
             .collect();
-        let load = wgpu::LoadOp::Load;
+        let node = self.scene_node(graph, id, scene, culled.as_ref().map(|(c, _)| c));
+        let written = gbuffer.load_into(node).record(move |ctx, rp| {
+            // The scene's lists: each object at its level (CPU path).
+            let split = scene.split_levels(vegetation);
+            let all_levels = levels.start == 0 && levels.end as usize >= MAX_LODS;
+            scene.bind_geometry(rp);
+            for (level, pipeline) in &pipelines {
+                let pipeline = pipeline.as_ref().map_err(|e| {
+                    GpuError::Other(format!("G-buffer vegetation permutation: {e}"))
+                })?;
+                rp.set_pipeline(pipeline);
+                let drawn = match level {
+                    Some(l) => u32::from(*l)..u32::from(*l) + 1,
+                    None => levels.clone(),
+                };
+                if all_levels && level.is_none() {
+                    scene.draw_list(rp, vegetation);
+                } else {
+                    for l in drawn.clone() {
+                        if let Some(draws) = split.get(l as usize) {
+                            scene.draw_list(rp, draws);
+                        }
+                    }
+                }
+                if let Some((c, view)) = culled
+                    && scene.has_vegetation()
+                {
+                    c.draw_levels(rp, ctx, view, List::Vegetation, ALL, drawn);
+                }
+            }
+            Ok(())
+        });
+        gbuffer.after(&written)
+    }
+
+    /// A node `id` of this pass's program with the scene's bindings: the
+    /// objects, the ripple grid, the deformation's previous positions, the
+    /// impostor atlas and the instances (`culled`'s lists, or the identity).
+    fn scene_node<'g, 'a>(
+        &'a self,
+        graph: &'g mut FrameGraph<'a>,
+        id: &str,
+        scene: &'a SceneGpu,
+        culled: Option<&Culled<'a>>,
+    ) -> Node<'g, 'a> {
         let node = graph
             .raster(id, &self.program)
             .uniform("objects", &scene.objects)
@@ -563,57 +628,6 @@ impl GBufferPass {
             .external("impostor_color_load", &scene.impostor_atlas.color)
             .external("impostor_normal_load", &scene.impostor_atlas.normal)
             .external("impostor_depth_load", &scene.impostor_atlas.depth);
-        let written = bind_instances(node, culled.as_ref().map(|(c, _)| c), &scene.instances)
-            .color(gbuffer.albedo, load)
-            .color(gbuffer.frame, load)
-            .color(gbuffer.material, load)
-            .color(gbuffer.motion, load)
-            .depth(
-                gbuffer.depth,
-                None,
-                wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            )
-            .record(move |ctx, rp| {
-                // The scene's lists: each object at its level (CPU path).
-                let split = scene.split_levels(vegetation);
-                let all_levels = levels.start == 0 && levels.end as usize >= MAX_LODS;
-                scene.bind_geometry(rp);
-                for (level, pipeline) in &pipelines {
-                    let pipeline = pipeline.as_ref().map_err(|e| {
-                        GpuError::Other(format!("G-buffer vegetation permutation: {e}"))
-                    })?;
-                    rp.set_pipeline(pipeline);
-                    let drawn = match level {
-                        Some(l) => u32::from(*l)..u32::from(*l) + 1,
-                        None => levels.clone(),
-                    };
-                    if all_levels && level.is_none() {
-                        scene.draw_list(rp, vegetation);
-                    } else {
-                        for l in drawn.clone() {
-                            if let Some(draws) = split.get(l as usize) {
-                                scene.draw_list(rp, draws);
-                            }
-                        }
-                    }
-                    if let Some((c, view)) = culled
-                        && scene.has_vegetation()
-                    {
-                        c.draw_levels(rp, ctx, view, List::Vegetation, ALL, drawn);
-                    }
-                }
-                Ok(())
-            });
-        let colour = |i: usize, h: TextureHandle| written.colors.get(i).copied().unwrap_or(h);
-        GBuffer {
-            albedo: colour(0, gbuffer.albedo),
-            frame: colour(1, gbuffer.frame),
-            material: colour(2, gbuffer.material),
-            motion: colour(3, gbuffer.motion),
-            depth: written.depth.unwrap_or(gbuffer.depth),
-        }
+        bind_instances(node, culled, &scene.instances)
     }
 }

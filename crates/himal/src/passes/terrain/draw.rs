@@ -6,7 +6,7 @@ use super::reference::Patch;
 use super::{MAX_PATCHES, TerrainPass};
 use crate::gpu::pipeline::{RenderSpec, target};
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::{FrameGraph, TextureHandle};
+use crate::graph::FrameGraph;
 use crate::passes::gbuffer::{
     ALBEDO_FORMAT, DEPTH_FORMAT, FRAME_FORMAT, GBuffer, MATERIAL_FORMAT, MOTION_FORMAT,
 };
@@ -81,8 +81,7 @@ impl TerrainPass {
         view: &'a wgpu::Buffer,
     ) -> GBuffer {
         let pipeline = self.pipeline(ctx, self.lod_view, self.specular_aa);
-        let load = wgpu::LoadOp::Load;
-        let written = graph
+        let node = graph
             .raster("terrain", &self.program)
             .pipeline(pipeline)
             .uniform("view", view)
@@ -93,30 +92,11 @@ impl TerrainPass {
             .external("pages", &self.pages_view)
             .external("detail_albedo", &self.detail_albedo)
             .external("detail_normal", &self.detail_normal)
-            .sampler("detail_sampler", &self.sampler)
-            .color(gbuffer.albedo, load)
-            .color(gbuffer.frame, load)
-            .color(gbuffer.material, load)
-            .color(gbuffer.motion, load)
-            .depth(
-                gbuffer.depth,
-                None,
-                wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            )
-            .record(move |_, rp| {
-                self.draw_view(rp, 0);
-                Ok(())
-            });
-        let colour = |i: usize, h: TextureHandle| written.colors.get(i).copied().unwrap_or(h);
-        GBuffer {
-            albedo: colour(0, gbuffer.albedo),
-            frame: colour(1, gbuffer.frame),
-            material: colour(2, gbuffer.material),
-            motion: colour(3, gbuffer.motion),
-            depth: written.depth.unwrap_or(gbuffer.depth),
-        }
+            .sampler("detail_sampler", &self.sampler);
+        let written = gbuffer.load_into(node).record(move |_, rp| {
+            self.draw_view(rp, 0);
+            Ok(())
+        });
+        gbuffer.after(&written)
     }
 }

@@ -128,7 +128,8 @@ fn camera(name: &str, position: Vec3, target: Vec3, fov: f32) -> NamedCamera {
 /// (1.8 m above a meadow toward the horizon), `top` (straight down from
 /// 1.2 km), `street` (eye height in that village, along its street),
 /// `forest` (over the densest forest within 2 km of the middle, looking
-/// across it).
+/// across it), `valley-forest` (the flight "across" at 7 km, over the
+/// forests of the upper valley).
 pub fn cameras(w: &World) -> Vec<NamedCamera> {
     let t = &w.terrain;
     let ground = |x: f32, z: f32| t.height(x, z);
@@ -232,5 +233,13 @@ pub fn cameras(w: &World) -> Vec<NamedCamera> {
         Vec3::new(c.x, ground(c.x, c.y) + 8.0, c.y),
         60.0,
     ));
+    // Issue #18's forest of >= 50,000 trees: the flight 7 km up the valley,
+    // where the most trees stand within the stream radius (docs/world.md).
+    let path = flight(w);
+    out.push(NamedCamera {
+        name: "valley-forest".into(),
+        camera: path.camera_at(7000.0 / path.speed, 60.0),
+        cinematic_shadows: None,
+    });
     out
 }
