@@ -203,8 +203,12 @@ impl SceneGpu {
     /// instancing one draw per run of consecutive objects of one mesh and
     /// level (V6), else one draw per object.
     pub fn draw_list(&self, rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
-        let draws = self.at_lod(draws);
-        let draws = &draws[..];
+        self.draw_placed(rp, &self.at_lod(draws));
+    }
+
+    /// Records `draws` as they are: already at their level
+    /// ([`Self::split_at_lod`]; [`Self::draw_list`] places them itself).
+    pub fn draw_placed(&self, rp: &mut wgpu::RenderPass<'_>, draws: &[Draw]) {
         if self.instancing.load(Ordering::Relaxed) {
             for (d, n) in runs(draws) {
                 let indices = d.first_index..d.first_index + d.index_count;

@@ -114,36 +114,64 @@ impl SceneGpu {
     /// mesh has a chain.
     pub fn at_lod<'d>(&self, draws: &'d [Draw]) -> std::borrow::Cow<'d, [Draw]> {
         let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
-        let leveled = lod.selection.enabled() && self.has_lods;
-        // `--vegetation off`: the draws of foliage and trunks go.
-        let hide = !self.vegetation.load(std::sync::atomic::Ordering::Relaxed)
-            && self.vegetation_objects.contains(&true);
+        let (leveled, hide) = self.lod_state(&lod);
         if !leveled && !hide {
             return std::borrow::Cow::Borrowed(draws);
         }
-        let shown = |d: &&Draw| {
-            !hide
-                || !(self.vegetation_objects.get(d.object as usize))
-                    .copied()
-                    .unwrap_or(false)
-        };
-        let at = |d: &Draw| {
-            if !leveled {
-                return d.clone();
-            }
-            let level = self.lod_level(d.object, &lod) as usize;
-            let range = (self.object_mesh.get(d.object as usize))
-                .and_then(|&m| self.lods.get(m as usize)?.get(level));
-            match range {
-                Some(r) if level > 0 => Draw {
+        let placed = draws
+            .iter()
+            .filter_map(|d| self.placed(d, &lod, leveled, hide));
+        std::borrow::Cow::Owned(placed.map(|(_, d)| d).collect())
+    }
+
+    /// [`Self::at_lod`] with each draw in its level's list, ready for
+    /// [`Self::draw_placed`] (V3's impostor levels in a pass of their own:
+    /// one level choice per object for both vegetation passes).
+    pub fn split_at_lod(&self, draws: &[Draw]) -> [Vec<Draw>; crate::scene::lod::MAX_LODS] {
+        let lod = self.lod.lock().map(|l| *l).unwrap_or_default();
+        let (leveled, hide) = self.lod_state(&lod);
+        let mut out: [Vec<Draw>; crate::scene::lod::MAX_LODS] = Default::default();
+        for (level, d) in draws
+            .iter()
+            .filter_map(|d| self.placed(d, &lod, leveled, hide))
+        {
+            out[level.min(out.len() - 1)].push(d);
+        }
+        out
+    }
+
+    /// Whether levels are chosen this frame, and whether `--vegetation off`
+    /// hides the foliage and trunks.
+    fn lod_state(&self, lod: &LodView) -> (bool, bool) {
+        let leveled = lod.selection.enabled() && self.has_lods;
+        let hide = !self.vegetation.load(std::sync::atomic::Ordering::Relaxed)
+            && self.vegetation_objects.contains(&true);
+        (leveled, hide)
+    }
+
+    /// `d` at its object's level (and that level), or `None` when hidden.
+    fn placed(&self, d: &Draw, lod: &LodView, leveled: bool, hide: bool) -> Option<(usize, Draw)> {
+        let vegetation = (self.vegetation_objects.get(d.object as usize)).copied();
+        if hide && vegetation.unwrap_or(false) {
+            return None;
+        }
+        if !leveled {
+            return Some((0, d.clone()));
+        }
+        let level = self.lod_level(d.object, lod) as usize;
+        let range = (self.object_mesh.get(d.object as usize))
+            .and_then(|&m| self.lods.get(m as usize)?.get(level));
+        Some(match range {
+            Some(r) if level > 0 => (
+                level,
+                Draw {
                     first_index: r.first_index,
                     index_count: r.index_count,
                     ..d.clone()
                 },
-                _ => d.clone(),
-            }
-        };
-        std::borrow::Cow::Owned(draws.iter().filter(shown).map(at).collect())
+            ),
+            _ => (level, d.clone()),
+        })
     }
 
     /// `draws` by the level [`Self::draw_list`] draws each at this frame

@@ -7,13 +7,18 @@
 //! Pipelines are permutations keyed by [`GBufferKey`] (E1's material-type
 //! axis), created for the material types the scene uses.
 
+use std::sync::Arc;
+
 use crate::gpu::pipeline::{Program, RenderSpec};
 use crate::gpu::{GpuContext, GpuError};
-use crate::gpu_scene::{SceneGpu, VisibleLists, vertex_layout};
+use crate::gpu_scene::{Draw, SceneGpu, VisibleLists, vertex_layout};
 use crate::graph::{FrameGraph, Node, TextureDesc, TextureHandle, Written};
 use crate::passes::common::target;
 use crate::passes::cull::{ALL, Culled, FADING, List, STEADY, bind_instances};
 use crate::scene::lod::MAX_LODS;
+
+/// Draws by level, each at its level ([`SceneGpu::split_at_lod`]).
+type LevelDraws = [Vec<Draw>; MAX_LODS];
 
 /// Albedo target: rgb linear albedo (stored sRGB-encoded), a material AO.
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -524,84 +529,66 @@ impl GBufferPass {
             true => 0..impostors.start,
             false => 0..MAX_LODS as u32,
         };
-        let gbuffer = self.vegetation_node(
-            ctx,
-            (graph, "vegetation.gbuffer"),
-            (scene, lists, culled),
-            gbuffer,
-            cards,
-        );
-        if !any_impostor {
-            return gbuffer;
+        // The scene's lists (CPU path): each object's level chosen once for
+        // both nodes.
+        let vegetation = lists.map_or(&scene.draws_vegetation, |l| &l.vegetation);
+        let split = std::sync::Arc::new(scene.split_at_lod(vegetation));
+        let nodes = [
+            ("vegetation.gbuffer", cards),
+            ("vegetation.impostor", impostors),
+        ];
+        let mut gbuffer = gbuffer;
+        for (id, levels) in nodes.into_iter().take(1 + usize::from(any_impostor)) {
+            let lists = (split.clone(), culled);
+            gbuffer = self.vegetation_node(ctx, (graph, id), scene, lists, gbuffer, levels);
         }
-        self.vegetation_node(
-            ctx,
-            (graph, "vegetation.impostor"),
-            (scene, lists, culled),
-            gbuffer,
-            impostors,
-        )
+        gbuffer
     }
 
-    /// One vegetation node (`id`): the vegetation lists' `levels` into
+    /// One vegetation node (`id`): `levels` of the scene's vegetation
+    /// (`split`, placed at their levels) and of the culled lists into
     /// `gbuffer` (loaded), per level under `--view lod`.
     fn vegetation_node<'a>(
         &'a self,
         ctx: &GpuContext,
         (graph, id): (&mut FrameGraph<'a>, &str),
-        (scene, lists, culled): (
-            &'a SceneGpu,
-            Option<&'a VisibleLists>,
-            Option<(Culled<'a>, u32)>,
-        ),
+        scene: &'a SceneGpu,
+        (split, culled): (Arc<LevelDraws>, Option<(Culled<'a>, u32)>),
         gbuffer: GBuffer,
         levels: std::ops::Range<u32>,
     ) -> GBuffer {
-        let vegetation = lists.map_or(&scene.draws_vegetation, |l| &l.vegetation);
-        if vegetation.is_empty() && !(culled.is_some() && scene.has_vegetation()) {
+        let culled = culled.filter(|_| scene.has_vegetation());
+        let scene_draws = levels.clone().any(|l| !split[l as usize].is_empty());
+        if !scene_draws && culled.is_none() {
             return gbuffer;
         }
-        let (lod_view, impostor_view) = (self.lod_view, self.impostor_view);
-        let key = |level: Option<u8>| {
-            let key = GBufferKey::VEGETATION.impostor_view(impostor_view);
-            level.map_or(key, |l| key.at_level(l))
-        };
-        let shown: Vec<u32> = levels.clone().collect();
-        let keys: Vec<Option<u8>> = match lod_view {
-            true => shown.iter().map(|&l| Some(l as u8)).collect(),
+        let key = GBufferKey::VEGETATION.impostor_view(self.impostor_view);
+        // `--view lod`: a pipeline per level, else one for all.
+        let keys: Vec<Option<u32>> = match self.lod_view {
+            true => levels.clone().map(Some).collect(),
             false => vec![None],
         };
-        let pipelines: Vec<(Option<u8>, Result<wgpu::RenderPipeline, GpuError>)> = keys
-            .iter()
-            .map(|&l| (l, self.pipeline(ctx, key(l))))
+        let pipelines: Vec<(Option<u32>, Result<wgpu::RenderPipeline, GpuError>)> = (keys.iter())
+            .map(|&l| {
+                (
+                    l,
+                    self.pipeline(ctx, l.map_or(key, |l| key.at_level(l as u8))),
+                )
+            })
             .collect();
         let node = self.scene_node(graph, id, scene, culled.as_ref().map(|(c, _)| c));
         let written = gbuffer.load_into(node).record(move |ctx, rp| {
-            // The scene's lists: each object at its level (CPU path).
-            let split = scene.split_levels(vegetation);
-            let all_levels = levels.start == 0 && levels.end as usize >= MAX_LODS;
             scene.bind_geometry(rp);
             for (level, pipeline) in &pipelines {
                 let pipeline = pipeline.as_ref().map_err(|e| {
                     GpuError::Other(format!("G-buffer vegetation permutation: {e}"))
                 })?;
                 rp.set_pipeline(pipeline);
-                let drawn = match level {
-                    Some(l) => u32::from(*l)..u32::from(*l) + 1,
-                    None => levels.clone(),
-                };
-                if all_levels && level.is_none() {
-                    scene.draw_list(rp, vegetation);
-                } else {
-                    for l in drawn.clone() {
-                        if let Some(draws) = split.get(l as usize) {
-                            scene.draw_list(rp, draws);
-                        }
-                    }
+                let drawn = level.map_or(levels.clone(), |l| l..l + 1);
+                for l in drawn.clone() {
+                    scene.draw_placed(rp, &split[l as usize]);
                 }
-                if let Some((c, view)) = culled
-                    && scene.has_vegetation()
-                {
+                if let Some((c, view)) = culled {
                     c.draw_levels(rp, ctx, view, List::Vegetation, ALL, drawn);
                 }
             }
